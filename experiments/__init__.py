@@ -1,0 +1,1 @@
+"""Scenarios, noise generators, Monte Carlo runner, metrics and plots."""

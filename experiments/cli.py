@@ -1,0 +1,107 @@
+"""Command line: ``python -m experiments COMMAND ...`` (SPEC section 3.1).
+
+Each command lives in its own module ``experiments.cmd_<name>`` exposing
+``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed
+as one JSON object on the last line of stdout with ``--json``, or as a readable
+table otherwise (``render(result) -> str`` when the module has one). Bad input
+(:class:`InputError`, argparse errors) exits with status 2 and one line on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from collections.abc import Sequence
+from typing import Any, NoReturn
+
+import numpy as np
+
+from experiments.errors import InputError
+
+#: command name -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "intercept": ("experiments.cmd_intercept", "Monte Carlo of the impulsive intercept"),
+    "compare": ("experiments.cmd_compare", "estimators x noises on paired realisations"),
+    "fig5": ("experiments.cmd_fig5", "the seed's Fig. 5 statistics (four variants)"),
+    "attitude": ("experiments.cmd_attitude", "attitude-loop scenarios"),
+    "pd-gains": ("experiments.cmd_pd_gains", "quaternion-PD gain study, f0(phi0) fit"),
+    "bench": ("experiments.cmd_bench", "per-step costs of the estimators, side by side"),
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports errors in one line with exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def _render_default(result: dict[str, Any], indent: str = "") -> str:
+    lines = []
+    for key, value in result.items():
+        if isinstance(value, dict):
+            lines.append(f"{indent}{key}:")
+            lines.append(_render_default(value, indent + "  "))
+        elif isinstance(value, float):
+            lines.append(f"{indent}{key}: {value:.6g}")
+        else:
+            lines.append(f"{indent}{key}: {value}")
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="python -m experiments", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name, (module_name, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.set_defaults(_module=module_name)
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != module_name:
+                raise
+            p.set_defaults(_missing=True)
+            continue
+        module.add_arguments(p)
+        p.add_argument("--json", action="store_true", help="print one JSON object (last line)")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "_missing", False):
+        print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
+        return 2
+    module = importlib.import_module(args._module)
+    try:
+        result = module.run(args)
+    except InputError as exc:
+        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{parser.prog} {args.command}: interrupted", file=sys.stderr)
+        return 130
+    if args.json:
+        print(json.dumps(_jsonable(result)))
+    else:
+        render = getattr(module, "render", None)
+        print(render(result) if render else _render_default(result))
+    return 0

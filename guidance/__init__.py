@@ -1,0 +1,1 @@
+"""Consumers of estimator beliefs: intercept guidance and attitude loops."""

@@ -1,0 +1,1 @@
+"""Spacecraft attitude loops: plants, actuators and controllers (SPEC section 2)."""

@@ -1,0 +1,154 @@
+"""Common attitude plant: a rigid body carrying an angular-momentum actuator.
+
+Equations (SPEC section 2)::
+
+    J dw/dt + w x (J w + h) = M_ext + M_u        (body rates w, rad/s)
+    dh/dt = -M_u                                  (actuator momentum h, N m s)
+    dq/dt = 1/2 q (x) (w, 0)                      (unit quaternion, scalar last)
+
+``M_u`` is the control torque acting on the body (the reaction of the wheels or
+gyrodines), so the total angular momentum ``J w + h`` changes only through
+``M_ext``. Quaternions follow scipy's ``Rotation`` convention (scalar last,
+body-to-inertial); conversions go through ``Rotation``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
+
+
+def _frozen(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
+    arr = np.array(a, dtype=float)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """Rigid-body inertia (kg m^2 = N m s^2), symmetric positive definite."""
+
+    inertia_kgm2: NDArray[np.float64]
+    inertia_inv: NDArray[np.float64] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        inertia = _frozen(self.inertia_kgm2, (3, 3), "inertia_kgm2")
+        if not np.allclose(inertia, inertia.T):
+            raise ValueError("inertia_kgm2 must be symmetric")
+        if np.any(np.linalg.eigvalsh(inertia) <= 0):
+            raise ValueError("inertia_kgm2 must be positive definite")
+        object.__setattr__(self, "inertia_kgm2", inertia)
+        inv = np.linalg.inv(inertia)
+        inv.setflags(write=False)
+        object.__setattr__(self, "inertia_inv", inv)
+
+    @classmethod
+    def diagonal(cls, j_kgm2: ArrayLike) -> RigidBody:
+        return cls(np.diag(np.asarray(j_kgm2, dtype=float)))
+
+
+@dataclass(frozen=True)
+class AttitudeState:
+    """Attitude ``q`` (scalar last), body rate ``w_radps``, actuator momentum ``h_Nms``."""
+
+    q: NDArray[np.float64]
+    w_radps: NDArray[np.float64]
+    h_Nms: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        q = np.array(self.q, dtype=float)
+        norm = np.linalg.norm(q)
+        if q.shape != (4,) or not np.isfinite(norm) or norm == 0:
+            raise ValueError("q must be a non-zero 4-vector (scalar last)")
+        q = q / norm
+        q.setflags(write=False)
+        object.__setattr__(self, "q", q)
+        object.__setattr__(self, "w_radps", _frozen(self.w_radps, (3,), "w_radps"))
+        object.__setattr__(self, "h_Nms", _frozen(self.h_Nms, (3,), "h_Nms"))
+
+    @property
+    def rotation(self) -> Rotation:
+        return Rotation.from_quat(self.q)
+
+    def as_vector(self) -> NDArray[np.float64]:
+        """State as one vector ``(q[4], w[3], h[3])``."""
+        return np.concatenate([self.q, self.w_radps, self.h_Nms])
+
+    @classmethod
+    def from_vector(cls, x: ArrayLike) -> AttitudeState:
+        x = np.asarray(x, dtype=float)
+        return cls(x[0:4], x[4:7], x[7:10])
+
+
+def quaternion_rate(q: NDArray[np.float64], w_radps: NDArray[np.float64]) -> NDArray[np.float64]:
+    """dq/dt for a scalar-last quaternion and body rates (2 dq_v = q4 w + q_v x w)."""
+    qv, q4 = q[:3], q[3]
+    dqv = 0.5 * (q4 * w_radps + np.cross(qv, w_radps))
+    dq4 = -0.5 * float(qv @ w_radps)
+    return np.concatenate([dqv, [dq4]])
+
+
+def attitude_rhs(
+    body: RigidBody,
+    x: NDArray[np.float64],
+    torque_Nm: NDArray[np.float64],
+    ext_torque_Nm: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Right-hand side of the plant for the state vector ``(q, w, h)``."""
+    q, w, h = x[0:4], x[4:7], x[7:10]
+    jw = body.inertia_kgm2 @ w
+    dw = body.inertia_inv @ (ext_torque_Nm + torque_Nm - np.cross(w, jw + h))
+    return np.concatenate([quaternion_rate(q, w), dw, -torque_Nm])
+
+
+def propagate(
+    body: RigidBody,
+    state: AttitudeState,
+    torque_Nm: ArrayLike,
+    dt_s: float,
+    ext_torque_Nm: ArrayLike = (0.0, 0.0, 0.0),
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> AttitudeState:
+    """Hold ``torque_Nm`` (and ``ext_torque_Nm``) constant over ``dt_s``; return the new state.
+
+    Integrates with ``solve_ivp`` (DOP853); the quaternion is renormalised at the end.
+    """
+    if not dt_s > 0:
+        raise ValueError(f"dt_s must be positive, got {dt_s}")
+    m_u = np.asarray(torque_Nm, dtype=float)
+    m_ext = np.asarray(ext_torque_Nm, dtype=float)
+    sol = solve_ivp(
+        lambda _t, x: attitude_rhs(body, x, m_u, m_ext),
+        (0.0, dt_s),
+        state.as_vector(),
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+    )
+    if not sol.success:  # pragma: no cover - DOP853 on a smooth field does not fail
+        raise RuntimeError(f"attitude propagation failed: {sol.message}")
+    return AttitudeState.from_vector(sol.y[:, -1])
+
+
+def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.float64]:
+    """Total angular momentum ``J w + h`` in body axes (conserved when M_ext = 0)."""
+    return body.inertia_kgm2 @ state.w_radps + state.h_Nms
+
+
+def attitude_error(q: ArrayLike, q_target: ArrayLike) -> Rotation:
+    """Error rotation ``q_target^-1 * q`` (body attitude relative to the target)."""
+    return Rotation.from_quat(q_target).inv() * Rotation.from_quat(q)
+
+
+def error_angle_deg(q: ArrayLike, q_target: ArrayLike) -> float:
+    """Principal angle of the attitude error, degrees."""
+    return float(np.degrees(attitude_error(q, q_target).magnitude()))
