@@ -1,0 +1,131 @@
+"""The ragged convex-polygon kernels against shapely (an independent computation)."""
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from estim.polygons import ConvexPolygons
+
+
+def _random_convex(rng, n_poly, kind="polygon"):
+    polys = []
+    for _ in range(n_poly):
+        centre = rng.normal(size=2) * 3
+        if kind == "point":
+            pts = centre[None, :]
+        elif kind == "segment":
+            pts = np.array([centre, centre + rng.normal(size=2)])
+        else:
+            pts = centre + rng.normal(size=(rng.integers(3, 12), 2)) * rng.uniform(0.1, 3, size=2)
+        hull = shapely.MultiPoint(pts).convex_hull
+        if hull.geom_type == "Polygon":
+            xy = np.asarray(hull.exterior.coords)[:-1]
+            if shapely.Polygon(xy).exterior.is_ccw is False:
+                xy = xy[::-1]
+        else:
+            xy = np.asarray(hull.coords) if hull.geom_type == "LineString" else pts
+        polys.append(xy)
+    return polys
+
+
+def _same_set(a_xy, b_geom, tol=1e-9):
+    """Two convex sets are equal iff each lies within tol of the other."""
+    a = shapely.MultiPoint(a_xy).convex_hull if len(a_xy) else shapely.Polygon()
+    if a.is_empty or b_geom.is_empty:
+        return a.is_empty == b_geom.is_empty or max(a.area, b_geom.area) < tol
+    return a.hausdorff_distance(b_geom) < tol * max(1.0, max(abs(c) for c in a.bounds))
+
+
+seeds = st.integers(0, 2**32 - 1)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=seeds, kind=st.sampled_from(["polygon", "polygon", "segment", "point"]))
+def test_clip_slab_equals_shapely_intersection(seed, kind):
+    rng = np.random.default_rng(seed)
+    polys = _random_convex(rng, 7, kind)
+    batch = ConvexPolygons.from_list(polys)
+    lo = rng.normal(size=7) * 3
+    hi = lo + rng.uniform(0, 4, size=7)
+    out = batch.clip_slab(0, lo, hi)
+    for i, p in enumerate(polys):
+        geom = shapely.MultiPoint(p).convex_hull
+        strip = shapely.box(lo[i], -1e3, hi[i], 1e3)
+        expected = geom.intersection(strip)
+        assert _same_set(out.polygon(i), expected), (i, out.polygon(i), expected)
+
+
+def test_clip_strip_that_misses_a_section_empties_it_and_touching_gives_a_point():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    batch = ConvexPolygons.from_list([square, square, square])
+    out = batch.clip_slab(0, [2.0, 1.0, 0.25], [3.0, 1.5, 0.5])
+    assert out.counts[0] == 0  # strip misses the section
+    assert len(out.polygon(1)) == 2  # touches an edge: a segment
+    np.testing.assert_allclose(out.polygon(1)[:, 0], 1.0)
+    assert out.areas()[2] == pytest.approx(0.25)
+    touch_corner = ConvexPolygons.from_list([square]).clip_halfplanes([1.0, 1.0], [0.0])
+    np.testing.assert_allclose(touch_corner.polygon(0), [[0.0, 0.0]])
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=seeds, kind=st.sampled_from(["polygon", "polygon", "segment", "point"]))
+def test_minkowski_segment_equals_hull_of_translates(seed, kind):
+    """P + [-g, g] = conv((P - g) U (P + g)), computed by shapely."""
+    rng = np.random.default_rng(seed)
+    polys = _random_convex(rng, 6, kind)
+    g = rng.normal(size=(6, 2)) * rng.uniform(0.01, 2)
+    out = ConvexPolygons.from_list(polys).minkowski_segment(g)
+    for i, p in enumerate(polys):
+        expected = shapely.MultiPoint(np.vstack([p - g[i], p + g[i]])).convex_hull
+        assert _same_set(out.polygon(i), expected)
+        poly = out.polygon(i)
+        if len(poly) >= 3 and expected.area > 1e-9:
+            # output is a proper CCW convex polygon, not just the right hull
+            assert out.areas()[i] == pytest.approx(expected.area, rel=1e-9)
+
+
+def test_minkowski_segment_parallel_to_a_segment_extends_it():
+    seg = np.array([[0.0, 0.0], [2.0, 0.0]])
+    out = ConvexPolygons.from_list([seg]).minkowski_segment([[1.0, 0.0]])
+    hull = shapely.MultiPoint(out.polygon(0)).convex_hull
+    assert hull.geom_type == "LineString"
+    np.testing.assert_allclose(hull.bounds, [-1.0, 0.0, 3.0, 0.0])
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=seeds)
+def test_affine_and_translate_equal_shapely_affine_transform(seed):
+    rng = np.random.default_rng(seed)
+    polys = _random_convex(rng, 5)
+    mats = np.eye(2) + rng.normal(size=(5, 2, 2)) * 0.3
+    mats[np.linalg.det(mats) < 0, 0, :] *= -1
+    off = rng.normal(size=(5, 2))
+    out = ConvexPolygons.from_list(polys).affine(mats, off).translate(-off)
+    for i, p in enumerate(polys):
+        m = mats[i]
+        geom = shapely.affinity.affine_transform(
+            shapely.Polygon(p), [m[0, 0], m[0, 1], m[1, 0], m[1, 1], 0.0, 0.0]
+        )
+        assert _same_set(out.polygon(i), geom)
+        assert out.areas()[i] > 0  # orientation kept CCW
+
+
+def test_select_and_bounds_and_negative_determinant_rejected():
+    polys = [np.array([[0.0, 0], [1, 0], [0, 1]]), np.zeros((0, 2)), np.array([[5.0, 5]])]
+    batch = ConvexPolygons.from_list(polys)
+    kept = batch.select(batch.nonempty())
+    assert kept.n == 2
+    np.testing.assert_array_equal(kept.polygon(1), [[5.0, 5.0]])
+    np.testing.assert_array_equal(kept.bounds()[0], [0, 0, 1, 1])
+    with pytest.raises(ValueError):
+        batch.affine(np.diag([1.0, -1.0]))
+
+
+def test_all_sections_empty():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    out = ConvexPolygons.from_list([square] * 4).clip_slab(0, 5.0, 6.0)
+    assert not out.nonempty().any()
+    assert out.select(out.nonempty()).n == 0
+    assert out.minkowski_segment([1.0, 1.0]).n == 4
