@@ -31,7 +31,7 @@ from scipy.spatial.transform import Rotation
 
 from estim import PerfectEstimator, PointBelief
 from experiments.errors import InputError
-from experiments.schema import Bool, Choice, Num, Str, Vec, validate_table
+from experiments.schema import Choice, Num, Str, Vec, validate_table
 from guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster, rk4_step
 from guidance.attitude.energy import (
     EnergySavingConfig,
@@ -121,13 +121,11 @@ _NOISE_RULES = {
     "angle_std_rad": Num(0.0, 1.0),
     "rate_std_radps": Num(0.0, 1.0),
     "disturbance_std_Nm": Num(0.0, 1e3),
-    "enabled": Bool(),
 }
 _NOISE_DEFAULTS = {
     "angle_std_rad": 3e-4,
     "rate_std_radps": 7e-6,
     "disturbance_std_Nm": 0.0,
-    "enabled": True,
 }
 
 
@@ -205,7 +203,6 @@ def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
         cm["sr_threshold"],
         cm["sr_damping"],
     )
-    noise_on = no["enabled"]
     return TurnSetup(
         inertia_kgm2=resurs_p_inertia(top["inertia_product_signs"]),
         initial_error_rad=np.radians(top["initial_error_deg"]),
@@ -216,9 +213,9 @@ def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
         euler=eu,
         cluster=cluster,
         beta0_rad=np.radians(cm["beta0_deg"]),
-        angle_std_rad=no["angle_std_rad"] if noise_on else 0.0,
-        rate_std_radps=no["rate_std_radps"] if noise_on else 0.0,
-        disturbance_std_Nm=no["disturbance_std_Nm"] if noise_on else 0.0,
+        angle_std_rad=no["angle_std_rad"],
+        rate_std_radps=no["rate_std_radps"],
+        disturbance_std_Nm=no["disturbance_std_Nm"],
         angle_tol_deg=top["angle_tol_deg"],
         rate_tol_degps=top["rate_tol_degps"],
     )
