@@ -10,6 +10,7 @@ numpy calls over the concatenated vertices (no per-polygon Python loop):
 * :meth:`ConvexPolygons.affine` -- a per-polygon affine map;
 * :meth:`ConvexPolygons.minkowski_segment` -- Minkowski sum with a centred
   segment ``[-g, g]`` per polygon (two new edges parallel to ``g``);
+* :meth:`ConvexPolygons.simplify` -- outer (conservative) vertex reduction;
 * :meth:`ConvexPolygons.translate`, :meth:`ConvexPolygons.select`.
 
 Vertices are counter-clockwise. Degenerate polygons (a segment, a point) are
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -35,6 +37,12 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _offsets(counts: IntArray) -> IntArray:
+    out = np.zeros(len(counts) + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class ConvexPolygons:
     """``n`` convex polygons; polygon ``i`` is ``xy[offsets[i]:offsets[i + 1]]`` (CCW)."""
@@ -43,6 +51,8 @@ class ConvexPolygons:
     offsets: IntArray
 
     def __post_init__(self) -> None:
+        if getattr(self, "_trusted", False):
+            return
         xy = np.ascontiguousarray(self.xy, dtype=float).reshape(-1, 2)
         offsets = np.asarray(self.offsets, dtype=np.int64)
         if offsets.ndim != 1 or offsets.size < 1 or offsets[0] != 0 or offsets[-1] != len(xy):
@@ -51,6 +61,15 @@ class ConvexPolygons:
             raise ValueError("offsets must be non-decreasing")
         object.__setattr__(self, "xy", _readonly(xy))
         object.__setattr__(self, "offsets", _readonly(offsets))
+
+    @classmethod
+    def _make(cls, xy: FloatArray, offsets: IntArray) -> ConvexPolygons:
+        """Internal constructor for kernel outputs: arrays already valid, no checks."""
+        obj = object.__new__(cls)
+        object.__setattr__(obj, "_trusted", True)
+        object.__setattr__(obj, "xy", _readonly(xy))
+        object.__setattr__(obj, "offsets", _readonly(offsets))
+        return obj
 
     # -- construction and views ------------------------------------------------------
     @classmethod
@@ -65,21 +84,29 @@ class ConvexPolygons:
     def n(self) -> int:
         return len(self.offsets) - 1
 
-    @property
+    # index arrays are derived once per (immutable) batch and cached
+    @cached_property
     def counts(self) -> IntArray:
-        return np.diff(self.offsets)
+        return _readonly(self.offsets[1:] - self.offsets[:-1])
+
+    @cached_property
+    def _owner(self) -> IntArray:
+        return _readonly(np.repeat(np.arange(self.n), self.counts))
 
     def owner(self) -> IntArray:
         """Index of the polygon each vertex belongs to."""
-        return np.repeat(np.arange(self.n), self.counts)
+        return self._owner
+
+    @cached_property
+    def _next(self) -> IntArray:
+        nxt = np.arange(1, len(self.xy) + 1)
+        nonempty = self.counts > 0
+        nxt[self.offsets[1:][nonempty] - 1] = self.offsets[:-1][nonempty]
+        return _readonly(nxt)
 
     def next_index(self) -> IntArray:
         """Index of the next vertex (cyclically) within the same polygon."""
-        nxt = np.arange(1, len(self.xy) + 1)
-        counts = self.counts
-        nonempty = counts > 0
-        nxt[self.offsets[1:][nonempty] - 1] = self.offsets[:-1][nonempty]
-        return nxt
+        return self._next
 
     def polygon(self, i: int) -> FloatArray:
         return self.xy[self.offsets[i] : self.offsets[i + 1]]
@@ -123,7 +150,7 @@ class ConvexPolygons:
         pos = np.arange(len(src)) - np.repeat(starts, count)
         new_xy = np.where((pos == 0)[:, None], first[src], cross_pt[src])
         new_counts = np.bincount(own, weights=count, minlength=self.n).astype(np.int64)
-        out = ConvexPolygons(new_xy, np.concatenate([[0], np.cumsum(new_counts)]))
+        out = ConvexPolygons._make(new_xy, _offsets(new_counts))
         return out._dedupe()
 
     def clip_slab(self, axis: int, lo: ArrayLike, hi: ArrayLike) -> ConvexPolygons:
@@ -140,11 +167,11 @@ class ConvexPolygons:
         offset = np.broadcast_to(np.asarray(offset, dtype=float), (self.n, 2))
         own = self.owner()
         xy = np.einsum("ijk,ik->ij", matrix[own], self.xy) + offset[own]
-        return ConvexPolygons(xy, self.offsets)
+        return ConvexPolygons._make(xy, self.offsets)
 
     def translate(self, offset: ArrayLike) -> ConvexPolygons:
         offset = np.broadcast_to(np.asarray(offset, dtype=float), (self.n, 2))
-        return ConvexPolygons(self.xy + offset[self.owner()], self.offsets)
+        return ConvexPolygons._make(self.xy + offset[self.owner()], self.offsets)
 
     def minkowski_segment(self, half: ArrayLike) -> ConvexPolygons:
         """Minkowski sum of polygon ``i`` with the segment ``[-half[i], half[i]]``.
@@ -182,7 +209,62 @@ class ConvexPolygons:
         sign = np.where(pos == 0, s_prev[src], s_cur[src])
         new_xy = self.xy[src] + sign[:, None] * g[src]
         new_counts = np.bincount(own, weights=count, minlength=self.n).astype(np.int64)
-        return ConvexPolygons(new_xy, np.concatenate([[0], np.cumsum(new_counts)]))
+        return ConvexPolygons._make(new_xy, _offsets(new_counts))
+
+    def simplify(
+        self, rel_area_tol: float = 1e-6, max_vertices: int = 24, max_passes: int = 8
+    ) -> ConvexPolygons:
+        """Outer (conservative) simplification: the result contains the input.
+
+        An edge ``k`` is removed by extending its neighbours ``k-1`` and ``k+1`` to
+        their intersection ``X`` (possible when they turn by less than pi); this
+        adds the triangle ``(v_k, X, v_k+1)``. Each pass removes, in every polygon,
+        the edges that are local minima of that added area, provided it is below
+        ``rel_area_tol`` times the polygon's area -- or unconditionally while the
+        polygon has more than ``max_vertices`` vertices. Removed edges are never
+        adjacent, so one pass is a single vectorised rewrite. The added area is
+        invariant under the affine prediction maps, so the tolerance is too.
+        """
+        out = self
+        for _ in range(max_passes):
+            out, changed = out._simplify_pass(rel_area_tol, max_vertices)
+            if not changed:
+                break
+        return out
+
+    def _simplify_pass(self, rel_tol: float, max_vertices: int) -> tuple[ConvexPolygons, bool]:
+        if len(self.xy) == 0:
+            return self, False
+        own = self.owner()
+        nxt = self.next_index()
+        prv = np.empty_like(nxt)
+        prv[nxt] = np.arange(len(nxt))
+        v, vn, vp, vnn = self.xy, self.xy[nxt], self.xy[prv], self.xy[nxt[nxt]]
+        d_prev, d_k, d_next = v - vp, vn - v, vnn - vn
+
+        def cross(a: FloatArray, b: FloatArray) -> FloatArray:
+            return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+
+        den = cross(d_prev, d_next)
+        counts = self.counts[own]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = cross(vn - v, d_next) / den
+            x_pt = v + t[:, None] * d_prev
+            added = 0.5 * np.abs(cross(d_k, x_pt - v))
+        area = np.abs(self.areas())[own]
+        valid = (den > 0) & (t >= 0) & np.isfinite(added) & (counts >= 4)
+        cost = np.where(valid, added, np.inf)
+        local_min = (cost < cost[prv]) & (cost <= cost[nxt])
+        small = cost <= rel_tol * area
+        remove = valid & local_min & (small | (counts > max_vertices))
+        if not remove.any():
+            return self, False
+        xy = self.xy.copy()
+        xy[remove] = x_pt[remove]
+        keep = np.ones(len(xy), dtype=bool)
+        keep[nxt[remove]] = False
+        new_counts = np.bincount(own, weights=keep, minlength=self.n).astype(np.int64)
+        return ConvexPolygons._make(xy[keep], _offsets(new_counts)), True
 
     def select(self, mask_or_index: ArrayLike) -> ConvexPolygons:
         """Keep the polygons chosen by a boolean mask or an index array (order kept)."""
@@ -192,7 +274,7 @@ class ConvexPolygons:
         counts = self.counts[idx]
         starts = self.offsets[:-1][idx]
         vert = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-        return ConvexPolygons(self.xy[vert], np.concatenate([[0], np.cumsum(counts)]))
+        return ConvexPolygons._make(self.xy[vert], _offsets(counts))
 
     def nonempty(self) -> NDArray[np.bool_]:
         return self.counts > 0
@@ -227,4 +309,4 @@ class ConvexPolygons:
         if keep.all():
             return self
         new_counts = np.bincount(self.owner(), weights=keep, minlength=self.n).astype(np.int64)
-        return ConvexPolygons(self.xy[keep], np.concatenate([[0], np.cumsum(new_counts)]))
+        return ConvexPolygons._make(self.xy[keep], _offsets(new_counts))

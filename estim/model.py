@@ -1,0 +1,158 @@
+"""The auxiliary linear model of one guidance channel (SPEC 1.3, seed 003 section 4).
+
+Per channel (lateral shown; the vertical channel is the same with theta, z) the
+state is the bearing ``alpha`` (rad), its rate ``omega`` (rad/s) and the range
+``x`` (m), with the nominal closing law ``x(t) = x(t0) - e (t - t0)``::
+
+    d alpha/dt = omega
+    d omega/dt = 2 e omega / x + v / x + (1/x) sum_i k(t_i) delta(t - t_i)
+
+``|v| <= nu`` stands for everything neglected (opponent's control). The impulse
+``k`` (m/s) is the change of the *relative* lateral velocity of the target with
+respect to the spacecraft; the spacecraft itself changes its velocity by ``-k``.
+
+Exact one-step solution (derivation: ``d(omega x^2)/dt = v x`` and
+``int dt/x^2 = Delta/(x0 x1)``), with ``x1 = x0 - e Delta`` and ``v`` constant over
+the step::
+
+    omega1 = omega0 x0^2/x1^2 + v Delta (x0 + x1) / (2 x1^2)
+    alpha1 = alpha0 + omega0 x0 Delta / x1 + v Delta^2 / (2 x1)
+
+The second ``v`` coefficient follows from ``int_0^Delta (x0 t - e t^2/2)/x(t)^2 dt
+= Delta^2 / (2 x1)``. A natural companion coordinate is the zero-effort miss
+``w = omega x^2 / e`` (m): the prediction becomes the unit-determinant shear
+``alpha1 = alpha0 + w0 e Delta/(x0 x1)``, ``w1 = w0 + v Delta (x0 + x1)/(2 e)``.
+
+Miss forecast for free motion (seed 003 section 5)::
+
+    Pi(alpha, omega, x) = omega x^2 / e + sign(omega) nu (x/e)^2 / 2
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+
+@dataclass(frozen=True)
+class BearingBound:
+    """Bearing error bound growing linearly as the range closes (SPEC 1.2).
+
+    ``bound(d) = end_rad + (start_rad - end_rad) * d / ref_range_m``: ``start_rad``
+    at the nominal initial range, ``end_rad`` at zero range.
+    """
+
+    start_rad: float = 1.5e-4
+    end_rad: float = 2.3e-4
+    ref_range_m: float = 5801.3e3
+
+    def __post_init__(self) -> None:
+        if not (self.start_rad > 0 and self.end_rad > 0 and self.ref_range_m > 0):
+            raise ValueError("bearing bounds and reference range must be positive")
+
+    @property
+    def max_range_m(self) -> float:
+        """Largest range at which the bound is still positive."""
+        slope = (self.end_rad - self.start_rad) / self.ref_range_m
+        return np.inf if slope <= 0 else self.end_rad / slope
+
+    def __call__(self, range_m: ArrayLike) -> NDArray[np.float64]:
+        d = np.asarray(range_m, dtype=float)
+        b = self.end_rad + (self.start_rad - self.end_rad) * d / self.ref_range_m
+        return np.maximum(b, 1e-3 * min(self.start_rad, self.end_rad))
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """A bearing measurement of one channel (rad)."""
+
+    alpha_rad: float
+
+
+@dataclass(frozen=True)
+class Range:
+    """A range-finder measurement (m)."""
+
+    range_m: float
+
+
+@dataclass(frozen=True)
+class ChannelModel:
+    """Parameters of the auxiliary model shared by every estimator of a channel."""
+
+    closing_speed_mps: float = 58.0e3
+    nu_mps2: float = 0.005
+    bearing_bound: BearingBound = field(default_factory=BearingBound)
+    range_rel_bound: float = 0.05
+    eps_m: float = 5.0e3
+
+    def __post_init__(self) -> None:
+        if not self.closing_speed_mps > 0:
+            raise ValueError("closing_speed_mps must be positive")
+        if not self.nu_mps2 >= 0:
+            raise ValueError("nu_mps2 must be non-negative")
+        if not 0 < self.range_rel_bound < 1:
+            raise ValueError("range_rel_bound must be in (0, 1)")
+        if not self.eps_m > 0:
+            raise ValueError("eps_m must be positive")
+
+    @property
+    def e(self) -> float:
+        return self.closing_speed_mps
+
+    def step_coefficients(self, x0_m: ArrayLike, dt_s: float) -> dict[str, NDArray[np.float64]]:
+        """Coefficients of the exact one-step map from ``x0`` to ``x1 = x0 - e dt``.
+
+        Returns ``x1``, ``a_w`` (alpha gain on w: e dt/(x0 x1)), ``omega_gain``
+        (x0^2/x1^2), ``alpha_omega`` (x0 dt/x1), ``g_alpha`` (dt^2/(2 x1)),
+        ``g_omega`` (dt (x0+x1)/(2 x1^2)), ``g_w`` (dt (x0+x1)/(2 e)): the ``g`` are
+        the coefficients of ``v``.
+        """
+        x0 = np.asarray(x0_m, dtype=float)
+        x1 = x0 - self.e * dt_s
+        return {
+            "x1": x1,
+            "a_w": self.e * dt_s / (x0 * x1),
+            "omega_gain": x0**2 / x1**2,
+            "alpha_omega": x0 * dt_s / x1,
+            "g_alpha": dt_s**2 / (2.0 * x1),
+            "g_omega": dt_s * (x0 + x1) / (2.0 * x1**2),
+            "g_w": dt_s * (x0 + x1) / (2.0 * self.e),
+        }
+
+    def step(self, state: ArrayLike, dt_s: float, v_mps2: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """Exact one-step propagation of ``(alpha, omega, x)`` rows with constant ``v``."""
+        s = np.asarray(state, dtype=float)
+        c = self.step_coefficients(s[..., 2], dt_s)
+        v = np.asarray(v_mps2, dtype=float)
+        alpha = s[..., 0] + c["alpha_omega"] * s[..., 1] + c["g_alpha"] * v
+        omega = c["omega_gain"] * s[..., 1] + c["g_omega"] * v
+        return np.stack([alpha, omega, c["x1"] + 0.0 * alpha], axis=-1)
+
+    def miss_forecast_m(self, points: ArrayLike) -> NDArray[np.float64]:
+        """``Pi(alpha, omega, x)`` of seed 003 section 5 for rows ``(alpha, omega, x)``."""
+        p = np.asarray(points, dtype=float)
+        omega, x = p[..., 1], p[..., 2]
+        t_go = x / self.e
+        return omega * x * t_go + np.sign(omega) * self.nu_mps2 * t_go**2 / 2.0
+
+    def zero_effort_miss_m(self, omega_radps: ArrayLike, x_m: ArrayLike) -> NDArray[np.float64]:
+        """``w = omega x^2 / e``."""
+        return np.asarray(omega_radps) * np.asarray(x_m) ** 2 / self.e
+
+    def omega_from_w(self, w_m: ArrayLike, x_m: ArrayLike) -> NDArray[np.float64]:
+        return np.asarray(w_m) * self.e / np.asarray(x_m) ** 2
+
+    def from_cartesian(self, lateral_m, lateral_vel_mps, x_m, vx_mps) -> NDArray[np.float64]:
+        """Exact ``(alpha, omega, x)`` of a relative Cartesian state of one channel.
+
+        ``alpha = atan2(y, x)``, ``omega = (x Vy - y Vx) / (x^2 + y^2)``.
+        """
+        y, vy, x, vx = (
+            np.asarray(a, dtype=float) for a in (lateral_m, lateral_vel_mps, x_m, vx_mps)
+        )
+        alpha = np.arctan2(y, x)
+        omega = (x * vy - y * vx) / (x**2 + y**2)
+        return np.stack([alpha, omega, x + 0.0 * alpha], axis=-1)
