@@ -1,0 +1,233 @@
+"""Energy-saving discrete control of Resurs-P (seed 000, SPEC 2.1) and the min-energy bound.
+
+The two full 300-s turns (energy law, Euler-axis baseline) are simulated once each
+(module fixtures) and shared by the tests that check them.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.linalg import expm, null_space
+
+from experiments.attitude_cmg import lower_bound_energy_N2m2s, setup_from_scenario, simulate_turn
+from guidance.attitude.energy import (
+    EnergySavingConfig,
+    EnergySavingController,
+    EnergySavingState,
+    given_system,
+    resurs_p_inertia,
+    skew,
+)
+from guidance.attitude.min_energy import min_energy_turn
+
+J = resurs_p_inertia()
+J_INV = np.linalg.inv(J)
+X0 = np.r_[np.radians([110.0, 45.0, 45.0]), 0.0, 0.0, 0.0]
+SEED_U0_NM = np.array([-5.4, -1.1, -2.4])
+CONFIG = EnergySavingConfig()
+
+
+@pytest.fixture(scope="module")
+def energy_turn():
+    setup = setup_from_scenario("test", {"horizon_s": 330.0})
+    return setup, simulate_turn(setup, "energy")
+
+
+@pytest.fixture(scope="module")
+def euler_turn():
+    setup = setup_from_scenario("test", {"horizon_s": 300.0})
+    return setup, simulate_turn(setup, "euler")
+
+
+def test_inertia_read_as_upper_triangle_with_thousands_separator():
+    np.testing.assert_array_equal(np.diag(J), [22147, 10213, 24497])
+    np.testing.assert_array_equal(J, J.T)
+    assert resurs_p_inertia((1, -1, 1))[0, 2] == -321
+    with pytest.raises(ValueError):
+        resurs_p_inertia((1, 0, 1))
+
+
+def test_F_is_inverse_inertia_times_momentum_cross_matrix():
+    """(3.5): dw/dt = -J^-1 (w x K) + J^-1 M  =>  F w = -J^-1 (w x K)."""
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        w, k = rng.normal(size=3), rng.normal(0, 100, 3)
+        a, _ = given_system(J_INV, k, 0.1)
+        f = (a[3:, 3:] - np.eye(3)) / 0.1  # recovering dt F from E + dt F costs ~4 digits
+        np.testing.assert_allclose(f @ w, -J_INV @ np.cross(w, k), rtol=1e-9)
+        np.testing.assert_allclose(skew(k) @ w, np.cross(k, w))
+
+
+def test_discretisation_3_10_3_11_against_scipy_expm():
+    """Zero-order hold of X' = R X + G M: exact for F = 0 (K = 0), first order in dt
+    for A and second order for B otherwise (the seed keeps these terms)."""
+
+    def exact(k, dt):
+        r = np.zeros((9, 9))
+        r[:3, 3:6] = np.eye(3)
+        r[3:6, 3:6] = J_INV @ skew(k)
+        r[3:6, 6:] = J_INV
+        e = expm(r * dt)
+        return e[:6, :6], e[:6, 6:]
+
+    a, b = given_system(J_INV, np.zeros(3), 0.1)
+    a_ex, b_ex = exact(np.zeros(3), 0.1)
+    np.testing.assert_allclose(a, a_ex, atol=1e-14)
+    np.testing.assert_allclose(b, b_ex, atol=1e-16)
+    k = np.array([300.0, -200.0, 100.0])
+    err_a = [np.abs(given_system(J_INV, k, dt)[0] - exact(k, dt)[0]).max() for dt in (0.1, 0.05)]
+    err_b = [np.abs(given_system(J_INV, k, dt)[1] - exact(k, dt)[1]).max() for dt in (0.1, 0.05)]
+    assert err_a[0] / err_a[1] == pytest.approx(4.0, rel=0.05)  # local error O(dt^2)
+    assert err_b[0] / err_b[1] == pytest.approx(8.0, rel=0.05)  # local error O(dt^3)
+
+
+def test_auxiliary_matrix_4_6():
+    c = CONFIG.aux_matrix(1000)
+    f1, f2 = 2.5e-5 * (1 + 5e-3 * 1000), 0.01 * (1 + 2.5e-4 * 1000)
+    np.testing.assert_allclose(np.diag(c[3:, :3]), -f1)
+    np.testing.assert_allclose(np.diag(c[3:, 3:]), 1 - f2)
+    np.testing.assert_allclose(c[:3, 3:], 0.1 * np.eye(3))
+
+
+def test_unforced_auxiliary_system_lyapunov_function_decreases_fig7():
+    """Seed Fig. 7: theta_i = (C_i xi_i)^T (C_i xi_i) decreases along the unforced motion."""
+    xi, theta = X0.copy(), []
+    for i in range(3000):
+        xi = CONFIG.aux_matrix(i) @ xi
+        theta.append(xi @ xi)
+    assert np.all(np.diff(theta) < 0)
+
+
+def _k_u_22(p, a, b, c, d, k_x, k_xi, k_u, k_eps):
+    """Seed eq. (2.2), written out independently of the controller."""
+    m = p @ (b - d) + np.eye(3)
+    return p @ a @ k_x @ a.T @ p.T + p @ c @ k_xi @ c.T @ p.T + m @ k_u @ m.T + p @ k_eps @ p.T
+
+
+def test_gain_2_4_minimises_trace_of_2_2_and_gives_2_5():
+    a, b = given_system(J_INV, np.array([10.0, -5.0, 3.0]), 0.1)
+    law = EnergySavingController(CONFIG)
+    rng = np.random.default_rng(4)
+    state = EnergySavingState(7, X0.copy(), np.zeros(3), np.diag([2e6, 5e5, 1e6]))
+    new, diag = law.update(state, a, b, X0 + 0.01)
+    k_x, k_eps = np.diag(CONFIG.state_var), np.diag(CONFIG.meas_var)
+    c, d = CONFIG.aux_matrix(7), -b
+    args = (a, b, c, d, k_x, np.diag(CONFIG.aux_var), state.k_u, k_eps)
+    best = np.trace(_k_u_22(diag.gain, *args))
+    for _ in range(20):
+        delta = rng.normal(size=(3, 6)) * np.abs(diag.gain).max() * 1e-3
+        assert np.trace(_k_u_22(diag.gain + delta, *args)) > best
+        assert np.trace(_k_u_22(diag.gain - delta, *args)) > best
+    np.testing.assert_allclose(new.k_u, _k_u_22(diag.gain, *args), rtol=1e-9)
+    assert diag.trace_increment == pytest.approx(np.trace(new.k_u) - np.trace(state.k_u))
+
+
+def test_seed_u0_is_the_torque_matching_the_auxiliary_first_step():
+    """Reading check (J, D = -B): X_1 - xi_1 = A X0 - C_0 X0 + 2 B U0 vanishes (least
+    squares) for U0 close to the seed's M_0 = (-5.4, -1.1, -2.4) N m."""
+    a, b = given_system(J_INV, np.zeros(3), 0.1)
+    u0 = np.linalg.lstsq(2 * b, CONFIG.aux_matrix(0) @ X0 - a @ X0, rcond=None)[0]
+    np.testing.assert_allclose(u0, SEED_U0_NM, atol=0.2)
+
+
+def test_min_energy_bound_equals_continuous_double_integrator_closed_form():
+    """With K = 0 the model is three double integrators J phi'' = M; the continuous
+    minimum of int M^T M dt over T is 12 |J phi0|^2 / T^3."""
+    a, b = given_system(J_INV, np.zeros(3), 0.1)
+    turn = min_energy_turn(a, b, X0, 3000, 0.1)
+    closed = 12.0 * np.sum((J @ X0[:3]) ** 2) / 300.0**3
+    assert turn.energy_N2m2s == pytest.approx(closed, rel=2e-3)
+    np.testing.assert_allclose(turn.final_state, 0.0, atol=1e-9)
+
+
+def test_min_energy_controls_beat_every_other_transfer():
+    """Any other control sequence reaching X_N = 0 (min-energy + null-space of the
+    reachability map) costs more."""
+    dt, n = 0.1, 40
+    a, b = given_system(J_INV, np.array([50.0, 0.0, -20.0]), dt)
+    x0 = np.r_[0.01, -0.02, 0.005, 0.0, 0.0, 0.0]
+    turn = min_energy_turn(a, b, x0, n, dt)
+    reach = np.hstack([np.linalg.matrix_power(a, n - 1 - i) @ b for i in range(n)])
+    basis = null_space(reach)
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        u = turn.controls_Nm.ravel() + basis @ rng.normal(size=basis.shape[1]) * 10
+        x = np.linalg.matrix_power(a, n) @ x0 + reach @ u
+        np.testing.assert_allclose(x, 0.0, atol=1e-9)
+        assert dt * u @ u > turn.energy_N2m2s
+
+
+def test_energy_turn_trace_of_k_u_decreases_every_step_2_6(energy_turn):
+    _, res = energy_turn
+    assert np.all(np.diff(res.trace_k_u) < 0)
+    assert np.all(res.trace_increment < 0)
+
+
+def test_energy_turn_reaches_seed_accuracy_by_320s_and_stays(energy_turn):
+    setup, res = energy_turn
+    settle = res.settle_time_s()
+    assert settle <= 320.0
+    end = slice(int(round(settle / setup.dt_s)), None)
+    assert np.all(res.angle_deg[end] <= 0.2) and np.all(res.rate_norm_degps[end] <= 0.02)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="seed data as printed (f1_i, f2_i of eq. 4.6) bring the error under 0.2 deg "
+    "only at ~313-316 s; at 300 s it is ~0.34 deg per axis, 0.39 deg in total",
+)
+def test_energy_turn_errors_within_seed_tolerance_at_300s(energy_turn):
+    setup, res = energy_turn
+    k = setup.n_turn_steps
+    assert res.angle_deg[k] <= 0.2 and res.rate_norm_degps[k] <= 0.02
+
+
+def test_energy_turn_gyro_momentum_returns_to_zero(energy_turn):
+    """Seed Fig. 9: K_G returns to zero. The total momentum J w + K_G is conserved (zero),
+    so |K_G| at rest-within-tolerance is bounded by |J| * 0.02 deg/s."""
+    setup, res = energy_turn
+    h = res.gyro_momentum_Nms
+    w = np.radians(res.rate_degps)
+    np.testing.assert_allclose(w @ J.T + h, 0.0, atol=1e-6)
+    settle = int(round(res.settle_time_s() / setup.dt_s))
+    bound = np.linalg.norm(J, 2) * np.radians(0.02)
+    assert np.all(np.linalg.norm(h[settle:], axis=1) <= bound)
+    assert np.linalg.norm(h[-1]) < 0.01 * np.linalg.norm(h, axis=1).max()
+    assert res.singular_steps == 0
+
+
+def test_energy_index_near_seed_2150_and_above_lower_bound(energy_turn):
+    setup, res = energy_turn
+    z = res.energy_N2m2s()
+    assert z == pytest.approx(2150.0, rel=0.10)
+    assert z > lower_bound_energy_N2m2s(setup)
+
+
+def test_euler_baseline_tracks_profile_and_costs_3x_the_energy_law(euler_turn, energy_turn):
+    setup, res = euler_turn
+    k = setup.n_turn_steps
+    assert res.angle_deg[k] <= 0.2 and res.rate_norm_degps[k] <= 0.02
+    # index of the ideal profile: M = J e s''(t) (total momentum zero: no gyroscopic term)
+    tracker_axis = setup.initial_error_rad / np.linalg.norm(setup.initial_error_rad)
+    from guidance.attitude.euler_turn import EulerAxisProfile
+
+    prof = EulerAxisProfile(np.linalg.norm(setup.initial_error_rad), 300.0, 6.0, 2.0)
+    t = np.linspace(0, 300, 300001)
+    ideal = np.sum((J @ tracker_axis) ** 2) * np.trapezoid(prof.accel(t) ** 2, t)
+    z = res.energy_N2m2s()
+    assert z == pytest.approx(ideal, rel=0.03)
+    assert z == pytest.approx(11200.0, rel=0.05)  # the phase durations chosen for the seed's Z
+    assert z >= 3.0 * energy_turn[1].energy_N2m2s()
+
+
+def test_seed_u0_removes_the_initial_torque_oscillation():
+    """Seed Fig. 8 vs Fig. 2: with U0 = (-5.4, -1.1, -2.4) N m the swing of the torques in
+    the first 30 s almost disappears (excess total variation < 10 % of the U0 = 0 case)."""
+    setup = setup_from_scenario("test", {"duration_s": 30.0, "horizon_s": 30.0})
+    zero = simulate_turn(setup, "energy").initial_oscillation_Nm()
+    seeded_setup = dataclasses.replace(
+        setup, energy=dataclasses.replace(setup.energy, u0_Nm=tuple(SEED_U0_NM))
+    )
+    seeded = simulate_turn(seeded_setup, "energy").initial_oscillation_Nm()
+    assert seeded < 0.1 * zero
