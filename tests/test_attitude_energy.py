@@ -19,6 +19,7 @@ from guidance.attitude.energy import (
     resurs_p_inertia,
     skew,
 )
+from guidance.attitude.euler_turn import EulerAxisProfile
 from guidance.attitude.min_energy import min_energy_turn
 
 J = resurs_p_inertia()
@@ -209,12 +210,12 @@ def test_euler_baseline_tracks_profile_and_costs_3x_the_energy_law(euler_turn, e
     k = setup.n_turn_steps
     assert res.angle_deg[k] <= 0.2 and res.rate_norm_degps[k] <= 0.02
     # index of the ideal profile: M = J e s''(t) (total momentum zero: no gyroscopic term)
-    tracker_axis = setup.initial_error_rad / np.linalg.norm(setup.initial_error_rad)
-    from guidance.attitude.euler_turn import EulerAxisProfile
-
-    prof = EulerAxisProfile(np.linalg.norm(setup.initial_error_rad), 300.0, 6.0, 2.0)
-    t = np.linspace(0, 300, 300001)
-    ideal = np.sum((J @ tracker_axis) ** 2) * np.trapezoid(prof.accel(t) ** 2, t)
+    theta0 = np.linalg.norm(setup.initial_error_rad)
+    axis = setup.initial_error_rad / theta0
+    eu = setup.euler
+    prof = EulerAxisProfile(theta0, setup.duration_s, eu["accel_time_s"], eu["jerk_time_s"])
+    t = np.linspace(0, setup.duration_s, 300001)
+    ideal = np.sum((J @ axis) ** 2) * np.trapezoid(prof.accel(t) ** 2, t)
     z = res.energy_N2m2s()
     assert z == pytest.approx(ideal, rel=0.03)
     assert z == pytest.approx(11200.0, rel=0.05)  # the phase durations chosen for the seed's Z

@@ -25,7 +25,11 @@ Control law (1.3), gain (2.4), covariance update (2.5), stability condition (2.6
     K_U,i+1 = [P_{i+1} (B-D) + E] K_U,i
     Tr[P_{i+1} (B-D) K_U,i] < 0
 
-``K_X`` and ``K_xi`` are held constant, as in the seed. Angles are in radians, so
+``K_X`` and ``K_xi`` are held constant, as in the seed. Note that with ``D = -B`` the
+difference ``X_{i+1} - xi_{i+1} = A X_i - C_i xi_i + 2 B U_i``: the law acts through
+``B - D = 2B``, and the torque that keeps ``X`` on ``xi`` is half of ``J`` times the
+auxiliary acceleration -- which is what the seed's ``U_0 = (-5.4, -1.1, -2.4)`` N m is
+(tests check it), a confirmation of this reading of ``J`` and ``D``. Angles are in radians, so
 ``K_X = diag(1, 1, 1, 0.01, 0.01, 0.01)`` means 1 rad^2 and 0.01 (rad/s)^2.
 """
 
