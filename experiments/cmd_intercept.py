@@ -1,0 +1,89 @@
+"""``python -m experiments intercept SCENARIO.toml``: Monte Carlo of the intercept (SPEC 3.1)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from experiments.engagement import ESTIMATORS, NOISES
+from experiments.errors import InputError
+from experiments.intercept_scenario import load_scenario
+from experiments.runner import run_experiment, summarise
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def seed_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return value
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    p.add_argument("--runs", type=positive_int, help="number of runs (default: the scenario's)")
+    p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
+    p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
+    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
+    p.add_argument("--out", help="output directory (default: results/<scenario name>)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_common(p)
+    p.add_argument("--estimator", choices=ESTIMATORS, help="default: the scenario's")
+    p.add_argument("--noise", choices=NOISES, help="default: the scenario's")
+
+
+def resolve(args) -> tuple[Any, int, int, Path]:
+    sc = load_scenario(args.scenario)
+    runs = args.runs or sc.experiment["runs"]
+    seed = sc.experiment["seed"] if args.seed is None else args.seed
+    out = Path(args.out) if args.out else Path("results") / sc.name
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: not a directory")
+    return sc, runs, seed, out
+
+
+def run(args) -> dict[str, Any]:
+    sc, runs, seed, out = resolve(args)
+    estimator = args.estimator or sc.experiment["estimator"]
+    noise = args.noise or sc.experiment["noise"]
+    t0 = time.perf_counter()
+    df = run_experiment(
+        sc, estimator, noise, runs, seed, out, args.workers, args.scheduler, not args.no_progress
+    )
+    result = summarise(df, sc, estimator, noise, seed, time.perf_counter() - t0)
+    result["out"] = str(out)
+    return result
+
+
+def render(result: dict[str, Any]) -> str:
+    m, f = result["miss_m"], result["fuel_mps"]
+    return "\n".join(
+        [
+            f"{result['scenario']}: {result['estimator']} / {result['noise']} noise, "
+            f"{result['runs']} runs, seed {result['seed']}",
+            f"  miss  m   mean {m['mean']:.2f}  p50 {m['p50']:.2f}  p90 {m['p90']:.2f}  "
+            f"max {m['max']:.2f}",
+            f"  fuel m/s  mean {f['mean']:.1f}  p50 {f['p50']:.1f}  p90 {f['p90']:.1f}  "
+            f"max {f['max']:.1f}",
+            f"  truth outside belief: {result['truth_outside']} steps; empty set: "
+            f"{result['empty_set']} runs; failures: {result['failures']}",
+            f"  results in {result['out']} ({result['wall_s']:.1f} s)",
+        ]
+    )

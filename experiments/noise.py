@@ -1,0 +1,127 @@
+"""Measurement-noise generators of the intercept (SPEC 1.6).
+
+``random``: every error uniform in its admissible interval.
+
+``game``: the adversary of seed 003 section 6. It keeps its *own* information
+set ``I_-`` of every channel (built from the same a-priori boxes, independent of
+the pursuer's estimator, updated with the measurements it issues and the
+impulses it observes). Before each measurement it finds the point of ``I_-``
+with the worst forecast miss (largest ``|Pi|``) and issues the measurement
+whose uncertainty interval
+
+(a) contains the true value (always: the error stays admissible),
+(b) contains the worst point, so the pursuer cannot rule it out, and
+(c) among such choices keeps the widest part of ``I_-`` alive: the interval is
+    centred as close as (a) and (b) allow on the middle of ``I_-``'s extent.
+
+If (a) and (b) are incompatible the interval is put as close as possible to
+the worst point. The range measurement is chosen the same way on ``x``.
+
+Generators are per-run objects driven by the engagement loop: ``bearings`` and
+``range`` issue measurements, ``observe`` reports the impulses issued, and
+``predict`` advances the generator's own sets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from estim.infoset import InformationSet, InformationSetEstimator
+from estim.model import Bearing, ChannelModel, Range
+
+
+def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -> float:
+    """The adversary's bearing for one channel (rules (a)-(c) of the module docstring)."""
+    model = belief.model
+    if belief.is_empty:
+        return alpha_true + bound_true
+    ext = belief.extremes(model.miss_forecast_m)
+    worst = ext.argmax if abs(ext.max_value) >= abs(ext.min_value) else ext.argmin
+    a_w, x_w = float(worst[0]), float(worst[2])
+    # a tiny inward margin keeps both points strictly inside after rounding
+    b_t = bound_true * (1 - 1e-9)
+    b_w = float(model.bearing_bound(x_w)) * (1 - 1e-9)
+    lo, hi = max(alpha_true - b_t, a_w - b_w), min(alpha_true + b_t, a_w + b_w)
+    if lo <= hi:
+        a_lo, a_hi = belief.alpha_range_rad()
+        return float(np.clip(0.5 * (a_lo + a_hi), lo, hi))
+    return float(np.clip(a_w, alpha_true - b_t, alpha_true + b_t))
+
+
+def game_range(range_true_m: float, rel_bound: float, x_worst_m: float, x_lo: float, x_hi: float):
+    """The adversary's range measurement: ``|d_m - d| <= b d`` and the interval
+    ``[d_m/(1+b), d_m/(1-b)]`` covers the worst point's range, centred on the set."""
+    b = rel_bound * (1 - 1e-9)
+    lo = max(range_true_m * (1 - b), x_worst_m * (1 - b))
+    hi = min(range_true_m * (1 + b), x_worst_m * (1 + b))
+    if lo <= hi:
+        # the interval's geometric centre d_m/(1-b^2) on the middle of the set's x-extent
+        return float(np.clip(0.5 * (x_lo + x_hi) * (1 - b**2), lo, hi))
+    return float(np.clip(x_worst_m, range_true_m * (1 - b), range_true_m * (1 + b)))
+
+
+@dataclass
+class RandomNoise:
+    """Uniform errors within the bounds (seeded generator, no global state)."""
+
+    model: ChannelModel
+    rng: np.random.Generator
+
+    def bearings(self, truth: Sequence[np.ndarray], range_true_m: float) -> list[float]:
+        bound = float(self.model.bearing_bound(range_true_m))
+        return [float(t[0] + self.rng.uniform(-bound, bound)) for t in truth]
+
+    def range(self, range_true_m: float) -> float:
+        b = self.model.range_rel_bound
+        return float(range_true_m * (1 + self.rng.uniform(-b, b)))
+
+    def observe(self, impulses_mps: Sequence[float]) -> None:
+        pass
+
+    def predict(self, dt_s: float) -> None:
+        pass
+
+
+class GameNoise:
+    """The adversary of seed 003 (module docstring); keeps its own sets per channel."""
+
+    def __init__(self, estimator: InformationSetEstimator, sets: Sequence[InformationSet]):
+        self.estimator = estimator
+        self.model = estimator.model
+        self.sets = list(sets)
+
+    def bearings(self, truth: Sequence[np.ndarray], range_true_m: float) -> list[float]:
+        bound = float(self.model.bearing_bound(range_true_m))
+        out = []
+        for i, t in enumerate(truth):
+            a = game_bearing(float(t[0]), bound, self.sets[i])
+            self.sets[i] = self.estimator.update(self.sets[i], Bearing(a))
+            out.append(a)
+        return out
+
+    def range(self, range_true_m: float) -> float:
+        live = [s for s in self.sets if not s.is_empty]
+        if not live:
+            return range_true_m
+        worst, worst_val = None, -1.0
+        for s in live:
+            ext = s.extremes(self.model.miss_forecast_m)
+            for val, arg in ((ext.max_value, ext.argmax), (ext.min_value, ext.argmin)):
+                if abs(val) > worst_val:
+                    worst, worst_val = arg, abs(val)
+        x_lo = min(s.x_range_m()[0] for s in live)
+        x_hi = max(s.x_range_m()[1] for s in live)
+        d_m = game_range(range_true_m, self.model.range_rel_bound, float(worst[2]), x_lo, x_hi)
+        self.sets = [self.estimator.update(s, Range(d_m)) for s in self.sets]
+        return d_m
+
+    def observe(self, impulses_mps: Sequence[float]) -> None:
+        self.sets = [
+            self.estimator.shift(s, k) for s, k in zip(self.sets, impulses_mps, strict=True)
+        ]
+
+    def predict(self, dt_s: float) -> None:
+        self.sets = [self.estimator.predict(s, dt_s) for s in self.sets]

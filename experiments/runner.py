@@ -1,0 +1,212 @@
+"""Monte Carlo runner: tasks on an Executor, paired seeding, atomic resumable Parquet.
+
+* Seeding: run ``j`` uses ``SeedSequence(seed).spawn(runs)[j]``; the realisation
+  depends only on (scenario, seed, j), never on the worker count or the order,
+  and is the same for every estimator (paired comparison).
+* Executor: in-process for one worker, a ``ProcessPoolExecutor`` for several, or a
+  Dask cluster's ``Client.get_executor()`` with ``scheduler`` (same results).
+* Results: one Parquet file per (scenario, estimator, noise, seed) with one row per
+  run, the resolved scenario as JSON beside it; both written atomically
+  (temporary file + ``os.replace``). Rerunning the same command completes only the
+  missing runs; a failing run is recorded with its error and does not stop the others.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from experiments.engagement import timed_engagement
+from experiments.errors import InputError
+from experiments.intercept_scenario import InterceptScenario
+
+SAVE_EVERY_S = 2.0
+
+
+def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
+    """The seed of run ``j``: ``SeedSequence(seed).spawn(runs)[j]`` (independent of ``runs``)."""
+    return np.random.SeedSequence(seed, spawn_key=(j,))
+
+
+class _InlineExecutor(Executor):
+    """Runs tasks in the calling process (one worker; also the simplest to debug)."""
+
+    def submit(self, fn, /, *args, **kwargs):  # type: ignore[override]
+        fut: Future = Future()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller via the future
+            fut.set_exception(exc)
+        return fut
+
+
+@contextmanager
+def make_executor(workers: int | None = None, scheduler: str | None = None) -> Iterator[Executor]:
+    """Local processes by default, a Dask cluster when ``scheduler`` is given."""
+    if scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise InputError(
+                "--scheduler needs dask.distributed (pip install '.[cluster]')"
+            ) from None
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        try:
+            yield client.get_executor()
+        finally:
+            client.close()
+        return
+    n = workers or os.cpu_count() or 1
+    if n == 1:
+        yield _InlineExecutor()
+        return
+    pool = ProcessPoolExecutor(max_workers=n)
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _atomic_write(path: Path, write: Callable[[str], None]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name, suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
+    return Path(out_dir) / f"{sc.name}-{estimator}-{noise}-s{seed}.parquet"
+
+
+def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
+    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    _atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+
+
+def run_experiment(
+    sc: InterceptScenario,
+    estimator: str,
+    noise: str,
+    runs: int,
+    seed: int,
+    out_dir: Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    executor: Executor | None = None,
+) -> pd.DataFrame:
+    """Run (or complete) an experiment and return its per-run table."""
+    path = results_path(out_dir, sc, estimator, noise, seed)
+    meta = {"scenario": sc.to_dict(), "estimator": estimator, "noise": noise, "seed": seed}
+    meta_path = path.with_suffix(".json")
+    rows: list[dict[str, Any]] = []
+    if path.exists():
+        if meta_path.exists() and json.loads(meta_path.read_text())["scenario"] != json.loads(
+            json.dumps(meta["scenario"])
+        ):
+            raise InputError(
+                f"{path}: results of a different scenario; use another --out or delete the file"
+            )
+        try:
+            rows = pd.read_parquet(path).to_dict("records")
+        except Exception as exc:  # a corrupt file is never produced by atomic writes
+            raise InputError(f"{path}: cannot read previous results ({exc})") from None
+        rows = [r for r in rows if r["run"] < runs]
+    _atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
+    done = {int(r["run"]) for r in rows}
+    todo = [j for j in range(runs) if j not in done]
+    base = {"scenario": sc.name, "estimator": estimator, "noise": noise, "seed": seed}
+    if todo:
+        bar = tqdm(
+            total=runs,
+            initial=len(done),
+            desc=f"{sc.name} {estimator}/{noise}",
+            file=sys.stderr,
+            disable=not progress or None,
+            leave=False,
+        )
+        last_save = time.monotonic()
+        with executor_or(executor, workers, scheduler) as ex:
+            futs = {
+                ex.submit(timed_engagement, sc, estimator, noise, run_seed(seed, runs, j)): j
+                for j in todo
+            }
+            try:
+                for fut in as_completed(futs):
+                    j = futs[fut]
+                    try:
+                        row = fut.result()
+                    except InputError:
+                        raise
+                    except Exception as exc:  # a worker died: record, keep going
+                        row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+                    rows.append({**base, "run": j, **row})
+                    bar.update(1)
+                    if time.monotonic() - last_save > SAVE_EVERY_S:
+                        _write_rows(path, rows)
+                        last_save = time.monotonic()
+            finally:
+                bar.close()
+                if rows:
+                    _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
+    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    return df
+
+
+@contextmanager
+def executor_or(executor: Executor | None, workers, scheduler) -> Iterator[Executor]:
+    if executor is not None:
+        yield executor
+    else:
+        with make_executor(workers, scheduler) as ex:
+            yield ex
+
+
+def _stats(values: pd.Series) -> dict[str, float]:
+    v = values.dropna().to_numpy(dtype=float)
+    if len(v) == 0:
+        return {"mean": float("nan"), "p50": float("nan"), "p90": float("nan"), "max": float("nan")}
+    return {
+        "mean": float(v.mean()),
+        "p50": float(np.percentile(v, 50)),
+        "p90": float(np.percentile(v, 90)),
+        "max": float(v.max()),
+    }
+
+
+def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
+    """The intercept JSON object of SPEC 3.1 for one estimator x noise."""
+    ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]
+    return {
+        "scenario": sc.name,
+        "estimator": estimator,
+        "noise": noise,
+        "runs": int(len(df)),
+        "seed": int(seed),
+        "miss_m": _stats(ok["miss_m"]) if len(ok) else _stats(pd.Series(dtype=float)),
+        "fuel_mps": _stats(ok["fuel_mps"]) if len(ok) else _stats(pd.Series(dtype=float)),
+        "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
+        "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
+        "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
+        "wall_s": float(wall_s),
+    }

@@ -1,0 +1,72 @@
+"""Impulsive guidance law of seed 003 section 5 (SPEC 1.5).
+
+For the current belief (after the measurements) take the extremes of the miss
+forecast ``Pi`` over it, ``Pi_min`` at range ``x*`` and ``Pi_max`` at ``x**``. An
+impulse ``k`` (relative velocity) shifts ``omega`` by ``k/x`` and so ``Pi`` by
+``k x / e``; the impulse that re-centres the forecast interval about zero is
+
+    k = -(Pi_min + Pi_max) e / (x* + x**)
+
+(the seed prints it without the minus sign, its ``k`` being the spacecraft's own
+impulse; ours is the change of the target's velocity relative to the spacecraft,
+which the spacecraft produces by an impulse of ``-k``). Then ``|k| < mu1`` means no
+impulse, ``|k| > mu2`` is clipped, and the total fuel ``sum |k|`` over both
+channels never exceeds the reserve ``mu``.
+
+The law only asks the belief for the extremes of a function over itself, so it
+runs unchanged on an information set or on a Kalman filter's k-sigma ellipsoid.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from estim.base import Belief, Extremes
+from estim.model import ChannelModel
+
+
+@dataclass(frozen=True)
+class ImpulseLimits:
+    """``mu1 <= |k| <= mu2`` for an issued impulse, total fuel ``<= mu`` (m/s)."""
+
+    min_mps: float = 0.25
+    max_mps: float = 7.5
+    reserve_mps: float = 2000.0
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.min_mps <= self.max_mps:
+            raise ValueError("impulse limits need 0 <= min_mps <= max_mps")
+        if not self.reserve_mps >= 0:
+            raise ValueError("reserve_mps must be non-negative")
+
+    def apply(self, k_mps: float, fuel_used_mps: float) -> float:
+        """The impulse actually issued for a command ``k_mps`` given the fuel used."""
+        k = float(np.clip(k_mps, -self.max_mps, self.max_mps))
+        k = float(np.sign(k)) * min(abs(k), max(self.reserve_mps - fuel_used_mps, 0.0))
+        return 0.0 if abs(k) < self.min_mps else k
+
+
+@dataclass(frozen=True)
+class ForecastCentringLaw:
+    """The seed's law: re-centre the interval of forecast misses about zero."""
+
+    model: ChannelModel
+    limits: ImpulseLimits = ImpulseLimits()
+
+    def forecast(self, belief: Belief) -> Extremes:
+        """Extremes of ``Pi`` over the belief (with the states attaining them)."""
+        return belief.extremes(self.model.miss_forecast_m)
+
+    def command_mps(self, belief: Belief) -> float:
+        """Unlimited impulse ``k = -(Pi_min + Pi_max) e / (x* + x**)``; 0 if empty."""
+        if belief.is_empty:
+            return 0.0
+        ext = self.forecast(belief)
+        x_sum = float(ext.argmin[2] + ext.argmax[2])
+        return -(ext.min_value + ext.max_value) * self.model.e / x_sum
+
+    def impulse_mps(self, belief: Belief, fuel_used_mps: float) -> float:
+        """The impulse issued: the command with the limits and the reserve applied."""
+        return self.limits.apply(self.command_mps(belief), fuel_used_mps)
