@@ -133,14 +133,14 @@ def _simulate_all(
     rngs = [np.random.default_rng(c) for c in children]
     try:
         return [simulate_turn(gyro, law, q0, q_t, beta, kind, rngs, cfg)], 0
-    except (FloatingPointError, ValueError, ArithmeticError):
+    except Exception:  # SPEC 3.1: a run that raises is a failure
         pass
     results, failures = [], 0
     for child in children:
         try:
             rng = [np.random.default_rng(child)]
             results.append(simulate_turn(gyro, law, q0, q_t, beta, kind, rng, cfg))
-        except (FloatingPointError, ValueError, ArithmeticError):
+        except Exception:
             failures += 1
     return results, failures
 
