@@ -1,0 +1,288 @@
+"""The Gaussian belief of a Kalman filter seen through its n-sigma ellipsoid.
+
+A Kalman filter's belief is a mean ``m`` and a covariance ``P``. To answer the same
+questions as the information set (:class:`estim.base.Belief`) it is read as the
+n-sigma ellipsoid
+
+    E = {s : (s - m)^T P^+ (s - m) <= n^2} = {m + n S u : |u| <= 1},   S S^T = P,
+
+(``n = 3`` by default; a singular ``P`` gives a flat ellipsoid, which is handled).
+The square root ``S`` is a Cholesky factor taken in the coordinate order
+``(omega, x, alpha)``, so that its first two columns span the projection of ``E``
+onto the ``(omega, x)`` plane (see :meth:`GaussianBelief.extremes`). Cholesky is
+invariant under diagonal scaling, so the wildly different units (``alpha`` ~ 1e-3
+rad, ``omega`` ~ 1e-5 rad/s, ``x`` ~ 6e6 m) need no explicit rescaling; no
+eigen-decomposition of ``P`` (which is not scale invariant) is ever taken.
+
+Unlike the information set, the ellipsoid is *not* guaranteed to contain the
+truth: containment is a statistic to count, never an invariant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from estim.base import Belief, Extremes, StateFunction
+from estim.model import ChannelModel
+
+FloatArray = NDArray[np.float64]
+
+#: coordinate order of the stored Cholesky factor: (omega, x, alpha)
+PERM = np.array([1, 2, 0])
+
+#: relative pivot below which a direction is taken as exactly degenerate
+#: (the share of a variance not explained by the preceding coordinates)
+PIVOT_RTOL = 1.0e-13
+
+#: angles sampling the boundary of the projected (omega, x) ellipse
+_N_BOUNDARY = 720
+_THETA = np.linspace(0.0, 2.0 * np.pi, _N_BOUNDARY, endpoint=False)
+_COS, _SIN = np.cos(_THETA), np.sin(_THETA)
+_DTHETA = 2.0 * np.pi / _N_BOUNDARY
+
+
+def _fibonacci_sphere(n: int) -> FloatArray:
+    """``n`` nearly uniform unit vectors in 3D (Fibonacci lattice)."""
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    r = np.sqrt(1.0 - z**2)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+#: unit-ball samples for generic functions: the centre, a half-radius shell and the surface
+_SPHERE = _fibonacci_sphere(1024)
+_BALL = np.vstack([np.zeros((1, 3)), 0.5 * _fibonacci_sphere(128), _SPHERE])
+
+
+def psd_cholesky(p: ArrayLike) -> FloatArray:
+    """Lower-triangular ``L`` with ``L L^T = P`` for a positive semi-definite ``P``.
+
+    ``numpy.linalg.cholesky`` when ``P`` is positive definite; otherwise the same
+    recursion with a zero column wherever the remaining pivot is below
+    ``PIVOT_RTOL`` of the diagonal entry (an exactly known direction).
+    """
+    p = np.asarray(p, dtype=float)
+    try:
+        return np.linalg.cholesky(p)
+    except np.linalg.LinAlgError:
+        pass
+    n = p.shape[0]
+    low = np.zeros_like(p)
+    for j in range(n):
+        piv = p[j, j] - low[j, :j] @ low[j, :j]
+        if piv > PIVOT_RTOL * p[j, j] and piv > 0.0:
+            low[j, j] = math.sqrt(piv)
+            low[j + 1 :, j] = (p[j + 1 :, j] - low[j + 1 :, :j] @ low[j, :j]) / low[j, j]
+    return low
+
+
+@dataclass(frozen=True, eq=False)
+class GaussianBelief(Belief):
+    """An immutable ``(mean, covariance)`` of ``(alpha, omega, x)`` read as its ellipsoid.
+
+    Parameters
+    ----------
+    mean : array (3,)
+        ``(alpha_rad, omega_radps, x_m)``.
+    cov : array (3, 3)
+        Covariance (symmetrised on construction).
+    n_sigma : float
+        Radius of the ellipsoid in standard deviations.
+    status : str
+        ``"ok"``, or ``"terminal"`` once the mean range has passed under ``eps``
+        (the belief is then empty, as the information set after its threshold).
+    contradictions : int
+        Always 0: a Kalman update cannot be contradicted (kept for the interface).
+    innovation_outliers : int
+        Number of measurements so far whose innovation exceeded ``n_sigma``
+        standard deviations (the Kalman filter's analogue of a contradiction).
+    """
+
+    mean: FloatArray
+    cov: FloatArray
+    n_sigma: float = 3.0
+    status: str = "ok"
+    contradictions: int = 0
+    innovation_outliers: int = 0
+    _root: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        m = np.array(self.mean, dtype=float).reshape(-1)
+        p = np.array(self.cov, dtype=float)
+        if m.shape != (3,) or p.shape != (3, 3):
+            raise ValueError("mean must have shape (3,) and cov shape (3, 3)")
+        if not (np.all(np.isfinite(m)) and np.all(np.isfinite(p))):
+            raise ValueError("mean and covariance must be finite")
+        if not self.n_sigma > 0:
+            raise ValueError("n_sigma must be positive")
+        p = 0.5 * (p + p.T)
+        if np.any(np.diag(p) < 0):
+            raise ValueError("covariance has a negative variance")
+        root = psd_cholesky(p[np.ix_(PERM, PERM)])
+        for a in (m, p, root):
+            a.setflags(write=False)
+        object.__setattr__(self, "mean", m)
+        object.__setattr__(self, "cov", p)
+        object.__setattr__(self, "_root", root)
+
+    # -- Belief interface ------------------------------------------------------------
+    @property
+    def is_empty(self) -> bool:
+        return self.status == "terminal"
+
+    def centre(self) -> FloatArray:
+        return self.mean.copy()
+
+    def std(self) -> FloatArray:
+        """Standard deviations of ``(alpha, omega, x)``."""
+        return np.sqrt(np.diag(self.cov))
+
+    def points(self, u: ArrayLike) -> FloatArray:
+        """Rows ``m + n S u`` for unit-ball rows ``u`` given in ``(omega, x, alpha)`` order."""
+        d = np.asarray(u, dtype=float) @ (self.n_sigma * self._root).T  # (omega, x, alpha)
+        out = np.empty_like(d)
+        out[..., PERM] = d
+        return out + self.mean
+
+    def mahalanobis(self, state: ArrayLike) -> float:
+        """Mahalanobis distance of ``state`` from the mean (``inf`` off a flat ellipsoid)."""
+        d = (np.asarray(state, dtype=float).reshape(3) - self.mean)[PERM]
+        low = self._root
+        z = np.zeros(3)
+        for i in range(3):
+            r = d[i] - low[i, :i] @ z[:i]
+            if low[i, i] > 0.0:
+                z[i] = r / low[i, i]
+            elif abs(r) > 1e-12 * (abs(self.mean[PERM[i]]) + abs(d[i])) + 1e-300:
+                return math.inf
+        return float(np.sqrt(z @ z))
+
+    def contains(self, state: ArrayLike) -> bool:
+        """Whether ``state`` lies in the n-sigma ellipsoid (Mahalanobis distance <= n)."""
+        if self.is_empty:
+            return False
+        return self.mahalanobis(state) <= self.n_sigma * (1.0 + 1e-12)
+
+    def extremes(self, fn: StateFunction) -> Extremes:
+        """Min and max of ``fn`` over the n-sigma ellipsoid, with the points.
+
+        The miss forecast ``Pi`` of a :class:`~estim.model.ChannelModel` (recognised
+        as the bound method ``model.miss_forecast_m``) takes the exact route of
+        :meth:`_forecast_extremes`. Any other function: samples of the ball (the
+        centre, a half-radius shell and 1024 surface points), then from the best
+        surface samples the fixed-point iteration ``u <- +-grad/|grad|`` on the unit
+        sphere (finite-difference gradient in ``u``), kept only when it improves.
+        For a linear function ``c.s`` one iteration gives the exact extremes
+        ``c.m -+ n sqrt(c^T P c)``; for convex functions the maximum improves
+        monotonically; a non-convex function is handled to sampling accuracy.
+        """
+        if self.is_empty:
+            raise ValueError(f"extremes of an empty Gaussian belief (status {self.status})")
+        model = getattr(fn, "__self__", None)
+        if getattr(fn, "__func__", None) is ChannelModel.miss_forecast_m and isinstance(
+            model, ChannelModel
+        ):
+            return self._forecast_extremes(fn, model)
+        return self._generic_extremes(fn)
+
+    # -- extremes ------------------------------------------------------------------
+    def _generic_extremes(self, fn: StateFunction) -> Extremes:
+        pts = self.points(_BALL)
+        vals = np.asarray(fn(pts), dtype=float)
+        i_min, i_max = int(np.argmin(vals)), int(np.argmax(vals))
+        best = []
+        for sign, i0 in ((-1.0, i_min), (1.0, i_max)):
+            u, v = _BALL[i0], vals[i0]
+            if np.linalg.norm(u) < 0.99:  # interior optimum: keep the sample
+                best.append((u, v))
+                continue
+            for _ in range(8):
+                g = self._u_gradient(fn, u)
+                ng = float(np.linalg.norm(g))
+                if ng == 0.0:
+                    break
+                u_new = sign * g / ng
+                v_new = float(np.asarray(fn(self.points(u_new[None, :])))[0])
+                if sign * (v_new - v) <= 0.0:
+                    break
+                step = float(np.linalg.norm(u_new - u))
+                u, v = u_new, v_new
+                if step < 1e-12:
+                    break
+            best.append((u, v))
+        (u_lo, v_lo), (u_hi, v_hi) = best
+        p = self.points(np.vstack([u_lo, u_hi]))
+        return Extremes(float(v_lo), p[0], float(v_hi), p[1])
+
+    def _u_gradient(self, fn: StateFunction, u: FloatArray, h: float = 1e-3) -> FloatArray:
+        steps = np.vstack([u + h * np.eye(3), u - h * np.eye(3)])
+        f = np.asarray(fn(self.points(steps)), dtype=float)
+        return (f[:3] - f[3:]) / (2.0 * h)
+
+    def _forecast_extremes(self, fn: StateFunction, model: ChannelModel) -> Extremes:
+        """Extremes of ``Pi(alpha, omega, x) = omega x^2/e + sign(omega) nu x^2/(2 e^2)``.
+
+        ``Pi`` does not depend on ``alpha`` and, for any fixed ``x != 0``, increases
+        with ``omega`` (linear on each side of ``omega = 0`` with a jump up there).
+        Its extremes over ``E`` are therefore its extremes over the projection of
+        ``E`` onto the ``(omega, x)`` plane, attained on the top (max) and bottom
+        (min) of that ellipse, whose boundary is ``m + n S (cos t, sin t, 0)``
+        with ``S`` the Cholesky factor in ``(omega, x, alpha)`` order; the ``alpha``
+        of that point is the conditional mean, so the returned rows lie on ``E``.
+
+        The boundary is sampled at 720 angles; each best sample is refined by up to
+        three Newton steps on its smooth branch (sign of ``omega`` fixed),
+        ``f(t) = (omega(t) + sign nu/(2e)) x(t)^2 / e``, accepted only if they stay
+        on the branch and improve the value. Values are ``fn`` at the returned rows.
+        """
+        m, low, n = self.mean, self._root, self.n_sigma
+        e, nu = model.e, model.nu_mps2
+        a_w = n * low[0, 0]
+        b_x, c_x = n * low[1, 0], n * low[1, 1]
+        b_a, c_a = n * low[2, 0], n * low[2, 1]
+
+        def rows(cos, sin):
+            return np.stack(
+                [m[0] + b_a * cos + c_a * sin, m[1] + a_w * cos, m[2] + b_x * cos + c_x * sin],
+                axis=-1,
+            )
+
+        pts = rows(_COS, _SIN)
+        vals = np.asarray(fn(pts), dtype=float)
+        out = []
+        for sense, i0 in ((-1.0, int(np.argmin(vals))), (1.0, int(np.argmax(vals)))):
+            best_p, best_v = pts[i0], float(vals[i0])
+            w0 = m[1] + a_w * _COS[i0]
+            if w0 == 0.0:  # on the jump itself: keep the sample
+                out.append((best_p, best_v))
+                continue
+            branch = math.copysign(1.0, w0)
+            c = branch * nu / (2.0 * e)
+            t = _THETA[i0]
+            for _ in range(3):
+                ct, st = math.cos(t), math.sin(t)
+                w, x = m[1] + a_w * ct, m[2] + b_x * ct + c_x * st
+                w1, x1 = -a_w * st, -b_x * st + c_x * ct
+                w2, x2 = -a_w * ct, -b_x * ct - c_x * st
+                f1 = w1 * x * x + 2.0 * (w + c) * x * x1
+                f2 = w2 * x * x + 4.0 * w1 * x * x1 + 2.0 * (w + c) * (x1 * x1 + x * x2)
+                if sense * f2 >= 0.0:  # not locally concave (max) / convex (min)
+                    break
+                dt = float(np.clip(-f1 / f2, -_DTHETA, _DTHETA))
+                t += dt
+                if abs(dt) < 1e-14:
+                    break
+            ct, st = math.cos(t), math.sin(t)
+            if t != _THETA[i0] and math.copysign(1.0, m[1] + a_w * ct) == branch:
+                p = rows(np.array([ct]), np.array([st]))
+                v = float(np.asarray(fn(p))[0])
+                if sense * (v - best_v) > 0.0:
+                    best_p, best_v = p[0], v
+            out.append((best_p.copy(), best_v))
+        (p_lo, v_lo), (p_hi, v_hi) = out
+        return Extremes(v_lo, p_lo, v_hi, p_hi)
