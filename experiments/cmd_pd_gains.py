@@ -1,0 +1,278 @@
+"""``python -m experiments pd-gains [--angles-deg LIST]``: quaternion-PD gain study (SPEC 2.2, 3.1).
+
+For every requested angle: the settle-time map over ``(k_q, k_w)`` (one numpy batch),
+the efficient-coefficient curve and its parabola ``k_q = f0 k_w^2`` (seed eq. (27));
+then the fit of eq. (28) to ``f0(phi0)``. Defaults follow the reading that reproduces
+the seed's table (:data:`guidance.attitude.gain_study.StudySettings` docstring);
+every convention is an option. Also writes (PNG + SVG in ``--out``): the 150 deg
+settle-time map with wheel limits (seed Fig. 10), ``f0`` against the table (Fig. 14)
+and the settle time against the angle for the fitted rule and the baseline rule (10)
+(Fig. 15).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import asdict, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from experiments.errors import InputError
+from guidance.attitude import gain_study as gs
+from guidance.attitude.pd import baseline_kq, term_scale
+
+DEFAULT_FIT_ANGLES = (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    d = gs.StudySettings()
+    parser.add_argument(
+        "--angles-deg", default=None, help="comma-separated angles (deg); default: the seed's table"
+    )
+    parser.add_argument(
+        "--out", default="results/pd_gains", help="figure directory (default results/pd_gains)"
+    )
+    parser.add_argument("--no-figures", action="store_true", help="skip the figures")
+    parser.add_argument(
+        "--quaternion-term", default=d.quaternion_term, help="twice (default) | vector"
+    )
+    parser.add_argument(
+        "--initial-turn", default=d.initial_turn, help="full_angle (default) | eq11"
+    )
+    parser.add_argument("--angle-tol-deg", type=float, default=d.angle_tol_deg)
+    parser.add_argument("--rate-tol-degps", type=float, default=d.rate_tol_degps)
+    parser.add_argument("--grid-step", type=float, default=d.grid_step)
+    parser.add_argument("--control-period-s", type=float, default=d.control_period_s)
+    parser.add_argument("--horizon-s", type=float, default=d.horizon_s)
+    parser.add_argument(
+        "--fit-loss", default=d.fit_loss, help="soft_l1 (default) | cauchy | linear"
+    )
+    parser.add_argument(
+        "--map-angle-deg", type=float, default=150.0, help="turn of the Fig. 10 map"
+    )
+    parser.add_argument("--fig15-kw", type=float, default=1.0, help="k_w of the Fig. 15 comparison")
+
+
+def _angles(text: str | None, table: dict[float, float]) -> list[tuple[str, float]]:
+    if text is None:
+        return [(f"{a:g}", a) for a in sorted(table)]
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        try:
+            value = float(item)
+        except ValueError:
+            raise InputError(
+                f"--angles-deg: '{item}' is not a number (want e.g. 1,2.5,6)"
+            ) from None
+        if not 0 < value <= 90:
+            raise InputError(f"--angles-deg: {item} must be in (0, 90] degrees")
+        out.append((item, value))
+    if not out:
+        raise InputError("--angles-deg: empty list")
+    return out
+
+
+def _settings(args: argparse.Namespace) -> gs.StudySettings:
+    try:
+        return replace(
+            gs.StudySettings(),
+            quaternion_term=args.quaternion_term,
+            initial_turn=args.initial_turn,
+            angle_tol_deg=args.angle_tol_deg,
+            rate_tol_degps=args.rate_tol_degps,
+            grid_step=args.grid_step,
+            control_period_s=args.control_period_s,
+            horizon_s=args.horizon_s,
+            fit_loss=args.fit_loss,
+        )
+    except ValueError as exc:
+        raise InputError(f"pd-gains option: {exc}") from None
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    table = gs.load_f0_table()
+    angles = _angles(args.angles_deg, table)
+    settings = _settings(args)
+    if not 0 < args.map_angle_deg <= 180 or not args.fig15_kw > 0:
+        raise InputError("--map-angle-deg must be in (0, 180] and --fig15-kw positive")
+    values = sorted({v for _, v in angles})
+    fit_angles = values if len(values) >= 4 else sorted(set(values) | set(DEFAULT_FIT_ANGLES))
+    f0_by_angle: dict[float, float] = {}
+    for a in tqdm(fit_angles, desc="f0(phi0)", file=sys.stderr, disable=None):
+        f0_by_angle[a] = gs.f0_for_angle(a, settings)
+    fit = gs.fit_f0_curve(list(f0_by_angle), list(f0_by_angle.values()), settings.quaternion_term)
+    result: dict[str, Any] = {
+        "f0": {text: f0_by_angle[v] for text, v in angles},
+        "fit": fit,
+        "fit_angle_unit": "rad",
+        "seed_table": {text: table.get(v) for text, v in angles},
+        "difference_pct": {
+            text: (100.0 * (f0_by_angle[v] / table[v] - 1.0) if v in table else None)
+            for text, v in angles
+        },
+        "seed_fit_eq28": gs.SEED_FIT_EQ28,
+        "settings": {
+            k: (v if np.isfinite(v) else None) if isinstance(v, float) else v
+            for k, v in asdict(settings).items()
+        },  # fmt: skip
+    }
+    smap = gs.settle_time_map(
+        args.map_angle_deg, replace(gs.MANEUVER_150, grid_step=settings.grid_step)
+    )
+    result["map"] = _map_summary(smap)
+    if not args.no_figures:
+        result["figures"] = write_figures(
+            Path(args.out), smap, f0_by_angle, fit, table, settings, args.fig15_kw
+        )
+    return result
+
+
+def _map_summary(smap: gs.SettleMap) -> dict[str, Any]:
+    i = int(np.argmin(np.abs(smap.k_w - 2.625)))
+    j = int(np.argmin(np.abs(smap.k_q - 1.375)))
+    jbest = int(np.argmin(smap.time_s[i]))
+    ib, jb = np.unravel_index(int(np.argmin(smap.time_s)), smap.time_s.shape)
+    return {
+        "phi0_deg": smap.phi0_deg,
+        "inertia_kgm2": smap.settings.inertia_kgm2,
+        "seed_gains_settle_s": float(smap.time_s[i, j]),
+        "efficient_kq_at_kw_2.625": float(smap.k_q[jbest]),
+        "efficient_settle_at_kw_2.625_s": float(smap.time_s[i, jbest]),
+        "grid_min_settle_s": float(smap.time_s[ib, jb]),
+        "grid_min_at": {"k_w": float(smap.k_w[ib]), "k_q": float(smap.k_q[jb])},
+        "seed_settle_s": 35.6,
+    }
+
+
+def fig15_times(
+    angles_deg: np.ndarray, k_w: float, fit: dict[str, float], settings: gs.StudySettings
+) -> dict[str, np.ndarray]:
+    """Settle time vs angle for the fitted rule (29) and the baseline rule (10), one batch."""
+    f0 = gs.f0_model(np.radians(angles_deg), **fit)
+    s = term_scale(settings.quaternion_term)
+    seed_f0 = gs.f0_model(np.radians(angles_deg), **gs.SEED_FIT_EQ28) / s
+    kq = np.stack(
+        [
+            f0 * k_w**2,
+            np.broadcast_to(baseline_kq(k_w, settings.quaternion_term), f0.shape),
+            seed_f0 * k_w**2,
+        ]
+    )
+    t = gs.rule_settle_times(angles_deg[None, :], k_w, kq, settings)
+    return {"fitted": t[0], "baseline": t[1], "seed_eq29": t[2]}
+
+
+def render(result: dict[str, Any]) -> str:
+    lines = ["phi0_deg  f0(ours)  f0(seed)  diff_%"]
+    for key, value in result["f0"].items():
+        seed = result["seed_table"].get(key)
+        diff = result["difference_pct"].get(key)
+        seed_s = f"{seed:.4f}" if seed is not None else "   -  "
+        diff_s = f"{diff:+.1f}" if diff is not None else "  -"
+        lines.append(f"{key:>8}  {value:.4f}    {seed_s}    {diff_s}")
+    fit = result["fit"]
+    lines.append(
+        "fit (28), phi0 in rad: f0 = {c1:.5g}/phi0^{p1:.4g} + {c2:.5g}/phi0^{p2:.4g}".format(**fit)
+    )
+    m = result["map"]
+    lines.append(
+        f"150 deg map (J={m['inertia_kgm2']}): seed gains {m['seed_gains_settle_s']:.2f} s, "
+        f"efficient k_q at k_w=2.625: {m['efficient_kq_at_kw_2.625']} -> "
+        f"{m['efficient_settle_at_kw_2.625_s']:.2f} s (seed 35.6 s)"
+    )
+    for path in result.get("figures", []):
+        lines.append(f"figure: {path}")
+    return "\n".join(lines)
+
+
+def _save(fig: Any, out: Path, stem: str) -> list[str]:
+    paths = []
+    for ext in ("png", "svg"):
+        path = out / f"{stem}.{ext}"
+        fig.savefig(path, dpi=130)
+        paths.append(str(path))
+    return paths
+
+
+def write_figures(
+    out: Path,
+    smap: gs.SettleMap,
+    f0_by_angle: dict[float, float],
+    fit: dict[str, float],
+    table: dict[float, float],
+    settings: gs.StudySettings,
+    k_w: float,
+) -> list[str]:
+    """Seed Figs. 10, 14 and 15 as PNG and SVG under ``out``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    paths: list[str] = []
+
+    # Fig. 10: settle-time map at 150 deg with wheel limits
+    fig, ax = plt.subplots(figsize=(7, 5.5))
+    t = np.where(np.isfinite(smap.time_s), smap.time_s, np.nan)
+    mesh = ax.pcolormesh(smap.k_w, smap.k_q, t.T, shading="nearest", cmap="viridis",
+                         vmax=np.nanpercentile(t, 95))  # fmt: skip
+    fig.colorbar(mesh, ax=ax, label="settle time, s")
+    kw, kq, _ = gs.efficient_curve(smap)
+    ax.plot(kw, kq, "r.", ms=4, label="efficient coefficients (min per $k_\\omega$)")
+    kline = np.linspace(smap.k_w[0], smap.k_w[-1], 200)
+    ax.plot(kline, baseline_kq(kline, smap.settings.quaternion_term), "w--",
+            label="$k_\\omega^2 = 2 k_q$ (eq. 9)")  # fmt: skip
+    ax.plot([2.625], [1.375], "m*", ms=12, label="seed: $k_q$=1.375, $k_\\omega$=2.625")
+    ax.set_ylim(smap.k_q[0], smap.k_q[-1])
+    ax.set_xlabel("$k_\\omega$, 1/s")
+    ax.set_ylabel("$k_q$, 1/s$^2$")
+    st = smap.settings
+    ax.set_title(
+        f"Settle time, {smap.phi0_deg:g} deg turn, J={st.inertia_kgm2} kg m$^2$, "
+        f"$M_{{max}}$={st.torque_max_Nm} N m, $L_{{max}}$={st.momentum_max_Nms} N m s",
+        fontsize=8,
+    )
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    paths += _save(fig, out, "fig10_settle_map")
+    plt.close(fig)
+
+    # Fig. 14: f0 against the seed's table and fits
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ta = np.array(sorted(table))
+    ax.plot(ta, [table[a] for a in ta], "ko", ms=4, label="seed table")
+    oa = np.array(sorted(f0_by_angle))
+    ax.plot(oa, [f0_by_angle[a] for a in oa], "rx", label="ours (efficient-curve fit)")
+    grid = np.linspace(min(ta[0], oa[0]), max(ta[-1], oa[-1]), 200)
+    ax.plot(grid, gs.f0_model(np.radians(grid), **fit), "r-", lw=1, label="our fit of eq. (28)")
+    s = term_scale(settings.quaternion_term)
+    ax.plot(grid, gs.f0_model(np.radians(grid), **gs.SEED_FIT_EQ28) / s, "k--", lw=1,
+            label=f"seed eq. (28), rad, / {s:g}")  # fmt: skip
+    ax.set_xlabel("$\\varphi_0$, deg")
+    ax.set_ylabel("$f_0$ (dimensionless, $k_q = f_0 k_\\omega^2$)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths += _save(fig, out, "fig14_f0")
+    plt.close(fig)
+
+    # Fig. 15: settle time vs angle, fitted rule vs baseline rule (10)
+    angles = np.round(np.arange(0.2, 6.0001, 0.1), 3)
+    times = fig15_times(angles, k_w, fit, settings)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(angles, times["baseline"], "b-", label="rule (10): $k_q = k_\\omega^2/2$ (vector part)")
+    ax.plot(angles, times["fitted"], "r-", label="rule (29), our fit")
+    ax.plot(angles, times["seed_eq29"], "k:", label="rule (29), seed coefficients")
+    ax.set_xlabel("$\\varphi_0$, deg")
+    ax.set_ylabel("settle time, s")
+    ax.set_title(f"$k_\\omega$ = {k_w:g} 1/s, no wheel limits", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths += _save(fig, out, "fig15_settle_vs_angle")
+    plt.close(fig)
+    return paths
