@@ -164,9 +164,8 @@ def settle_times(
         np.greater_equal(tmp, tol_r, out=bad2)
         bad |= bad2
         np.copyto(last_bad, i + 1, where=bad)
-    t_settle = last_bad * dt
-    t_settle[t_settle > settings.horizon_s - settings.hold_s] = np.inf
-    return t_settle
+    t_settle = np.asarray(last_bad * dt, dtype=float)
+    return np.where(t_settle > settings.horizon_s - settings.hold_s, np.inf, t_settle)
 
 
 @dataclass(frozen=True)
