@@ -1,29 +1,50 @@
 """The convex-section information set of one guidance channel (SPEC 1.4, seed 003).
 
 The information set is the set of all states ``(alpha, omega, x)`` compatible with
-the measurement and control history. It is stored as a stack of x-sections: for
-each of N range values ``x_j`` a convex polygon of ``(alpha, omega)``.
+the measurement and control history. It is stored as a stack of x-sections; each
+section ``j`` is a convex polygon of ``(alpha, omega)`` together with the range
+interval ``[x_lo_j, x_hi_j]`` it stands for.
+
+Two discretisations share the code:
+
+* ``"points"`` -- the seed's: N sections at single ranges ``x_j`` (zero-width
+  intervals) moving with the nominal closing speed ``e``. Exact for a state whose
+  range is one of the ``x_j`` and whose closing speed is ``e``; a true range
+  between sections, or a true closing speed other than ``e`` (folded by the seed
+  into ``nu``), is not covered, and near the target the seed's ``nu`` does not
+  cover it either.
+* ``"slabs"`` (default) -- the same N sections, each standing for a whole range
+  interval: together they partition the a-priori range box, and every operation
+  is taken over the interval (and over the closing-speed interval
+  ``[e_lo, e_hi]``), so the union of the sections contains every state compatible
+  with the data. This is what makes the guarantee hold for the full nonlinear
+  truth (tested, and counted in every experiment).
 
 Coordinates. ``alpha`` (~1e-3 rad) and ``omega`` (~1e-5 rad/s early, ~1e-2 rad/s
 near the target) differ by orders of magnitude and ``omega`` sweeps four decades
-over an engagement. Polygons are therefore kept in the scaled coordinates
+over an engagement. Polygons are kept in the scaled coordinates
 ``(alpha / alpha_scale_rad, w / w_scale_m)`` with ``w = omega x^2 / e`` the
-zero-effort miss: a bearing strip stays a unit-scale slab, the prediction is a
-shear of determinant 1, and all polygon operations are well conditioned.
+zero-effort miss (nominal ``e``): a bearing strip is a unit-scale slab and the
+prediction is a shear of determinant 1. ``d(omega x^2)/dt = v x`` holds for any
+closing speed, so ``w`` evolves independently of the true closing speed; only the
+range does not.
 
-Operations (all sections at once through :class:`~estim.polygons.ConvexPolygons`):
+Operations on all sections at once (:class:`~estim.polygons.ConvexPolygons`):
 
-* bearing update: clip every section with ``|alpha - alpha_m| <= bound(x_j)``;
-* range update: drop sections outside ``[d_m/(1+b), d_m/(1-b)]`` (keeping the
-  outermost neighbours, so a true range between two sections stays bracketed);
-* control: ``omega += k/x``, i.e. ``w += k x / e``;
-* prediction: ``x_j -> x_j - e Delta``, exact linear map, Minkowski sum with the
-  segment of constant disturbances ``|v| <= nu`` (the seed's discrete-time
-  opponent: ``v`` constant over a step), then drop sections that passed under
-  ``eps`` (threshold).
+* bearing update: clip with ``|alpha - alpha_m| <= bound(x_lo_j)`` (the widest
+  strip over the interval, since the bound shrinks with range);
+* range update: intersect the intervals with ``[d_m/(1+b), d_m/(1-b)]``, drop
+  sections left empty;
+* control ``k``: ``w += k x / e`` for ``x`` in the interval: a shift by the
+  interval's middle and a Minkowski sum with a vertical segment;
+* prediction: ``x_lo -= e_hi Delta``, ``x_hi -= e_lo Delta``, the shear
+  ``alpha += c w`` with ``c = e Delta / (x0 x1)`` taken at the interval's middle
+  plus a horizontal segment covering the other ``c`` of the interval, and the
+  disturbance ``|v| <= nu`` (the seed's discrete-time opponent, constant over a
+  step) as a box; sections entirely under ``eps`` are dropped (threshold).
 
-An empty intersection means the measurement contradicts the model: the update
-is rejected (the predicted set is kept), ``contradictions`` is incremented and the
+An empty intersection means the measurement contradicts the model: the update is
+rejected (the predicted set is kept), ``contradictions`` is incremented and the
 status becomes ``"contradiction"``; the caller counts it. When every section has
 passed under ``eps`` the set is empty with status ``"terminal"``.
 """
@@ -50,12 +71,19 @@ STRIP_MARGIN = 1.0e-9
 RANGE_COS_MARGIN = 1.0e-4
 
 
+def _frozen(a: ArrayLike) -> FloatArray:
+    arr = np.array(a, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
 @dataclass(frozen=True, eq=False)
 class InformationSet(Belief):
-    """An immutable stack of convex x-sections (see module docstring)."""
+    """An immutable stack of convex sections with their range intervals."""
 
     model: ChannelModel
-    x_m: FloatArray
+    x_lo_m: FloatArray
+    x_hi_m: FloatArray
     polygons: ConvexPolygons
     alpha_scale_rad: float
     w_scale_m: float
@@ -63,13 +91,13 @@ class InformationSet(Belief):
     contradictions: int = 0
 
     def __post_init__(self) -> None:
-        x = np.array(self.x_m, dtype=float)
-        if x.ndim != 1 or len(x) != self.polygons.n:
-            raise ValueError("one range per section is required")
-        if np.any(np.diff(x) <= 0):
-            raise ValueError("section ranges must be strictly increasing")
-        x.setflags(write=False)
-        object.__setattr__(self, "x_m", x)
+        lo, hi = _frozen(self.x_lo_m), _frozen(self.x_hi_m)
+        if lo.ndim != 1 or lo.shape != hi.shape or len(lo) != self.polygons.n:
+            raise ValueError("one range interval per section is required")
+        if np.any(hi < lo):
+            raise ValueError("section intervals need x_lo <= x_hi")
+        object.__setattr__(self, "x_lo_m", lo)
+        object.__setattr__(self, "x_hi_m", hi)
 
     # -- Belief interface ------------------------------------------------------------
     @property
@@ -80,9 +108,15 @@ class InformationSet(Belief):
     def n_sections(self) -> int:
         return self.polygons.n
 
-    def vertices(self) -> FloatArray:
-        """All section vertices as rows ``(alpha, omega, x)``."""
-        x = self.x_m[self.polygons.owner()]
+    @property
+    def x_mid_m(self) -> FloatArray:
+        return 0.5 * (self.x_lo_m + self.x_hi_m)
+
+    def vertices(self, at: str = "mid") -> FloatArray:
+        """Section vertices as rows ``(alpha, omega, x)`` with ``x`` at each
+        section's ``"lo"``, ``"mid"`` or ``"hi"`` range."""
+        xs = {"lo": self.x_lo_m, "mid": self.x_mid_m, "hi": self.x_hi_m}[at]
+        x = xs[self.polygons.owner()]
         alpha = self.polygons.xy[:, 0] * self.alpha_scale_rad
         omega = self.model.omega_from_w(self.polygons.xy[:, 1] * self.w_scale_m, x)
         return np.column_stack([alpha, omega, x])
@@ -93,25 +127,26 @@ class InformationSet(Belief):
             return np.full(3, np.nan)
         own = self.polygons.owner()
         counts = self.polygons.counts
-        cen = np.stack(
-            [np.bincount(own, weights=self.polygons.xy[:, k]) / counts for k in range(2)], axis=1
-        )
-        x = float(self.x_m.mean())
-        alpha = float(cen[:, 0].mean()) * self.alpha_scale_rad
-        w = float(cen[:, 1].mean()) * self.w_scale_m
+        cen = [np.bincount(own, weights=self.polygons.xy[:, k]) / counts for k in range(2)]
+        x = float(self.x_mid_m.mean())
+        alpha = float(cen[0].mean()) * self.alpha_scale_rad
+        w = float(cen[1].mean()) * self.w_scale_m
         return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the vertices of all sections.
+        """Min and max of ``fn`` over the set, from the section vertices taken at both
+        ends of each section's range interval.
 
-        Exact for functions whose extremes over a convex section lie at vertices:
-        linear or convex functions, and the miss forecast ``Pi``, which for fixed
-        ``x`` is increasing in ``omega`` (linear on each side of ``omega = 0`` with a
-        jump up there), so its max and min sit at the extreme-``omega`` vertices.
+        Exact for functions whose extremes over a section sit at a vertex and at an
+        end of the interval: linear functions of ``(alpha, w)`` monotone in ``x``, and
+        the miss forecast ``Pi = w + sign(w) nu (x/e)^2 / 2`` of seed 003 (for fixed
+        ``x`` increasing in ``omega``, with a jump up at ``omega = 0``).
         """
         if self.is_empty:
             raise ValueError(f"extremes of an empty information set (status {self.status})")
-        pts = self.vertices()
+        pts = self.vertices("hi")
+        if np.any(self.x_hi_m > self.x_lo_m):
+            pts = np.vstack([self.vertices("lo"), pts])
         values = np.asarray(fn(pts), dtype=float)
         i_min, i_max = int(np.argmin(values)), int(np.argmax(values))
         return Extremes(float(values[i_min]), pts[i_min], float(values[i_max]), pts[i_max])
@@ -119,36 +154,42 @@ class InformationSet(Belief):
     def contains(self, state: ArrayLike, tol: float = 1e-9) -> bool:
         """Whether ``(alpha, omega, x)`` lies in the set.
 
-        Between two sections the set is taken as the x-section of the convex hull
-        of the two neighbouring sections (the Minkowski combination
-        ``(1 - l) S_j + l S_j+1``); at a section's own range this is the section.
-        ``tol`` is a distance in the scaled coordinates (numerical tolerance).
+        Slabs: the state is inside when a section whose interval contains ``x``
+        contains ``(alpha, w)``. Points (zero-width intervals): between two sections
+        the set is taken as the x-section of the convex hull of the neighbouring
+        sections (a heuristic; exact at a section's own range). ``tol`` is a
+        distance in the scaled coordinates (numerical tolerance).
         """
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float))
         if self.is_empty:
             return False
-        xs = self.x_m
-        span = max(float(xs[-1] - xs[0]), 1.0)
-        if x < xs[0] - tol * span or x > xs[-1] + tol * span:
-            return False
-        j = int(np.clip(np.searchsorted(xs, x) - 1, 0, max(len(xs) - 2, 0)))
-        if len(xs) == 1:
-            pts = self.polygons.polygon(0)
-        else:
-            lam = float(np.clip((x - xs[j]) / (xs[j + 1] - xs[j]), 0.0, 1.0))
-            a, b = self.polygons.polygon(j), self.polygons.polygon(j + 1)
-            if lam == 0.0:
-                pts = a
-            elif lam == 1.0:
-                pts = b
-            else:
-                pts = ((1 - lam) * a[:, None, :] + lam * b[None, :, :]).reshape(-1, 2)
-        p = np.array(
-            [alpha / self.alpha_scale_rad, self.model.zero_effort_miss_m(omega, x) / self.w_scale_m]
+        p = shapely.Point(
+            alpha / self.alpha_scale_rad, self.model.zero_effort_miss_m(omega, x) / self.w_scale_m
         )
-        hull = shapely.MultiPoint(pts).convex_hull
-        scale = max(1.0, float(np.abs(pts).max()))
-        return bool(shapely.distance(hull, shapely.Point(p)) <= tol * scale)
+        span = max(float(self.x_hi_m.max() - self.x_lo_m.min()), 1.0)
+        if np.all(self.x_hi_m == self.x_lo_m) and self.n_sections > 1:
+            candidates = [self._interpolated(x, span * tol)]
+        else:
+            idx = np.flatnonzero((self.x_lo_m <= x + tol * span) & (self.x_hi_m >= x - tol * span))
+            candidates = [self.polygons.polygon(int(i)) for i in idx]
+        for pts in candidates:
+            if pts is None or len(pts) == 0:
+                continue
+            scale = max(1.0, float(np.abs(pts).max()))
+            if shapely.distance(shapely.MultiPoint(pts).convex_hull, p) <= tol * scale:
+                return True
+        return False
+
+    def _interpolated(self, x: float, x_tol: float) -> FloatArray | None:
+        xs = self.x_lo_m
+        if x < xs[0] - x_tol or x > xs[-1] + x_tol:
+            return None
+        j = int(np.clip(np.searchsorted(xs, x) - 1, 0, len(xs) - 2))
+        lam = float(np.clip((x - xs[j]) / (xs[j + 1] - xs[j]), 0.0, 1.0))
+        a, b = self.polygons.polygon(j), self.polygons.polygon(j + 1)
+        if lam in (0.0, 1.0):
+            return a if lam == 0.0 else b
+        return ((1 - lam) * a[:, None, :] + lam * b[None, :, :]).reshape(-1, 2)
 
     # -- summaries -------------------------------------------------------------------
     def alpha_range_rad(self) -> tuple[float, float]:
@@ -156,7 +197,7 @@ class InformationSet(Belief):
         return float(a.min()), float(a.max())
 
     def x_range_m(self) -> tuple[float, float]:
-        return float(self.x_m[0]), float(self.x_m[-1])
+        return float(self.x_lo_m.min()), float(self.x_hi_m.max())
 
 
 @dataclass(frozen=True)
@@ -166,11 +207,17 @@ class InformationSetEstimator(Estimator[InformationSet]):
     Parameters
     ----------
     model : ChannelModel
-        Closing speed, disturbance bound, measurement bounds, threshold eps.
+        Nominal closing speed, disturbance bound, measurement bounds, threshold.
     n_sections : int
-        Number of x-sections of the initial set (seed: 29).
+        Number of sections of the initial set (seed: 29).
+    sections : {"slabs", "points"}
+        Discretisation (module docstring): ``"slabs"`` is guaranteed, ``"points"``
+        is the seed's.
+    closing_speed_mps : (float, float) or None
+        Interval of the true closing speed; ``None`` means the nominal ``e`` exactly
+        (the seed's model). Used by ``"slabs"`` only.
     alpha_scale_rad, w_scale_m : float
-        Coordinate scales of the stored polygons (see module docstring).
+        Coordinate scales of the stored polygons.
     simplify_rel_area, max_vertices : float, int
         Outer simplification after each prediction: edges whose removal adds less
         than ``simplify_rel_area`` of a section's area are removed, and sections are
@@ -179,19 +226,34 @@ class InformationSetEstimator(Estimator[InformationSet]):
 
     model: ChannelModel = field(default_factory=ChannelModel)
     n_sections: int = 29
+    sections: str = "slabs"
+    closing_speed_mps: tuple[float, float] | None = None
     alpha_scale_rad: float = 1.0e-4
     w_scale_m: float = 1.0
     simplify_rel_area: float = 1.0e-6
     max_vertices: int = 16
 
     def __post_init__(self) -> None:
-        if self.max_vertices < 4:
-            raise ValueError("max_vertices must be >= 4")
         if self.n_sections < 1:
             raise ValueError("n_sections must be >= 1")
+        if self.sections not in ("slabs", "points"):
+            raise ValueError("sections must be 'slabs' or 'points'")
+        if self.closing_speed_mps is not None:
+            lo, hi = self.closing_speed_mps
+            if not 0 < lo <= hi:
+                raise ValueError("closing_speed_mps must be an interval 0 < lo <= hi")
         if not (self.alpha_scale_rad > 0 and self.w_scale_m > 0):
             raise ValueError("scales must be positive")
+        if self.max_vertices < 4:
+            raise ValueError("max_vertices must be >= 4")
 
+    @property
+    def speed_interval(self) -> tuple[float, float]:
+        if self.sections == "points" or self.closing_speed_mps is None:
+            return self.model.e, self.model.e
+        return self.closing_speed_mps
+
+    # -- construction ----------------------------------------------------------------
     def initial(
         self,
         lateral_m: tuple[float, float],
@@ -200,53 +262,71 @@ class InformationSetEstimator(Estimator[InformationSet]):
     ) -> InformationSet:
         """The initial set from the boxes ``B`` (position) and ``D`` (velocity).
 
-        For fixed ``x`` the small-angle map ``(y, Vy) -> (alpha, w) = (y/x, y + Vy x/e)``
-        is linear with determinant ``1/e > 0``, so the box maps to a parallelogram
-        (counter-clockwise corners map to counter-clockwise vertices).
+        At fixed ``x`` the small-angle map ``(y, Vy) -> (alpha, w) = (y/x, y + Vy x/e)``
+        is linear with determinant ``1/e > 0``: the box maps to a parallelogram.
+        A slab takes the parallelogram at its middle range plus a box covering the
+        change over the interval: ``|y| |1/x - 1/x_mid|`` in ``alpha`` and
+        ``|Vy| |x - x_mid| / e`` in ``w``.
         """
         (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
         if not (y0 <= y1 and v0 <= v1 and 0 < xa <= xb):
             raise ValueError("boxes must be [lo, hi] with lo <= hi and positive range")
-        xs = np.linspace(xa, xb, self.n_sections) if xb > xa else np.array([xa])
+        n = self.n_sections
+        if self.sections == "points" or xb == xa:
+            x_lo = x_hi = np.linspace(xa, xb, n) if xb > xa else np.array([xa])
+        else:
+            edges = np.linspace(xa, xb, n + 1)
+            x_lo, x_hi = edges[:-1], edges[1:]
+        xm = 0.5 * (x_lo + x_hi)
         corners = np.array([[y0, v0], [y1, v0], [y1, v1], [y0, v1]])
-        y = np.tile(corners[:, 0], len(xs))
-        vy = np.tile(corners[:, 1], len(xs))
-        xx = np.repeat(xs, 4)
-        alpha = y / xx / self.alpha_scale_rad
-        w = (y + vy * xx / self.model.e) / self.w_scale_m
-        offsets = np.arange(0, 4 * len(xs) + 1, 4)
-        polys = ConvexPolygons(np.column_stack([alpha, w]), offsets)._dedupe()
-        return InformationSet(self.model, xs, polys, self.alpha_scale_rad, self.w_scale_m)
+        y = np.tile(corners[:, 0], len(xm))
+        vy = np.tile(corners[:, 1], len(xm))
+        xx = np.repeat(xm, 4)
+        xy = np.column_stack(
+            [y / xx / self.alpha_scale_rad, (y + vy * xx / self.model.e) / self.w_scale_m]
+        )
+        polys = ConvexPolygons(xy, np.arange(0, 4 * len(xm) + 1, 4))._dedupe()
+        if np.any(x_hi > x_lo):
+            y_abs, v_abs = max(abs(y0), abs(y1)), max(abs(v0), abs(v1))
+            d_inv = np.maximum(1 / x_lo - 1 / xm, 1 / xm - 1 / x_hi)
+            spread_a = y_abs * d_inv / self.alpha_scale_rad * (1 + 1e-9)
+            spread_w = v_abs * (x_hi - x_lo) / 2 / self.model.e / self.w_scale_m * (1 + 1e-9)
+            zeros = np.zeros_like(xm)
+            polys = polys.minkowski_segment(np.column_stack([spread_a, zeros]))
+            polys = polys.minkowski_segment(np.column_stack([zeros, spread_w]))
+        return InformationSet(self.model, x_lo, x_hi, polys, self.alpha_scale_rad, self.w_scale_m)
 
-    def from_sections(self, x_m: ArrayLike, sections: list[ArrayLike]) -> InformationSet:
-        """A set from explicit ``(alpha, omega)`` CCW polygons at ranges ``x_m`` (tests)."""
-        xs = np.asarray(x_m, dtype=float)
+    def from_sections(
+        self, x_lo_m: ArrayLike, sections: list[ArrayLike], x_hi_m: ArrayLike | None = None
+    ) -> InformationSet:
+        """A set from explicit ``(alpha, omega)`` CCW polygons (``omega`` converted to
+        ``w`` at ``x_lo``); intervals ``[x_lo, x_hi]`` (points when ``x_hi`` is None)."""
+        lo = np.asarray(x_lo_m, dtype=float)
+        hi = lo if x_hi_m is None else np.asarray(x_hi_m, dtype=float)
         scaled = []
-        for x, sec in zip(xs, sections, strict=True):
+        for x, sec in zip(lo, sections, strict=True):
             s = np.asarray(sec, dtype=float).reshape(-1, 2)
             w = self.model.zero_effort_miss_m(s[:, 1], x)
             scaled.append(np.column_stack([s[:, 0] / self.alpha_scale_rad, w / self.w_scale_m]))
         polys = ConvexPolygons.from_list(scaled)
-        return InformationSet(self.model, xs, polys, self.alpha_scale_rad, self.w_scale_m)
+        return InformationSet(self.model, lo, hi, polys, self.alpha_scale_rad, self.w_scale_m)
 
     # -- Estimator interface ---------------------------------------------------------
     def update(self, belief: InformationSet, measurement: Bearing | Range) -> InformationSet:
-        """Intersect with a bearing strip, or drop sections outside a range interval."""
+        """Intersect with a bearing strip, or with a range interval."""
         if belief.is_empty:
             return belief
         if isinstance(measurement, Bearing):
-            # outward rounding: a relative 1e-9 (~1e-13 rad) so that floating-point
-            # error never cuts off a state lying exactly on the strip's edge
-            half = self.model.bearing_bound(belief.x_m) / self.alpha_scale_rad
+            # widest strip over the interval (the bound shrinks with range); outward
+            # rounding so floating-point error never cuts off a state on the edge
+            half = self.model.bearing_bound(belief.x_lo_m) / self.alpha_scale_rad
             half = half * (1.0 + STRIP_MARGIN) + STRIP_MARGIN
             centre = measurement.alpha_rad / self.alpha_scale_rad
             clipped = belief.polygons.clip_slab(0, centre - half, centre + half)
             keep = clipped.nonempty()
             if not keep.any():
-                return replace(
-                    belief, status="contradiction", contradictions=belief.contradictions + 1
-                )
-            return replace(belief, polygons=clipped.select(keep), x_m=belief.x_m[keep])
+                return self._contradiction(belief)
+            return self._select(belief, keep, polygons=clipped)
         if isinstance(measurement, Range):
             return self._update_range(belief, measurement.range_m)
         raise TypeError(f"unsupported measurement {type(measurement).__name__}")
@@ -254,56 +334,88 @@ class InformationSetEstimator(Estimator[InformationSet]):
     def _update_range(self, belief: InformationSet, range_m: float) -> InformationSet:
         b = self.model.range_rel_bound
         lo = range_m / (1.0 + b) * (1.0 - RANGE_COS_MARGIN)
-        hi = range_m / (1.0 - b)
-        inside = (belief.x_m >= lo) & (belief.x_m <= hi)
-        n = belief.n_sections
-        if inside.any():
-            # keep one neighbour on each side so that the true range stays bracketed
+        hi = range_m / (1.0 - b) * (1.0 + STRIP_MARGIN)
+        if self.sections == "points":
+            inside = (belief.x_lo_m >= lo) & (belief.x_hi_m <= hi)
+            if not inside.any():
+                return self._contradiction(belief)
+            # keep one neighbour each side so that a true range between two
+            # sections stays bracketed for the interpolating containment test
             idx = np.flatnonzero(inside)
-            keep = np.zeros(n, dtype=bool)
-            keep[max(idx[0] - 1, 0) : min(idx[-1] + 2, n)] = True
-        else:
-            below, above = np.flatnonzero(belief.x_m < lo), np.flatnonzero(belief.x_m > hi)
-            if len(below) == 0 or len(above) == 0:
-                return replace(
-                    belief, status="contradiction", contradictions=belief.contradictions + 1
-                )
-            keep = np.zeros(n, dtype=bool)
-            keep[[below[-1], above[0]]] = True  # the interval falls between two sections
-        return replace(belief, polygons=belief.polygons.select(keep), x_m=belief.x_m[keep])
+            keep = np.zeros(belief.n_sections, dtype=bool)
+            keep[max(idx[0] - 1, 0) : idx[-1] + 2] = True
+            return self._select(belief, keep)
+        x_lo, x_hi = np.maximum(belief.x_lo_m, lo), np.minimum(belief.x_hi_m, hi)
+        keep = x_lo <= x_hi
+        if not keep.any():
+            return self._contradiction(belief)
+        return replace(self._select(belief, keep), x_lo_m=x_lo[keep], x_hi_m=x_hi[keep])
 
     def shift(self, belief: InformationSet, control: float) -> InformationSet:
         """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``."""
         k = float(control)
         if k == 0.0 or belief.is_empty:
             return belief
-        dw = k * belief.x_m / self.model.e / self.w_scale_m
-        offset = np.column_stack([np.zeros_like(dw), dw])
-        return replace(belief, polygons=belief.polygons.translate(offset))
+        scale = k / self.model.e / self.w_scale_m
+        zeros = np.zeros(belief.n_sections)
+        polys = belief.polygons.translate(np.column_stack([zeros, scale * belief.x_mid_m]))
+        half = np.abs(scale) * 0.5 * (belief.x_hi_m - belief.x_lo_m)
+        if np.any(half > 0):
+            polys = polys.minkowski_segment(np.column_stack([zeros, half]))
+        return replace(belief, polygons=polys)
 
     def predict(self, belief: InformationSet, dt_s: float) -> InformationSet:
-        """Move every section from ``x`` to ``x - e dt`` (exact map + disturbance segment).
-
-        Sections that pass under ``eps`` during the step are dropped (threshold).
-        """
+        """Move every section over ``dt_s``: exact shear at the interval's middle, a
+        segment for the rest of the interval, the disturbance box; threshold at eps."""
         if belief.is_empty:
             return belief
-        x1_all = belief.x_m - self.model.e * dt_s
-        keep = x1_all >= self.model.eps_m
+        e_lo, e_hi = self.speed_interval
+        eps = self.model.eps_m
+        x_lo1, x_hi1 = belief.x_lo_m - e_hi * dt_s, belief.x_hi_m - e_lo * dt_s
+        keep = x_hi1 >= eps
         if not keep.all():
-            belief = replace(belief, polygons=belief.polygons.select(keep), x_m=belief.x_m[keep])
+            belief = self._select(belief, keep)
+            x_lo1, x_hi1 = x_lo1[keep], x_hi1[keep]
             if belief.is_empty:
                 return replace(belief, status="terminal")
-        c = self.model.step_coefficients(belief.x_m, dt_s)
-        shear = np.zeros((belief.n_sections, 2, 2))
+        x_lo1 = np.maximum(x_lo1, eps)  # states that pass under eps leave the set
+        # shear coefficient c = e dt / (x0 x1) over the interval's states
+        x0_lo = np.maximum(belief.x_lo_m, eps + e_lo * dt_s)
+        c_hi = self.model.e * dt_s / (x0_lo * x_lo1)
+        c_lo = self.model.e * dt_s / (belief.x_hi_m * x_hi1)
+        ratio = self.w_scale_m / self.alpha_scale_rad
+        n = belief.n_sections
+        shear = np.zeros((n, 2, 2))
         shear[:, 0, 0] = shear[:, 1, 1] = 1.0
-        shear[:, 0, 1] = c["a_w"] * self.w_scale_m / self.alpha_scale_rad
+        shear[:, 0, 1] = 0.5 * (c_lo + c_hi) * ratio
+        polys = belief.polygons.affine(shear)
         nu = self.model.nu_mps2
-        g = np.column_stack(
-            [nu * c["g_alpha"] / self.alpha_scale_rad, nu * c["g_w"] / self.w_scale_m]
-        )
-        polys = belief.polygons.affine(shear).minkowski_segment(g)
-        # every step adds two edges; an outer simplification keeps the vertex count
+        # horizontal: the other shears of the interval + the disturbance in alpha
+        w_abs = np.maximum.reduceat(np.abs(belief.polygons.xy[:, 1]), belief.polygons.offsets[:-1])
+        g_alpha = nu * dt_s**2 / (2.0 * x_lo1) / self.alpha_scale_rad
+        half_a = 0.5 * (c_hi - c_lo) * ratio * w_abs + g_alpha
+        g_w = nu * dt_s * (belief.x_hi_m + x_hi1) / (2.0 * self.model.e) / self.w_scale_m
+        if self.sections == "points":
+            # the seed's exact segment of constant disturbances
+            seg = np.column_stack([g_alpha, g_w])
+            polys = polys.minkowski_segment(seg)
+        else:
+            zeros = np.zeros(n)
+            polys = polys.minkowski_segment(np.column_stack([half_a, zeros]))
+            polys = polys.minkowski_segment(np.column_stack([zeros, g_w]))
+        # every step adds edges; an outer simplification keeps the vertex count
         # bounded without ever losing a state (the result contains the exact sum)
         polys = polys.simplify(self.simplify_rel_area, self.max_vertices)
-        return replace(belief, polygons=polys, x_m=c["x1"])
+        return replace(belief, polygons=polys, x_lo_m=x_lo1, x_hi_m=x_hi1)
+
+    # -- internals -------------------------------------------------------------------
+    @staticmethod
+    def _select(belief: InformationSet, keep, polygons: ConvexPolygons | None = None):
+        polys = (belief.polygons if polygons is None else polygons).select(keep)
+        return replace(
+            belief, polygons=polys, x_lo_m=belief.x_lo_m[keep], x_hi_m=belief.x_hi_m[keep]
+        )
+
+    @staticmethod
+    def _contradiction(belief: InformationSet) -> InformationSet:
+        return replace(belief, status="contradiction", contradictions=belief.contradictions + 1)

@@ -1,47 +1,58 @@
 """EKF and UKF of one intercept guidance channel, built on filterpy (SPEC 1.7).
 
-State choice. Per channel the state is ``s = (alpha, omega, x)``: bearing (rad),
-bearing rate (rad/s) and range along the nominal axis (m), the very coordinates
-of the auxiliary model (SPEC 1.3, :mod:`estim.model`) and of the information set.
-Reasons:
+State choice. Per channel the state is ``(alpha, r, x)``: bearing (rad), a rate
+coordinate ``r`` and the range along the nominal axis (m), i.e. the coordinates
+of the auxiliary model (SPEC 1.3, :mod:`estim.model`) and of the information set,
+whose polygons live in ``(alpha, w)`` at each ``x``. Two choices of ``r``:
 
-* the bearing measurement is then *linear*, ``h(s) = alpha``, so the update of both
-  filters is the exact Kalman update and any difference to the set comes from the
-  prediction model and the Gaussian reading of the noise, not from linearising
-  the measurement;
-* the one-step map (exact for constant ``v``) and the disturbance ``v`` are those
-  of the set, so both estimators are run on the same model (a fair comparison),
-  and the guidance law receives rows ``(alpha, omega, x)`` from both;
-* the miss forecast ``Pi`` is a function of ``(omega, x)`` alone, which makes its
-  extremes over the ellipsoid a 1-D problem (:mod:`estim.kalman_belief`).
+* ``coords="zem"`` (default): the zero-effort miss ``w = omega x^2 / e`` (m);
+* ``coords="rate"``: the bearing rate ``omega`` (rad/s) itself.
 
-The Cartesian alternative ``(y, Vy, x, Vx)`` would put the nonlinearity into the
-bearing ``atan2(y, x)`` and need its own model of the disturbance. As in the set,
-``x`` drifts at the *nominal* closing speed ``e`` with no process noise (the
-mismatch of the true closing speed is part of what ``v`` stands for).
+Why not the Cartesian ``(y, Vy, x, Vx)``: it would put a nonlinearity into the
+bearing ``atan2(y, x)`` and need its own disturbance model; here the bearing is
+*linear*, ``h = alpha``, so the update of both filters is the exact Kalman update,
+and the one-step map and the disturbance ``v`` are those of the set (a fair
+comparison on the same model). Why ``w`` rather than ``omega``: in ``w`` the model
+is as linear as it can be. The prediction of ``w`` is ``w1 = w0 + g_w v``
+(independent of the uncertain range), the impulse ``w -> w + k x / e`` is linear,
+and ``Pi = w + sign(w) nu x^2/(2 e^2)`` is linear in ``w``; the only nonlinear
+term left is the bearing drift ``w e Delta/(x0 x1)``, which is what carries the
+range information. In ``omega`` the prediction ``omega x0^2/x1^2`` and the impulse
+``k/x`` both multiply the range error and the EKF linearisation fails as soon as
+the bearing rate starts revealing the range: on the uncontrolled model with
+uniform noise (40 runs, fig. 3 boxes) the mean NEES of the ``omega``-EKF exceeds 9
+(3 expected) from ``x`` ~ 2000 km on and reaches 1e2-1e3 under 1300 km, while the
+``w``-EKF stays at 3-4 down to ~700 km. As in the set, ``x`` drifts at the
+*nominal* closing speed ``e`` with no process noise (the true closing speed's
+mismatch is part of what ``v`` stands for). The belief answers in rows
+``(alpha, omega, x)`` whatever ``r`` is (:mod:`estim.kalman_belief`).
 
-Model (SPEC 1.3, :meth:`estim.model.ChannelModel.step`), one step ``Delta``::
+Model (SPEC 1.3, :meth:`estim.model.ChannelModel.step_coefficients`), one step
+``Delta``, ``x1 = x0 - e Delta``, ``v`` constant over the step::
 
-    alpha1 = alpha0 + omega0 x0 Delta / x1 + g_alpha v,  g_alpha = Delta^2 / (2 x1)
-    omega1 = omega0 x0^2 / x1^2 + g_omega v,             g_omega = Delta (x0 + x1) / (2 x1^2)
-    x1     = x0 - e Delta
+    alpha1 = alpha0 + w0 e Delta/(x0 x1) + g_alpha v      = alpha0 + omega0 x0 Delta/x1 + g_alpha v
+    w1     = w0 + g_w v                                   omega1 = omega0 x0^2/x1^2 + g_omega v
 
-with ``v`` uniform in ``[-nu, nu]`` and constant over the step: process noise
-``Q = G G^T nu^2/3``, ``G = (g_alpha, g_omega, 0)`` at the mean range. The EKF
-Jacobian ``F = d s1/d s0`` has ``d alpha1/d omega0 = x0 Delta/x1``,
-``d alpha1/d x0 = -omega0 e Delta^2/x1^2``, ``d omega1/d omega0 = x0^2/x1^2``,
-``d omega1/d x0 = -2 omega0 x0 e Delta/x1^3``, ``d x1/d x0 = 1``.
+with ``g_alpha = Delta^2/(2 x1)``, ``g_w = Delta (x0 + x1)/(2 e)``,
+``g_omega = Delta (x0 + x1)/(2 x1^2)``; ``v`` uniform in ``[-nu, nu]``: process
+noise ``Q = G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at the mean range. EKF
+Jacobians ``F = d q1/d q0`` (besides the unit diagonal and the constant ``dx1/dx0 = 1``):
+
+* zem: ``d alpha1/d w0 = e Delta/(x0 x1)``, ``d alpha1/d x0 = -w0 e Delta (x0 + x1)/(x0 x1)^2``;
+* rate: ``d alpha1/d omega0 = x0 Delta/x1``, ``d alpha1/d x0 = -omega0 e Delta^2/x1^2``,
+  ``d omega1/d omega0 = x0^2/x1^2``, ``d omega1/d x0 = -2 omega0 x0 e Delta/x1^3``.
 
 Measurements: bearing ``alpha`` with a uniform error of half-width ``a(d)``,
 variance ``R = a(x_hat)^2/3``; range ``d = x / cos(alpha)`` (the other channel's
 angle neglected: a relative 1e-6) with a uniform error ``|beta| <= b d``,
-``R = (b d_hat)^2/3``. Control: an impulse ``k`` maps ``omega -> omega + k/x``
-(nonlinear in an uncertain ``x``: the EKF linearises it, the UKF transforms it).
+``R = (b d_hat)^2/3``. Control: an impulse ``k`` (relative velocity) maps
+``omega -> omega + k/x`` (rate: nonlinear in ``x``, linearised by the EKF and
+transformed by the UKF), i.e. ``w -> w + k x/e`` (zem: exactly linear).
 
-Initial belief: the exact first two moments of ``alpha = y/x``,
-``omega = Vy/x + c y/x^2`` (``c = -Vx``; the set's small-angle map with ``c = e``)
-for ``y, Vy, x, c`` independent and uniform in their boxes (variance
-``width^2/12``), from the closed-form moments of ``1/x^k`` of a uniform ``x``.
+Initial belief: the exact first two moments of ``alpha = y/x`` and
+``omega = Vy/x + c y/x^2`` or ``w = (Vy x + c y)/e`` (``c = -Vx``; the set's
+small-angle map with ``c = e``) for ``y, Vy, x, c`` independent and uniform in
+their boxes (variance ``width^2/12``), with the closed-form moments of ``x^-k``.
 
 filterpy objects are mutable: each call builds a fresh filter from the belief's
 ``(mean, cov)`` (copies), runs one filterpy step and returns a new
@@ -62,7 +73,7 @@ from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, Unscen
 from numpy.typing import NDArray
 
 from estim.base import Estimator
-from estim.kalman_belief import GaussianBelief, psd_cholesky
+from estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
 from estim.model import Bearing, ChannelModel, Range
 
 FloatArray = NDArray[np.float64]
@@ -113,6 +124,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         Filter type.
     n_sigma : float
         Radius (in standard deviations) of the ellipsoid the beliefs answer with.
+    coords : {"zem", "rate"}
+        Second state coordinate: zero-effort miss ``w`` or bearing rate ``omega``.
     ukf_alpha, ukf_beta, ukf_kappa : float
         Van der Merwe sigma-point parameters (UKF only).
     """
@@ -120,6 +133,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     model: ChannelModel = field(default_factory=ChannelModel)
     kind: str = "ekf"
     n_sigma: float = 3.0
+    coords: str = "zem"
     ukf_alpha: float = 1.0
     ukf_beta: float = 2.0
     ukf_kappa: float = 0.0
@@ -128,6 +142,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
+        if self.coords not in COORDS:
+            raise ValueError(f"coords must be one of {COORDS}, got {self.coords!r}")
         if not self.n_sigma > 0:
             raise ValueError("n_sigma must be positive")
         if not (self.ukf_alpha > 0 and 3 + self.ukf_kappa > 0):
@@ -145,8 +161,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
 
     # -- construction ----------------------------------------------------------------
     def belief(self, mean, cov) -> GaussianBelief:
-        """A belief with this estimator's ``n_sigma``."""
-        return GaussianBelief(mean, cov, self.n_sigma)
+        """A belief in this estimator's coordinates with its ``n_sigma``."""
+        return GaussianBelief(mean, cov, self.n_sigma, self.coords, self.model.e)
 
     def initial(
         self,
@@ -157,14 +173,13 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     ) -> GaussianBelief:
         """Moment-matched Gaussian of the a-priori boxes (see module docstring).
 
-        ``alpha = y/x``, ``omega = Vy/x + c y/x^2`` with ``c = -Vx`` uniform in the
-        ``vx_mps`` box (``c = e`` when it is not given), ``x`` uniform in ``x_m``.
+        ``alpha = y/x``, ``omega = Vy/x + c y/x^2`` or ``w = (Vy x + c y)/e`` with
+        ``c = -Vx`` uniform in the ``vx_mps`` box (``c = e`` when it is not given)
+        and ``x`` uniform in ``x_m``; all four independent.
         """
         (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
-        if vx_mps is None:
-            c0 = c1 = self.model.e
-        else:
-            c0, c1 = sorted((-vx_mps[0], -vx_mps[1]))
+        e = self.model.e
+        c0, c1 = (e, e) if vx_mps is None else sorted((-vx_mps[0], -vx_mps[1]))
         if not (y0 <= y1 and v0 <= v1 and 0 < xa <= xb and c0 > 0):
             raise ValueError("boxes must be [lo, hi] with lo <= hi, positive range and closing")
         ey, ey2 = _uniform_moments(y0, y1)
@@ -172,15 +187,19 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         ec, ec2 = _uniform_moments(c0, c1)
         ex, ex2 = _uniform_moments(xa, xb)
         r1, r2, r3, r4 = (_inv_moment(xa, xb, k) for k in (1, 2, 3, 4))
-        m_a = ey * r1
-        m_w = ev * r1 + ec * ey * r2
-        e_aa = ey2 * r2
-        e_ww = ev2 * r2 + 2.0 * ev * ey * ec * r3 + ec2 * ey2 * r4
-        e_aw = ey * ev * r2 + ec * ey2 * r3
-        e_ax = ey  # E[y/x x]
-        e_wx = ev + ec * ey * r1
-        mean = np.array([m_a, m_w, ex])
-        second = np.array([[e_aa, e_aw, e_ax], [e_aw, e_ww, e_wx], [e_ax, e_wx, ex2]], dtype=float)
+        m_a, e_aa, e_ax = ey * r1, ey2 * r2, ey  # alpha = y r, r = 1/x
+        if self.coords == "rate":  # omega = Vy r + c y r^2
+            m_r = ev * r1 + ec * ey * r2
+            e_rr = ev2 * r2 + 2.0 * ev * ey * ec * r3 + ec2 * ey2 * r4
+            e_ar = ey * ev * r2 + ec * ey2 * r3
+            e_rx = ev + ec * ey * r1
+        else:  # w = (Vy x + c y) / e
+            m_r = (ev * ex + ec * ey) / e
+            e_rr = (ev2 * ex2 + 2.0 * ev * ex * ec * ey + ec2 * ey2) / e**2
+            e_ar = (ey * ev + ec * ey2 * r1) / e
+            e_rx = (ev * ex2 + ec * ey * ex) / e
+        mean = np.array([m_a, m_r, ex])
+        second = np.array([[e_aa, e_ar, e_ax], [e_ar, e_rr, e_rx], [e_ax, e_rx, ex2]])
         cov = second - np.outer(mean, mean)
         cov[2, 2] = (xb - xa) ** 2 / 12.0
         # raw moments minus squared means cancel: a variance below the rounding of
@@ -191,30 +210,62 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         return self.belief(mean, cov)
 
     # -- model pieces ------------------------------------------------------------------
+    def step(self, q, dt_s: float) -> FloatArray:
+        """Exact one-step map of internal rows ``(alpha, r, x)`` with ``v = 0``."""
+        q = np.asarray(q, dtype=float)
+        if self.coords == "rate":
+            return self.model.step(q, dt_s)
+        c = self.model.step_coefficients(q[..., 2], dt_s)
+        return np.stack([q[..., 0] + c["a_w"] * q[..., 1], q[..., 1], c["x1"]], axis=-1)
+
     def process_noise(self, x_m: float, dt_s: float) -> FloatArray:
-        """``Q = G G^T nu^2/3``, ``G = (g_alpha, g_omega, 0)`` at range ``x_m``."""
+        """``Q = G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at range ``x_m``."""
         c = self.model.step_coefficients(x_m, dt_s)
-        g = np.array([float(c["g_alpha"]), float(c["g_omega"]), 0.0])
+        g_r = c["g_omega"] if self.coords == "rate" else c["g_w"]
+        g = np.array([float(c["g_alpha"]), float(g_r), 0.0])
         return np.outer(g, g) * self.model.nu_mps2**2 / 3.0
 
-    def step_jacobian(self, state, dt_s: float) -> FloatArray:
-        """``F = d step(s)/d s`` at ``s = (alpha, omega, x)`` (module docstring)."""
-        _, w, x0 = (float(v) for v in state)
+    def step_jacobian(self, q, dt_s: float) -> FloatArray:
+        """``F = d step(q)/d q`` at ``q = (alpha, r, x)`` (module docstring)."""
+        _, r, x0 = (float(v) for v in q)
         e = self.model.e
         x1 = x0 - e * dt_s
+        if self.coords == "rate":
+            return np.array(
+                [
+                    [1.0, x0 * dt_s / x1, -r * e * dt_s**2 / x1**2],
+                    [0.0, x0**2 / x1**2, -2.0 * r * x0 * e * dt_s / x1**3],
+                    [0.0, 0.0, 1.0],
+                ]
+            )
         return np.array(
             [
-                [1.0, x0 * dt_s / x1, -w * e * dt_s**2 / x1**2],
-                [0.0, x0**2 / x1**2, -2.0 * w * x0 * e * dt_s / x1**3],
+                [1.0, e * dt_s / (x0 * x1), -r * e * dt_s * (x0 + x1) / (x0 * x1) ** 2],
+                [0.0, 1.0, 0.0],
                 [0.0, 0.0, 1.0],
             ]
         )
 
+    def shift_map(self, q, k_mps: float) -> FloatArray:
+        """Internal rows after an impulse ``k``: ``omega + k/x`` or ``w + k x/e``."""
+        out = np.array(q, dtype=float)
+        if self.coords == "rate":
+            out[..., 1] = out[..., 1] + k_mps / out[..., 2]
+        else:
+            out[..., 1] = out[..., 1] + k_mps * out[..., 2] / self.model.e
+        return out
+
+    def shift_jacobian(self, q, k_mps: float) -> FloatArray:
+        jac = np.eye(3)
+        x = float(q[2])
+        jac[1, 2] = -k_mps / x**2 if self.coords == "rate" else k_mps / self.model.e
+        return jac
+
     @staticmethod
-    def range_of(state) -> FloatArray:
-        """Range ``d = x / cos(alpha)`` of ``(alpha, omega, x)`` (rows)."""
-        s = np.asarray(state, dtype=float)
-        return s[..., 2] / np.cos(s[..., 0])
+    def range_of(q) -> FloatArray:
+        """Range ``d = x / cos(alpha)`` of internal rows ``(alpha, r, x)``."""
+        q = np.asarray(q, dtype=float)
+        return q[..., 2] / np.cos(q[..., 0])
 
     # -- Estimator interface ---------------------------------------------------------
     def predict(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
@@ -223,15 +274,16 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         When the mean range would pass under ``eps`` the belief becomes empty
         with status ``"terminal"`` (as the set after its threshold): guidance ends.
         """
+        self._check(belief)
         if belief.is_empty:
             return belief
-        x1 = float(belief.mean[2]) - self.model.e * dt_s
-        if x1 < self.model.eps_m:
+        x0 = float(belief.mean[2])
+        if x0 - self.model.e * dt_s < self.model.eps_m:
             return replace(belief, status="terminal")
-        q = self.process_noise(float(belief.mean[2]), dt_s)
+        q = self.process_noise(x0, dt_s)
 
         def fx(s, dt=dt_s):
-            return self.model.step(s, dt)
+            return self.step(s, dt)
 
         if self.kind == "ekf":
             f = _MappedEKF(fx)
@@ -246,21 +298,18 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
 
     def shift(self, belief: GaussianBelief, control: float) -> GaussianBelief:
         """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``."""
+        self._check(belief)
         k = float(control)
         if k == 0.0 or belief.is_empty:
             return belief
 
         def fx(s, dt=0.0):
-            out = np.array(s, dtype=float)
-            out[..., 1] = out[..., 1] + k / out[..., 2]
-            return out
+            return self.shift_map(s, k)
 
         if self.kind == "ekf":
             f = _MappedEKF(fx)
             f.x, f.P = belief.mean.copy(), belief.cov.copy()
-            jac = np.eye(3)
-            jac[1, 2] = -k / float(belief.mean[2]) ** 2
-            f.F, f.Q = jac, np.zeros((3, 3))
+            f.F, f.Q = self.shift_jacobian(belief.mean, k), np.zeros((3, 3))
             f.predict()
         else:
             f = self._ukf(belief, fx)
@@ -270,6 +319,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
 
     def update(self, belief: GaussianBelief, measurement: Bearing | Range) -> GaussianBelief:
         """Kalman update with a bearing (linear) or a range (nonlinear) measurement."""
+        self._check(belief)
         if belief.is_empty:
             return belief
         if isinstance(measurement, Bearing):
@@ -302,8 +352,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             f.x, f.P = belief.mean.copy(), belief.cov.copy()
             f.update(zs, jac, hx, R=np.array([[r]]))
         else:
-            f = self._ukf(belief, lambda s, dt: s, hx)
-            f.compute_process_sigmas(0.0, fx=lambda s, dt: s)  # sigmas of the current belief
+            f = self._ukf(belief, _identity, hx)
+            f.compute_process_sigmas(0.0, fx=_identity)  # sigmas of the current belief
             f.update(zs, R=np.array([[r]]))
         innovation = float(np.ravel(f.y)[0])
         s_var = float(np.ravel(f.S)[0])
@@ -316,6 +366,12 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         )
 
     # -- helpers -----------------------------------------------------------------------
+    def _check(self, belief: GaussianBelief) -> None:
+        if belief.coords != self.coords:
+            raise ValueError(
+                f"belief in {belief.coords!r} coordinates, estimator in {self.coords!r}"
+            )
+
     def _ukf(self, belief: GaussianBelief, fx, hx=None) -> UnscentedKalmanFilter:
         """A fresh filterpy UKF holding copies of the belief's mean and covariance."""
         f = UnscentedKalmanFilter(
@@ -328,3 +384,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         )
         f.x, f.P = belief.mean.copy(), belief.cov.copy()
         return f
+
+
+def _identity(s, dt=0.0):
+    return s

@@ -1,15 +1,19 @@
 """The Gaussian belief of a Kalman filter seen through its n-sigma ellipsoid.
 
-A Kalman filter's belief is a mean ``m`` and a covariance ``P``. To answer the same
-questions as the information set (:class:`estim.base.Belief`) it is read as the
-n-sigma ellipsoid
+A Kalman filter's belief is a mean ``m`` and a covariance ``P`` of its internal
+state ``q = (alpha, r, x)``, where ``r`` is either the bearing rate ``omega``
+(``coords="rate"``) or the zero-effort miss ``w = omega x^2 / e`` (``coords="zem"``,
+see :mod:`estim.kalman` for the choice). To answer the same questions as the
+information set (:class:`estim.base.Belief`) it is read as the n-sigma ellipsoid
 
-    E = {s : (s - m)^T P^+ (s - m) <= n^2} = {m + n S u : |u| <= 1},   S S^T = P,
+    E = {q : (q - m)^T P^+ (q - m) <= n^2} = {m + n S u : |u| <= 1},   S S^T = P,
 
-(``n = 3`` by default; a singular ``P`` gives a flat ellipsoid, which is handled).
+(``n = 3`` by default; a singular ``P`` gives a flat ellipsoid, which is handled),
+and every point leaves the belief as a row ``(alpha, omega, x)`` (for ``"zem"``
+through ``omega = w e / x^2``: the region is then the image of the ellipsoid).
 The square root ``S`` is a Cholesky factor taken in the coordinate order
-``(omega, x, alpha)``, so that its first two columns span the projection of ``E``
-onto the ``(omega, x)`` plane (see :meth:`GaussianBelief.extremes`). Cholesky is
+``(r, x, alpha)``, so that its first two columns span the projection of ``E``
+onto the ``(r, x)`` plane (see :meth:`GaussianBelief.extremes`). Cholesky is
 invariant under diagonal scaling, so the wildly different units (``alpha`` ~ 1e-3
 rad, ``omega`` ~ 1e-5 rad/s, ``x`` ~ 6e6 m) need no explicit rescaling; no
 eigen-decomposition of ``P`` (which is not scale invariant) is ever taken.
@@ -31,8 +35,11 @@ from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
 
-#: coordinate order of the stored Cholesky factor: (omega, x, alpha)
+#: coordinate order of the stored Cholesky factor: (r, x, alpha)
 PERM = np.array([1, 2, 0])
+
+#: internal coordinates: (alpha, omega, x) or (alpha, w = omega x^2/e, x)
+COORDS = ("rate", "zem")
 
 #: relative pivot below which a direction is taken as exactly degenerate
 #: (the share of a variance not explained by the preceding coordinates)
@@ -83,14 +90,19 @@ def psd_cholesky(p: ArrayLike) -> FloatArray:
 
 @dataclass(frozen=True, eq=False)
 class GaussianBelief(Belief):
-    """An immutable ``(mean, covariance)`` of ``(alpha, omega, x)`` read as its ellipsoid.
+    """An immutable ``(mean, covariance)`` of ``(alpha, r, x)`` read as its ellipsoid.
 
     Parameters
     ----------
     mean : array (3,)
-        ``(alpha_rad, omega_radps, x_m)``.
+        ``(alpha_rad, omega_radps, x_m)`` (``coords="rate"``) or
+        ``(alpha_rad, w_m, x_m)`` (``coords="zem"``).
     cov : array (3, 3)
         Covariance (symmetrised on construction).
+    coords : {"rate", "zem"}
+        Meaning of the second coordinate.
+    closing_speed_mps : float
+        ``e`` of the map ``omega = w e / x^2`` (``"zem"`` only).
     n_sigma : float
         Radius of the ellipsoid in standard deviations.
     status : str
@@ -106,6 +118,8 @@ class GaussianBelief(Belief):
     mean: FloatArray
     cov: FloatArray
     n_sigma: float = 3.0
+    coords: str = "rate"
+    closing_speed_mps: float = 58.0e3
     status: str = "ok"
     contradictions: int = 0
     innovation_outliers: int = 0
@@ -120,6 +134,10 @@ class GaussianBelief(Belief):
             raise ValueError("mean and covariance must be finite")
         if not self.n_sigma > 0:
             raise ValueError("n_sigma must be positive")
+        if self.coords not in COORDS:
+            raise ValueError(f"coords must be one of {COORDS}, got {self.coords!r}")
+        if not self.closing_speed_mps > 0:
+            raise ValueError("closing_speed_mps must be positive")
         p = 0.5 * (p + p.T)
         if np.any(np.diag(p) < 0):
             raise ValueError("covariance has a negative variance")
@@ -136,22 +154,44 @@ class GaussianBelief(Belief):
         return self.status == "terminal"
 
     def centre(self) -> FloatArray:
-        return self.mean.copy()
+        """The mean as a row ``(alpha, omega, x)``."""
+        return self.to_rows(self.mean)
 
     def std(self) -> FloatArray:
-        """Standard deviations of ``(alpha, omega, x)``."""
+        """Standard deviations of the internal coordinates ``(alpha, r, x)``."""
         return np.sqrt(np.diag(self.cov))
 
-    def points(self, u: ArrayLike) -> FloatArray:
-        """Rows ``m + n S u`` for unit-ball rows ``u`` given in ``(omega, x, alpha)`` order."""
-        d = np.asarray(u, dtype=float) @ (self.n_sigma * self._root).T  # (omega, x, alpha)
+    def to_rows(self, q: ArrayLike) -> FloatArray:
+        """Internal ``(alpha, r, x)`` rows to ``(alpha, omega, x)`` rows (new array)."""
+        out = np.array(q, dtype=float)
+        if self.coords == "zem":
+            out[..., 1] = out[..., 1] * self.closing_speed_mps / out[..., 2] ** 2
+        return out
+
+    def from_rows(self, state: ArrayLike) -> FloatArray:
+        """``(alpha, omega, x)`` rows to internal ``(alpha, r, x)`` rows (new array)."""
+        out = np.array(state, dtype=float)
+        if self.coords == "zem":
+            out[..., 1] = out[..., 1] * out[..., 2] ** 2 / self.closing_speed_mps
+        return out
+
+    def internal_points(self, u: ArrayLike) -> FloatArray:
+        """Internal rows ``m + n S u`` for unit-ball rows ``u`` in ``(r, x, alpha)`` order."""
+        d = np.asarray(u, dtype=float) @ (self.n_sigma * self._root).T  # (r, x, alpha)
         out = np.empty_like(d)
         out[..., PERM] = d
         return out + self.mean
 
+    def points(self, u: ArrayLike) -> FloatArray:
+        """Rows ``(alpha, omega, x)`` of the ellipsoid points ``m + n S u``."""
+        return self.to_rows(self.internal_points(u))
+
     def mahalanobis(self, state: ArrayLike) -> float:
-        """Mahalanobis distance of ``state`` from the mean (``inf`` off a flat ellipsoid)."""
-        d = (np.asarray(state, dtype=float).reshape(3) - self.mean)[PERM]
+        """Mahalanobis distance of a row ``(alpha, omega, x)`` from the mean.
+
+        Measured in the internal coordinates; ``inf`` off a flat ellipsoid.
+        """
+        d = (self.from_rows(np.asarray(state, dtype=float).reshape(3)) - self.mean)[PERM]
         low = self._root
         z = np.zeros(3)
         for i in range(3):
@@ -227,50 +267,58 @@ class GaussianBelief(Belief):
     def _forecast_extremes(self, fn: StateFunction, model: ChannelModel) -> Extremes:
         """Extremes of ``Pi(alpha, omega, x) = omega x^2/e + sign(omega) nu x^2/(2 e^2)``.
 
-        ``Pi`` does not depend on ``alpha`` and, for any fixed ``x != 0``, increases
-        with ``omega`` (linear on each side of ``omega = 0`` with a jump up there).
-        Its extremes over ``E`` are therefore its extremes over the projection of
-        ``E`` onto the ``(omega, x)`` plane, attained on the top (max) and bottom
-        (min) of that ellipse, whose boundary is ``m + n S (cos t, sin t, 0)``
-        with ``S`` the Cholesky factor in ``(omega, x, alpha)`` order; the ``alpha``
-        of that point is the conditional mean, so the returned rows lie on ``E``.
+        In internal coordinates ``Pi = A r x^2 + B r + C x^2`` with, for ``"rate"``,
+        ``A = 1/e, B = 0``, and for ``"zem"`` (``omega = w e_b/x^2``) ``A = 0,
+        B = e_b/e``; ``C = sign(r) nu/(2 e^2)``. ``Pi`` does not depend on ``alpha``
+        and, for any fixed ``x != 0``, increases with ``r`` (linear on each side of
+        ``r = 0`` with a jump up there). Its extremes over ``E`` are therefore its
+        extremes over the projection of ``E`` onto the ``(r, x)`` plane, attained on
+        the top (max) and bottom (min) of that ellipse, whose boundary is
+        ``m + n S (cos t, sin t, 0)`` with ``S`` the Cholesky factor in
+        ``(r, x, alpha)`` order; the ``alpha`` of that point is the conditional
+        mean, so the returned rows lie on the surface of ``E``.
 
         The boundary is sampled at 720 angles; each best sample is refined by up to
-        three Newton steps on its smooth branch (sign of ``omega`` fixed),
-        ``f(t) = (omega(t) + sign nu/(2e)) x(t)^2 / e``, accepted only if they stay
-        on the branch and improve the value. Values are ``fn`` at the returned rows.
+        three Newton steps on its smooth branch (sign of ``r`` fixed), accepted
+        only if they stay on the branch and improve the value. Values are ``fn`` at
+        the returned rows.
         """
         m, low, n = self.mean, self._root, self.n_sigma
         e, nu = model.e, model.nu_mps2
-        a_w = n * low[0, 0]
+        coef_a, coef_b = (
+            (1.0 / e, 0.0) if self.coords == "rate" else (0.0, self.closing_speed_mps / e)
+        )
+        a_r = n * low[0, 0]
         b_x, c_x = n * low[1, 0], n * low[1, 1]
         b_a, c_a = n * low[2, 0], n * low[2, 1]
 
         def rows(cos, sin):
-            return np.stack(
-                [m[0] + b_a * cos + c_a * sin, m[1] + a_w * cos, m[2] + b_x * cos + c_x * sin],
+            q = np.stack(
+                [m[0] + b_a * cos + c_a * sin, m[1] + a_r * cos, m[2] + b_x * cos + c_x * sin],
                 axis=-1,
             )
+            return self.to_rows(q)
 
         pts = rows(_COS, _SIN)
         vals = np.asarray(fn(pts), dtype=float)
         out = []
         for sense, i0 in ((-1.0, int(np.argmin(vals))), (1.0, int(np.argmax(vals)))):
             best_p, best_v = pts[i0], float(vals[i0])
-            w0 = m[1] + a_w * _COS[i0]
-            if w0 == 0.0:  # on the jump itself: keep the sample
-                out.append((best_p, best_v))
+            r0 = m[1] + a_r * _COS[i0]
+            if r0 == 0.0:  # on the jump itself: keep the sample
+                out.append((best_p.copy(), best_v))
                 continue
-            branch = math.copysign(1.0, w0)
-            c = branch * nu / (2.0 * e)
+            branch = math.copysign(1.0, r0)
+            coef_c = branch * nu / (2.0 * e * e)
             t = _THETA[i0]
             for _ in range(3):
                 ct, st = math.cos(t), math.sin(t)
-                w, x = m[1] + a_w * ct, m[2] + b_x * ct + c_x * st
-                w1, x1 = -a_w * st, -b_x * st + c_x * ct
-                w2, x2 = -a_w * ct, -b_x * ct - c_x * st
-                f1 = w1 * x * x + 2.0 * (w + c) * x * x1
-                f2 = w2 * x * x + 4.0 * w1 * x * x1 + 2.0 * (w + c) * (x1 * x1 + x * x2)
+                r, x = m[1] + a_r * ct, m[2] + b_x * ct + c_x * st
+                r1, x1 = -a_r * st, -b_x * st + c_x * ct
+                r2, x2 = -a_r * ct, -b_x * ct - c_x * st
+                xx1, xx2 = 2.0 * x * x1, 2.0 * (x1 * x1 + x * x2)  # (x^2)', (x^2)''
+                f1 = coef_a * (r1 * x * x + r * xx1) + coef_b * r1 + coef_c * xx1
+                f2 = coef_a * (r2 * x * x + 2.0 * r1 * xx1 + r * xx2) + coef_b * r2 + coef_c * xx2
                 if sense * f2 >= 0.0:  # not locally concave (max) / convex (min)
                     break
                 dt = float(np.clip(-f1 / f2, -_DTHETA, _DTHETA))
@@ -278,7 +326,7 @@ class GaussianBelief(Belief):
                 if abs(dt) < 1e-14:
                     break
             ct, st = math.cos(t), math.sin(t)
-            if t != _THETA[i0] and math.copysign(1.0, m[1] + a_w * ct) == branch:
+            if t != _THETA[i0] and math.copysign(1.0, m[1] + a_r * ct) == branch:
                 p = rows(np.array([ct]), np.array([st]))
                 v = float(np.asarray(fn(p))[0])
                 if sense * (v - best_v) > 0.0:

@@ -122,10 +122,21 @@ class ChannelModel:
             "g_w": dt_s * (x0 + x1) / (2.0 * self.e),
         }
 
-    def step(self, state: ArrayLike, dt_s: float, v_mps2: ArrayLike = 0.0) -> NDArray[np.float64]:
-        """Exact one-step propagation of ``(alpha, omega, x)`` rows with constant ``v``."""
+    def step(
+        self,
+        state: ArrayLike,
+        dt_s: float,
+        v_mps2: ArrayLike = 0.0,
+        closing_speed_mps: float | None = None,
+    ) -> NDArray[np.float64]:
+        """Exact one-step propagation of ``(alpha, omega, x)`` rows with constant ``v``.
+
+        ``closing_speed_mps`` (default ``e``) is the true closing speed: the same
+        formulas hold for any constant closing speed, with ``x1 = x0 - e_true dt``.
+        """
         s = np.asarray(state, dtype=float)
-        c = self.step_coefficients(s[..., 2], dt_s)
+        e_true = self.e if closing_speed_mps is None else closing_speed_mps
+        c = ChannelModel(e_true, self.nu_mps2).step_coefficients(s[..., 2], dt_s)
         v = np.asarray(v_mps2, dtype=float)
         alpha = s[..., 0] + c["alpha_omega"] * s[..., 1] + c["g_alpha"] * v
         omega = c["omega_gain"] * s[..., 1] + c["g_omega"] * v

@@ -202,6 +202,9 @@ class ConvexPolygons:
         flat = np.bincount(own, weights=(np.abs(c) > 1e-14 * scale), minlength=self.n) == 0
         fv = flat[own]
         s_prev[fv], s_cur[fv] = -1.0, 1.0
+        # a zero segment leaves the polygon unchanged (one vertex each, no shift)
+        zero = (g_poly == 0.0).all(axis=1)[own]
+        s_prev[zero], s_cur[zero] = 1.0, 1.0
         count = np.where(s_prev != s_cur, 2, 1)
         src = np.repeat(np.arange(len(self.xy)), count)
         starts = np.cumsum(count) - count

@@ -8,9 +8,9 @@ The engagement ends at the truth's closest approach (found by minimising the
 range over the last step) or, once every belief has passed under ``eps`` or the
 target is within ``eps``, by free flight to the closest approach.
 
-Containment of the truth is checked while its range exceeds
-``eps + e Delta + section spacing``: below that the threshold legitimately drops
-the sections that would bracket it.
+Containment of the truth is checked at every step while its range exceeds
+``eps`` (with the seed's point sections: ``eps + e Delta + section spacing``,
+below which the threshold legitimately drops the sections that bracket it).
 """
 
 from __future__ import annotations
@@ -61,11 +61,21 @@ def channel_boxes(sc: InterceptScenario, channel: str) -> dict[str, tuple[float,
     }
 
 
+def infoset_estimator(sc: InterceptScenario, model: ChannelModel) -> InformationSetEstimator:
+    e = sc.estimator
+    return InformationSetEstimator(
+        model,
+        n_sections=e["n_sections"],
+        sections=e["sections"],
+        closing_speed_mps=tuple(v * 1e3 for v in e["closing_speed_kmps"]),
+    )
+
+
 def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, channel: str):
     """Estimator of one channel and its initial belief, by name."""
     boxes = channel_boxes(sc, channel)
     if name == "infoset":
-        est = InformationSetEstimator(model, n_sections=sc.estimator["n_sections"])
+        est = infoset_estimator(sc, model)
         return est, est.initial(boxes["lateral_m"], boxes["lateral_vel_mps"], boxes["x_m"])
     if name in ("ekf", "ukf"):
         try:
@@ -81,7 +91,7 @@ def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels,
     if name == "random":
         return RandomNoise(model, rng)
     if name == "game":
-        est = InformationSetEstimator(model, n_sections=sc.estimator["n_sections"])
+        est = infoset_estimator(sc, model)
         sets = []
         for ch in channels:
             b = channel_boxes(sc, ch)
@@ -111,6 +121,7 @@ class EngagementResult:
     steps: int
     ca_time_s: float
     final_status: str
+    fuel_perfect_info_mps: float
 
     def as_row(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -129,6 +140,10 @@ def run_engagement(
     pos_km, vel_kmps = draw_truth(sc, rng)
     state = truth_model.initial(pos_km, vel_kmps)
     channels = [c for c in CHANNELS if sc.guidance[c]]
+    # lower bound: one impulse at the start cancelling the zero-effort miss
+    t_go0 = -pos_km[0] / vel_kmps[0]
+    zem_km = [abs(pos_km[i] + vel_kmps[i] * t_go0) for i in (1, 2) if sc.guidance[CHANNELS[i - 1]]]
+    fuel_floor_mps = sum(zem_km) * 1e3 / t_go0
     built = [build_estimator(estimator_name, sc, model, c) for c in channels]
     est: list[Estimator] = [b[0] for b in built]
     beliefs: list[Belief] = [b[1] for b in built]
@@ -140,7 +155,11 @@ def run_engagement(
     rf = sc.range_finder
     x_box = sc.estimator["x_km"]
     spacing_m = (x_box[1] - x_box[0]) * 1e3 / max(sc.estimator["n_sections"] - 1, 1)
-    check_floor_m = model.eps_m + model.e * dt + spacing_m
+    # the seed's point sections bracket the truth only above eps + one step + one
+    # spacing; slabs contain it down to eps
+    check_floor_m = model.eps_m + (
+        model.e * dt + spacing_m if sc.estimator["sections"] == "points" else 0.0
+    )
     axis = {"lateral": 1, "vertical": 2}
 
     fuel = 0.0
@@ -188,7 +207,9 @@ def run_engagement(
         r1, v1 = truth_model.relative(new_state)
         if float(r1 @ v1) >= 0.0:  # closest approach inside this step
             miss_m, t_ca = truth_model.closest_approach(state, dt)
-            return _result(miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca)
+            return _result(
+                miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca, fuel_floor_mps
+            )
         beliefs = [e.predict(b, dt) for e, b in zip(est, beliefs, strict=True)]
         noise.predict(dt)
         state = new_state
@@ -196,10 +217,12 @@ def run_engagement(
     r_km, v_kmps = truth_model.relative(state)
     t_go = max(-float(r_km @ v_kmps) / float(v_kmps @ v_kmps), 0.0)
     miss_m, t_ca = truth_model.closest_approach(state, 1.5 * t_go + dt)
-    return _result(miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca)
+    return _result(
+        miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca, fuel_floor_mps
+    )
 
 
-def _result(miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca) -> EngagementResult:
+def _result(miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor) -> EngagementResult:
     contradictions = sum(getattr(b, "contradictions", 0) for b in beliefs)
     statuses = {getattr(b, "status", "ok") for b in beliefs}
     return EngagementResult(
@@ -212,6 +235,7 @@ def _result(miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca) -> Enga
         steps=int(steps),
         ca_time_s=float(t_ca),
         final_status=",".join(sorted(statuses)),
+        fuel_perfect_info_mps=float(floor),
     )
 
 

@@ -37,10 +37,13 @@ ESTIMATOR_RULES = {
     "vz_kmps": Interval(Num(-10.0, 10.0)),
     "vx_kmps": Interval(Num(-100.0, -0.1)),
     "n_sections": Num(2, 400, integer=True),
+    "sections": Choice(("slabs", "points")),
+    "closing_speed_kmps": Interval(Num(0.1, 100.0)),
     "kalman_sigma": Num(0.5, 10.0),
 }
 TRUTH_RULES = dict(ESTIMATOR_RULES)
-del TRUTH_RULES["n_sections"], TRUTH_RULES["kalman_sigma"]
+for _k in ("n_sections", "sections", "closing_speed_kmps", "kalman_sigma"):
+    del TRUTH_RULES[_k]
 RANGE_RULES = {
     "enabled": Bool(),
     "rel_bound": Num(0.0, 0.5, open_lo=True),
@@ -98,6 +101,8 @@ DEFAULTS = {
         "vz_kmps": (-0.1, 0.1),
         "vx_kmps": (-59.0, -57.0),
         "n_sections": 29,
+        "sections": "slabs",
+        "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
         "kalman_sigma": 3.0,
     },
     "range_finder": {"enabled": False, "rel_bound": 0.05, "first_s": 1.0, "period_s": 2.0},
@@ -160,7 +165,10 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
         ("reference", REFERENCE_RULES),
     ):
         tables[key] = validate_table(source, data.get(key, {}), rules, DEFAULTS[key], key + ".")
-    truth_defaults = {k: tables["estimator"][k] for k in TRUTH_RULES}
+    est = tables["estimator"]
+    if est["closing_speed_kmps"] is None:
+        est["closing_speed_kmps"] = (tables["model"]["closing_speed_kmps"],) * 2
+    truth_defaults = {k: est[k] for k in TRUTH_RULES}
     tables["truth"] = validate_table(
         source, data.get("truth", {}), TRUTH_RULES, truth_defaults, "truth."
     )

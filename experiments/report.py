@@ -1,0 +1,44 @@
+"""Tables of experiment summaries (markdown) and the per-run table files."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from experiments.runner import _atomic_write
+
+
+def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:
+    """A markdown table with one line per summary object (SPEC 3.1 intercept JSON)."""
+    head = [
+        *label_keys,
+        "runs",
+        "miss mean / p50 / p90 / max, m",
+        "fuel mean / p50 / p90 / max, m/s",
+    ]
+    head += ["truth outside (steps)", "empty set (runs)", "failures"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        m, f = r["miss_m"], r["fuel_mps"]
+        cells = [str(r[k]) for k in label_keys] + [str(r["runs"])]
+        cells.append(f"{m['mean']:.2f} / {m['p50']:.2f} / {m['p90']:.2f} / {m['max']:.2f}")
+        cells.append(f"{f['mean']:.1f} / {f['p50']:.1f} / {f['p90']:.1f} / {f['max']:.1f}")
+        cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r["failures"])]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_tables(df: pd.DataFrame, stem: Path) -> list[Path]:
+    """Per-run table as Parquet and CSV, atomically."""
+    pq, csv = stem.with_suffix(".parquet"), stem.with_suffix(".csv")
+    _atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
+    _atomic_write(csv, lambda tmp: df.to_csv(tmp, index=False))
+    return [pq, csv]
+
+
+def write_text(path: Path, text: str) -> Path:
+    _atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    return path
