@@ -122,9 +122,15 @@ class EngagementResult:
     ca_time_s: float
     final_status: str
     fuel_perfect_info_mps: float
+    max_impulse_mps: float
+    min_impulse_mps: float
+    truth0: tuple[float, ...]
 
     def as_row(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        row = {k: v for k, v in self.__dict__.items() if k != "truth0"}
+        keys = ("x0_km", "y0_km", "z0_km", "vx0_kmps", "vy0_kmps", "vz0_kmps")
+        row.update(zip(keys, self.truth0, strict=True))
+        return row
 
 
 def run_engagement(
@@ -164,6 +170,7 @@ def run_engagement(
 
     fuel = 0.0
     n_imp = outside = checked = 0
+    issued: list[float] = []
     max_steps = int(math.ceil(pos_km[0] * 1e3 / model.e / dt * 2)) + 10
     for step in range(max_steps):
         t = step * dt
@@ -196,6 +203,8 @@ def run_engagement(
             k = law.impulse_mps(b, fuel)
             fuel += abs(k)
             n_imp += k != 0.0
+            if k != 0.0:
+                issued.append(abs(k))
             ks.append(k)
         beliefs = [e.shift(b, k) for e, b, k in zip(est, beliefs, ks, strict=True)]
         noise.observe(ks)
@@ -208,8 +217,9 @@ def run_engagement(
         if float(r1 @ v1) >= 0.0:  # closest approach inside this step
             miss_m, t_ca = truth_model.closest_approach(state, dt)
             return _result(
-                miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca, fuel_floor_mps
-            )
+                miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca, fuel_floor_mps,
+                issued, (*pos_km, *vel_kmps),
+            )  # fmt: skip
         beliefs = [e.predict(b, dt) for e, b in zip(est, beliefs, strict=True)]
         noise.predict(dt)
         state = new_state
@@ -218,11 +228,14 @@ def run_engagement(
     t_go = max(-float(r_km @ v_kmps) / float(v_kmps @ v_kmps), 0.0)
     miss_m, t_ca = truth_model.closest_approach(state, 1.5 * t_go + dt)
     return _result(
-        miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca, fuel_floor_mps
-    )
+        miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca, fuel_floor_mps,
+        issued, (*pos_km, *vel_kmps),
+    )  # fmt: skip
 
 
-def _result(miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor) -> EngagementResult:
+def _result(
+    miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor, issued, truth0
+) -> EngagementResult:
     contradictions = sum(getattr(b, "contradictions", 0) for b in beliefs)
     statuses = {getattr(b, "status", "ok") for b in beliefs}
     return EngagementResult(
@@ -236,6 +249,9 @@ def _result(miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor) 
         ca_time_s=float(t_ca),
         final_status=",".join(sorted(statuses)),
         fuel_perfect_info_mps=float(floor),
+        max_impulse_mps=float(max(issued, default=0.0)),
+        min_impulse_mps=float(min(issued, default=0.0)),
+        truth0=tuple(float(v) for v in truth0),
     )
 
 

@@ -3,8 +3,9 @@
 * Seeding: run ``j`` uses ``SeedSequence(seed).spawn(runs)[j]``; the realisation
   depends only on (scenario, seed, j), never on the worker count or the order,
   and is the same for every estimator (paired comparison).
-* Executor: in-process for one worker, a ``ProcessPoolExecutor`` for several, or a
-  Dask cluster's ``Client.get_executor()`` with ``scheduler`` (same results).
+* Executor: runs in this process for one worker, a ``ProcessPoolExecutor`` for
+  several, or a Dask cluster's ``Client.get_executor()`` with ``scheduler`` (same
+  results either way).
 * Results: one Parquet file per (scenario, estimator, noise, seed) with one row per
   run, the resolved scenario as JSON beside it; both written atomically
   (temporary file + ``os.replace``). Rerunning the same command completes only the
@@ -19,7 +20,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -38,18 +39,6 @@ SAVE_EVERY_S = 2.0
 def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
     """The seed of run ``j``: ``SeedSequence(seed).spawn(runs)[j]`` (independent of ``runs``)."""
     return np.random.SeedSequence(seed, spawn_key=(j,))
-
-
-class _InlineExecutor(Executor):
-    """Runs tasks in the calling process (one worker; also the simplest to debug)."""
-
-    def submit(self, fn, /, *args, **kwargs):  # type: ignore[override]
-        fut: Future = Future()
-        try:
-            fut.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller via the future
-            fut.set_exception(exc)
-        return fut
 
 
 @contextmanager
@@ -72,9 +61,6 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
             client.close()
         return
     n = workers or os.cpu_count() or 1
-    if n == 1:
-        yield _InlineExecutor()
-        return
     pool = ProcessPoolExecutor(max_workers=n)
     try:
         yield pool
@@ -146,31 +132,43 @@ def run_experiment(
             leave=False,
         )
         last_save = time.monotonic()
-        with executor_or(executor, workers, scheduler) as ex:
-            futs = {
-                ex.submit(timed_engagement, sc, estimator, noise, run_seed(seed, runs, j)): j
-                for j in todo
-            }
-            try:
-                for fut in as_completed(futs):
-                    j = futs[fut]
-                    try:
-                        row = fut.result()
-                    except InputError:
-                        raise
-                    except Exception as exc:  # a worker died: record, keep going
-                        row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
-                    rows.append({**base, "run": j, **row})
-                    bar.update(1)
-                    if time.monotonic() - last_save > SAVE_EVERY_S:
-                        _write_rows(path, rows)
-                        last_save = time.monotonic()
-            finally:
-                bar.close()
-                if rows:
-                    _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
+        try:
+            for j, row in _results(
+                sc, estimator, noise, seed, runs, todo, executor, workers, scheduler
+            ):
+                rows.append({**base, "run": j, **row})
+                bar.update(1)
+                if time.monotonic() - last_save > SAVE_EVERY_S:
+                    _write_rows(path, rows)
+                    last_save = time.monotonic()
+        finally:
+            bar.close()
+            if rows:
+                _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
     return df
+
+
+def _results(sc, estimator, noise, seed, runs, todo, executor, workers, scheduler):
+    """Yield ``(run, row)`` as runs finish: in order in this process for one local
+    worker (so Ctrl-C stops between runs), else as completed on the executor."""
+    if executor is None and scheduler is None and (workers or os.cpu_count() or 1) == 1:
+        for j in todo:
+            yield j, timed_engagement(sc, estimator, noise, run_seed(seed, runs, j))
+        return
+    with executor_or(executor, workers, scheduler) as ex:
+        futs = {
+            ex.submit(timed_engagement, sc, estimator, noise, run_seed(seed, runs, j)): j
+            for j in todo
+        }
+        for fut in as_completed(futs):
+            try:
+                row = fut.result()
+            except InputError:
+                raise
+            except Exception as exc:  # a worker died: record the run as failed, go on
+                row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+            yield futs[fut], row
 
 
 @contextmanager

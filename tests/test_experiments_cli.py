@@ -1,0 +1,221 @@
+"""Command line, scenario validation and the Monte Carlo harness (SPEC 3, issue 5)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments import runner
+from experiments.cli import main
+from experiments.intercept_scenario import load_scenario
+from experiments.runner import run_experiment
+
+ROOT = Path(__file__).resolve().parents[1]
+FIG3 = ROOT / "data" / "scenarios" / "kp_fig3.toml"
+
+# a short engagement (~1000 km, 35 steps) so harness tests stay fast
+SHORT = """
+name = "short"
+[model]
+nominal_range_km = 1000.0
+[estimator]
+x_km = [900.0, 1100.0]
+n_sections = 9
+closing_speed_kmps = [57.9, 58.1]
+[truth]
+y_km = [-1.0, 1.0]
+z_km = [-1.0, 1.0]
+x_km = [950.0, 1050.0]
+vy_kmps = [-0.05, 0.05]
+vz_kmps = [-0.05, 0.05]
+vx_kmps = [-58.1, -57.9]
+[range_finder]
+enabled = true
+[experiment]
+runs = 4
+seed = 11
+"""
+
+
+def cli(*args, cwd=ROOT):
+    """``python -m experiments ARGS`` in a subprocess (the real entry point)."""
+    return subprocess.run(
+        [sys.executable, "-m", "experiments", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=600,
+    )
+
+
+def cli_inproc(capsys, *args):
+    """The same through ``experiments.cli.main`` in this process (fast)."""
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, out.out, out.err)
+
+
+@pytest.fixture
+def short(tmp_path):
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT)
+    return p
+
+
+def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path):
+    """Issue 3: Fig. 3 with random noise misses by <= 10 m with 150..400 m/s of fuel;
+    game noise costs more fuel; the truth never leaves the set, no empty set."""
+    out = {}
+    for noise in ("random", "game"):
+        r = cli("intercept", FIG3, "--noise", noise, "--json", "--out", tmp_path, "--no-progress")
+        assert r.returncode == 0, r.stderr
+        out[noise] = json.loads(r.stdout.strip().splitlines()[-1])
+        assert out[noise]["truth_outside"] == 0
+        assert out[noise]["empty_set"] == 0 and out[noise]["failures"] == 0
+    assert out["random"]["miss_m"]["max"] <= 10.0
+    assert 150.0 <= out["random"]["fuel_mps"]["max"] <= 400.0
+    assert out["game"]["fuel_mps"]["mean"] > out["random"]["fuel_mps"]["mean"]
+
+
+BAD = {
+    "unknown top key": ("colour = 'red'\n", "unknown key 'colour'"),
+    "unknown table key": ("[model]\nspeed = 3\n", "unknown key 'model.speed'"),
+    "wrong type": ("[model]\ndt_s = 'fast'\n", "field 'model.dt_s' must be a number"),
+    "out of range": ("[model]\nnu_mps2 = -1.0\n", "field 'model.nu_mps2' must be"),
+    "bad choice": ("[experiment]\nnoise = 'pink'\n", "field 'experiment.noise' must be one of"),
+    "bad interval": ("[estimator]\ny_km = [5.0, -5.0]\n", "field 'estimator.y_km'"),
+    "truth outside box": ("[truth]\ny_km = [-20.0, 0.0]\n", "must lie inside"),
+    "bad toml": ("[model\n", "invalid TOML"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_scenario_input_exits_2_with_one_line(tmp_path, capsys, case):
+    text, message = BAD[case]
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    r = cli_inproc(capsys, "intercept", p, "--json")
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and str(p) in lines[0]
+    assert "Traceback" not in r.stderr and r.stdout == ""
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["intercept", "missing.toml"],
+        ["intercept", str(FIG3), "--estimator", "kalman9"],
+        ["intercept", str(FIG3), "--runs", "0"],
+        ["compare", str(FIG3), "--estimators", "infoset,foo"],
+        ["nonsense"],
+    ],
+)
+def test_bad_command_line_exits_2_with_one_line(capsys, args):
+    r = cli_inproc(capsys, *args)
+    assert r.returncode == 2
+    assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+
+
+def _table(df):
+    cols = ["run", "miss_m", "fuel_mps", "truth_outside", "x0_km", "y0_km", "vy0_kmps"]
+    return df[cols].sort_values("run").reset_index(drop=True)
+
+
+def test_same_results_with_one_and_two_workers_and_same_seed(short, tmp_path):
+    sc = load_scenario(short)
+    a = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "a", workers=1, progress=False)
+    b = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "b", workers=2, progress=False)
+    c = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "c", workers=1, progress=False)
+    pd.testing.assert_frame_equal(_table(a), _table(b))
+    pd.testing.assert_frame_equal(_table(a), _table(c))
+    assert (a["status"] == "ok").all() and a["truth_outside"].sum() == 0
+    d = run_experiment(sc, "infoset", "random", 4, 12, tmp_path / "d", workers=1, progress=False)
+    assert not np.allclose(a["y0_km"], d["y0_km"])  # another seed, another realisation
+
+
+def test_same_results_on_a_dask_local_cluster(short, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    sc = load_scenario(short)
+    a = run_experiment(sc, "infoset", "game", 3, 11, tmp_path / "a", workers=1, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True) as cluster:
+        b = run_experiment(
+            sc, "infoset", "game", 3, 11, tmp_path / "b", scheduler=cluster.scheduler_address,
+            progress=False,
+        )  # fmt: skip
+    pd.testing.assert_frame_equal(_table(a), _table(b))
+
+
+def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
+    short, tmp_path, monkeypatch
+):
+    sc = load_scenario(short)
+    calls = []
+    real = runner.timed_engagement
+
+    def flaky(sc_, est, noise, ss):
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # Ctrl-C after two finished runs
+        calls.append(ss.spawn_key)
+        return real(sc_, est, noise, ss)
+
+    monkeypatch.setattr(runner, "timed_engagement", flaky)
+    with pytest.raises(KeyboardInterrupt):
+        run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    first = pd.read_parquet(path)
+    assert sorted(first["run"]) == [0, 1]  # finished runs were written
+    monkeypatch.setattr(runner, "timed_engagement", real)
+    calls.clear()
+    done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+    assert sorted(done["run"]) == [0, 1, 2, 3]
+    # the first two rows are the stored ones (wall times unchanged: not recomputed)
+    np.testing.assert_array_equal(done["wall_s"][:2], first.sort_values("run")["wall_s"])
+    fresh = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "f", 1, progress=False)
+    pd.testing.assert_frame_equal(_table(done), _table(fresh))
+
+
+def test_a_failing_run_is_recorded_and_does_not_stop_the_others(short, tmp_path, monkeypatch):
+    sc = load_scenario(short)
+    real = runner.timed_engagement
+
+    def sometimes(sc_, est, noise, ss):
+        if ss.spawn_key == (1,):
+            return {"status": "failed", "error": "RuntimeError: boom", "wall_s": 0.0}
+        return real(sc_, est, noise, ss)
+
+    monkeypatch.setattr(runner, "timed_engagement", sometimes)
+    df = run_experiment(sc, "infoset", "random", 3, 11, tmp_path, workers=1, progress=False)
+    assert list(df["status"]) == ["ok", "failed", "ok"]
+    assert "boom" in df.loc[1, "error"]
+
+
+def test_engagement_errors_are_caught_per_run(short):
+    """timed_engagement records an exception inside a run as a failed row."""
+    import dataclasses
+
+    sc = load_scenario(short)
+    broken = dataclasses.replace(sc, model={**sc.model, "dt_s": float("nan")})
+    row = runner.timed_engagement(broken, "infoset", "random", runner.run_seed(1, 1, 0))
+    assert row["status"] == "failed" and row["error"]
+
+
+def test_results_are_written_atomically_with_the_resolved_scenario(short, tmp_path):
+    sc = load_scenario(short)
+    run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
+    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    meta = json.loads(path.with_suffix(".json").read_text())
+    assert meta["scenario"]["name"] == "short" and meta["seed"] == 11
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_real_entry_point_reports_bad_input_in_one_line():
+    r = cli("intercept", "missing.toml", "--json")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "missing.toml" in r.stderr

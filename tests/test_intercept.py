@@ -1,0 +1,119 @@
+"""Intercept of seed 003: truth model, forecast, guidance law, game noise (SPEC 1)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from estim.infoset import InformationSetEstimator
+from estim.model import ChannelModel
+from experiments.noise import game_bearing, game_range
+from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from guidance.intercept.truth import TwoBodyTruth
+
+MODEL = ChannelModel()
+TRUTH = TwoBodyTruth()
+
+
+def test_kepler_truth_matches_an_independent_solve_ivp_propagation():
+    """The relative motion from the universal-variable Kepler solution of both bodies
+    equals a DOP853 integration of the differential-gravity equations (100 s)."""
+    s_k = s_n = TRUTH.initial([5801.3, -8.0, 1.0], [-58.0, 0.05, -0.02])
+    for _ in range(20):
+        s_k = TRUTH.propagate(s_k, 5.0)
+        s_n = TRUTH.propagate_numeric(s_n, 5.0)
+    (rk, vk), (rn, vn) = TRUTH.relative(s_k), TRUTH.relative(s_n)
+    assert np.linalg.norm(rk - rn) * 1e3 < 1e-4  # m
+    assert np.linalg.norm(vk - vn) * 1e3 < 1e-7  # m/s
+
+
+def test_relative_gravity_is_included_and_of_the_expected_size():
+    """SPEC 1.1: the differential gravity (~1e-7 m/s^2) moves the target by about
+    a t^2/2 ~ 1e-3 m over 100 s relative to straight-line motion."""
+    r0, v0 = np.array([5801.3, -8.0, 0.0]), np.array([-58.0, 0.0, 0.0])
+    s = TRUTH.initial(r0, v0)
+    a_rel = TRUTH.rhs(0.0, s)[9:12]
+    assert 1e-11 < np.linalg.norm(a_rel) < 1e-9  # km/s^2, i.e. 1e-8 .. 1e-6 m/s^2
+    r, _ = TRUTH.relative(TRUTH.propagate(s, 100.0))
+    dev_m = np.linalg.norm(r - (r0 + 100.0 * v0)) * 1e3
+    assert 1e-5 < dev_m < 1e-2
+
+
+@pytest.mark.parametrize("y_km, vy_kmps", [(-8.0, 0.0), (3.0, -0.05), (0.5, 0.08)])
+def test_forecast_equals_propagated_free_flight_miss_seed003_section5(y_km, vy_kmps):
+    """Pi(alpha, omega, x) with nu = 0 is the lateral offset at closest approach of
+    the propagated two-body motion (within the ~mm differential-gravity effect)."""
+    r0, v0 = np.array([5801.3, y_km, 0.0]), np.array([-58.0, vy_kmps, 0.0])
+    state = MODEL.from_cartesian(r0[1] * 1e3, v0[1] * 1e3, r0[0] * 1e3, v0[0] * 1e3)
+    forecast = ChannelModel(nu_mps2=0.0).miss_forecast_m(state)
+    miss_m, t_ca = TRUTH.closest_approach(TRUTH.initial(r0, v0), 110.0)
+    assert abs(t_ca - 5801.3 / 58.0) < 0.01
+    # small-angle forecast vs exact geometry: relative error ~ (y/x)^2
+    assert abs(abs(float(forecast)) - miss_m) < 0.01 + 1e-5 * miss_m
+
+
+def test_impulse_recentres_the_forecast_interval_seed003_law():
+    """After the law's impulse the forecast at the two extreme points sums to zero
+    (k = -(Pi_min + Pi_max) e / (x* + x**)); the interval's centre moves to ~0."""
+    est = InformationSetEstimator(MODEL, sections="points")
+    s = est.initial((-10e3, 10e3), (-20.0, 60.0), (5301.3e3, 6301.3e3))
+    law = ForecastCentringLaw(MODEL, ImpulseLimits(0.0, 1e6, 1e9))
+    ext = law.forecast(s)
+    k = law.command_mps(s)
+    after = est.shift(s, k)
+    pts = np.array([ext.argmin, ext.argmax]) + np.array([[0, k / ext.argmin[2], 0]])
+    pts[1, 1] = ext.argmax[1] + k / ext.argmax[2]
+    assert abs(MODEL.miss_forecast_m(pts).sum()) < 1e-6 * (ext.max_value - ext.min_value)
+    new = law.forecast(after)
+    centre_before = abs(ext.max_value + ext.min_value) / 2
+    centre_after = abs(new.max_value + new.min_value) / 2
+    assert centre_after < 0.02 * centre_before
+
+
+@given(
+    k=st.floats(-50, 50),
+    used=st.floats(0, 2100),
+)
+def test_impulse_limits_and_fuel_reserve(k, used):
+    lim = ImpulseLimits(0.25, 7.5, 2000.0)
+    out = lim.apply(k, used)
+    assert out == 0.0 or 0.25 <= abs(out) <= 7.5
+    assert abs(out) <= max(2000.0 - used, 0.0) + 1e-12
+    if abs(k) < 0.25:
+        assert out == 0.0
+    if out != 0.0:
+        assert np.sign(out) == np.sign(k)
+    if 0.25 <= abs(k) <= 7.5 and used + abs(k) <= 2000.0:
+        assert out == k
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    y=st.floats(-10e3, 10e3),
+    vy=st.floats(-100, 100),
+    alpha_err=st.floats(-3e-3, 3e-3),
+    x=st.floats(5301.3e3, 6301.3e3),
+)
+def test_game_bearing_always_contains_the_truth(y, vy, alpha_err, x):
+    """SPEC 1.6 (a): the adversary's bearing error never exceeds the bound, wherever
+    the truth is relative to the adversary's set; (b) when compatible, the strip at
+    the worst point's range contains the worst point."""
+    est = InformationSetEstimator(MODEL)
+    s = est.initial((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
+    alpha_true = y / x + alpha_err
+    bound = float(MODEL.bearing_bound(x))
+    a_m = game_bearing(alpha_true, bound, s)
+    assert abs(a_m - alpha_true) <= bound
+    ext = s.extremes(MODEL.miss_forecast_m)
+    worst = ext.argmax if abs(ext.max_value) >= abs(ext.min_value) else ext.argmin
+    if abs(worst[0] - alpha_true) <= bound + float(MODEL.bearing_bound(worst[2])) - 1e-12:
+        assert abs(a_m - worst[0]) <= float(MODEL.bearing_bound(worst[2]))
+
+
+@given(d=st.floats(1e4, 1e7), xw=st.floats(1e4, 1e7))
+def test_game_range_always_contains_the_truth(d, xw):
+    b = 0.05
+    d_m = game_range(d, b, xw, 0.5 * d, 1.5 * d)
+    assert abs(d_m - d) <= b * d * (1 + 1e-12)
+    if abs(xw - d) <= b * min(d, xw) * 0.99:
+        assert abs(d_m - xw) <= b * xw * (1 + 1e-12)
