@@ -71,6 +71,7 @@ from typing import Any
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, UnscentedKalmanFilter
 from numpy.typing import NDArray
+from scipy import special
 
 from estim.base import Estimator
 from estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
@@ -268,18 +269,43 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         return q[..., 2] / np.cos(q[..., 0])
 
     # -- Estimator interface ---------------------------------------------------------
-    def predict(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
-        """Propagate over ``dt_s`` (exact map, ``Q`` of the disturbance).
+    def threshold(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
+        """Condition on ``x >= eps + e dt`` (states that pass under ``eps`` are dropped).
 
-        When the mean range would pass under ``eps`` the belief becomes empty
-        with status ``"terminal"`` (as the set after its threshold): guidance ends.
+        The Gaussian analogue of the set's threshold (SPEC 1.4): when the n-sigma
+        ellipsoid reaches under ``x_lo = eps + e dt``, ``x`` is replaced by its normal
+        distribution truncated at ``x_lo`` (moments ``m + s lambda``,
+        ``s^2 (1 + b lambda - lambda^2)``, ``b = (x_lo - m)/s``,
+        ``lambda = phi(b)/(1 - Phi(b))``) and the other coordinates follow through
+        their regression on ``x`` (Simon & Simon's truncation of a Gaussian). When the
+        whole ellipsoid is under ``x_lo`` the belief becomes empty, status
+        ``"terminal"``: guidance ends, as with an emptied set.
         """
+        if belief.is_empty:
+            return belief
+        x_lo = self.model.eps_m + self.model.e * dt_s
+        m, p = belief.mean, belief.cov
+        sx = math.sqrt(p[2, 2])
+        n = belief.n_sigma
+        if m[2] + n * sx < x_lo:
+            return replace(belief, status="terminal")
+        if m[2] - n * sx >= x_lo or sx == 0.0:
+            return belief
+        b = (x_lo - m[2]) / sx
+        lam = math.sqrt(2.0 / math.pi) / float(special.erfcx(b / math.sqrt(2.0)))
+        new_var = p[2, 2] * max(1.0 + b * lam - lam * lam, 0.0)
+        gain = p[:, 2] / p[2, 2]
+        mean = m + gain * (sx * lam)
+        cov = p - np.outer(gain, gain) * (p[2, 2] - new_var)
+        return replace(belief, mean=mean, cov=cov)
+
+    def predict(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
+        """Threshold (:meth:`threshold`), then propagate over ``dt_s`` (exact map, ``Q``)."""
         self._check(belief)
+        belief = self.threshold(belief, dt_s)
         if belief.is_empty:
             return belief
         x0 = float(belief.mean[2])
-        if x0 - self.model.e * dt_s < self.model.eps_m:
-            return replace(belief, status="terminal")
         q = self.process_noise(x0, dt_s)
 
         def fx(s, dt=dt_s):

@@ -283,37 +283,37 @@ class GaussianBelief(Belief):
         only if they stay on the branch and improve the value. Values are ``fn`` at
         the returned rows.
         """
-        m, low, n = self.mean, self._root, self.n_sigma
+        m0, m1, m2 = (float(v) for v in self.mean)
+        low, n = self._root, self.n_sigma
         e, nu = model.e, model.nu_mps2
         coef_a, coef_b = (
             (1.0 / e, 0.0) if self.coords == "rate" else (0.0, self.closing_speed_mps / e)
         )
-        a_r = n * low[0, 0]
-        b_x, c_x = n * low[1, 0], n * low[1, 1]
-        b_a, c_a = n * low[2, 0], n * low[2, 1]
+        a_r = n * float(low[0, 0])
+        b_x, c_x = n * float(low[1, 0]), n * float(low[1, 1])
+        b_a, c_a = n * float(low[2, 0]), n * float(low[2, 1])
 
         def rows(cos, sin):
-            q = np.stack(
-                [m[0] + b_a * cos + c_a * sin, m[1] + a_r * cos, m[2] + b_x * cos + c_x * sin],
-                axis=-1,
-            )
+            q = np.empty((len(cos), 3))
+            q[:, 0] = m0 + b_a * cos + c_a * sin
+            q[:, 1] = m1 + a_r * cos
+            q[:, 2] = m2 + b_x * cos + c_x * sin
             return self.to_rows(q)
 
         pts = rows(_COS, _SIN)
         vals = np.asarray(fn(pts), dtype=float)
-        out = []
-        for sense, i0 in ((-1.0, int(np.argmin(vals))), (1.0, int(np.argmax(vals)))):
-            best_p, best_v = pts[i0], float(vals[i0])
-            r0 = m[1] + a_r * _COS[i0]
+        best = [int(np.argmin(vals)), int(np.argmax(vals))]
+        angles = [float(_THETA[i]) for i in best]
+        for j, sense in enumerate((-1.0, 1.0)):
+            r0 = m1 + a_r * float(_COS[best[j]])
             if r0 == 0.0:  # on the jump itself: keep the sample
-                out.append((best_p.copy(), best_v))
                 continue
             branch = math.copysign(1.0, r0)
             coef_c = branch * nu / (2.0 * e * e)
-            t = _THETA[i0]
+            t = angles[j]
             for _ in range(3):
                 ct, st = math.cos(t), math.sin(t)
-                r, x = m[1] + a_r * ct, m[2] + b_x * ct + c_x * st
+                r, x = m1 + a_r * ct, m2 + b_x * ct + c_x * st
                 r1, x1 = -a_r * st, -b_x * st + c_x * ct
                 r2, x2 = -a_r * ct, -b_x * ct - c_x * st
                 xx1, xx2 = 2.0 * x * x1, 2.0 * (x1 * x1 + x * x2)  # (x^2)', (x^2)''
@@ -321,16 +321,20 @@ class GaussianBelief(Belief):
                 f2 = coef_a * (r2 * x * x + 2.0 * r1 * xx1 + r * xx2) + coef_b * r2 + coef_c * xx2
                 if sense * f2 >= 0.0:  # not locally concave (max) / convex (min)
                     break
-                dt = float(np.clip(-f1 / f2, -_DTHETA, _DTHETA))
+                dt = min(max(-f1 / f2, -_DTHETA), _DTHETA)
                 t += dt
                 if abs(dt) < 1e-14:
                     break
-            ct, st = math.cos(t), math.sin(t)
-            if t != _THETA[i0] and math.copysign(1.0, m[1] + a_r * ct) == branch:
-                p = rows(np.array([ct]), np.array([st]))
-                v = float(np.asarray(fn(p))[0])
-                if sense * (v - best_v) > 0.0:
-                    best_p, best_v = p[0], v
-            out.append((best_p.copy(), best_v))
+            if math.copysign(1.0, m1 + a_r * math.cos(t)) == branch:
+                angles[j] = t
+        # refined candidates, evaluated with fn; kept only where they improve the sample
+        cand = rows(np.cos(angles), np.sin(angles))
+        cval = np.asarray(fn(cand), dtype=float)
+        out = []
+        for j, sense in enumerate((-1.0, 1.0)):
+            if sense * (cval[j] - vals[best[j]]) > 0.0:
+                out.append((cand[j], float(cval[j])))
+            else:
+                out.append((pts[best[j]].copy(), float(vals[best[j]])))
         (p_lo, v_lo), (p_hi, v_hi) = out
         return Extremes(v_lo, p_lo, v_hi, p_hi)
