@@ -175,12 +175,13 @@ def _stats(values: np.ndarray) -> dict[str, float]:
     v = np.asarray(values, dtype=float)
     if v.size == 0:
         return {"mean": float("nan"), "p50": float("nan"), "p90": float("nan"), "max": float("nan")}
-    return {
-        "mean": float(np.mean(v)),
-        "p50": float(np.percentile(v, 50)),
-        "p90": float(np.percentile(v, 90)),
-        "max": float(np.max(v)),
-    }
+    with np.errstate(invalid="ignore"):  # unsettled runs are inf; their stats print as null
+        return {
+            "mean": float(np.mean(v)),
+            "p50": float(np.percentile(v, 50)),
+            "p90": float(np.percentile(v, 90)),
+            "max": float(np.max(v)),
+        }
 
 
 def simulate_runs(
