@@ -57,6 +57,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
+from estim import _kernels as _k
 from estim.base import Belief, Estimator, Extremes, StateFunction
 from estim.model import Bearing, ChannelModel, Range
 from estim.polygons import ConvexPolygons
@@ -75,6 +76,14 @@ def _frozen(a: ArrayLike) -> FloatArray:
     arr = np.array(a, dtype=float)
     arr.setflags(write=False)
     return arr
+
+
+def _frozen_view(a: FloatArray) -> FloatArray:
+    """Read-only without a copy: for arrays the caller has just created."""
+    if a.flags.writeable:
+        a = a.view()
+        a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,6 +107,17 @@ class InformationSet(Belief):
             raise ValueError("section intervals need x_lo <= x_hi")
         object.__setattr__(self, "x_lo_m", lo)
         object.__setattr__(self, "x_hi_m", hi)
+
+    @classmethod
+    def _new(cls, like: InformationSet, x_lo, x_hi, polygons, **changes) -> InformationSet:
+        """Internal constructor from fresh arrays (no copies, no checks): the hot path."""
+        obj = object.__new__(cls)
+        for name in ("model", "alpha_scale_rad", "w_scale_m", "status", "contradictions"):
+            object.__setattr__(obj, name, changes.get(name, getattr(like, name)))
+        object.__setattr__(obj, "x_lo_m", _frozen_view(x_lo))
+        object.__setattr__(obj, "x_hi_m", _frozen_view(x_hi))
+        object.__setattr__(obj, "polygons", polygons)
+        return obj
 
     # -- Belief interface ------------------------------------------------------------
     @property
@@ -163,22 +183,21 @@ class InformationSet(Belief):
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float))
         if self.is_empty:
             return False
-        p = shapely.Point(
-            alpha / self.alpha_scale_rad, self.model.zero_effort_miss_m(omega, x) / self.w_scale_m
+        p = (
+            alpha / self.alpha_scale_rad,
+            float(self.model.zero_effort_miss_m(omega, x)) / self.w_scale_m,
         )
         span = max(float(self.x_hi_m.max() - self.x_lo_m.min()), 1.0)
         if np.all(self.x_hi_m == self.x_lo_m) and self.n_sections > 1:
-            candidates = [self._interpolated(x, span * tol)]
-        else:
-            idx = np.flatnonzero((self.x_lo_m <= x + tol * span) & (self.x_hi_m >= x - tol * span))
-            candidates = [self.polygons.polygon(int(i)) for i in idx]
-        for pts in candidates:
-            if pts is None or len(pts) == 0:
-                continue
+            pts = self._interpolated(x, span * tol)
+            if pts is None:
+                return False
             scale = max(1.0, float(np.abs(pts).max()))
-            if shapely.distance(shapely.MultiPoint(pts).convex_hull, p) <= tol * scale:
-                return True
-        return False
+            hull = shapely.MultiPoint(pts).convex_hull
+            return bool(shapely.distance(hull, shapely.Point(p)) <= tol * scale)
+        idx = np.flatnonzero((self.x_lo_m <= x + tol * span) & (self.x_hi_m >= x - tol * span))
+        scale = max(1.0, float(np.abs(self.polygons.xy).max()))
+        return self.polygons.contains_point(idx, p, tol * scale)
 
     def _interpolated(self, x: float, x_tol: float) -> FloatArray | None:
         xs = self.x_lo_m
@@ -323,7 +342,9 @@ class InformationSetEstimator(Estimator[InformationSet]):
             half = half * (1.0 + STRIP_MARGIN) + STRIP_MARGIN
             centre = measurement.alpha_rad / self.alpha_scale_rad
             clipped = belief.polygons.clip_slab(0, centre - half, centre + half)
-            keep = clipped.nonempty()
+            keep = clipped.counts > 0
+            if keep.all():
+                return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, clipped)
             if not keep.any():
                 return self._contradiction(belief)
             return self._select(belief, keep, polygons=clipped)
@@ -357,12 +378,9 @@ class InformationSetEstimator(Estimator[InformationSet]):
         if k == 0.0 or belief.is_empty:
             return belief
         scale = k / self.model.e / self.w_scale_m
-        zeros = np.zeros(belief.n_sections)
-        polys = belief.polygons.translate(np.column_stack([zeros, scale * belief.x_mid_m]))
-        half = np.abs(scale) * 0.5 * (belief.x_hi_m - belief.x_lo_m)
-        if np.any(half > 0):
-            polys = polys.minkowski_segment(np.column_stack([zeros, half]))
-        return replace(belief, polygons=polys)
+        half = abs(scale) * 0.5 * (belief.x_hi_m - belief.x_lo_m)
+        polys = belief.polygons.shift_band(scale * belief.x_mid_m, half)
+        return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, polys)
 
     def predict(self, belief: InformationSet, dt_s: float) -> InformationSet:
         """Move every section over ``dt_s``: exact shear at the interval's middle, a
@@ -384,37 +402,29 @@ class InformationSetEstimator(Estimator[InformationSet]):
         c_hi = self.model.e * dt_s / (x0_lo * x_lo1)
         c_lo = self.model.e * dt_s / (belief.x_hi_m * x_hi1)
         ratio = self.w_scale_m / self.alpha_scale_rad
-        n = belief.n_sections
-        shear = np.zeros((n, 2, 2))
-        shear[:, 0, 0] = shear[:, 1, 1] = 1.0
-        shear[:, 0, 1] = 0.5 * (c_lo + c_hi) * ratio
-        polys = belief.polygons.affine(shear)
         nu = self.model.nu_mps2
-        # horizontal: the other shears of the interval + the disturbance in alpha
-        w_abs = np.maximum.reduceat(np.abs(belief.polygons.xy[:, 1]), belief.polygons.offsets[:-1])
+        polys = belief.polygons
         g_alpha = nu * dt_s**2 / (2.0 * x_lo1) / self.alpha_scale_rad
-        half_a = 0.5 * (c_hi - c_lo) * ratio * w_abs + g_alpha
         g_w = nu * dt_s * (belief.x_hi_m + x_hi1) / (2.0 * self.model.e) / self.w_scale_m
-        if self.sections == "points":
-            # the seed's exact segment of constant disturbances
-            seg = np.column_stack([g_alpha, g_w])
-            polys = polys.minkowski_segment(seg)
-        else:
-            zeros = np.zeros(n)
-            polys = polys.minkowski_segment(np.column_stack([half_a, zeros]))
-            polys = polys.minkowski_segment(np.column_stack([zeros, g_w]))
-        # every step adds edges; an outer simplification keeps the vertex count
-        # bounded without ever losing a state (the result contains the exact sum)
-        polys = polys.simplify(self.simplify_rel_area, self.max_vertices)
-        return replace(belief, polygons=polys, x_lo_m=x_lo1, x_hi_m=x_hi1)
+        points = self.sections == "points"
+        if not points:
+            # the other shears of the interval, as a horizontal segment
+            w_abs = np.maximum.reduceat(np.abs(polys.xy[:, 1]), polys.offsets[:-1])
+            g_alpha = g_alpha + 0.5 * (c_hi - c_lo) * ratio * w_abs
+        # shear at the middle; then the disturbance (the seed's exact segment of
+        # constant disturbances for points, a box for slabs); then an outer
+        # simplification that bounds the vertex count without losing a state
+        xy, off = _k.predict_sections(
+            polys.xy, polys.offsets, 0.5 * (c_lo + c_hi) * ratio, g_alpha, g_w, points,
+            self.simplify_rel_area, self.max_vertices,
+        )  # fmt: skip
+        return InformationSet._new(belief, x_lo1, x_hi1, ConvexPolygons._make(xy, off))
 
     # -- internals -------------------------------------------------------------------
     @staticmethod
     def _select(belief: InformationSet, keep, polygons: ConvexPolygons | None = None):
         polys = (belief.polygons if polygons is None else polygons).select(keep)
-        return replace(
-            belief, polygons=polys, x_lo_m=belief.x_lo_m[keep], x_hi_m=belief.x_hi_m[keep]
-        )
+        return InformationSet._new(belief, belief.x_lo_m[keep], belief.x_hi_m[keep], polys)
 
     @staticmethod
     def _contradiction(belief: InformationSet) -> InformationSet:

@@ -1,9 +1,9 @@
-"""A batch of convex polygons stored as one ragged vertex array, with exact numpy kernels.
+"""A batch of convex polygons stored as one ragged vertex array, with exact kernels.
 
 The information set keeps one convex polygon per x-section and applies the same
 operation to all of them every step. Doing that through GEOS costs about a
-millisecond per operation for 29 sections; these kernels do it in a handful of
-numpy calls over the concatenated vertices (no per-polygon Python loop):
+millisecond per operation for 29 sections; here each operation is one call of a
+compiled kernel (:mod:`estim._kernels`) over the concatenated vertices:
 
 * :meth:`ConvexPolygons.clip_halfplanes` -- Sutherland-Hodgman against one
   half-plane per polygon (a strip is two of them);
@@ -14,8 +14,8 @@ numpy calls over the concatenated vertices (no per-polygon Python loop):
 * :meth:`ConvexPolygons.translate`, :meth:`ConvexPolygons.select`.
 
 Vertices are counter-clockwise. Degenerate polygons (a segment, a point) are
-allowed and handled by every kernel; an emptied polygon has zero vertices and is
-removed by :meth:`drop_empty`. The kernels are tested against shapely.
+allowed and handled by every kernel; an emptied polygon has zero vertices
+(:meth:`nonempty`, :meth:`select`). The kernels are tested against shapely.
 """
 
 from __future__ import annotations
@@ -27,6 +27,8 @@ from functools import cached_property
 import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
+
+from estim import _kernels as _k
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -126,38 +128,40 @@ class ConvexPolygons:
     def clip_halfplanes(self, normal: ArrayLike, bound: ArrayLike) -> ConvexPolygons:
         """Intersect polygon ``i`` with the half-plane ``normal[i] . p <= bound[i]``.
 
-        Sutherland-Hodgman over all polygons at once: every vertex ``v`` emits
-        itself when inside, then the crossing point of the edge ``v -> next`` when
-        the edge crosses the line. Consecutive duplicates are removed.
+        Sutherland-Hodgman: every vertex ``v`` emits itself when inside, then the
+        crossing point of the edge ``v -> next`` when the edge crosses the line.
+        Consecutive duplicates are removed.
         """
         if len(self.xy) == 0:
             return self
         normal = np.broadcast_to(np.asarray(normal, dtype=float), (self.n, 2))
         bound = np.broadcast_to(np.asarray(bound, dtype=float), (self.n,))
-        own = self.owner()
-        nxt = self.next_index()
-        s = np.einsum("ij,ij->i", self.xy, normal[own]) - bound[own]
-        inside = s <= 0.0
-        crossing = inside != inside[nxt]
-        count = inside.astype(np.int64) + crossing
-        # crossing point of edge v -> next; t in [0, 1] because s changes sign
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(crossing, s / (s - s[nxt]), 0.0)
-        cross_pt = self.xy + t[:, None] * (self.xy[nxt] - self.xy)
-        first = np.where(inside[:, None], self.xy, cross_pt)
-        src = np.repeat(np.arange(len(self.xy)), count)
-        starts = np.cumsum(count) - count
-        pos = np.arange(len(src)) - np.repeat(starts, count)
-        new_xy = np.where((pos == 0)[:, None], first[src], cross_pt[src])
-        new_counts = np.bincount(own, weights=count, minlength=self.n).astype(np.int64)
-        out = ConvexPolygons._make(new_xy, _offsets(new_counts))
-        return out._dedupe()
+        xy, off = _k.clip_halfplanes(
+            self.xy, self.offsets, np.ascontiguousarray(normal[:, 0]),
+            np.ascontiguousarray(normal[:, 1]), np.ascontiguousarray(bound),
+        )  # fmt: skip
+        return ConvexPolygons._make(xy, off)
 
     def clip_slab(self, axis: int, lo: ArrayLike, hi: ArrayLike) -> ConvexPolygons:
         """Intersect polygon ``i`` with ``lo[i] <= p[axis] <= hi[i]``."""
-        e = np.zeros(2)
-        e[axis] = 1.0
-        return self.clip_halfplanes(e, hi).clip_halfplanes(-e, -np.asarray(lo, dtype=float))
+        if len(self.xy) == 0:
+            return self
+        lo = np.ascontiguousarray(np.broadcast_to(np.asarray(lo, dtype=float), (self.n,)))
+        hi = np.ascontiguousarray(np.broadcast_to(np.asarray(hi, dtype=float), (self.n,)))
+        return ConvexPolygons._make(*_k.clip_slab(self.xy, self.offsets, axis, lo, hi))
+
+    def shift_band(self, dy: FloatArray, half_y: FloatArray) -> ConvexPolygons:
+        """Translate polygon ``i`` by ``(0, dy[i])`` and add ``[-(0, h_i), (0, h_i)]``."""
+        if len(self.xy) == 0:
+            return self
+        return ConvexPolygons._make(*_k.shift_band(self.xy, self.offsets, dy, half_y))
+
+    def contains_point(self, index: ArrayLike, point: ArrayLike, tol: float) -> bool:
+        """Whether ``point`` lies within ``tol`` of one of the polygons ``index``."""
+        idx = np.ascontiguousarray(index, dtype=np.int64)
+        return bool(
+            _k.polygon_contains(self.xy, self.offsets, idx, float(point[0]), float(point[1]), tol)
+        )
 
     def affine(self, matrix: ArrayLike, offset: ArrayLike = (0.0, 0.0)) -> ConvexPolygons:
         """``p -> matrix[i] @ p + offset[i]``; ``det(matrix[i]) > 0`` keeps the orientation."""
@@ -187,87 +191,27 @@ class ConvexPolygons:
         """
         if len(self.xy) == 0:
             return self
-        g_poly = np.broadcast_to(np.asarray(half, dtype=float), (self.n, 2))
-        own = self.owner()
-        nxt = self.next_index()
-        g = g_poly[own]
-        edge = self.xy[nxt] - self.xy
-        c = g[:, 0] * edge[:, 1] - g[:, 1] * edge[:, 0]
-        side = np.where(c > 0.0, 1.0, -1.0)
-        prv = np.empty_like(nxt)
-        prv[nxt] = np.arange(len(nxt))
-        s_prev, s_cur = side[prv], side.copy()
-        # all edges parallel to g (incl. points): emit both ends for every vertex
-        scale = np.abs(self.xy).max(initial=1.0) * np.abs(g_poly).max(initial=1.0)
-        flat = np.bincount(own, weights=(np.abs(c) > 1e-14 * scale), minlength=self.n) == 0
-        fv = flat[own]
-        s_prev[fv], s_cur[fv] = -1.0, 1.0
-        # a zero segment leaves the polygon unchanged (one vertex each, no shift)
-        zero = (g_poly == 0.0).all(axis=1)[own]
-        s_prev[zero], s_cur[zero] = 1.0, 1.0
-        count = np.where(s_prev != s_cur, 2, 1)
-        src = np.repeat(np.arange(len(self.xy)), count)
-        starts = np.cumsum(count) - count
-        pos = np.arange(len(src)) - np.repeat(starts, count)
-        sign = np.where(pos == 0, s_prev[src], s_cur[src])
-        new_xy = self.xy[src] + sign[:, None] * g[src]
-        new_counts = np.bincount(own, weights=count, minlength=self.n).astype(np.int64)
-        return ConvexPolygons._make(new_xy, _offsets(new_counts))
+        g = np.broadcast_to(np.asarray(half, dtype=float), (self.n, 2))
+        xy, off = _k.minkowski_segment(
+            self.xy, self.offsets, np.ascontiguousarray(g[:, 0]), np.ascontiguousarray(g[:, 1])
+        )
+        return ConvexPolygons._make(xy, off)
 
-    def simplify(
-        self, rel_area_tol: float = 1e-6, max_vertices: int = 24, max_passes: int = 8
-    ) -> ConvexPolygons:
+    def simplify(self, rel_area_tol: float = 1e-6, max_vertices: int = 24) -> ConvexPolygons:
         """Outer (conservative) simplification: the result contains the input.
 
         An edge ``k`` is removed by extending its neighbours ``k-1`` and ``k+1`` to
         their intersection ``X`` (possible when they turn by less than pi); this
-        adds the triangle ``(v_k, X, v_k+1)``. Each pass removes, in every polygon,
-        the edges that are local minima of that added area, provided it is below
+        adds the triangle ``(v_k, X, v_k+1)``. Edges are removed while that area is below
         ``rel_area_tol`` times the polygon's area -- or unconditionally while the
-        polygon has more than ``max_vertices`` vertices. Removed edges are never
-        adjacent, so one pass is a single vectorised rewrite. The added area is
-        invariant under the affine prediction maps, so the tolerance is too.
+        polygon has more than ``max_vertices`` vertices (greedy, cheapest edge
+        first). The added area is invariant under the affine prediction maps, so
+        the tolerance is too.
         """
-        out = self
-        for _ in range(max_passes):
-            out, changed = out._simplify_pass(rel_area_tol, max_vertices)
-            if not changed:
-                break
-        return out
-
-    def _simplify_pass(self, rel_tol: float, max_vertices: int) -> tuple[ConvexPolygons, bool]:
         if len(self.xy) == 0:
-            return self, False
-        own = self.owner()
-        nxt = self.next_index()
-        prv = np.empty_like(nxt)
-        prv[nxt] = np.arange(len(nxt))
-        v, vn, vp, vnn = self.xy, self.xy[nxt], self.xy[prv], self.xy[nxt[nxt]]
-        d_prev, d_k, d_next = v - vp, vn - v, vnn - vn
-
-        def cross(a: FloatArray, b: FloatArray) -> FloatArray:
-            return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-
-        den = cross(d_prev, d_next)
-        counts = self.counts[own]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = cross(vn - v, d_next) / den
-            x_pt = v + t[:, None] * d_prev
-            added = 0.5 * np.abs(cross(d_k, x_pt - v))
-        area = np.abs(self.areas())[own]
-        valid = (den > 0) & (t >= 0) & np.isfinite(added) & (counts >= 4)
-        cost = np.where(valid, added, np.inf)
-        local_min = (cost < cost[prv]) & (cost <= cost[nxt])
-        small = cost <= rel_tol * area
-        remove = valid & local_min & (small | (counts > max_vertices))
-        if not remove.any():
-            return self, False
-        xy = self.xy.copy()
-        xy[remove] = x_pt[remove]
-        keep = np.ones(len(xy), dtype=bool)
-        keep[nxt[remove]] = False
-        new_counts = np.bincount(own, weights=keep, minlength=self.n).astype(np.int64)
-        return ConvexPolygons._make(xy[keep], _offsets(new_counts)), True
+            return self
+        xy, off = _k.simplify(self.xy, self.offsets, float(rel_area_tol), int(max_vertices))
+        return ConvexPolygons._make(xy, off)
 
     def select(self, mask_or_index: ArrayLike) -> ConvexPolygons:
         """Keep the polygons chosen by a boolean mask or an index array (order kept)."""
@@ -303,13 +247,5 @@ class ConvexPolygons:
         """Remove vertices equal to their successor (keeping one per polygon)."""
         if len(self.xy) == 0:
             return self
-        nxt = self.next_index()
-        scale = 1e-15 * max(1.0, float(np.abs(self.xy).max()))
-        keep = np.abs(self.xy - self.xy[nxt]).max(axis=1) > scale
-        keep[self.offsets[:-1][self.counts > 0]] |= ~np.logical_or.reduceat(
-            keep, self.offsets[:-1][self.counts > 0]
-        )
-        if keep.all():
-            return self
-        new_counts = np.bincount(self.owner(), weights=keep, minlength=self.n).astype(np.int64)
-        return ConvexPolygons._make(self.xy[keep], _offsets(new_counts))
+        xy, off = _k.dedupe(self.xy, self.offsets)
+        return ConvexPolygons._make(xy, off)
