@@ -219,3 +219,22 @@ def test_results_are_written_atomically_with_the_resolved_scenario(short, tmp_pa
 def test_real_entry_point_reports_bad_input_in_one_line():
     r = cli("intercept", "missing.toml", "--json")
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "missing.toml" in r.stderr
+
+
+def test_bench_reports_every_field_side_by_side(capsys):
+    """`bench --json` (issue 5): all costs measured in one process (tiny settings)."""
+    r = cli_inproc(capsys, "bench", "--json", "--steps", "3", "--repeat", "1", "--mc-runs", "2")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in (
+        "infoset_step_us",
+        "ekf_step_us",
+        "ukf_step_us",
+        "engagement_ms",
+        "runs_per_s",
+        "runs_per_s_2",
+        "speedup_2_workers",
+        "infoset_to_ukf_ratio",
+    ):
+        assert out[key] > 0, key
+    assert out["machine"]["cpus"] >= 1
