@@ -37,6 +37,7 @@ FloatArray = NDArray[np.float64]
 
 #: coordinate order of the stored Cholesky factor: (r, x, alpha)
 PERM = np.array([1, 2, 0])
+_PERM_IX = np.ix_(PERM, PERM)
 
 #: internal coordinates: (alpha, omega, x) or (alpha, w = omega x^2/e, x)
 COORDS = ("rate", "zem")
@@ -141,7 +142,7 @@ class GaussianBelief(Belief):
         p = 0.5 * (p + p.T)
         if np.any(np.diag(p) < 0):
             raise ValueError("covariance has a negative variance")
-        root = psd_cholesky(p[np.ix_(PERM, PERM)])
+        root = psd_cholesky(p[_PERM_IX])
         for a in (m, p, root):
             a.setflags(write=False)
         object.__setattr__(self, "mean", m)
