@@ -54,7 +54,7 @@ def cdf_figure(
         ax.set_ylabel("fraction of runs (CDF)")
         ax.set_ylim(0, 1.02)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8, loc="lower right")
+    axes[0].legend(fontsize=8, loc="upper left")
     fig.suptitle(title, fontsize=10)
     return fig
 

@@ -238,3 +238,29 @@ def test_bench_reports_every_field_side_by_side(capsys):
     ):
         assert out[key] > 0, key
     assert out["machine"]["cpus"] >= 1
+
+
+def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, capsys):
+    """Issue 4: compare returns one row per estimator x noise, zero failures, zero
+    containment violations for the information set, writes Parquet and PNG; run j
+    has the same truth for every estimator; the same seed twice gives the same table."""
+    args = ("compare", short, "--runs", "3", "--json", "--workers", "1", "--no-progress")
+    r = cli_inproc(capsys, *args, "--out", tmp_path / "a")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert len(out["rows"]) == 6
+    assert {(x["estimator"], x["noise"]) for x in out["rows"]} == {
+        (e, n) for e in ("infoset", "ekf", "ukf") for n in ("random", "game")
+    }
+    assert all(x["failures"] == 0 for x in out["rows"])
+    assert all(x["truth_outside"] == 0 for x in out["rows"] if x["estimator"] == "infoset")
+    assert any(f.endswith(".parquet") for f in out["files"])
+    assert any(f.endswith(".png") for f in out["files"])
+    table = pd.read_parquet(next(f for f in out["files"] if f.endswith(".parquet")))
+    truth = table.groupby("run")[["x0_km", "y0_km", "vy0_kmps", "vx0_kmps"]].nunique()
+    assert (truth == 1).all().all()  # every estimator and noise saw the same truth in run j
+    r2 = cli_inproc(capsys, *args, "--out", tmp_path / "b")
+    table2 = pd.read_parquet(Path(tmp_path / "b") / "short-compare.parquet")
+    cols = ["estimator", "noise", "run", "miss_m", "fuel_mps", "truth_outside"]
+    pd.testing.assert_frame_equal(table[cols], table2[cols])
+    assert r2.returncode == 0
