@@ -59,7 +59,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from estim import _kernels as _k
 from estim.base import Belief, Estimator, Extremes, StateFunction
-from estim.model import Bearing, ChannelModel, Range
+from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
 from estim.polygons import ConvexPolygons
 
 FloatArray = NDArray[np.float64]
@@ -372,13 +372,18 @@ class InformationSetEstimator(Estimator[InformationSet]):
             return self._contradiction(belief)
         return replace(self._select(belief, keep), x_lo_m=x_lo[keep], x_hi_m=x_hi[keep])
 
-    def shift(self, belief: InformationSet, control: float) -> InformationSet:
-        """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``."""
-        k = float(control)
-        if k == 0.0 or belief.is_empty:
+    def shift(self, belief: InformationSet, control: float | Impulse) -> InformationSet:
+        """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``.
+
+        ``control`` may be an :class:`~estim.model.Impulse` whose magnitude is only
+        known to ``+-dk``: the set is then widened by ``dk x/e`` in ``w``.
+        """
+        k, dk = impulse_parts(control)
+        if (k == 0.0 and dk == 0.0) or belief.is_empty:
             return belief
         scale = k / self.model.e / self.w_scale_m
         half = abs(scale) * 0.5 * (belief.x_hi_m - belief.x_lo_m)
+        half = half + dk * belief.x_hi_m / self.model.e / self.w_scale_m
         polys = belief.polygons.shift_band(scale * belief.x_mid_m, half)
         return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, polys)
 

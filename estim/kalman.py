@@ -84,7 +84,7 @@ from scipy import special
 
 from estim.base import Estimator
 from estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
-from estim.model import Bearing, ChannelModel, Range
+from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
 
 FloatArray = NDArray[np.float64]
 
@@ -331,10 +331,20 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             f.predict(dt=dt_s)
         return replace(belief, mean=f.x, cov=f.P)
 
-    def shift(self, belief: GaussianBelief, control: float) -> GaussianBelief:
-        """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``."""
+    def shift(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
+        """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``.
+
+        An :class:`~estim.model.Impulse` known to ``+-dk`` adds the variance of a
+        uniform error, ``(dk x/e)^2/3``, to the rate coordinate.
+        """
         self._check(belief)
-        k = float(control)
+        k, dk = impulse_parts(control)
+        if dk > 0.0 and not belief.is_empty:
+            x = float(belief.mean[2])
+            gain = x / self.model.e if self.coords == "zem" else 1.0 / x
+            cov = belief.cov.copy()
+            cov[1, 1] += (dk * gain) ** 2 / 3.0
+            belief = replace(belief, cov=cov)
         if k == 0.0 or belief.is_empty:
             return belief
 

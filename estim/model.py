@@ -79,6 +79,26 @@ class Range:
 
 
 @dataclass(frozen=True)
+class Impulse:
+    """A control impulse ``k_mps`` (relative velocity, m/s) known to within
+    ``+-uncertainty_mps`` (e.g. thrust misalignment from a pointing error)."""
+
+    k_mps: float
+    uncertainty_mps: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.uncertainty_mps >= 0:
+            raise ValueError("uncertainty_mps must be non-negative")
+
+
+def impulse_parts(control: float | Impulse) -> tuple[float, float]:
+    """``(k, uncertainty)`` of a control given as a number or an :class:`Impulse`."""
+    if isinstance(control, Impulse):
+        return float(control.k_mps), float(control.uncertainty_mps)
+    return float(control), 0.0
+
+
+@dataclass(frozen=True)
 class ChannelModel:
     """Parameters of the auxiliary model shared by every estimator of a channel."""
 

@@ -265,3 +265,20 @@ def test_point_sections_contain_an_on_grid_truth_seed003_model(y, vy, j, mode, v
     truth = _cartesian(y, vy, s.x_lo_m[j])
     rng = np.random.default_rng(seed)
     _run_guarantee(POINTS, s, truth, 0.5, mode, v_mode, rng, MODEL.e)
+
+
+def test_uncertain_impulse_keeps_every_possible_truth():
+    """An Impulse(k, dk) widens the set so that any actual impulse in [k-dk, k+dk]
+    keeps the truth inside (thrust misalignment from a pointing error)."""
+    from estim.model import Impulse
+
+    rng = np.random.default_rng(5)
+    s = SLABS.update(SLABS.initial(B_Y, D_VY, B_X), Bearing(0.0))
+    t = SLABS.shift(s, Impulse(5.0, 0.5))
+    pts = _sample_in_sections(s, rng, per=10)
+    for k_true in (4.5, 5.5, 5.0):
+        shifted = pts + np.column_stack(
+            [np.zeros(len(pts)), k_true / pts[:, 2], np.zeros(len(pts))]
+        )
+        assert all(t.contains(q) for q in shifted[::2])
+    assert t.polygons.areas().sum() > SLABS.shift(s, 5.0).polygons.areas().sum()
