@@ -28,6 +28,7 @@ from estim.model import Bearing, BearingBound, ChannelModel, Range
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
 from experiments.noise import GameNoise, RandomNoise
+from experiments.pointing import PointingCoupling
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from guidance.intercept.truth import TwoBodyTruth
 
@@ -87,16 +88,19 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
     raise InputError(f"unknown estimator '{name}' (allowed: {', '.join(ESTIMATORS)})")
 
 
-def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels, rng):
+def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None):
+    """Noise generator; ``sensor`` (default ``model``) bounds the sensor's own errors
+    while ``model`` is what the pursuer's estimators (and the adversary's set) use."""
+    sensor = sensor or model
     if name == "random":
-        return RandomNoise(model, rng)
+        return RandomNoise(sensor, rng)
     if name == "game":
         est = infoset_estimator(sc, model)
         sets = []
         for ch in channels:
             b = channel_boxes(sc, ch)
             sets.append(est.initial(b["lateral_m"], b["lateral_vel_mps"], b["x_m"]))
-        return GameNoise(est, sets)
+        return GameNoise(est, sets, sensor.bearing_bound)
     raise InputError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
 
 
@@ -125,11 +129,13 @@ class EngagementResult:
     max_impulse_mps: float
     min_impulse_mps: float
     truth0: tuple[float, ...]
+    extras: tuple[tuple[str, float], ...] = ()
 
     def as_row(self) -> dict[str, Any]:
-        row = {k: v for k, v in self.__dict__.items() if k != "truth0"}
+        row = {k: v for k, v in self.__dict__.items() if k not in ("truth0", "extras")}
         keys = ("x0_km", "y0_km", "z0_km", "vx0_kmps", "vy0_kmps", "vz0_kmps")
         row.update(zip(keys, self.truth0, strict=True))
+        row.update(self.extras)
         return row
 
 
@@ -140,10 +146,17 @@ def run_engagement(
     rng: np.random.Generator,
 ) -> EngagementResult:
     """Simulate one engagement; ``rng`` draws the truth first, then the noise."""
-    model = channel_model(sc)
+    sensor = model = channel_model(sc)
     dt = sc.model["dt_s"]
     truth_model = TwoBodyTruth(sun_distance_km=sc.model["sun_distance_km"])
     pos_km, vel_kmps = draw_truth(sc, rng)
+    pointing = None
+    if sc.attitude is not None:  # end-to-end: an attitude loop holds the axis
+        from guidance.attitude.pointing import PointingLoop
+
+        loop = PointingLoop.from_table(sc.source, sc.attitude, rng.spawn(1)[0])
+        pointing = PointingCoupling(loop)
+        model = pointing.widen(sensor)
     state = truth_model.initial(pos_km, vel_kmps)
     channels = [c for c in CHANNELS if sc.guidance[c]]
     # lower bound: one impulse at the start cancelling the zero-effort miss
@@ -153,7 +166,7 @@ def run_engagement(
     built = [build_estimator(estimator_name, sc, model, c) for c in channels]
     est: list[Estimator] = [b[0] for b in built]
     beliefs: list[Belief] = [b[1] for b in built]
-    noise = build_noise(noise_name, sc, model, channels, rng)
+    noise = build_noise(noise_name, sc, model, channels, rng, sensor)
     g = sc.guidance
     law = ForecastCentringLaw(
         model, ImpulseLimits(g["min_impulse_mps"], g["max_impulse_mps"], g["reserve_mps"])
@@ -186,6 +199,9 @@ def run_engagement(
             for c in channels
         ]
         alphas = noise.bearings(truth_ch, d_m)
+        if pointing is not None:
+            errs = pointing.bearing_errors(r_km, channels)
+            alphas = [a + err for a, err in zip(alphas, errs, strict=True)]
         beliefs = [e.update(b, Bearing(a)) for e, b, a in zip(est, beliefs, alphas, strict=True)]
         if rf["enabled"] and t >= rf["first_s"] - 1e-9:
             phase = (t - rf["first_s"]) / rf["period_s"]
@@ -206,11 +222,14 @@ def run_engagement(
             if k != 0.0:
                 issued.append(abs(k))
             ks.append(k)
-        beliefs = [e.shift(b, k) for e, b, k in zip(est, beliefs, ks, strict=True)]
-        noise.observe(ks)
         dv = np.zeros(3)
         for c, k in zip(channels, ks, strict=True):
             dv[axis[c]] = k
+        controls: list[Any] = ks
+        if pointing is not None:
+            dv, controls = pointing.impulse(dv, channels)
+        beliefs = [e.shift(b, u) for e, b, u in zip(est, beliefs, controls, strict=True)]
+        noise.observe(controls)
         state = truth_model.apply_impulse(state, dv)
         new_state = truth_model.propagate(state, dt)
         r1, v1 = truth_model.relative(new_state)
@@ -218,10 +237,12 @@ def run_engagement(
             miss_m, t_ca = truth_model.closest_approach(state, dt)
             return _result(
                 miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca, fuel_floor_mps,
-                issued, (*pos_km, *vel_kmps),
+                issued, (*pos_km, *vel_kmps), pointing,
             )  # fmt: skip
         beliefs = [e.predict(b, dt) for e, b in zip(est, beliefs, strict=True)]
         noise.predict(dt)
+        if pointing is not None:
+            pointing.step(dt)
         state = new_state
     # guidance over: free flight to the closest approach
     r_km, v_kmps = truth_model.relative(state)
@@ -229,12 +250,12 @@ def run_engagement(
     miss_m, t_ca = truth_model.closest_approach(state, 1.5 * t_go + dt)
     return _result(
         miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca, fuel_floor_mps,
-        issued, (*pos_km, *vel_kmps),
+        issued, (*pos_km, *vel_kmps), pointing,
     )  # fmt: skip
 
 
 def _result(
-    miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor, issued, truth0
+    miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor, issued, truth0, pointing
 ) -> EngagementResult:
     contradictions = sum(getattr(b, "contradictions", 0) for b in beliefs)
     statuses = {getattr(b, "status", "ok") for b in beliefs}
@@ -252,6 +273,7 @@ def _result(
         max_impulse_mps=float(max(issued, default=0.0)),
         min_impulse_mps=float(min(issued, default=0.0)),
         truth0=tuple(float(v) for v in truth0),
+        extras=tuple(pointing.summary().items()) if pointing is not None else (),
     )
 
 

@@ -3,8 +3,10 @@
 A scenario file has the tables ``[model]``, ``[estimator]`` (the a-priori boxes B
 and D known to the estimators), ``[truth]`` (the boxes the true initial state is
 drawn from, uniformly; a degenerate interval fixes a value), ``[range_finder]``,
-``[guidance]``, ``[experiment]`` and an optional ``[reference]`` of the paper's
-numbers. Every field is checked; unknown keys are errors.
+``[guidance]``, ``[experiment]``, an optional ``[reference]`` of the paper's
+numbers and an optional ``[attitude]`` loop holding the spacecraft's axis (the
+end-to-end scenario, validated by :class:`guidance.attitude.pointing.PointingLoop`).
+Every field is checked; unknown keys are errors.
 """
 
 from __future__ import annotations
@@ -80,6 +82,7 @@ TOP_RULES = {
     "guidance": None,
     "experiment": None,
     "reference": None,
+    "attitude": None,
 }
 
 DEFAULTS = {
@@ -132,6 +135,7 @@ class InterceptScenario:
     experiment: dict[str, Any]
     reference: dict[str, Any]
     source: str = ""
+    attitude: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -181,8 +185,16 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
         raise InputError(f"{source}: field 'guidance.lateral' or 'guidance.vertical' must be true")
     if tables["estimator"]["x_km"][0] <= m["eps_km"]:
         raise InputError(f"{source}: field 'estimator.x_km' must start above 'model.eps_km'")
+    attitude = data.get("attitude")
+    if attitude is not None:
+        # validated by the pointing loop itself (one line, exit 2, at load time)
+        import numpy as np
+        from guidance.attitude.pointing import PointingLoop
+
+        PointingLoop.from_table(str(source), attitude, np.random.default_rng(0))
     return InterceptScenario(
         name=data.get("name", Path(source).stem),
+        attitude=attitude,
         description=data.get("description", ""),
         source=str(source),
         **tables,

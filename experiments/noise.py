@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from estim.infoset import InformationSet, InformationSetEstimator
-from estim.model import Bearing, ChannelModel, Range
+from estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
 
 
 def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -> float:
@@ -78,7 +78,7 @@ class RandomNoise:
         b = self.model.range_rel_bound
         return float(range_true_m * (1 + self.rng.uniform(-b, b)))
 
-    def observe(self, impulses_mps: Sequence[float]) -> None:
+    def observe(self, impulses: Sequence[float | Impulse]) -> None:
         pass
 
     def predict(self, dt_s: float) -> None:
@@ -88,13 +88,20 @@ class RandomNoise:
 class GameNoise:
     """The adversary of seed 003 (module docstring); keeps its own sets per channel."""
 
-    def __init__(self, estimator: InformationSetEstimator, sets: Sequence[InformationSet]):
+    def __init__(
+        self,
+        estimator: InformationSetEstimator,
+        sets: Sequence[InformationSet],
+        sensor_bound: BearingBound | None = None,
+    ):
         self.estimator = estimator
         self.model = estimator.model
         self.sets = list(sets)
+        # the sensor's own error bound (the pursuer's model may add pointing errors)
+        self.sensor_bound = sensor_bound or self.model.bearing_bound
 
     def bearings(self, truth: Sequence[np.ndarray], range_true_m: float) -> list[float]:
-        bound = float(self.model.bearing_bound(range_true_m))
+        bound = float(self.sensor_bound(range_true_m))
         out = []
         for i, t in enumerate(truth):
             a = game_bearing(float(t[0]), bound, self.sets[i])
@@ -118,10 +125,9 @@ class GameNoise:
         self.sets = [self.estimator.update(s, Range(d_m)) for s in self.sets]
         return d_m
 
-    def observe(self, impulses_mps: Sequence[float]) -> None:
-        self.sets = [
-            self.estimator.shift(s, k) for s, k in zip(self.sets, impulses_mps, strict=True)
-        ]
+    def observe(self, impulses: Sequence[float | Impulse]) -> None:
+        """The pursuer's impulses (numbers or :class:`Impulse` with uncertainty)."""
+        self.sets = [self.estimator.shift(s, k) for s, k in zip(self.sets, impulses, strict=True)]
 
     def predict(self, dt_s: float) -> None:
         self.sets = [self.estimator.predict(s, dt_s) for s in self.sets]
