@@ -97,8 +97,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"{parser.prog} {args.command}: interrupted", file=sys.stderr)
+        print(f"{parser.prog} {args.command}: interrupted; rerun to resume", file=sys.stderr)
         return 130
+    except RuntimeError as exc:
+        from experiments.runner import WorkerLost
+
+        if not isinstance(exc, WorkerLost):
+            raise
+        print(f"{parser.prog} {args.command}: {exc}", file=sys.stderr)
+        return 1
     if args.json:
         print(json.dumps(_jsonable(result)))
     else:

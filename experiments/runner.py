@@ -20,7 +20,13 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import (
+    BrokenExecutor,
+    CancelledError,
+    Executor,
+    ProcessPoolExecutor,
+    as_completed,
+)
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -149,6 +155,10 @@ def run_experiment(
     return df
 
 
+class WorkerLost(RuntimeError):
+    """A worker process died; finished runs are saved, the lost ones are missing."""
+
+
 def _results(sc, estimator, noise, seed, runs, todo, executor, workers, scheduler):
     """Yield ``(run, row)`` as runs finish: in order in this process for one local
     worker (so Ctrl-C stops between runs), else as completed on the executor."""
@@ -161,14 +171,20 @@ def _results(sc, estimator, noise, seed, runs, todo, executor, workers, schedule
             ex.submit(timed_engagement, sc, estimator, noise, run_seed(seed, runs, j)): j
             for j in todo
         }
+        lost = 0
         for fut in as_completed(futs):
             try:
                 row = fut.result()
             except InputError:
                 raise
-            except Exception as exc:  # a worker died: record the run as failed, go on
+            except (BrokenExecutor, CancelledError):
+                lost += 1  # a worker died: the run is missing, not failed (resumable)
+                continue
+            except Exception as exc:  # the run itself raised outside the engagement
                 row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
             yield futs[fut], row
+        if lost:
+            raise WorkerLost(f"{lost} runs lost to a dead worker; rerun the same command")
 
 
 @contextmanager

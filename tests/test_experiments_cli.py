@@ -182,6 +182,41 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
     pd.testing.assert_frame_equal(_table(done), _table(fresh))
 
 
+def _dies_on_run_3(sc_, est, noise, ss):
+    """Module level so that worker processes can unpickle it."""
+    import os
+
+    if ss.spawn_key == (3,):
+        os._exit(1)  # the worker process dies
+    from experiments.engagement import timed_engagement
+
+    return timed_engagement(sc_, est, noise, ss)
+
+
+def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_path, monkeypatch):
+    """A worker process killed mid-run (os._exit): finished runs are saved, the lost
+    ones are missing (not failed), and rerunning completes exactly those."""
+    sc = load_scenario(short)
+    real = runner.timed_engagement
+    monkeypatch.setattr(runner, "timed_engagement", _dies_on_run_3)
+    with pytest.raises(runner.WorkerLost):
+        run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=2, progress=False)
+    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    saved = pd.read_parquet(path) if path.exists() else pd.DataFrame({"run": []})
+    assert 3 not in set(saved["run"]) and (saved.get("status", pd.Series()) == "ok").all()
+    monkeypatch.setattr(runner, "timed_engagement", real)
+    done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+    assert sorted(done["run"]) == [0, 1, 2, 3] and (done["status"] == "ok").all()
+
+
+def test_run_seed_is_the_spawned_child():
+    """run j's seed is SeedSequence(seed).spawn(runs)[j] (SPEC 3)."""
+    children = np.random.SeedSequence(7).spawn(5)
+    for j in range(5):
+        a = np.random.default_rng(runner.run_seed(7, 5, j)).random(4)
+        np.testing.assert_array_equal(a, np.random.default_rng(children[j]).random(4))
+
+
 def test_a_failing_run_is_recorded_and_does_not_stop_the_others(short, tmp_path, monkeypatch):
     sc = load_scenario(short)
     real = runner.timed_engagement
