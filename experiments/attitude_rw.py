@@ -10,11 +10,15 @@ is updated every sample with the measured state and the law is evaluated at
 ``belief.centre()``. One :class:`~estim.base.PointBelief` carries the batch of
 independent runs (shape ``(runs, 10)``).
 
-Noise mapping: ``none`` = perfect measurements, no disturbance; ``random`` = Gaussian
-attitude (small rotation, per axis) and rate errors fed to the perfect estimator,
-plus a constant disturbance torque per run uniform in ``[-d, d]`` per axis; ``game`` =
-perfect measurements and a bounded disturbance ``-d sign(M_u)`` that opposes the
-control every sample. Random initial attitudes (``maneuver.random_attitude``)
+The controller reads ``(q, w)`` from an estimator (``perfect``, ``ukf`` or ``box``,
+:mod:`experiments.attitude_est`) updated every sample with the measurement.
+
+Noise mapping: ``none`` = exact measurements, no disturbance; ``random`` = attitude
+(small body-frame rotation, per axis) and rate errors uniform within ``+-sqrt(3)
+sigma`` (the scenario's 1-sigma values, same variance), plus a constant disturbance
+torque per run uniform in ``[-d, d]`` per axis; ``game`` = the same measurement
+errors and a bounded disturbance ``-d sign(M_u)`` that opposes the control every
+sample. Random initial attitudes (``maneuver.random_attitude``)
 are drawn for every noise setting, from the run's own seed.
 """
 
@@ -27,7 +31,14 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from estim.base import PerfectEstimator, PointBelief
+from estim.attitude_model import (
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    draw_measurement,
+)
+from estim.base import PointBelief
+from experiments.attitude_est import EstimatorLoop
 from experiments.errors import InputError
 from experiments.schema import Bool, Choice, Num, Str, Vec, validate_table
 from guidance.attitude.lqr import LQRController
@@ -184,39 +195,70 @@ def _stats(values: np.ndarray) -> dict[str, float]:
         }
 
 
+def estimator_model(tables: Mapping[str, Any]) -> AttitudeModel:
+    """What the estimators know: J, the disturbance bound and the measurement bounds.
+
+    The scenario's ``meas_*`` values are 1-sigma; the errors are drawn uniform within
+    ``+-sqrt(3) sigma`` (same variance, bounded: admissible for the box estimator).
+    """
+    body, _, _ = body_of(tables)
+    nz = tables["noise"]
+    return AttitudeModel(
+        body.inertia_kgm2,
+        nz["disturbance_Nm"],
+        max(np.sqrt(3.0) * np.radians(nz["meas_angle_deg"]), 1e-12),
+        max(np.sqrt(3.0) * np.radians(nz["meas_rate_degps"]), 1e-12),
+    )
+
+
 def simulate_runs(
-    tables: Mapping[str, Any], controller: str, noise: str, rngs: list[np.random.Generator]
+    tables: Mapping[str, Any],
+    controller: str,
+    noise: str,
+    rngs: list[np.random.Generator],
+    estimator: str = "perfect",
 ) -> dict[str, np.ndarray]:
-    """Simulate the runs as one batch; per-run metrics."""
+    """Simulate the runs as one batch; per-run metrics.
+
+    The controller reads ``(q, w)`` from the estimator's belief (plus the wheel
+    momentum, known on board). Noise ``random``: constant disturbance per run uniform
+    in ``[-d, d]``; ``game``: ``-d sign(M_u)`` (opposes the control); both with
+    measurement errors uniform within the bounds; ``none``: exact measurements.
+    """
     body, _, _ = body_of(tables)
     law = make_controller(controller, tables)
     wh = tables["wheels"]
     wheels = ReactionWheels(wh["torque_max_Nm"], wh["momentum_max_Nms"])
     sim, nz = tables["simulation"], tables["noise"]
+    period = sim["control_period_s"]
     x0 = initial_states(tables, rngs)
     n = len(rngs)
-    estimator = PerfectEstimator()
-    belief = PointBelief(x0)
-    sig_a = np.radians(nz["meas_angle_deg"]) if noise == "random" else 0.0
-    sig_r = np.radians(nz["meas_rate_degps"]) if noise == "random" else 0.0
+    model = estimator_model(tables)
+    loop = EstimatorLoop(estimator, model)
     d = nz["disturbance_Nm"]
     const_dist = (
         np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))
     )
+    state: dict[str, Any] = {"belief": None, "ctrl": None, "outside": np.zeros(n, dtype=int)}
+    bounds = []
 
-    def measure(x: np.ndarray) -> np.ndarray:
-        if noise != "random":
-            return x
-        z = x.copy()
-        errs = [Rotation.from_rotvec(r.normal(0.0, sig_a, 3)) for r in rngs]
-        z[:, 0:4] = (Rotation.from_quat(x[:, 0:4]) * Rotation.concatenate(errs)).as_quat()
-        z[:, 4:7] += np.stack([r.normal(0.0, sig_r, 3) for r in rngs])
-        return z
+    def measure(x: np.ndarray) -> AttitudeMeasurement:
+        if noise == "none":
+            return AttitudeMeasurement(x[:, 0:4], x[:, 4:7])
+        return draw_measurement(x, model, rngs)
 
     def control(_t: float, x: np.ndarray) -> np.ndarray:
-        nonlocal belief
-        belief = estimator.update(estimator.predict(belief, sim["control_period_s"]), measure(x))
-        return law.from_belief(belief)
+        meas = measure(x)
+        if state["belief"] is None:
+            belief = loop.start(meas)
+        else:
+            belief = loop.step(state["belief"], state["ctrl"], period, meas)
+        state["outside"] += ~loop.inside(belief, x)
+        bounds.append(loop.attitude_bound_rad(belief))
+        x_est = np.concatenate([loop.centre(belief), x[:, 7:10]], axis=-1)
+        u = wheels.limit(law.from_belief(PointBelief(x_est)), x[:, 7:10], period)
+        state["belief"], state["ctrl"] = belief, AttitudeControl.held(u, x[:, 7:10], period)
+        return u
 
     def disturbance(_t: float, _x: np.ndarray, u: np.ndarray) -> np.ndarray:
         if noise == "game":
@@ -224,14 +266,7 @@ def simulate_runs(
         return const_dist
 
     traj = simulate_closed_loop(
-        body,
-        wheels,
-        control,
-        x0,
-        sim["duration_s"],
-        sim["control_period_s"],
-        sim["substeps"],
-        ext_torque=disturbance,
+        body, wheels, control, x0, sim["duration_s"], period, sim["substeps"], disturbance
     )
     angle, rate = angle_and_rate_deg(traj.x, law.q_target)
     settle = np.array(
@@ -249,10 +284,13 @@ def simulate_runs(
     u = traj.torque_Nm[:-1]
     out = {
         "settle_time_s": settle,
-        "energy_N2m2s": np.sum(u**2, axis=(0, 2)) * sim["control_period_s"],
+        "energy_N2m2s": np.sum(u**2, axis=(0, 2)) * period,
         "final_angle_deg": angle[-1],
         "final_rate_degps": rate[-1],
         "max_torque_Nm": np.max(np.abs(u), axis=(0, 2)),
+        "truth_outside": state["outside"],
+        "empty_steps": loop.empty_steps(state["belief"]),
+        "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
     }
     if isinstance(law, LQRController):
         v = law.lyapunov(traj.x)
@@ -260,8 +298,21 @@ def simulate_runs(
     return out
 
 
+def per_run_rows(metrics: Mapping[str, np.ndarray], children) -> list[dict[str, Any]]:
+    """One row per run (metrics as plain floats) for the Parquet table."""
+    keys = [k for k, v in metrics.items() if np.ndim(v) == 1]
+    n = len(metrics["settle_time_s"])
+    return [{"run": j, **{k: float(metrics[k][j]) for k in keys}} for j in range(n)]
+
+
 def run(
-    source: str, scenario: Mapping[str, Any], controller: str, noise: str, runs: int, seed: int
+    source: str,
+    scenario: Mapping[str, Any],
+    controller: str,
+    noise: str,
+    runs: int,
+    seed: int,
+    estimator: str = "perfect",
 ) -> dict[str, Any]:
     """The ``attitude`` command for ``pd`` and ``lqr`` (JSON of SPEC 3.1)."""
     if controller not in CONTROLLERS:
@@ -280,12 +331,13 @@ def run(
     rngs = [np.random.default_rng(c) for c in children]
     failures = 0
     try:
-        metrics = simulate_runs(tables, controller, noise, rngs)
+        metrics = simulate_runs(tables, controller, noise, rngs, estimator)
     except Exception:  # noqa: BLE001 - rerun one by one and count the runs that raise
         parts = []
         for c in children:
             try:
-                parts.append(simulate_runs(tables, controller, noise, [np.random.default_rng(c)]))
+                rng = [np.random.default_rng(c)]
+                parts.append(simulate_runs(tables, controller, noise, rng, estimator))
             except Exception:  # noqa: BLE001
                 failures += 1
         keys = parts[0].keys() if parts else ("settle_time_s",)
@@ -303,9 +355,13 @@ def run(
         "final_rate_degps": _stats(metrics.get("final_rate_degps", np.zeros(0))),
         "max_torque_Nm": float(np.max(metrics["max_torque_Nm"])) if failures < runs else None,
         "failures": failures,
+        "estimator": estimator,
+        "truth_outside": int(np.sum(metrics.get("truth_outside", 0))),
+        "empty_steps": int(np.sum(metrics.get("empty_steps", 0))),
         "not_settled": int(np.sum(~np.isfinite(settle))),
         "wall_s": time.perf_counter() - t0,
     }
+    result["_rows"] = per_run_rows(metrics, children if not failures else [])
     jd = tables["body"]["inertia_kgm2"]
     if controller == "pd":
         wh, p = tables["wheels"], tables["pd"]

@@ -1,0 +1,272 @@
+"""What the attitude estimators know: the rigid-body model, its inputs and measurements.
+
+Shared by :mod:`estim.attitude_box` (set-membership) and :mod:`estim.attitude_ukf`.
+The model is the common plant of SPEC 2 written for an estimator::
+
+    J_b dw/dt = M_u + d - w x (J_g w + h),      dq/dt = 1/2 q (x) (w, 0)
+
+``J_g`` is the inertia in the angular momentum, ``J_b`` the one that divides the
+torque; both are ``J`` for reaction wheels and gyrodines (``h`` their momentum), and
+for the three-rotor gyrostat of seed 004 eq. (1.1) ``J_g = diag(A)``, ``J_b =
+diag(A - J)``, ``h = J phi'`` (relative rotor momentum), ``M_u = -u``: with
+``J (phi'' + x') = u`` the seed's ``(A - J) x' = K x x - u + v`` is the line above.
+
+Known inputs of one step (:class:`AttitudeControl`): the body torque ``M_u`` held
+over the step and an interval ``[h_lo, h_hi]`` that contains the actuator momentum
+over the whole step (the loops know it from their actuators: wheel speeds, gyrodine
+angles, rotor tachometers). Unknown: the disturbance ``|d_i| <= D_i``.
+
+Measurements (:class:`AttitudeMeasurement`): an attitude ``q_m = q exp(n)`` with a
+body-frame error rotation ``|n_i| <= b_a`` per axis, and a rate ``w_m = w + m`` with
+``|m_i| <= b_w``. Everything is batched over a leading axis of ``R`` runs.
+
+Quaternions are scalar last (scipy's ``Rotation``); ``exp``/``log`` are
+``Rotation.from_rotvec``/``as_rotvec``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+FloatArray = NDArray[np.float64]
+
+
+def _vec3(value: ArrayLike, name: str, positive: bool = False) -> FloatArray:
+    arr = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0) or (positive and np.any(arr == 0)):
+        raise ValueError(f"{name} must be finite and >= 0 per axis, got {arr}")
+    arr.setflags(write=False)
+    return arr
+
+
+def _inertia(value: ArrayLike, name: str) -> FloatArray:
+    arr = np.array(value, dtype=float)
+    if arr.shape == (3,):
+        arr = np.diag(arr)
+    if arr.shape != (3, 3) or not np.allclose(arr, arr.T):
+        raise ValueError(f"{name} must be a symmetric 3x3 matrix (or its diagonal)")
+    if np.any(np.linalg.eigvalsh(arr) <= 0):
+        raise ValueError(f"{name} must be positive definite")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class AttitudeModel:
+    """Estimator model: inertias, disturbance bound, measurement bounds.
+
+    Parameters
+    ----------
+    inertia_kgm2 : (3, 3) or (3,)
+        ``J_g`` (momentum ``J_g w + h``).
+    disturbance_bound_Nm : float or (3,)
+        ``D``: ``|d_i| <= D_i``.
+    meas_angle_bound_rad, meas_rate_bound_radps : float or (3,)
+        ``b_a``, ``b_w``: per-axis bounds of the attitude and rate errors.
+    effective_inertia_kgm2 : (3, 3) or (3,), optional
+        ``J_b`` (divides the torque); ``J_g`` when omitted.
+    """
+
+    inertia_kgm2: ArrayLike
+    disturbance_bound_Nm: ArrayLike
+    meas_angle_bound_rad: ArrayLike
+    meas_rate_bound_radps: ArrayLike
+    effective_inertia_kgm2: ArrayLike | None = None
+    j_b_inv: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        j_g = _inertia(self.inertia_kgm2, "inertia_kgm2")
+        j_b = j_g if self.effective_inertia_kgm2 is None else _inertia(
+            self.effective_inertia_kgm2, "effective_inertia_kgm2"
+        )  # fmt: skip
+        object.__setattr__(self, "inertia_kgm2", j_g)
+        object.__setattr__(self, "effective_inertia_kgm2", j_b)
+        inv = np.linalg.inv(j_b)
+        inv.setflags(write=False)
+        object.__setattr__(self, "j_b_inv", inv)
+        object.__setattr__(
+            self, "disturbance_bound_Nm", _vec3(self.disturbance_bound_Nm, "disturbance_bound_Nm")
+        )
+        object.__setattr__(
+            self,
+            "meas_angle_bound_rad",
+            _vec3(self.meas_angle_bound_rad, "meas_angle_bound_rad", positive=True),
+        )
+        object.__setattr__(
+            self,
+            "meas_rate_bound_radps",
+            _vec3(self.meas_rate_bound_radps, "meas_rate_bound_radps", positive=True),
+        )
+
+
+@dataclass(frozen=True)
+class AttitudeControl:
+    """Known inputs over one step: body torque ``M_u`` and an enclosure of ``h`` (batched)."""
+
+    torque_Nm: FloatArray
+    h_lo_Nms: FloatArray
+    h_hi_Nms: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("torque_Nm", "h_lo_Nms", "h_hi_Nms"):
+            arr = np.array(np.atleast_2d(getattr(self, name)), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        if np.any(self.h_lo_Nms > self.h_hi_Nms):
+            raise ValueError("h_lo_Nms must not exceed h_hi_Nms")
+
+    @classmethod
+    def held(cls, torque_Nm: ArrayLike, h0_Nms: ArrayLike, dt_s: float, h_err_Nms: float = 0.0):
+        """Momentum ``h(s) = h0 - M_u s`` (``dh/dt = -M_u``) over ``[0, dt_s]``, +- ``h_err``."""
+        m = np.atleast_2d(np.asarray(torque_Nm, dtype=float))
+        h0 = np.atleast_2d(np.asarray(h0_Nms, dtype=float))
+        h1 = h0 - m * dt_s
+        return cls(m, np.minimum(h0, h1) - h_err_Nms, np.maximum(h0, h1) + h_err_Nms)
+
+    @classmethod
+    def zero(cls, runs: int) -> AttitudeControl:
+        z = np.zeros((runs, 3))
+        return cls(z, z, z)
+
+
+@dataclass(frozen=True)
+class AttitudeMeasurement:
+    """Measured attitude quaternions ``(R, 4)`` and rates ``(R, 3)``."""
+
+    quat: FloatArray
+    rate_radps: FloatArray
+
+    def __post_init__(self) -> None:
+        q = np.array(np.atleast_2d(self.quat), dtype=float)
+        q /= np.linalg.norm(q, axis=-1, keepdims=True)
+        w = np.array(np.atleast_2d(self.rate_radps), dtype=float)
+        for arr in (q, w):
+            arr.setflags(write=False)
+        object.__setattr__(self, "quat", q)
+        object.__setattr__(self, "rate_radps", w)
+
+
+def draw_measurement(
+    state: ArrayLike, model: AttitudeModel, rng_or_rngs, bound_scale: float = 1.0
+) -> AttitudeMeasurement:
+    """A measurement of ``state = (q, w, ...)`` (R, >=7) with errors uniform in the bounds.
+
+    ``rng_or_rngs``: one Generator, or one per run (paired realisations).
+    """
+    x = np.atleast_2d(np.asarray(state, dtype=float))
+    runs = x.shape[0]
+    rngs = rng_or_rngs if isinstance(rng_or_rngs, list | tuple) else [rng_or_rngs] * runs
+    u = np.stack([g.uniform(-1.0, 1.0, 6) for g in rngs]) * bound_scale
+    n = u[:, 0:3] * model.meas_angle_bound_rad
+    m = u[:, 3:6] * model.meas_rate_bound_radps
+    q = (Rotation.from_quat(x[:, 0:4]) * Rotation.from_rotvec(n)).as_quat()
+    return AttitudeMeasurement(q, x[:, 4:7] + m)
+
+
+def cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a x b`` over the last axis (cheaper than ``np.cross`` on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def qmul(p: FloatArray, q: FloatArray) -> FloatArray:
+    """Hamilton product ``p (x) q`` (scalar last), i.e. ``Rotation(p) * Rotation(q)``."""
+    pv, p4 = p[..., :3], p[..., 3:4]
+    qv, q4 = q[..., :3], q[..., 3:4]
+    vec = p4 * qv + q4 * pv + cross(pv, qv)
+    sca = p4 * q4 - np.add.reduce(pv * qv, axis=-1, keepdims=True)
+    return np.concatenate([vec, sca], axis=-1)
+
+
+def qexp(rotvec: ArrayLike) -> FloatArray:
+    """Quaternion of a rotation vector, batched; equals ``Rotation.from_rotvec(v).as_quat()``.
+
+    ``(sin(t/2) v/t, cos(t/2))``, ``t = |v|``, with the series ``sin(t/2)/t = 1/2 - t^2/48 +
+    t^4/3840`` for ``t < 1e-3`` (numpy; scipy's object overhead dominates these small batches).
+    """
+    v = np.asarray(rotvec, dtype=float)
+    t2 = np.add.reduce(v * v, axis=-1, keepdims=True)
+    t = np.sqrt(t2)
+    small = t < 1e-3
+    safe = np.where(small, 1.0, t)
+    s = np.where(small, 0.5 - t2 / 48.0 + t2 * t2 / 3840.0, np.sin(0.5 * safe) / safe)
+    return np.concatenate([s * v, np.cos(0.5 * t)], axis=-1)
+
+
+def qlog(q: ArrayLike) -> FloatArray:
+    """Rotation vector (angle in [0, pi]) of a unit quaternion, batched; as ``as_rotvec()``."""
+    q = np.asarray(q, dtype=float)
+    q = np.where(q[..., 3:4] < 0, -q, q)
+    qv, q4 = q[..., :3], q[..., 3:4]
+    n2 = np.add.reduce(qv * qv, axis=-1, keepdims=True)
+    n = np.sqrt(n2)
+    small = n < 1e-6
+    # t/n with t = 2 atan2(n, q4); for small n: 2/q4 (1 - n^2 / (3 q4^2))
+    scale = np.where(
+        small,
+        2.0 / q4 * (1.0 - n2 / (3.0 * q4 * q4)),
+        2.0 * np.arctan2(n, q4) / np.where(small, 1.0, n),
+    )
+    return scale * qv
+
+
+def qmatrix(q: ArrayLike) -> FloatArray:
+    """Rotation matrices of unit quaternions (body -> reference), batched."""
+    q = np.asarray(q, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+
+
+def qinv(q: FloatArray) -> FloatArray:
+    return q * np.array([-1.0, -1.0, -1.0, 1.0])
+
+
+def rate_rhs(
+    model: AttitudeModel, w: FloatArray, torque_Nm: FloatArray, h_Nms: FloatArray
+) -> FloatArray:
+    """``dw/dt = J_b^-1 (M_u - w x (J_g w + h))`` (nominal: no disturbance), batched."""
+    jw = w @ model.inertia_kgm2.T
+    return (torque_Nm - cross(w, jw + h_Nms)) @ model.j_b_inv.T
+
+
+def rk4_attitude(
+    model: AttitudeModel,
+    q: FloatArray,
+    w: FloatArray,
+    torque_Nm: FloatArray,
+    h_Nms: FloatArray,
+    dt_s: float,
+    substeps: int = 1,
+) -> tuple[FloatArray, FloatArray]:
+    """Nominal model (``d = 0``, ``h`` held) integrated by classical RK4; ``q`` renormalised."""
+    h = dt_s / substeps
+
+    def f(qq, ww):
+        qv, q4 = qq[..., :3], qq[..., 3:4]
+        dq = np.concatenate(
+            [0.5 * (q4 * ww + cross(qv, ww)), -0.5 * np.sum(qv * ww, axis=-1, keepdims=True)],
+            axis=-1,
+        )
+        return dq, rate_rhs(model, ww, torque_Nm, h_Nms)
+
+    for _ in range(substeps):
+        k1q, k1w = f(q, w)
+        k2q, k2w = f(q + 0.5 * h * k1q, w + 0.5 * h * k1w)
+        k3q, k3w = f(q + 0.5 * h * k2q, w + 0.5 * h * k2w)
+        k4q, k4w = f(q + h * k3q, w + h * k3w)
+        q = q + h / 6.0 * (k1q + 2 * k2q + 2 * k3q + k4q)
+        w = w + h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w)
+        q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return q, w
