@@ -77,6 +77,10 @@ REL_INFLATION = 1e-12
 _J, _K = [1, 2, 0], [2, 0, 1]
 
 
+class _NoEnclosure(Exception):
+    """The Picard inclusion did not close within the iterations (step too long)."""
+
+
 def _frozen(a: ArrayLike) -> FloatArray:
     arr = np.array(a, dtype=float)
     arr.setflags(write=False)
@@ -86,6 +90,16 @@ def _frozen(a: ArrayLike) -> FloatArray:
 # --- midpoint-radius interval arithmetic (arrays of centres c and radii r) -------------
 def imul(c1, r1, c2, r2):
     return c1 * c2, np.abs(c1) * r2 + r1 * np.abs(c2) + r1 * r2
+
+
+def icross(c1, r1, c2, r2):
+    """Enclosure of ``a x b`` for ``a in (c1, r1)``, ``b in (c2, r2)`` (per component:
+    ``a_j b_k - a_k b_j`` with the product rule above)."""
+    a = np.stack([c1, r1, np.abs(c1), c2, r2, np.abs(c2)])
+    c1j, r1j, a1j, c2j, r2j, a2j = a[..., _J]
+    c1k, r1k, a1k, c2k, r2k, a2k = a[..., _K]
+    rad = (a1j + r1j) * (a2k + r2k) - a1j * a2k + (a1k + r1k) * (a2j + r2j) - a1k * a2j
+    return c1j * c2k - c1k * c2j, rad
 
 
 def imat(m: FloatArray, c, r):
@@ -148,7 +162,9 @@ class BoxAttitudeBelief(Belief):
 
     ``control`` holds the known inputs of the next step (set by ``shift``); ``n_empty``
     counts, per run, the updates whose intersection was empty; ``last_empty`` flags
-    the runs whose last update was.
+    the runs whose last update was; ``n_unbounded`` counts the predictions whose
+    enclosure could not be closed (step far too long for the rates): the set then is
+    the whole space until the next measurement (still guaranteed, and reported).
     """
 
     q_ref: FloatArray
@@ -159,6 +175,7 @@ class BoxAttitudeBelief(Belief):
     control: AttitudeControl | None = None
     n_empty: FloatArray = field(default=None)  # type: ignore[assignment]
     last_empty: FloatArray = field(default=None)  # type: ignore[assignment]
+    n_unbounded: int = 0
 
     def __post_init__(self) -> None:
         for name in ("q_ref", "e_c", "e_r", "w_c", "w_r"):
@@ -231,12 +248,9 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
     abs_inflation_rad: float = 1e-12
     picard_iterations: int = 8
 
-    _j_norm: float = field(init=False, repr=False)
-
     def __post_init__(self) -> None:
         if not self.abs_inflation_rad >= 0:
             raise ValueError("abs_inflation_rad must be >= 0")
-        object.__setattr__(self, "_j_norm", float(np.linalg.norm(self.model.inertia_kgm2, 2)))
 
     # -- measurement enclosure ---------------------------------------------------------
     def measurement_box(self, q_ref: FloatArray, meas: AttitudeMeasurement):
@@ -260,25 +274,41 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
         return _with(belief, control=control)
 
     def _rate_field(self, wc, wr, ctrl: AttitudeControl):
-        """Enclosure of ``J_b^-1 (M_u + d - w x (J_g w + h))`` over ``w in (wc, wr)``, ``h``, ``d``.
-
-        ``w x (J w + h) - wc x kc`` (``kc = J wc + hc``) ``= (w - wc) x (J w + h) + wc x (J (w -
-        wc) + h - hc)``, bounded per component by ``|wr| |J w + h|max + |wc| (||J|| |wr| + |hr|)``.
-        """
+        """Enclosure of ``J_b^-1 (M_u + d - w x (J_g w + h))`` over ``w in (wc, wr)``, ``h``, ``d``
+        (interval cross product per component)."""
         m = self.model
         hc = 0.5 * (ctrl.h_lo_Nms + ctrl.h_hi_Nms)
-        hr_n = _norm(0.5 * (ctrl.h_hi_Nms - ctrl.h_lo_Nms))
-        kc = wc @ m.inertia_kgm2.T + hc
-        wr_n = _norm(wr)
-        jwr = self._j_norm * wr_n
-        gr = wr_n * (_norm(kc) + jwr + hr_n) + _norm(wc) * (jwr + hr_n)
-        tc = ctrl.torque_Nm - cross(wc, kc)
-        tr = gr[..., None] + m.disturbance_bound_Nm
-        return imat(m.j_b_inv, tc, tr)
+        hr = 0.5 * (ctrl.h_hi_Nms - ctrl.h_lo_Nms)
+        jc, jr = imat(m.inertia_kgm2, wc, wr)
+        gc, gr = icross(wc, wr, jc + hc, jr + hr)
+        return imat(m.j_b_inv, ctrl.torque_Nm - gc, gr + m.disturbance_bound_Nm)
 
     def predict(self, belief: BoxAttitudeBelief, dt_s: float) -> BoxAttitudeBelief:
+        """Enclosure after ``dt_s``; a step too long for the a-priori enclosure is halved
+        (the known inputs hold over the whole step, so each half is enclosed as well)."""
         if not dt_s > 0:
             raise ValueError("dt_s must be positive")
+        return self._predict(belief, dt_s, depth=0)
+
+    def _predict(self, belief: BoxAttitudeBelief, dt_s: float, depth: int) -> BoxAttitudeBelief:
+        if not np.all(np.isfinite(belief.e_r)):
+            return belief  # already "any state": stays so until the next measurement
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                return self._predict_once(belief, dt_s)
+        except (_NoEnclosure, FloatingPointError):
+            if depth >= 6:
+                # no enclosure: the guaranteed set is the whole state space (the next
+                # update restarts from the measurement); counted in n_unbounded
+                inf = np.full_like(belief.e_r, np.inf)
+                return _with(
+                    belief, e_c=np.zeros_like(inf), e_r=inf, w_r=inf.copy(),
+                    n_unbounded=belief.n_unbounded + 1,
+                )  # fmt: skip
+            half = self._predict(belief, 0.5 * dt_s, depth + 1)
+            return self._predict(half, 0.5 * dt_s, depth + 1)
+
+    def _predict_once(self, belief: BoxAttitudeBelief, dt_s: float) -> BoxAttitudeBelief:
         ctrl = belief.control if belief.control is not None else AttitudeControl.zero(belief.runs)
         w0c, w0r = belief.w_c, belief.w_r
         # a-priori enclosure W* of w(s), s in [0, dt]: W0 + [0, dt] F(W*) subset W*
@@ -289,13 +319,15 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
             fc, fr = self._rate_field(ac, ar, ctrl)
             sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
             tc, tr = w0c + sc, w0r + sr
+            if not np.all(np.isfinite(tr)):
+                raise _NoEnclosure
             if np.all(np.abs(tc - ac) + tr <= ar):
                 break
             lo = np.minimum(ac - ar, tc - tr)
             hi = np.maximum(ac + ar, tc + tr)
             ac, ar = 0.5 * (lo + hi), 0.5 * (hi - lo) * 1.5 + 1e-15
         else:
-            raise FloatingPointError("no a-priori rate enclosure found (step too long?)")
+            raise _NoEnclosure
         # a-priori enclosure verified: w(s) in (ac, ar); end rate by the mean-value form
         fc, fr = self._rate_field(ac, ar, ctrl)
         w1c = w0c + dt_s * fc
@@ -323,6 +355,10 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
         """Intersect with the measurement's box; empty -> restart from it (status counted)."""
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
+        lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
+        if np.any(lost):  # "any state": re-reference at the measurement
+            q_ref = np.where(lost[:, None], measurement.quat, belief.q_ref)
+            belief = _with(belief, q_ref=q_ref, e_c=np.where(lost[:, None], 0.0, belief.e_c))
         mec, mer, mwc, mwr = self.measurement_box(belief.q_ref, measurement)
         e_lo = np.maximum(belief.e_c - belief.e_r, mec - mer)
         e_hi = np.minimum(belief.e_c + belief.e_r, mec + mer)

@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 FloatArray = NDArray[np.float64]
 
@@ -163,8 +162,7 @@ def draw_measurement(
     u = np.stack([g.uniform(-1.0, 1.0, 6) for g in rngs]) * bound_scale
     n = u[:, 0:3] * model.meas_angle_bound_rad
     m = u[:, 3:6] * model.meas_rate_bound_radps
-    q = (Rotation.from_quat(x[:, 0:4]) * Rotation.from_rotvec(n)).as_quat()
-    return AttitudeMeasurement(q, x[:, 4:7] + m)
+    return AttitudeMeasurement(qmul(x[:, 0:4], qexp(n)), x[:, 4:7] + m)
 
 
 def cross(a: FloatArray, b: FloatArray) -> FloatArray:

@@ -74,13 +74,21 @@ def _frozen(a: ArrayLike) -> FloatArray:
 
 
 def residual_x(x1: FloatArray, x2: FloatArray) -> FloatArray:
-    """On-manifold difference of error states or measurements (batched over leading axes)."""
+    """On-manifold difference of error states or measurements (batched over leading axes).
+
+    ``log(exp(a2)^-1 exp(a1))``; when every ``|a2| < 1e-15`` this is ``a1 - a2`` to
+    ``|a1| |a2|/2 < 1e-15 |a1|`` (BCH) and is computed so (the reset makes ``a2 = 0``).
+    """
+    if not np.any(np.abs(x2[..., 0:3]) >= 1e-15):
+        return x1 - x2
     a = qlog(qmul(qinv(qexp(x2[..., 0:3])), qexp(x1[..., 0:3])))
     return np.concatenate([a, x1[..., 3:] - x2[..., 3:]], axis=-1)
 
 
 def state_add(x: FloatArray, dx: FloatArray) -> FloatArray:
-    """On-manifold sum of an error state and a correction (batched)."""
+    """On-manifold sum of an error state and a correction (batched); ``a = 0``: ``da``."""
+    if not np.any(x[..., 0:3]):
+        return x + dx
     a = qlog(qmul(qexp(x[..., 0:3]), qexp(dx[..., 0:3])))
     return np.concatenate([a, x[..., 3:] + dx[..., 3:]], axis=-1)
 

@@ -4,12 +4,14 @@ Seed 000 (SPEC 2.1). ``run(...)`` is the entry point used by ``experiments.cmd_a
 for the controllers ``energy`` and ``euler`` (SPEC 3.1 attitude JSON, plus
 ``lower_bound_energy_N2m2s`` and diagnostics). ``simulate_turn`` runs one turn.
 
-Closed loop, each step of ``dt``: the truth ``(q, w, h)`` is measured as
-``X = (rotvec(R_target^-1 R), w)`` (+ eps with noise ``random``), passed through a
-:class:`estim.PerfectEstimator` (the controller reads ``belief.centre()``), the
-controller asks for a torque, the gyrodine cluster produces it (``cmg.CmgCluster.step``)
-and the common plant is advanced by a fixed-step RK4 with the delivered torque; the
-plant's ``h`` equals the cluster momentum at the step ends.
+Closed loop, each step of ``dt``: the truth ``(q, w, h)`` is measured (noise
+``random``/``game``: a body-frame error rotation and a rate error, uniform within
+``+-sqrt(3)`` times the seed's standard deviations), passed through an estimator
+(``perfect``, ``ukf`` or ``box``, :mod:`experiments.attitude_est`), the controller reads
+``X = (rotvec(R_target^-1 R), w)`` at the belief's centre and asks for a torque, the
+gyrodine cluster produces it (``cmg.CmgCluster.step``) and the common plant is advanced
+by a fixed-step RK4 with the delivered torque; the plant's ``h`` equals the cluster
+momentum at the step ends.
 
 Reading followed for the seed's angles: ``(phi1, phi2, phi3)`` is the rotation vector
 of the body relative to the final attitude. The auxiliary system moves along a straight
@@ -20,205 +22,40 @@ kinematics ``phi' = w`` is exact along the reference motion.
 
 from __future__ import annotations
 
+import os
 import time
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from estim import PerfectEstimator, PointBelief
+from estim.attitude_model import (
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    draw_measurement,
+    qlog,
+)
+from experiments.attitude_cmg_setup import SQRT3, TurnSetup, setup_from_scenario
+from experiments.attitude_est import EstimatorLoop
 from experiments.errors import InputError
-from experiments.schema import Choice, Num, Str, Vec, validate_table
-from guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster, rk4_step
+from guidance.attitude.cmg import rk4_step
 from guidance.attitude.energy import (
-    EnergySavingConfig,
     EnergySavingController,
     EnergySavingState,
     given_system,
-    resurs_p_inertia,
 )
 from guidance.attitude.euler_turn import EulerTurnTracker
 from guidance.attitude.min_energy import min_energy_turn
-from guidance.attitude.plant import RigidBody
 
 CONTROLLERS = ("energy", "euler")
 #: Seed 000, section 5: accumulated index Z (N^2 m^2 s) of the two turns.
 SEED_ENERGY_N2M2S = {"energy": 2150.0, "euler": 11200.0}
 OSCILLATION_WINDOW_S = 30.0
-
-_POS = Num(0.0, open_lo=True)
-_TABLES = ("energy", "euler", "cmg", "noise")
-_TOP_RULES = {
-    "controller": Choice(CONTROLLERS),
-    "description": Str(),
-    "dt_s": Num(1e-3, 1.0),
-    "duration_s": Num(1.0, 1e4),
-    "horizon_s": Num(1.0, 1e4),
-    "initial_error_deg": Vec(Num(-179.0, 179.0), 3),
-    "inertia_product_signs": Vec(Num(-1, 1, integer=True), 3),
-    "angle_tol_deg": _POS,
-    "rate_tol_degps": _POS,
-}
-_TOP_DEFAULTS = {
-    "controller": "energy",
-    "description": "",
-    "dt_s": 0.1,
-    "duration_s": 300.0,
-    "horizon_s": 360.0,
-    "initial_error_deg": (110.0, 45.0, 45.0),
-    "inertia_product_signs": (1, 1, 1),
-    "angle_tol_deg": 0.2,
-    "rate_tol_degps": 0.02,
-}
-_ENERGY_RULES = {
-    "u0_Nm": Vec(Num(-1e4, 1e4), 3),
-    "f1": Vec(Num(0.0, 1.0), 2),
-    "f2": Vec(Num(0.0, 1.0), 2),
-    "state_var": Vec(Num(0.0, 1e6), 6),
-    "aux_var": Vec(Num(0.0, 1e6), 6),
-    "control_std0_Nm": Num(0.0, 1e7, open_lo=True),
-}
-_ENERGY_DEFAULTS = {
-    "u0_Nm": (0.0, 0.0, 0.0),
-    "f1": (2.5e-5, 5e-3),
-    "f2": (0.01, 2.5e-4),
-    "state_var": (1.0, 1.0, 1.0, 0.01, 0.01, 0.01),
-    "aux_var": (1.0, 1.0, 1.0, 0.01, 0.01, 0.01),
-    "control_std0_Nm": 5000.0,
-}
-_EULER_RULES = {
-    "accel_time_s": _POS,
-    "jerk_time_s": Num(0.0),
-    "natural_freq_radps": Num(0.0, 10.0, open_lo=True),
-    "damping": Num(0.0, 10.0, open_lo=True),
-}
-_EULER_DEFAULTS = {
-    "accel_time_s": 6.0,
-    "jerk_time_s": 2.0,
-    "natural_freq_radps": 0.1,
-    "damping": 0.9,
-}
-_CMG_RULES = {
-    "rotor_momentum_Nms": Num(0.0, 1e5, open_lo=True),
-    "cone_half_angle_deg": Num(0.0, 90.0, open_lo=True, open_hi=True),
-    "pair_azimuths_deg": Vec(Num(-360.0, 360.0), 3),
-    "beta0_deg": Vec(Num(-720.0, 720.0), 6),
-    "sr_threshold": Num(0.0, 1.0, open_lo=True, open_hi=True),
-    "sr_damping": _POS,
-}
-_CMG_DEFAULTS = {
-    "rotor_momentum_Nms": 250.0,
-    "cone_half_angle_deg": 30.0,
-    "pair_azimuths_deg": (0.0, 120.0, 240.0),
-    "beta0_deg": RESURS_P_BETA0_DEG,
-    "sr_threshold": 0.05,
-    "sr_damping": 0.01,
-}
-_NOISE_RULES = {
-    "angle_std_rad": Num(0.0, 1.0),
-    "rate_std_radps": Num(0.0, 1.0),
-    "disturbance_std_Nm": Num(0.0, 1e3),
-}
-_NOISE_DEFAULTS = {
-    "angle_std_rad": 3e-4,
-    "rate_std_radps": 7e-6,
-    "disturbance_std_Nm": 0.0,
-}
-
-
-@dataclass(frozen=True)
-class TurnSetup:
-    """Everything one turn needs (built from a validated scenario)."""
-
-    inertia_kgm2: NDArray[np.float64]
-    initial_error_rad: NDArray[np.float64]
-    dt_s: float
-    duration_s: float
-    horizon_s: float
-    energy: EnergySavingConfig
-    euler: dict[str, float]
-    cluster: CmgCluster
-    beta0_rad: NDArray[np.float64]
-    angle_std_rad: float
-    rate_std_radps: float
-    disturbance_std_Nm: float
-    angle_tol_deg: float = 0.2
-    rate_tol_degps: float = 0.02
-    body: RigidBody = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        if not (0 < self.dt_s and self.duration_s <= self.horizon_s):
-            raise ValueError("need dt_s > 0 and duration_s <= horizon_s")
-        object.__setattr__(self, "body", RigidBody(self.inertia_kgm2))
-
-    @property
-    def n_turn_steps(self) -> int:
-        return int(round(self.duration_s / self.dt_s))
-
-    @property
-    def n_steps(self) -> int:
-        return int(round(self.horizon_s / self.dt_s))
-
-
-def _table(source: str, scenario: Mapping[str, Any], key: str, rules, defaults) -> dict:
-    return validate_table(source, scenario.get(key, {}), rules, defaults, prefix=f"{key}.")
-
-
-def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
-    """Validate a scenario dict (unknown keys and bad values raise InputError)."""
-    flat = {k: v for k, v in scenario.items() if k not in _TABLES}
-    top = validate_table(source, flat, _TOP_RULES, _TOP_DEFAULTS)
-    en = _table(source, scenario, "energy", _ENERGY_RULES, _ENERGY_DEFAULTS)
-    eu = _table(source, scenario, "euler", _EULER_RULES, _EULER_DEFAULTS)
-    cm = _table(source, scenario, "cmg", _CMG_RULES, _CMG_DEFAULTS)
-    no = _table(source, scenario, "noise", _NOISE_RULES, _NOISE_DEFAULTS)
-    if top["horizon_s"] < top["duration_s"]:
-        raise InputError(f"{source}: field 'horizon_s' must be >= duration_s")
-    if any(s == 0 for s in top["inertia_product_signs"]):
-        raise InputError(f"{source}: field 'inertia_product_signs' must be +1 or -1 each")
-    if not 0 < eu["accel_time_s"] <= top["duration_s"] / 2:
-        raise InputError(f"{source}: field 'euler.accel_time_s' must be in (0, duration_s/2]")
-    if not eu["jerk_time_s"] <= eu["accel_time_s"] / 2:
-        raise InputError(f"{source}: field 'euler.jerk_time_s' must be in [0, accel_time_s/2]")
-    meas_var = (no["angle_std_rad"] ** 2,) * 3 + (no["rate_std_radps"] ** 2,) * 3
-    energy = EnergySavingConfig(
-        dt_s=top["dt_s"],
-        f1_0=en["f1"][0],
-        f1_growth=en["f1"][1],
-        f2_0=en["f2"][0],
-        f2_growth=en["f2"][1],
-        state_var=en["state_var"],
-        aux_var=en["aux_var"],
-        meas_var=meas_var,
-        control_var0_N2m2=en["control_std0_Nm"] ** 2,
-        u0_Nm=en["u0_Nm"],
-    )
-    cluster = CmgCluster(
-        cm["rotor_momentum_Nms"],
-        cm["cone_half_angle_deg"],
-        tuple(cm["pair_azimuths_deg"]),
-        cm["sr_threshold"],
-        cm["sr_damping"],
-    )
-    return TurnSetup(
-        inertia_kgm2=resurs_p_inertia(top["inertia_product_signs"]),
-        initial_error_rad=np.radians(top["initial_error_deg"]),
-        dt_s=top["dt_s"],
-        duration_s=top["duration_s"],
-        horizon_s=top["horizon_s"],
-        energy=energy,
-        euler=eu,
-        cluster=cluster,
-        beta0_rad=np.radians(cm["beta0_deg"]),
-        angle_std_rad=no["angle_std_rad"],
-        rate_std_radps=no["rate_std_radps"],
-        disturbance_std_Nm=no["disturbance_std_Nm"],
-        angle_tol_deg=top["angle_tol_deg"],
-        rate_tol_degps=top["rate_tol_degps"],
-    )
 
 
 @dataclass(frozen=True)
@@ -239,6 +76,9 @@ class TurnResult:
     singular_steps: int
     angle_tol_deg: float
     rate_tol_degps: float
+    truth_outside: int = 0
+    empty_steps: int = 0
+    mean_knowledge_bound_deg: float = 0.0
 
     @property
     def angle_deg(self) -> NDArray[np.float64]:
@@ -278,30 +118,61 @@ def _measure(x: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.concatenate([Rotation.from_quat(x[0:4]).as_rotvec(), x[4:7]])
 
 
+def estimator_model(setup: TurnSetup, noise: str = "random") -> AttitudeModel:
+    """Bounds known to the estimators: errors uniform in ``+-sqrt(3) std`` (the seed's K_eps
+    variances), disturbance ``+-sqrt(3) std`` (random) or the game bound."""
+    d = setup.game_disturbance_Nm if noise == "game" else SQRT3 * setup.disturbance_std_Nm
+    return AttitudeModel(
+        setup.inertia_kgm2,
+        d,
+        max(SQRT3 * setup.angle_std_rad, 1e-12),
+        max(SQRT3 * setup.rate_std_radps, 1e-12),
+    )
+
+
 def simulate_turn(
     setup: TurnSetup,
     controller: str,
     rng: np.random.Generator | None = None,
+    estimator: str = "perfect",
+    noise: str | None = None,
 ) -> TurnResult:
-    """One closed-loop turn; noise is drawn from ``rng`` (None: perfect measurements)."""
+    """One closed-loop turn; noise is drawn from ``rng`` (None: perfect measurements).
+
+    Each step ``X`` is read from the estimator's belief centre ``(rotvec(q), w)``. With
+    ``rng`` the attitude/rate errors are uniform within ``+-sqrt(3) std`` (a body-frame
+    error rotation, the seed's variances) and the disturbance torque uniform within
+    ``+-sqrt(3) disturbance_std`` per step (``noise="random"``) or, ``noise="game"``,
+    ``-D sign(M)`` with ``D = game_disturbance_Nm`` (opposes the delivered torque).
+    """
     if controller not in CONTROLLERS:
         raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
+    noise = noise or ("random" if rng is not None else "none")
     n, dt = setup.n_steps, setup.dt_s
     body, cluster = setup.body, setup.cluster
     j, j_inv = body.inertia_kgm2, body.inertia_inv
-    noise_std = np.array([setup.angle_std_rad] * 3 + [setup.rate_std_radps] * 3)
     noisy = rng is not None
+    model = estimator_model(setup, noise)
+    loop = EstimatorLoop(estimator, model)
+    d_bound = model.disturbance_bound_Nm
 
     beta = setup.beta0_rad.copy()
     q0 = Rotation.from_rotvec(setup.initial_error_rad).as_quat()
     x = np.concatenate([q0, np.zeros(3), cluster.momentum_Nms(beta)])
-    estimator = PerfectEstimator()
 
-    def measured(m: NDArray[np.float64]) -> NDArray[np.float64]:
-        return m + rng.normal(0.0, noise_std) if noisy else m
+    def measured(xx: NDArray[np.float64]) -> AttitudeMeasurement:
+        if noisy:
+            return draw_measurement(xx, model, rng)
+        return AttitudeMeasurement(xx[0:4], xx[4:7])
+
+    def estimate(b) -> NDArray[np.float64]:
+        c = loop.centre(b)[0]
+        return np.concatenate([qlog(c[0:4]), c[4:7]])
 
     truth = _measure(x)
-    belief = estimator.update(PointBelief(np.zeros(6)), measured(truth))
+    belief = loop.start(measured(x))
+    outside = int(np.sum(~loop.inside(belief, x[None])))
+    bound_sum = 0.0
 
     err = np.empty((n + 1, 3))
     rate = np.empty((n + 1, 3))
@@ -314,7 +185,7 @@ def simulate_turn(
 
     if controller == "energy":
         law = EnergySavingController(setup.energy)
-        ctrl = EnergySavingState.initial(setup.energy, belief.centre())
+        ctrl = EnergySavingState.initial(setup.energy, estimate(belief))
         trace_k_u[0] = np.trace(ctrl.k_u)
     else:
         eu = setup.euler
@@ -329,9 +200,9 @@ def simulate_turn(
         )
         ref_rot, ref_w, ref_dw = tracker.reference(np.arange(n) * dt)
 
+    xm = estimate(belief)
     for i in range(n):
         err[i], rate[i], hist_h[i] = truth[:3], x[4:7], x[7:10]
-        xm = belief.centre()
         h_gyro = cluster.momentum_Nms(beta)  # known on board from the precession angles
         if controller == "energy":
             a_i, b_i = given_system(j_inv, j @ xm[3:] + h_gyro, dt)
@@ -340,15 +211,24 @@ def simulate_turn(
             ref = (ref_rot[i], ref_w[i], ref_dw[i])
             command = tracker.torque_from_reference(ref, xm[:3], xm[3:], h_gyro)
         min_manip = min(min_manip, cluster.manipulability(beta))
+        h_before = x[7:10].copy()
         beta, torque, singular = cluster.step(beta, command, dt)
         n_singular += int(singular)
         cmd[i], delivered[i] = command, torque
-        ext = rng.normal(0.0, setup.disturbance_std_Nm, 3) if noisy else None
+        ext = None
+        if noisy and noise == "game":
+            ext = -d_bound * np.sign(torque)
+        elif noisy:
+            ext = rng.uniform(-1.0, 1.0, 3) * d_bound
         x = rk4_step(body, x, torque, dt, ext)
         truth = _measure(x)
-        belief = estimator.update(estimator.predict(belief, dt), measured(truth))
+        known = AttitudeControl.held(torque, h_before, dt)
+        belief = loop.step(belief, known, dt, measured(x))
+        outside += int(np.sum(~loop.inside(belief, x[None])))
+        bound_sum += float(loop.attitude_bound_rad(belief)[0])
+        xm = estimate(belief)
         if controller == "energy":
-            ctrl, diag = law.update(ctrl, a_i, b_i, belief.centre())
+            ctrl, diag = law.update(ctrl, a_i, b_i, xm)
             trace_k_u[i + 1], trace_inc[i] = diag.trace_k_u, diag.trace_increment
     err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
     return TurnResult(
@@ -366,6 +246,9 @@ def simulate_turn(
         singular_steps=n_singular,
         angle_tol_deg=setup.angle_tol_deg,
         rate_tol_degps=setup.rate_tol_degps,
+        truth_outside=outside,
+        empty_steps=int(np.sum(loop.empty_steps(belief))),
+        mean_knowledge_bound_deg=float(np.degrees(bound_sum / max(n, 1))),
     )
 
 
@@ -390,52 +273,84 @@ def _stats(values: list[float]) -> dict[str, float | None]:
     }
 
 
+def _one_run(setup: TurnSetup, controller: str, noise: str, child, estimator: str):
+    """One turn and its row (module level: picklable for a process pool)."""
+    rng = np.random.default_rng(child) if noise != "none" else None
+    res = simulate_turn(setup, controller, rng, estimator, noise)
+    k = setup.n_turn_steps
+    return {
+        "settle": res.settle_time_s(),
+        "energy": res.energy_N2m2s(),
+        "energy_horizon": res.energy_N2m2s(setup.n_steps),
+        "angle": float(res.angle_deg[k]),
+        "axis": float(np.abs(res.error_rotvec_deg[k]).max()),
+        "rate": float(res.rate_norm_degps[k]),
+        "max_torque": float(np.abs(res.torque_Nm).max()),
+        "h_end": float(np.linalg.norm(res.gyro_momentum_Nms[k])),
+        "h_peak": float(np.linalg.norm(res.gyro_momentum_Nms, axis=1).max()),
+        "osc": res.initial_oscillation_Nm(),
+        "tr_inc": float(res.trace_increment.max()) if res.trace_increment.size else np.nan,
+        "tr_dec": bool(np.all(np.diff(res.trace_k_u) < 0)) if res.trace_k_u.size else None,
+        "manip": res.min_manipulability,
+        "singular": res.singular_steps,
+        "outside": res.truth_outside,
+        "empty": res.empty_steps,
+        "kbound": res.mean_knowledge_bound_deg,
+    }
+
+
+def _run_all(setup, controller, noise, children, estimator) -> tuple[list[dict], int]:
+    """All runs, on a process pool when there are several (2 cores: ~2x); failures counted."""
+    rows: list[dict] = []
+    failures = 0
+    workers = min(len(children), os.cpu_count() or 1)
+    if workers > 1:
+        try:
+            with ProcessPoolExecutor(workers) as pool:
+                futs = [
+                    pool.submit(_one_run, setup, controller, noise, c, estimator) for c in children
+                ]
+                for f in futs:
+                    try:
+                        rows.append(f.result())
+                    except Exception:  # contract: a run that raises is a failure
+                        failures += 1
+            return rows, failures
+        except (OSError, BrokenProcessPool):  # no processes here: run in this one
+            rows, failures = [], 0
+    for child in children:
+        try:
+            rows.append(_one_run(setup, controller, noise, child, estimator))
+        except Exception:  # contract: a run that raises is counted in "failures"
+            failures += 1
+    return rows, failures
+
+
 def run(
-    source: str, scenario: dict, controller: str, noise: str, runs: int, seed: int
+    source: str,
+    scenario: dict,
+    controller: str,
+    noise: str,
+    runs: int,
+    seed: int,
+    estimator: str = "perfect",
 ) -> dict[str, Any]:
     """SPEC 3.1 ``attitude`` for the controllers ``energy`` and ``euler`` (seed 000)."""
     start = time.perf_counter()
     if controller not in CONTROLLERS:
         raise InputError(f"{source}: controller {controller!r} is not handled here {CONTROLLERS}")
-    if noise == "game":
-        raise InputError(
-            f"{source}: noise 'game' is not defined for controller '{controller}' "
-            "(the Resurs-P turn has no adversarial torques); use none or random"
-        )
-    if noise not in ("none", "random"):
-        raise InputError(f"{source}: noise must be one of 'none', 'random', got {noise!r}")
+    if noise not in ("none", "random", "game"):
+        raise InputError(f"{source}: noise must be one of none, random, game, got {noise!r}")
     if not (isinstance(runs, int) and runs >= 1):
         raise InputError(f"{source}: --runs must be a positive integer")
     setup = setup_from_scenario(source, scenario)
-    children = np.random.SeedSequence(seed).spawn(runs)
-    rows: list[dict[str, float]] = []
-    failures = 0
-    for child in children:
-        rng = np.random.default_rng(child) if noise == "random" else None
-        try:
-            res = simulate_turn(setup, controller, rng)
-        except Exception:  # contract: a run that raises is counted in "failures"
-            failures += 1
-            continue
-        k = setup.n_turn_steps
-        rows.append(
-            {
-                "settle": res.settle_time_s(),
-                "energy": res.energy_N2m2s(),
-                "energy_horizon": res.energy_N2m2s(setup.n_steps),
-                "angle": float(res.angle_deg[k]),
-                "axis": float(np.abs(res.error_rotvec_deg[k]).max()),
-                "rate": float(res.rate_norm_degps[k]),
-                "max_torque": float(np.abs(res.torque_Nm).max()),
-                "h_end": float(np.linalg.norm(res.gyro_momentum_Nms[k])),
-                "h_peak": float(np.linalg.norm(res.gyro_momentum_Nms, axis=1).max()),
-                "osc": res.initial_oscillation_Nm(),
-                "tr_inc": float(res.trace_increment.max()) if res.trace_increment.size else np.nan,
-                "tr_dec": bool(np.all(np.diff(res.trace_k_u) < 0)) if res.trace_k_u.size else None,
-                "manip": res.min_manipulability,
-                "singular": res.singular_steps,
-            }
+    if noise == "game" and setup.game_disturbance_Nm <= 0:
+        raise InputError(
+            f"{source}: noise 'game' is not defined for controller '{controller}' while "
+            "noise.game_disturbance_Nm = 0 (set the adversary's torque bound, N m)"
         )
+    children = np.random.SeedSequence(seed).spawn(runs)
+    rows, failures = _run_all(setup, controller, noise, children, estimator)
 
     def col(key: str) -> list[float]:
         return [r[key] for r in rows]
@@ -452,6 +367,9 @@ def run(
         "final_rate_degps": _stats(col("rate")),
         "max_torque_Nm": max(col("max_torque"), default=None),
         "failures": failures,
+        "estimator": estimator,
+        "truth_outside": int(sum(col("outside"))),
+        "empty_steps": int(sum(col("empty"))),
         "lower_bound_energy_N2m2s": lower_bound_energy_N2m2s(setup),
         "seed_energy_N2m2s": SEED_ENERGY_N2M2S[controller],
         "turn_time_s": setup.duration_s,
@@ -467,5 +385,19 @@ def run(
     if controller == "energy":
         result["trace_k_u_decreasing"] = all(col("tr_dec")) if rows else None
         result["max_trace_increment"] = max(col("tr_inc"), default=None)
+    result["_rows"] = [
+        {
+            "run": i,
+            "settle_time_s": r["settle"],
+            "energy_N2m2s": r["energy"],
+            "final_angle_deg": r["angle"],
+            "final_rate_degps": r["rate"],
+            "max_torque_Nm": r["max_torque"],
+            "truth_outside": r["outside"],
+            "empty_steps": r["empty"],
+            "mean_knowledge_bound_deg": r["kbound"],
+        }
+        for i, r in enumerate(rows)
+    ]
     result["wall_s"] = time.perf_counter() - start
     return result

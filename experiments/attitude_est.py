@@ -159,7 +159,8 @@ def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: di
         vals = vals[np.isfinite(vals)]
         if col == "final_angle_deg" and vals.size and vals.min() > 0:
             ax.set_xscale("log")
-    axes[0].legend(fontsize=8, loc="lower right")
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize=8, loc="lower right")
     fig.suptitle(f"{stem}: controller / estimator / noise", fontsize=10)
     files = plots.save(fig, out_dir / f"{stem}-cdf")
     return [str(table), *(str(f) for f in files)]

@@ -5,9 +5,11 @@ designs a* by the iteration of seed section 3 (:func:`guidance.attitude.game.des
 simulates ``runs`` turns batched (:func:`guidance.attitude.gyrostat_loop.simulate_turn`)
 and returns the JSON of SPEC 3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
 
-Noise mapping: ``none`` = perfect measurements, no disturbance; ``random`` = uniform
-random disturbance torques and bounded uniform measurement errors; ``game`` = the
-adversarial disturbance (perfect measurements). ``[simulation] disturbance`` overrides the
+The law reads ``(q, x)`` from an estimator (``perfect``, ``ukf``, ``box``;
+:mod:`experiments.gyrostat_est_loop`). Noise mapping: ``none`` = perfect measurements,
+no disturbance; ``random`` = uniform random disturbance torques and bounded uniform
+measurement errors; ``game`` = the adversarial disturbance and the same bounded
+measurement errors. ``[simulation] disturbance`` overrides the
 disturbance kind (``"constant"`` = a vertex of the box held all run).
 """
 
@@ -20,10 +22,11 @@ from typing import Any
 import numpy as np
 
 from experiments.errors import InputError
+from experiments.gyrostat_est_loop import simulate_turn_est
 from experiments.schema import Choice, Num, Str, Vec, validate_table
 from guidance.attitude.game import GameLaw, design_a_star
 from guidance.attitude.gyrostat import Gyrostat, error_quaternion, quat_mul
-from guidance.attitude.gyrostat_loop import LoopConfig, LoopResult, simulate_turn
+from guidance.attitude.gyrostat_loop import LoopConfig, LoopResult
 
 NOISES = ("none", "random", "game")
 AUTO_DISTURBANCE = {"none": "none", "random": "random", "game": "adversarial"}
@@ -127,26 +130,32 @@ def _stats(values: np.ndarray) -> dict[str, float]:
 
 
 def _simulate_all(
-    gyro: Gyrostat, law: GameLaw, q0, q_t, beta, kind, children, cfg
-) -> tuple[list[LoopResult], int]:
+    gyro: Gyrostat, law: GameLaw, q0, q_t, beta, kind, children, cfg, estimator="perfect"
+) -> tuple[list[tuple[LoopResult, dict]], int]:
     """Batched simulation; if the batch raises, rerun one by one and count failures."""
     rngs = [np.random.default_rng(c) for c in children]
     try:
-        return [simulate_turn(gyro, law, q0, q_t, beta, kind, rngs, cfg)], 0
+        return [simulate_turn_est(gyro, law, q0, q_t, beta, kind, rngs, cfg, estimator)], 0
     except Exception:  # SPEC 3.1: a run that raises is a failure
         pass
     results, failures = [], 0
     for child in children:
         try:
             rng = [np.random.default_rng(child)]
-            results.append(simulate_turn(gyro, law, q0, q_t, beta, kind, rng, cfg))
+            results.append(simulate_turn_est(gyro, law, q0, q_t, beta, kind, rng, cfg, estimator))
         except Exception:
             failures += 1
     return results, failures
 
 
 def run(
-    source: str, scenario: Mapping[str, Any], controller: str, noise: str, runs: int, seed: int
+    source: str,
+    scenario: Mapping[str, Any],
+    controller: str,
+    noise: str,
+    runs: int,
+    seed: int,
+    estimator: str = "perfect",
 ) -> dict[str, Any]:
     """Monte Carlo of the gyrostat game turn; the JSON object of SPEC 3.1."""
     t_wall = time.perf_counter()
@@ -169,7 +178,7 @@ def run(
     except ValueError as exc:
         raise InputError(f"{source}: infeasible gyrostat design: {exc}") from None
     kind = AUTO_DISTURBANCE[noise] if sim["disturbance"] == "auto" else sim["disturbance"]
-    noisy = noise == "random"
+    noisy = noise in ("random", "game")
     h = sim["control_period_s"]
     cfg = LoopConfig(
         period_s=h,
@@ -183,14 +192,33 @@ def run(
     )
     law = GameLaw(design.a_star, rho, h, mode=sim["switching"])
     children = np.random.SeedSequence(seed).spawn(runs)
-    results, failures = _simulate_all(gyro, law, q0, q_t, beta, kind, children, cfg)
+    pairs, failures = _simulate_all(gyro, law, q0, q_t, beta, kind, children, cfg, estimator)
+    results = [r for r, _ in pairs]
 
     def cat(attr: str) -> np.ndarray:
         parts = [getattr(r, attr) for r in results]
         return np.concatenate(parts) if parts else np.empty((0,))
 
+    def count(key: str) -> np.ndarray:
+        parts = [c[key] for _, c in pairs]
+        return np.concatenate(parts) if parts else np.empty((0,))
+
     settle = cat("settle_time_s")
     max_u = np.concatenate([r.max_abs_torque_Nm for r in results]) if results else np.zeros((0, 3))
+    rows = [
+        {
+            "run": i,
+            "settle_time_s": float(settle[i]),
+            "energy_N2m2s": float(cat("energy_N2m2s")[i]),
+            "final_angle_deg": float(np.degrees(cat("final_angle_rad")[i])),
+            "final_rate_degps": float(np.degrees(cat("final_rate_radps")[i])),
+            "max_torque_Nm": float(max_u[i].max()),
+            "truth_outside": int(count("truth_outside")[i]),
+            "empty_steps": int(count("empty_steps")[i]),
+            "mean_knowledge_bound_deg": float(count("mean_knowledge_bound_deg")[i]),
+        }
+        for i in range(len(settle))
+    ]
     tau = design.tau_s
     return {
         "scenario": str(scenario.get("name", source)),
@@ -205,6 +233,10 @@ def run(
         "final_rate_degps": _stats(np.degrees(cat("final_rate_radps"))),
         "max_torque_Nm": float(max_u.max()) if max_u.size else float("nan"),
         "failures": failures,
+        "estimator": estimator,
+        "truth_outside": int(count("truth_outside").sum()),
+        "empty_steps": int(count("empty_steps").sum()),
+        "_rows": rows,
         "wall_s": time.perf_counter() - t_wall,
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
