@@ -33,6 +33,7 @@ class PointingCoupling:
         self.loop = loop
         self.kb_rad = float(loop.knowledge_bound_rad)
         self.max_residual_rad = 0.0
+        self.max_bound_rad = self.kb_rad
 
     def widen(self, model: ChannelModel) -> ChannelModel:
         """The intercept model with the bearing bound widened by the knowledge bound."""
@@ -47,6 +48,7 @@ class PointingCoupling:
         r_corr = self.loop.estimated_error.apply(r_body)
         residual = (self.loop.estimated_error * self.loop.true_error.inv()).magnitude()
         self.max_residual_rad = max(self.max_residual_rad, float(residual))
+        self.max_bound_rad = max(self.max_bound_rad, float(self.loop.knowledge_bound_rad))
         return [
             float(
                 np.arctan2(r_corr[AXIS[c]], r_corr[0])
@@ -67,7 +69,12 @@ class PointingCoupling:
         self.loop.step(dt_s)
 
     def summary(self) -> dict[str, float]:
-        out = {f"attitude_{k}": float(v) for k, v in self.loop.summary().items()}
+        out = {
+            f"attitude_{k}": float(v)
+            for k, v in self.loop.summary().items()
+            if isinstance(v, int | float | np.number)
+        }
         out["pointing_residual_max_deg"] = float(np.degrees(self.max_residual_rad))
         out["pointing_knowledge_bound_deg"] = float(np.degrees(self.kb_rad))
+        out["pointing_bound_max_deg"] = float(np.degrees(self.max_bound_rad))
         return out
