@@ -164,3 +164,36 @@ def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: di
     fig.suptitle(f"{stem}: controller / estimator / noise", fontsize=10)
     files = plots.save(fig, out_dir / f"{stem}-cdf")
     return [str(table), *(str(f) for f in files)]
+
+
+def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Path]:
+    """README figure: one row per scenario, columns settle time / energy / final error,
+    one CDF curve per estimator x noise, from the per-run Parquet tables."""
+    from experiments import plots
+
+    fig, axes = plots.plt.subplots(
+        len(tables), 3, figsize=(15, 3.3 * len(tables)), constrained_layout=True, squeeze=False
+    )
+    styles = {"perfect": ":", "ukf": "--", "box": "-"}
+    colours = {"random": "C0", "game": "C3", "none": "C2"}
+    for row, (name, paths) in zip(axes, tables.items(), strict=True):
+        df = pd.concat([pd.read_parquet(p) for p in paths], ignore_index=True)
+        for ax, (col, label) in zip(row, PANELS, strict=True):
+            for (est, noise), grp in df.groupby(["estimator", "noise"], sort=True):
+                plots._cdf(
+                    ax, grp[col].to_numpy(dtype=float), f"{est} / {noise}",
+                    linestyle=styles.get(est, "-"), color=colours.get(noise, "k"), lw=1.5,
+                )  # fmt: skip
+            vals = df[col].to_numpy(dtype=float)
+            vals = vals[np.isfinite(vals)]
+            if col != "settle_time_s" and vals.size and vals.min() > 0:
+                ax.set_xscale("log")
+            ax.set_xlabel(label)
+            ax.set_ylabel("fraction of runs")
+            ax.set_ylim(0, 1.02)
+            ax.grid(True, alpha=0.3)
+        ctrl = ", ".join(sorted(set(df["controller"])))
+        row[0].set_title(f"{name} ({ctrl})", loc="left", fontsize=9)
+        if row[0].get_legend_handles_labels()[0]:
+            row[0].legend(fontsize=7, loc="lower right")
+    return plots.save(fig, out_stem)

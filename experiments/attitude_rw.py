@@ -1,17 +1,14 @@
 """``attitude`` command, controllers ``pd`` (SPEC 2.2) and ``lqr`` (SPEC 2.3) on reaction wheels.
 
-``run(source, scenario, controller, noise, runs, seed)`` validates the scenario,
+``run(source, scenario, controller, noise, runs, seed, estimator)`` validates the scenario,
 simulates ``runs`` closed loops as one batch (the plant of
 :mod:`guidance.attitude.wheels`: RK4, controller sampled every ``control_period_s``
 with the torque held) and returns the JSON of SPEC 3.1.
 
-The controller sees only an estimator's belief: a :class:`estim.base.PerfectEstimator`
-is updated every sample with the measured state and the law is evaluated at
-``belief.centre()``. One :class:`~estim.base.PointBelief` carries the batch of
-independent runs (shape ``(runs, 10)``).
-
-The controller reads ``(q, w)`` from an estimator (``perfect``, ``ukf`` or ``box``,
-:mod:`experiments.attitude_est`) updated every sample with the measurement.
+The controller sees only an estimator's belief (``perfect``, ``ukf`` or ``box``,
+:mod:`experiments.attitude_est`; one belief carries the batch of runs), updated every
+sample with the measurement; the law is evaluated at ``(q, w)`` of ``belief.centre()``
+and the wheel momentum (known on board).
 
 Noise mapping: ``none`` = exact measurements, no disturbance; ``random`` = attitude
 (small body-frame rotation, per axis) and rate errors uniform within ``+-sqrt(3)
