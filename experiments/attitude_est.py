@@ -157,7 +157,12 @@ def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: di
         ax.grid(True, alpha=0.3)
         vals = df[col].to_numpy(dtype=float)
         vals = vals[np.isfinite(vals)]
-        if col == "final_angle_deg" and vals.size and vals.min() > 0:
+        if (
+            col == "final_angle_deg"
+            and vals.size
+            and vals.min() > 0
+            and vals.max() > 20 * vals.min()
+        ):
             ax.set_xscale("log")
     if axes[0].get_legend_handles_labels()[0]:
         axes[0].legend(fontsize=8, loc="lower right")
@@ -187,7 +192,8 @@ def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Pat
             vals = df[col].to_numpy(dtype=float)
             vals = vals[np.isfinite(vals)]
             if col != "settle_time_s" and vals.size and vals.min() > 0:
-                ax.set_xscale("log")
+                if vals.max() / vals.min() > 20:
+                    ax.set_xscale("log")
             ax.set_xlabel(label)
             ax.set_ylabel("fraction of runs")
             ax.set_ylim(0, 1.02)

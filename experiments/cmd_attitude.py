@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"--out {out_dir}: not a directory")
     if rows:
-        stem = f"{Path(args.scenario).stem}-{controller}-{args.noise}"
+        stem = f"{Path(args.scenario).stem}-{controller}-{args.noise}-{'_'.join(estimators)}"
         meta = {"scenario": scenario, "controller": controller, "noise": args.noise,
                 "estimators": estimators, "runs": args.runs, "seed": args.seed}  # fmt: skip
         result["files"] = write_outputs(out_dir, stem, rows, meta)
