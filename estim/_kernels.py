@@ -280,3 +280,19 @@ def polygon_contains(xy, offsets, index, px, py, tol):
         if ok:
             return True
     return False
+
+
+def warm_up() -> None:
+    """Load every kernel (from numba's on-disk cache, or compile) in this process.
+
+    Worker processes forked afterwards inherit the loaded machine code instead of
+    each loading it again (about a second per process)."""
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    off = np.array([0, 4], dtype=np.int64)
+    one, zero = np.ones(1), np.zeros(1)
+    clip_slab(xy, off, 0, zero, one)
+    shift_band(xy, off, zero, one)
+    predict_sections(xy, off, zero, one, one, False, 1e-6, 16)
+    predict_sections(xy, off, zero, one, one, True, 1e-6, 16)
+    polygon_contains(xy, off, np.zeros(1, dtype=np.int64), 0.5, 0.5, 1e-9)
+    dedupe(xy, off)

@@ -11,8 +11,10 @@ Measured on the same problem (seed 003's Fig. 3 boxes, one channel, 29 sections)
 * ``runs_per_s`` (1 worker) and ``runs_per_s_2`` (2 worker processes): Monte Carlo
   throughput on Fig. 5's scenario, and their ratio ``speedup_2_workers``.
 
-Every timing is the median of ``--repeat`` repetitions (wall clock,
-``time.perf_counter``); the machine and library versions are reported beside.
+Step and engagement timings are the median of ``--repeat`` repetitions (wall clock,
+``time.perf_counter``); throughputs are the best of ``--repeat`` interleaved
+measurements (the speed of a shared machine drifts between them). The machine and
+library versions are reported beside.
 """
 
 from __future__ import annotations
@@ -105,8 +107,12 @@ def run(args) -> dict[str, Any]:
     }
     result["infoset_to_ukf_ratio"] = result["infoset_step_us"] / result["ukf_step_us"]
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
-    result["runs_per_s"] = throughput(fig5, args.mc_runs, 1)
-    result["runs_per_s_2"] = throughput(fig5, args.mc_runs, 2)
+    # interleaved and best-of-repeat: the machine's speed drifts (shared host)
+    one, two = [], []
+    for _ in range(args.repeat):
+        one.append(throughput(fig5, args.mc_runs, 1))
+        two.append(throughput(fig5, args.mc_runs, 2))
+    result["runs_per_s"], result["runs_per_s_2"] = max(one), max(two)
     result["speedup_2_workers"] = result["runs_per_s_2"] / result["runs_per_s"]
     result["machine"] = {
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),

@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from estim import _kernels as _k
 from experiments.engagement import timed_engagement
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
@@ -67,6 +68,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
             client.close()
         return
     n = workers or os.cpu_count() or 1
+    _k.warm_up()  # forked workers inherit the loaded kernels
     pool = ProcessPoolExecutor(max_workers=n)
     try:
         yield pool
