@@ -356,7 +356,7 @@ def run(
         return [r[key] for r in rows]
 
     result: dict[str, Any] = {
-        "scenario": str(source),
+        "scenario": str(scenario.get("name", source)),
         "controller": controller,
         "noise": noise,
         "runs": runs,

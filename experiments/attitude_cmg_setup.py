@@ -24,6 +24,7 @@ _POS = Num(0.0, open_lo=True)
 _TABLES = ("energy", "euler", "cmg", "noise")
 _TOP_RULES = {
     "controller": Choice(CONTROLLERS),
+    "name": Str(),
     "description": Str(),
     "dt_s": Num(1e-3, 1.0),
     "duration_s": Num(1.0, 1e4),
@@ -35,6 +36,7 @@ _TOP_RULES = {
 }
 _TOP_DEFAULTS = {
     "controller": "energy",
+    "name": "",
     "description": "",
     "dt_s": 0.1,
     "duration_s": 300.0,

@@ -150,8 +150,9 @@ def test_scenario_file_loads_and_bad_input_is_one_line_input_error():
         with pytest.raises(InputError, match=field.replace(".", r"\.")) as exc:
             setup_from_scenario(path, {**scenario, **bad})
         assert "\n" not in str(exc.value)
+    no_game = {**scenario, "noise": {**scenario["noise"], "game_disturbance_Nm": 0.0}}
     with pytest.raises(InputError, match="not defined"):
-        run(path, scenario, "energy", "game", 1, 0)
+        run(path, no_game, "energy", "game", 1, 0)
 
 
 def test_run_random_noise_is_seeded_and_paired():
