@@ -43,6 +43,7 @@ from estim.attitude_model import (
 from experiments.attitude_cmg_setup import SQRT3, TurnSetup, setup_from_scenario
 from experiments.attitude_est import EstimatorLoop
 from experiments.errors import InputError
+from experiments.stats import summary_stats
 from guidance.attitude.cmg import rk4_step
 from guidance.attitude.energy import (
     EnergySavingController,
@@ -260,19 +261,6 @@ def lower_bound_energy_N2m2s(setup: TurnSetup) -> float:
     return min_energy_turn(a, b, x0, setup.n_turn_steps, setup.dt_s).energy_N2m2s
 
 
-def _stats(values: list[float]) -> dict[str, float | None]:
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return {"mean": None, "p50": None, "p90": None, "max": None}
-    return {
-        "mean": float(v.mean()),
-        "p50": float(np.percentile(v, 50)),
-        "p90": float(np.percentile(v, 90)),
-        "max": float(v.max()),
-    }
-
-
 def _one_run(setup: TurnSetup, controller: str, noise: str, child, estimator: str):
     """One turn and its row (module level: picklable for a process pool)."""
     rng = np.random.default_rng(child) if noise != "none" else None
@@ -361,10 +349,10 @@ def run(
         "noise": noise,
         "runs": runs,
         "seed": seed,
-        "settle_time_s": _stats(col("settle")),
-        "energy_N2m2s": _stats(col("energy")),
-        "final_angle_deg": _stats(col("angle")),
-        "final_rate_degps": _stats(col("rate")),
+        "settle_time_s": summary_stats(col("settle")),
+        "energy_N2m2s": summary_stats(col("energy")),
+        "final_angle_deg": summary_stats(col("angle")),
+        "final_rate_degps": summary_stats(col("rate")),
         "max_torque_Nm": max(col("max_torque"), default=None),
         "failures": failures,
         "estimator": estimator,
@@ -374,11 +362,11 @@ def run(
         "seed_energy_N2m2s": SEED_ENERGY_N2M2S[controller],
         "turn_time_s": setup.duration_s,
         "horizon_s": setup.horizon_s,
-        "energy_to_horizon_N2m2s": _stats(col("energy_horizon")),
-        "final_axis_error_deg": _stats(col("axis")),
-        "final_gyro_momentum_Nms": _stats(col("h_end")),
+        "energy_to_horizon_N2m2s": summary_stats(col("energy_horizon")),
+        "final_axis_error_deg": summary_stats(col("axis")),
+        "final_gyro_momentum_Nms": summary_stats(col("h_end")),
         "peak_gyro_momentum_Nms": max(col("h_peak"), default=None),
-        "initial_oscillation_Nm": _stats(col("osc")),
+        "initial_oscillation_Nm": summary_stats(col("osc")),
         "min_manipulability": min(col("manip"), default=None),
         "singular_steps": int(sum(col("singular"))),
     }

@@ -21,7 +21,6 @@ energy index and final error, one curve per controller x estimator x noise).
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -110,20 +109,6 @@ class EstimatorLoop:
         if self.name == "perfect":
             return np.zeros(self.centre(belief).shape[0])
         return belief.attitude_bound_rad()
-
-
-def stats(values: Sequence[float] | np.ndarray) -> dict[str, float | None]:
-    """mean / p50 / p90 / max over the finite values (None when there are none)."""
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return {"mean": None, "p50": None, "p90": None, "max": None}
-    return {
-        "mean": float(v.mean()),
-        "p50": float(np.percentile(v, 50)),
-        "p90": float(np.percentile(v, 90)),
-        "max": float(v.max()),
-    }
 
 
 PANELS = (

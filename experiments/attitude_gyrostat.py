@@ -24,6 +24,7 @@ import numpy as np
 from experiments.errors import InputError
 from experiments.gyrostat_est_loop import simulate_turn_est
 from experiments.schema import Choice, Num, Str, Vec, validate_table
+from experiments.stats import summary_stats
 from guidance.attitude.game import GameLaw, design_a_star
 from guidance.attitude.gyrostat import Gyrostat, error_quaternion, quat_mul
 from guidance.attitude.gyrostat_loop import LoopConfig, LoopResult
@@ -115,18 +116,6 @@ def initial_quaternion(man: Mapping[str, Any]) -> np.ndarray:
     half = 0.5 * np.radians(man["initial_angle_deg"])
     rel = np.concatenate([np.sin(half) * axis / np.linalg.norm(axis), [np.cos(half)]])
     return quat_mul(np.asarray(man["target_quaternion"], float), rel)
-
-
-def _stats(values: np.ndarray) -> dict[str, float]:
-    v = np.asarray(values, dtype=float)
-    if v.size == 0:
-        return {"mean": float("nan"), "p50": float("nan"), "p90": float("nan"), "max": float("nan")}
-    return {
-        "mean": float(np.mean(v)),
-        "p50": float(np.percentile(v, 50)),
-        "p90": float(np.percentile(v, 90)),
-        "max": float(np.max(v)),
-    }
 
 
 def _simulate_all(
@@ -227,10 +216,10 @@ def run(
         "runs": runs,
         "seed": seed,
         "disturbance": kind,
-        "settle_time_s": _stats(settle),
-        "energy_N2m2s": _stats(cat("energy_N2m2s")),
-        "final_angle_deg": _stats(np.degrees(cat("final_angle_rad"))),
-        "final_rate_degps": _stats(np.degrees(cat("final_rate_radps"))),
+        "settle_time_s": summary_stats(settle, finite_only=False),
+        "energy_N2m2s": summary_stats(cat("energy_N2m2s"), finite_only=False),
+        "final_angle_deg": summary_stats(np.degrees(cat("final_angle_rad")), finite_only=False),
+        "final_rate_degps": summary_stats(np.degrees(cat("final_rate_radps")), finite_only=False),
         "max_torque_Nm": float(max_u.max()) if max_u.size else float("nan"),
         "failures": failures,
         "estimator": estimator,

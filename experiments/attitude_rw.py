@@ -38,6 +38,7 @@ from estim.base import PointBelief
 from experiments.attitude_est import EstimatorLoop
 from experiments.errors import InputError
 from experiments.schema import Bool, Choice, Num, Str, Vec, validate_table
+from experiments.stats import summary_stats
 from guidance.attitude.lqr import LQRController
 from guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, regime_boundaries, settle_time
 from guidance.attitude.plant import RigidBody
@@ -177,19 +178,6 @@ def initial_states(tables: Mapping[str, Any], rngs: list[np.random.Generator]) -
             man["random_rate_degps"]
         ) * rng.uniform(-1.0, 1.0, 3)
     return x
-
-
-def _stats(values: np.ndarray) -> dict[str, float]:
-    v = np.asarray(values, dtype=float)
-    if v.size == 0:
-        return {"mean": float("nan"), "p50": float("nan"), "p90": float("nan"), "max": float("nan")}
-    with np.errstate(invalid="ignore"):  # unsettled runs are inf; their stats print as null
-        return {
-            "mean": float(np.mean(v)),
-            "p50": float(np.percentile(v, 50)),
-            "p90": float(np.percentile(v, 90)),
-            "max": float(np.max(v)),
-        }
 
 
 def estimator_model(tables: Mapping[str, Any]) -> AttitudeModel:
@@ -346,10 +334,14 @@ def run(
         "noise": noise,
         "runs": runs,
         "seed": seed,
-        "settle_time_s": _stats(settle),
-        "energy_N2m2s": _stats(metrics.get("energy_N2m2s", np.zeros(0))),
-        "final_angle_deg": _stats(metrics.get("final_angle_deg", np.zeros(0))),
-        "final_rate_degps": _stats(metrics.get("final_rate_degps", np.zeros(0))),
+        "settle_time_s": summary_stats(settle, finite_only=False),
+        "energy_N2m2s": summary_stats(metrics.get("energy_N2m2s", np.zeros(0)), finite_only=False),
+        "final_angle_deg": summary_stats(
+            metrics.get("final_angle_deg", np.zeros(0)), finite_only=False
+        ),
+        "final_rate_degps": summary_stats(
+            metrics.get("final_rate_degps", np.zeros(0)), finite_only=False
+        ),
         "max_torque_Nm": float(np.max(metrics["max_torque_Nm"])) if failures < runs else None,
         "failures": failures,
         "estimator": estimator,

@@ -39,6 +39,7 @@ from estim import _kernels as _k
 from experiments.engagement import timed_engagement
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
+from experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
 
@@ -198,18 +199,6 @@ def executor_or(executor: Executor | None, workers, scheduler) -> Iterator[Execu
             yield ex
 
 
-def _stats(values: pd.Series) -> dict[str, float]:
-    v = values.dropna().to_numpy(dtype=float)
-    if len(v) == 0:
-        return {"mean": float("nan"), "p50": float("nan"), "p90": float("nan"), "max": float("nan")}
-    return {
-        "mean": float(v.mean()),
-        "p50": float(np.percentile(v, 50)),
-        "p90": float(np.percentile(v, 90)),
-        "max": float(v.max()),
-    }
-
-
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
     """The intercept JSON object of SPEC 3.1 for one estimator x noise."""
     ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]
@@ -219,8 +208,8 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "noise": noise,
         "runs": int(len(df)),
         "seed": int(seed),
-        "miss_m": _stats(ok["miss_m"]) if len(ok) else _stats(pd.Series(dtype=float)),
-        "fuel_mps": _stats(ok["fuel_mps"]) if len(ok) else _stats(pd.Series(dtype=float)),
+        "miss_m": summary_stats(ok["miss_m"].to_numpy(dtype=float) if len(ok) else []),
+        "fuel_mps": summary_stats(ok["fuel_mps"].to_numpy(dtype=float) if len(ok) else []),
         "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
         "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
         "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
