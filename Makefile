@@ -17,8 +17,8 @@ run: $(STAMP)
 	$(BIN)/python -m experiments fig5 --out results/fig5
 
 test: $(STAMP)
-	$(BIN)/ruff check .
-	$(BIN)/ruff format --check .
+	$(BIN)/ruff check --no-cache .
+	$(BIN)/ruff format --check --no-cache .
 	$(BIN)/python -m pytest
 
 lint: $(STAMP)

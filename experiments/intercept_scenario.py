@@ -189,6 +189,7 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
     if attitude is not None:
         # validated by the pointing loop itself (one line, exit 2, at load time)
         import numpy as np
+
         from guidance.attitude.pointing import PointingLoop
 
         PointingLoop.from_table(str(source), attitude, np.random.default_rng(0))
