@@ -152,7 +152,7 @@ def run_engagement(
     pos_km, vel_kmps = draw_truth(sc, rng)
     pointing = None
     if sc.attitude is not None:  # end-to-end: an attitude loop holds the axis
-        from guidance.attitude.pointing import PointingLoop
+        from experiments.pointing_loop import PointingLoop
 
         loop = PointingLoop.from_table(sc.source, sc.attitude, rng.spawn(1)[0])
         pointing = PointingCoupling(loop)

@@ -5,7 +5,7 @@ and D known to the estimators), ``[truth]`` (the boxes the true initial state is
 drawn from, uniformly; a degenerate interval fixes a value), ``[range_finder]``,
 ``[guidance]``, ``[experiment]``, an optional ``[reference]`` of the paper's
 numbers and an optional ``[attitude]`` loop holding the spacecraft's axis (the
-end-to-end scenario, validated by :class:`guidance.attitude.pointing.PointingLoop`).
+end-to-end scenario, validated by :class:`experiments.pointing_loop.PointingLoop`).
 Every field is checked; unknown keys are errors.
 """
 
@@ -190,7 +190,7 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
         # validated by the pointing loop itself (one line, exit 2, at load time)
         import numpy as np
 
-        from guidance.attitude.pointing import PointingLoop
+        from experiments.pointing_loop import PointingLoop
 
         PointingLoop.from_table(str(source), attitude, np.random.default_rng(0))
     return InterceptScenario(

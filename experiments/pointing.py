@@ -1,7 +1,7 @@
 """Coupling of an attitude loop to the intercept: the end-to-end scenario (SPEC 2.5).
 
 The spacecraft's longitudinal axis is held by an attitude loop
-(:class:`guidance.attitude.pointing.PointingLoop`: plant, controller, estimator,
+(:class:`experiments.pointing_loop.PointingLoop`: plant, controller, estimator,
 noise). Its pointing error enters the intercept twice:
 
 * bearings are measured in body axes, so the true pointing error biases them; the

@@ -1,4 +1,4 @@
-"""PointingLoop (guidance.attitude.pointing): the end-to-end attitude loop's contract."""
+"""PointingLoop (experiments.pointing_loop): the end-to-end attitude loop's contract."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from experiments.errors import InputError
-from guidance.attitude.pointing import PointingLoop
+from experiments.pointing_loop import PointingLoop
 
 
 @pytest.mark.parametrize("disturbance", ["random", "game"])

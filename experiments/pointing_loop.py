@@ -1,5 +1,9 @@
 """Attitude loop holding the longitudinal axis of the interceptor (SPEC 2.5, end-to-end).
 
+It lives in ``experiments`` because it composes a whole simulated loop (plant,
+noise, estimator, controller), as the other experiment runners do; ``guidance``
+keeps the controllers themselves.
+
 The spacecraft of Problem A carries reaction wheels; its attitude loop holds the body
 axes on the guidance frame (target attitude = identity). The controller (quaternion
 PD, SPEC 2.2, or LQR, SPEC 2.3) reads ``(q, w)`` from an estimator (``box``, ``ukf`` or
