@@ -31,7 +31,7 @@ from estim.attitude_model import (
     draw_measurement,
 )
 from experiments.attitude_est import EstimatorLoop
-from guidance.attitude.game import GameLaw, adversarial_disturbance_Nm
+from guidance.attitude.game import GameLaw
 from guidance.attitude.gyrostat import (
     PHI,
     STATE_DIM,
@@ -40,11 +40,17 @@ from guidance.attitude.gyrostat import (
     X,
     error_angle_rad,
     error_quaternion,
-    eta_v_rate,
-    linearising_torque,
     rk4_step,
 )
-from guidance.attitude.gyrostat_loop import DISTURBANCES, LoopConfig, LoopResult
+from guidance.attitude.gyrostat_loop import (
+    DISTURBANCES,
+    LoopConfig,
+    LoopResult,
+    disturbance_at,
+    disturbance_draws,
+    game_torques,
+    settle_update,
+)
 
 Array = NDArray[np.float64]
 
@@ -87,10 +93,7 @@ def simulate_turn_est(
     state = np.zeros((runs, STATE_DIM))
     state[:, Q] = np.broadcast_to(np.asarray(q0, dtype=float), (runs, 4))
     state[:, Q] /= np.linalg.norm(state[:, Q], axis=-1, keepdims=True)
-    if disturbance == "random":
-        v_seq = np.stack([g.uniform(-1.0, 1.0, size=(n, 3)) for g in rngs]) * beta
-    elif disturbance == "constant":
-        v_const = np.stack([g.choice([-1.0, 1.0], size=3) for g in rngs]) * beta
+    draws = disturbance_draws(disturbance, rngs, n, beta)
 
     def measure(s: Array) -> tuple[AttitudeMeasurement, Array]:
         if not noisy:
@@ -108,21 +111,8 @@ def simulate_turn_est(
 
     for k in range(n):
         est = loop.centre(belief)
-        eta_hat = error_quaternion(est[:, 0:4], q_t)
-        deta_hat = eta_v_rate(eta_hat, est[:, 4:7])
-        u_star = law.u_star(eta_hat[:, :3], deta_hat)
-        u = linearising_torque(gyro, eta_hat, est[:, 4:7], phid, u_star)
-        if disturbance == "none":
-            v = np.zeros((runs, 3))
-        elif disturbance == "random":
-            v = v_seq[:, k]
-        elif disturbance == "constant":
-            v = v_const
-        else:
-            eta = error_quaternion(state[:, Q], q_t)
-            v = adversarial_disturbance_Nm(
-                gyro, eta, eta_v_rate(eta, state[:, X]), u_star, law, beta
-            )
+        u_star, u = game_torques(gyro, law, est[:, 0:4], est[:, 4:7], phid, q_t)
+        v = disturbance_at(disturbance, k, draws, gyro, state, q_t, u_star, law, beta)
         # known inputs for the estimator: M_u = -u, h = J phi' enclosed over the period
         k_est = a_mom * est[:, 4:7] + j_rot * phid
         wn = np.linalg.norm(est[:, 4:7], axis=-1, keepdims=True)
@@ -141,11 +131,7 @@ def simulate_turn_est(
         energy += np.sum(u * u, axis=-1) * h
         np.maximum(max_u, np.abs(u), out=max_u)
         np.maximum(max_rotor, np.max(np.abs(state[:, PHI]), axis=-1), out=max_rotor)
-        eta = error_quaternion(state[:, Q], q_t)
-        inside = (error_angle_rad(eta) <= cfg.settle_angle_rad) & (
-            np.linalg.norm(state[:, X], axis=-1) <= cfg.settle_rate_radps
-        )
-        last_out = np.where(inside, last_out, (k + 1) * h)
+        last_out = settle_update(state, q_t, cfg, last_out, (k + 1) * h)
 
     settled = last_out < n * h
     eta = error_quaternion(state[:, Q], q_t)

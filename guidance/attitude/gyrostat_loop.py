@@ -92,6 +92,50 @@ def _measurement_noise(rng: np.random.Generator, n: int, cfg: LoopConfig) -> Arr
     return rng.uniform(-1.0, 1.0, size=(n, 9)) * bounds
 
 
+def disturbance_draws(disturbance: str, rngs, n: int, beta: NDArray) -> dict[str, NDArray]:
+    """Per-run disturbance draws: a sequence (``random``) or a vertex (``constant``)."""
+    if disturbance == "random":
+        return {"seq": np.stack([g.uniform(-1.0, 1.0, size=(n, 3)) for g in rngs]) * beta}
+    if disturbance == "constant":
+        return {"const": np.stack([g.choice([-1.0, 1.0], size=3) for g in rngs]) * beta}
+    return {}
+
+
+def disturbance_at(
+    disturbance: str, k: int, draws: dict[str, NDArray], gyro: Gyrostat, state: NDArray,
+    q_t: NDArray, u_star: NDArray, law: GameLaw, beta: NDArray,
+) -> NDArray:  # fmt: skip
+    """The disturbance torque of step ``k`` (the adversary reads the true state)."""
+    if disturbance == "none":
+        return np.zeros((state.shape[0], 3))
+    if disturbance == "random":
+        return draws["seq"][:, k]
+    if disturbance == "constant":
+        return draws["const"]
+    eta = error_quaternion(state[:, Q], q_t)
+    return adversarial_disturbance_Nm(gyro, eta, eta_v_rate(eta, state[:, X]), u_star, law, beta)
+
+
+def game_torques(
+    gyro: Gyrostat, law: GameLaw, q_hat: NDArray, x_hat: NDArray, phid_hat: NDArray, q_t: NDArray
+) -> tuple[NDArray, NDArray]:
+    """``(u*, u)`` from an estimated state: the game law and the linearising torques (2.1)."""
+    eta_hat = error_quaternion(q_hat, q_t)
+    u_star = law.u_star(eta_hat[:, :3], eta_v_rate(eta_hat, x_hat))
+    return u_star, linearising_torque(gyro, eta_hat, x_hat, phid_hat, u_star)
+
+
+def settle_update(
+    state: NDArray, q_t: NDArray, cfg: LoopConfig, last_out: NDArray, t_s: float
+) -> NDArray:
+    """Time of the last sample outside the settle tolerances (per run)."""
+    eta = error_quaternion(state[:, Q], q_t)
+    inside = (error_angle_rad(eta) <= cfg.settle_angle_rad) & (
+        np.linalg.norm(state[:, X], axis=-1) <= cfg.settle_rate_radps
+    )
+    return np.where(inside, last_out, t_s)
+
+
 def simulate_turn(
     gyro: Gyrostat,
     law: GameLaw,
@@ -127,10 +171,7 @@ def simulate_turn(
     if noise is not None:  # attitude error as a small body-frame rotation, precomputed
         noise_q = Rotation.from_rotvec(noise[..., 0:3].reshape(-1, 3)).as_quat()
         noise_q = noise_q.reshape(runs, n, 4)
-    if disturbance == "random":
-        v_seq = np.stack([g.uniform(-1.0, 1.0, size=(n, 3)) for g in rngs]) * beta
-    elif disturbance == "constant":
-        v_const = np.stack([g.choice([-1.0, 1.0], size=3) for g in rngs]) * beta
+    draws = disturbance_draws(disturbance, rngs, n, beta)
 
     estimator = PerfectEstimator()
     belief = PointBelief(state)
@@ -151,22 +192,8 @@ def simulate_turn(
             meas[:, PHI] += noise[:, k, 6:9]
         belief = estimator.update(belief, meas)
         est = belief.centre()
-        eta_hat = error_quaternion(est[:, Q], q_t)
-        deta_hat = eta_v_rate(eta_hat, est[:, X])
-        u_star = law.u_star(eta_hat[:, :3], deta_hat)
-        u = linearising_torque(gyro, eta_hat, est[:, X], est[:, PHI], u_star)
-
-        if disturbance == "none":
-            v = np.zeros((runs, 3))
-        elif disturbance == "random":
-            v = v_seq[:, k]
-        elif disturbance == "constant":
-            v = v_const
-        else:
-            eta = error_quaternion(state[:, Q], q_t)
-            v = adversarial_disturbance_Nm(
-                gyro, eta, eta_v_rate(eta, state[:, X]), u_star, law, beta
-            )
+        u_star, u = game_torques(gyro, law, est[:, Q], est[:, X], est[:, PHI], q_t)
+        v = disturbance_at(disturbance, k, draws, gyro, state, q_t, u_star, law, beta)
 
         for _ in range(cfg.substeps):
             state = rk4_step(gyro, state, u, v, dt)
@@ -175,11 +202,7 @@ def simulate_turn(
         energy += np.sum(u * u, axis=-1) * h
         np.maximum(max_u, np.abs(u), out=max_u)
         np.maximum(max_rotor, np.max(np.abs(state[:, PHI]), axis=-1), out=max_rotor)
-        eta = error_quaternion(state[:, Q], q_t)
-        inside = (error_angle_rad(eta) <= cfg.settle_angle_rad) & (
-            np.linalg.norm(state[:, X], axis=-1) <= cfg.settle_rate_radps
-        )
-        last_out = np.where(inside, last_out, (k + 1) * h)
+        last_out = settle_update(state, q_t, cfg, last_out, (k + 1) * h)
         if record:
             states[:, k + 1] = state
             rec_u[:, k], rec_us[:, k], rec_v[:, k] = u, u_star, v
