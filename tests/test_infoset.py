@@ -221,7 +221,7 @@ noise_modes = st.sampled_from(["uniform", "bounds", "bias_high", "bias_low"])
 v_modes = st.sampled_from(["uniform", "bounds", "zero"])
 
 
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(
     y=st.floats(*B_Y),
     vy=st.floats(*D_VY),
@@ -249,7 +249,7 @@ def test_slab_set_contains_truth_under_admissible_noise_seed003_guarantee(
     assert np.ptp(w1) < 0.25 * np.ptp(w0)
 
 
-@settings(max_examples=5, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(
     y=st.floats(*B_Y),
     vy=st.floats(*D_VY),
