@@ -112,6 +112,10 @@ def run_experiment(
 ) -> pd.DataFrame:
     """Run (or complete) an experiment and return its per-run table."""
     path = results_path(out_dir, sc, estimator, noise, seed)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
     meta = {"scenario": sc.to_dict(), "estimator": estimator, "noise": noise, "seed": seed}
     meta_path = path.with_suffix(".json")
     rows: list[dict[str, Any]] = []

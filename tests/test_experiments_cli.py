@@ -115,6 +115,7 @@ def test_bad_scenario_input_exits_2_with_one_line(tmp_path, capsys, case):
         ["intercept", str(FIG3), "--estimator", "kalman9"],
         ["intercept", str(FIG3), "--runs", "0"],
         ["compare", str(FIG3), "--estimators", "infoset,foo"],
+        ["intercept", str(FIG3), "--out", "/proc/no/such/folder"],
         ["nonsense"],
     ],
 )
