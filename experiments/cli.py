@@ -96,6 +96,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # an output or input path the system refuses
+        where = f" ({exc.filename})" if exc.filename else ""
+        print(f"{parser.prog} {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"{parser.prog} {args.command}: interrupted; rerun to resume", file=sys.stderr)
         return 130

@@ -116,6 +116,7 @@ def test_bad_scenario_input_exits_2_with_one_line(tmp_path, capsys, case):
         ["intercept", str(FIG3), "--runs", "0"],
         ["compare", str(FIG3), "--estimators", "infoset,foo"],
         ["intercept", str(FIG3), "--out", "/proc/no/such/folder"],
+        ["attitude", str(ROOT / "data/scenarios/gyrostat_game.toml"), "--out", "/proc/no/such"],
         ["nonsense"],
     ],
 )
