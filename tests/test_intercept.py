@@ -117,3 +117,52 @@ def test_game_range_always_contains_the_truth(d, xw):
     assert abs(d_m - d) <= b * d * (1 + 1e-12)
     if abs(xw - d) <= b * min(d, xw) * 0.99:
         assert abs(d_m - xw) <= b * xw * (1 + 1e-12)
+
+
+SHORT_ENGAGEMENT = """
+name = "short_property"
+[model]
+nominal_range_km = 800.0
+[estimator]
+x_km = [700.0, 900.0]
+n_sections = 9
+closing_speed_kmps = [57.5, 58.5]
+[truth]                    # within the guidance's authority: the small-angle regime
+x_km = [700.0, 900.0]
+y_km = [-1.0, 1.0]
+z_km = [-1.0, 1.0]
+vy_kmps = [-0.05, 0.05]
+vz_kmps = [-0.05, 0.05]
+vx_kmps = [-58.5, -57.5]
+[range_finder]
+enabled = {range}
+[guidance]
+lateral = true
+vertical = {vertical}
+"""
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    noise=st.sampled_from(["random", "game"]),
+    range_on=st.booleans(),
+    vertical=st.booleans(),
+)
+def test_full_engagement_never_loses_the_truth(tmp_path_factory, seed, noise, range_on, vertical):
+    """The guarantee in the full simulation (SPEC 1.4): two-body truth off the section
+    grid with any closing speed in the interval, random or adversarial bearings (and
+    ranges), guided impulses: the truth is inside the set at every checked step and the
+    set never becomes empty. The truth box keeps the engagement within the impulses'
+    authority: when guidance saturates and the line of sight swings by tenths of a
+    radian, the auxiliary model's nu no longer covers the neglected nonlinear terms
+    (a 9 km offset at 800 km does that: miss 6.8 km, one step outside)."""
+    from experiments.engagement import run_engagement
+    from experiments.intercept_scenario import load_scenario
+
+    p = tmp_path_factory.mktemp("sc") / "short.toml"
+    text = SHORT_ENGAGEMENT.format(range=str(range_on).lower(), vertical=str(vertical).lower())
+    p.write_text(text)
+    res = run_engagement(load_scenario(p), "infoset", noise, np.random.default_rng(seed))
+    assert res.checked_steps > 20
+    assert res.truth_outside == 0 and res.contradictions == 0
