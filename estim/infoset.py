@@ -67,9 +67,6 @@ FloatArray = NDArray[np.float64]
 #: relative outward margin of bearing strips (outward rounding, ~1e-13 rad)
 STRIP_MARGIN = 1.0e-9
 
-#: relative margin on the lower range bound: x = d cos(angle) <= d, with off-axis
-#: angles below 0.014 rad (1 - cos = 1e-4); keeps the truth's x inside the interval
-RANGE_COS_MARGIN = 1.0e-4
 
 
 def _frozen(a: ArrayLike) -> FloatArray:
@@ -354,7 +351,8 @@ class InformationSetEstimator(Estimator[InformationSet]):
 
     def _update_range(self, belief: InformationSet, range_m: float) -> InformationSet:
         b = self.model.range_rel_bound
-        lo = range_m / (1.0 + b) * (1.0 - RANGE_COS_MARGIN)
+        # the sections are in x = d cos(off-axis angle), not in the measured range d
+        lo = range_m / (1.0 + b) * np.cos(self.model.max_off_axis_rad)
         hi = range_m / (1.0 - b) * (1.0 + STRIP_MARGIN)
         if self.sections == "points":
             inside = (belief.x_lo_m >= lo) & (belief.x_hi_m <= hi)

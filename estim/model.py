@@ -107,6 +107,9 @@ class ChannelModel:
     bearing_bound: BearingBound = field(default_factory=BearingBound)
     range_rel_bound: float = 0.05
     eps_m: float = 5.0e3
+    #: bound on the line of sight's total off-axis angle (both channels): the range
+    #: finder measures d, the sections are in x = d cos(angle) >= d cos(max_off_axis)
+    max_off_axis_rad: float = 0.1
 
     def __post_init__(self) -> None:
         if not self.closing_speed_mps > 0:
@@ -117,6 +120,8 @@ class ChannelModel:
             raise ValueError("range_rel_bound must be in (0, 1)")
         if not self.eps_m > 0:
             raise ValueError("eps_m must be positive")
+        if not 0 <= self.max_off_axis_rad < np.pi / 2:
+            raise ValueError("max_off_axis_rad must be in [0, pi/2)")
 
     @property
     def e(self) -> float:

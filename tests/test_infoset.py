@@ -129,7 +129,7 @@ def test_range_update_intersects_intervals():
     s = SLABS.initial(B_Y, D_VY, B_X)
     d_m = 5801.3e3
     u = SLABS.update(s, Range(d_m))
-    lo, hi = d_m / 1.05 * (1 - 1e-4), d_m / 0.95
+    lo, hi = d_m / 1.05 * np.cos(MODEL.max_off_axis_rad), d_m / 0.95
     assert u.x_lo_m.min() == pytest.approx(max(lo, B_X[0]))
     assert u.x_hi_m.max() == pytest.approx(min(hi, B_X[1]), rel=1e-8)
     assert u.n_sections == np.sum((s.x_hi_m >= lo) & (s.x_lo_m <= hi))
