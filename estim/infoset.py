@@ -68,7 +68,6 @@ FloatArray = NDArray[np.float64]
 STRIP_MARGIN = 1.0e-9
 
 
-
 def _frozen(a: ArrayLike) -> FloatArray:
     arr = np.array(a, dtype=float)
     arr.setflags(write=False)
