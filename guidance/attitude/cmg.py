@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from guidance.attitude.plant import RigidBody
+from guidance.attitude.plant import RigidBody, attitude_rhs
 
 #: Seed 000, section 4: initial precession angles of the six gyrodines, degrees.
 RESURS_P_BETA0_DEG = (315.0, 225.0, 315.0, 225.0, 315.0, 225.0)
@@ -166,32 +166,6 @@ class CmgCluster:
         return beta_next, delivered, sing0 or sing1
 
 
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
-def plant_rhs(
-    body: RigidBody,
-    x: NDArray[np.float64],
-    torque_Nm: NDArray[np.float64],
-    ext_torque_Nm: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Same field as ``plant.attitude_rhs`` (tests compare them), without ``np.cross``'s
-    overhead: ``J w' = M_ext + M_u - w x (J w + h)``, ``h' = -M_u``, ``q' = q (x) (w, 0) / 2``.
-    """
-    q, w = x[0:4], x[4:7]
-    dw = body.inertia_inv @ (ext_torque_Nm + torque_Nm - _cross(w, body.inertia_kgm2 @ w + x[7:10]))
-    dqv = 0.5 * (q[3] * w + _cross(q[0:3], w))
-    out = np.empty(10)
-    out[0:3] = dqv
-    out[3] = -0.5 * float(q[0:3] @ w)
-    out[4:7] = dw
-    out[7:10] = -torque_Nm
-    return out
-
-
 def rk4_step(
     body: RigidBody,
     x: NDArray[np.float64],
@@ -205,10 +179,10 @@ def rk4_step(
     ``plant.propagate`` (DOP853) for the 3000-step turns; tests compare the two.
     """
     ext = np.zeros(3) if ext_torque_Nm is None else ext_torque_Nm
-    k1 = plant_rhs(body, x, torque_Nm, ext)
-    k2 = plant_rhs(body, x + 0.5 * dt_s * k1, torque_Nm, ext)
-    k3 = plant_rhs(body, x + 0.5 * dt_s * k2, torque_Nm, ext)
-    k4 = plant_rhs(body, x + dt_s * k3, torque_Nm, ext)
+    k1 = attitude_rhs(body, x, torque_Nm, ext)
+    k2 = attitude_rhs(body, x + 0.5 * dt_s * k1, torque_Nm, ext)
+    k3 = attitude_rhs(body, x + 0.5 * dt_s * k2, torque_Nm, ext)
+    k4 = attitude_rhs(body, x + dt_s * k3, torque_Nm, ext)
     out = x + dt_s / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     out[0:4] /= np.linalg.norm(out[0:4])
     return out

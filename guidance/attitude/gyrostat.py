@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from estim.attitude_model import cross  # noqa: F401 - re-exported
+
 Array = NDArray[np.float64]
 
 #: State vector layout: quaternion (4, scalar last), body rates x (3), rotor rates (3).
@@ -69,15 +71,6 @@ class Gyrostat:
     def body_moments_kgm2(self) -> Array:
         """``A_i - J_i``, the coefficients of ``dx_i/dt`` in (1.1)."""
         return self.A_kgm2 - self.rotor_J_kgm2
-
-
-def cross(a: Array, b: Array) -> Array:
-    """Cross product over the last axis (explicit; faster than np.cross on small batches)."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
 
 
 def quat_mul(p: Array, q: Array) -> Array:

@@ -21,6 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from estim.attitude_model import cross
+
 
 def _frozen(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
     arr = np.array(a, dtype=float)
@@ -91,7 +93,7 @@ class AttitudeState:
 def quaternion_rate(q: NDArray[np.float64], w_radps: NDArray[np.float64]) -> NDArray[np.float64]:
     """dq/dt for a scalar-last quaternion and body rates (2 dq_v = q4 w + q_v x w)."""
     qv, q4 = q[:3], q[3]
-    dqv = 0.5 * (q4 * w_radps + np.cross(qv, w_radps))
+    dqv = 0.5 * (q4 * w_radps + cross(qv, w_radps))
     dq4 = -0.5 * float(qv @ w_radps)
     return np.concatenate([dqv, [dq4]])
 
@@ -105,7 +107,7 @@ def attitude_rhs(
     """Right-hand side of the plant for the state vector ``(q, w, h)``."""
     q, w, h = x[0:4], x[4:7], x[7:10]
     jw = body.inertia_kgm2 @ w
-    dw = body.inertia_inv @ (ext_torque_Nm + torque_Nm - np.cross(w, jw + h))
+    dw = body.inertia_inv @ (ext_torque_Nm + torque_Nm - cross(w, jw + h))
     return np.concatenate([quaternion_rate(q, w), dw, -torque_Nm])
 
 

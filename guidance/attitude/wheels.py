@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from estim.attitude_model import cross  # noqa: F401 - re-exported
 from guidance.attitude.plant import RigidBody
 
 FloatArray = NDArray[np.float64]
@@ -72,13 +73,6 @@ class ReactionWheels:
             lo = np.maximum(lo, np.minimum((h - self.momentum_max_Nms) / period_s, 0.0))
             hi = np.minimum(hi, np.maximum((h + self.momentum_max_Nms) / period_s, 0.0))
         return np.clip(m, lo, hi)
-
-
-def cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a x b`` over the last axis (3); ``np.cross`` costs ~40 us per call on small arrays."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def quaternion_rate_batch(q: FloatArray, w: FloatArray) -> FloatArray:
