@@ -8,6 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 from scipy.linalg import expm, null_space
 
 from experiments.attitude_cmg import lower_bound_energy_N2m2s, setup_from_scenario, simulate_turn
@@ -182,6 +183,66 @@ def test_energy_turn_errors_within_seed_tolerance_at_300s(energy_turn):
     setup, res = energy_turn
     k = setup.n_turn_steps
     assert res.angle_deg[k] <= 0.2 and res.rate_norm_degps[k] <= 0.02
+
+
+def _linear_turn_error_deg(config: EnergySavingConfig, n_steps: int) -> NDArray[np.float64]:
+    """Principal error angle (deg) of the linear loop (3.9) + law, perfect measurements.
+
+    The total momentum is zero (gyrodines start balanced), so F = 0 and A_i, B_i are
+    constant: the double integrator the seed linearises to.
+    """
+    a, b = given_system(J_INV, np.zeros(3), config.dt_s)
+    ctl = EnergySavingController(config)
+    x = X0.copy()
+    state = EnergySavingState.initial(config, x)
+    out = np.empty(n_steps + 1)
+    out[0] = np.linalg.norm(x[:3])
+    for i in range(n_steps):
+        x = a @ x + b @ state.u_Nm
+        state, _ = ctl.update(state, a, b, x)
+        out[i + 1] = np.linalg.norm(x[:3])
+    return np.degrees(out)
+
+
+@pytest.mark.parametrize(
+    ("which", "factor"),
+    [
+        *[(w, f) for w in ("state_var", "control_var0_N2m2", "meas_var") for f in (1e-2, 1e2)],
+        ("degrees", (np.pi / 180.0) ** 2),
+    ],
+)
+def test_seed_000_accuracy_at_300s_is_set_by_printed_f1_f2_not_by_covariances(which, factor):
+    """Why the xfail above is the seed's data, not our tuning (seed section 4, eq. 4.6).
+
+    The law makes X follow the auxiliary system; where X is at 300 s is fixed by C_i
+    (f1_i, f2_i) and D_i = -B_i. Scaling K_X and K_xi, K_U0 or K_eps by 1e-2 or 1e2, or
+    reading the state in degrees (K_X, K_xi, K_eps divided by (180/pi)^2), moves the
+    300-s error by under 2 %: it stays ~0.39 deg, twice the seed's 0.2 deg, and 0.2 deg
+    is first reached after 310 s in every case.
+    """
+    base = _linear_turn_error_deg(CONFIG, 3300)
+    if which == "degrees":
+        cfg = dataclasses.replace(
+            CONFIG,
+            state_var=tuple(np.multiply(CONFIG.state_var, factor)),
+            aux_var=tuple(np.multiply(CONFIG.aux_var, factor)),
+            meas_var=tuple(np.multiply(CONFIG.meas_var, factor)),
+        )
+    elif which == "state_var":
+        cfg = dataclasses.replace(
+            CONFIG,
+            state_var=tuple(np.multiply(CONFIG.state_var, factor)),
+            aux_var=tuple(np.multiply(CONFIG.aux_var, factor)),
+        )
+    elif which == "meas_var":
+        cfg = dataclasses.replace(CONFIG, meas_var=tuple(np.multiply(CONFIG.meas_var, factor)))
+    else:
+        cfg = dataclasses.replace(CONFIG, control_var0_N2m2=CONFIG.control_var0_N2m2 * factor)
+    err = _linear_turn_error_deg(cfg, 3300)
+    assert err[3000] == pytest.approx(base[3000], rel=0.02)
+    assert err[3000] > 0.35
+    first_within = np.flatnonzero(err <= 0.2)[0] * CONFIG.dt_s
+    assert first_within > 310.0
 
 
 def test_energy_turn_gyro_momentum_returns_to_zero(energy_turn):
