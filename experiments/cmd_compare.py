@@ -17,7 +17,8 @@ import pandas as pd
 from experiments import plots
 from experiments.cmd_fig5 import miss_floor_m
 from experiments.cmd_intercept import add_common, resolve
-from experiments.engagement import ESTIMATORS, NOISES
+from experiments.engagement import ESTIMATORS
+from experiments.noise import NOISES
 from experiments.report import summary_markdown, write_tables, write_text
 from experiments.runner import run_experiment, summarise
 
@@ -38,7 +39,12 @@ def _list_of(allowed):
 def add_arguments(p) -> None:
     add_common(p)
     p.add_argument("--estimators", type=_list_of(ESTIMATORS), default=list(ESTIMATORS))
-    p.add_argument("--noise", type=_list_of(NOISES), default=list(NOISES))
+    p.add_argument(
+        "--noise",
+        type=_list_of(NOISES),
+        default=["random", "game"],
+        help=f"comma-separated, from {','.join(NOISES)} (default: random,game)",
+    )
 
 
 def run(args) -> dict[str, Any]:

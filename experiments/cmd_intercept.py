@@ -7,9 +7,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from experiments.engagement import ESTIMATORS, NOISES
+from experiments.engagement import ESTIMATORS
 from experiments.errors import InputError
 from experiments.intercept_scenario import load_scenario
+from experiments.noise import NOISES
 from experiments.runner import run_experiment, summarise
 
 

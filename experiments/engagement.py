@@ -27,13 +27,12 @@ from estim.infoset import InformationSetEstimator
 from estim.model import Bearing, BearingBound, ChannelModel, Range
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
-from experiments.noise import GameNoise, RandomNoise
+from experiments.noise import NOISES, BiasNoise, GameNoise, RandomNoise
 from experiments.pointing import PointingCoupling
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from guidance.intercept.truth import TwoBodyTruth
 
 ESTIMATORS = ("infoset", "ekf", "ukf")
-NOISES = ("random", "game")
 CHANNELS = ("lateral", "vertical")
 
 
@@ -94,6 +93,8 @@ def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels,
     sensor = sensor or model
     if name == "random":
         return RandomNoise(sensor, rng)
+    if name == "bias":
+        return BiasNoise(sensor, rng, len(channels))
     if name == "game":
         est = infoset_estimator(sc, model)
         sets = []

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from experiments.errors import InputError
+from experiments.noise import NOISES
 from experiments.schema import Bool, Choice, Interval, Num, Str, load_toml, validate_table
 
 POS = Num(0.0, open_lo=True)
@@ -62,7 +63,7 @@ GUIDANCE_RULES = {
 EXPERIMENT_RULES = {
     "runs": Num(1, 10**7, integer=True),
     "seed": Num(0, 2**63 - 1, integer=True),
-    "noise": Choice(("random", "game")),
+    "noise": Choice(NOISES),
     "estimator": Choice(("infoset", "ekf", "ukf")),
 }
 REFERENCE_RULES = {

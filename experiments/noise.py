@@ -2,6 +2,11 @@
 
 ``random``: every error uniform in its admissible interval.
 
+``bias``: every error held at its bound (a hair inside) with a sign drawn once per
+run and channel (SPEC 1.6, "bias at the bound"): bounded, admissible, and as far
+from zero-mean white noise as an error can be -- the case a Kalman filter's
+``R = a^2/3`` underestimates by a factor of three in variance and never averages out.
+
 ``game``: the adversary of seed 003 section 6. It keeps its *own* information
 set ``I_-`` of every channel (built from the same a-priori boxes, independent of
 the pursuer's estimator, updated with the measurements it issues and the
@@ -31,6 +36,9 @@ import numpy as np
 
 from estim.infoset import InformationSet, InformationSetEstimator
 from estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
+
+#: noise kinds of the intercept (``random`` and ``game`` are SPEC 1.6's required two)
+NOISES = ("random", "game", "bias")
 
 
 def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -> float:
@@ -77,6 +85,44 @@ class RandomNoise:
     def range(self, range_true_m: float) -> float:
         b = self.model.range_rel_bound
         return float(range_true_m * (1 + self.rng.uniform(-b, b)))
+
+    def observe(self, impulses: Sequence[float | Impulse]) -> None:
+        pass
+
+    def predict(self, dt_s: float) -> None:
+        pass
+
+
+@dataclass
+class BiasNoise:
+    """Errors at the bound with a per-run sign per channel (module docstring).
+
+    The signs are drawn from ``rng`` when the generator is built (the engagement builds
+    it after drawing the truth), one per bearing channel and one for the range.
+    """
+
+    model: ChannelModel
+    rng: np.random.Generator
+    n_channels: int
+    # a hair inside the bound, as for the adversary: the error stays admissible after
+    # rounding, so the set's guarantee applies
+    margin: float = 1e-9
+
+    def __post_init__(self) -> None:
+        if self.n_channels < 1:
+            raise ValueError("n_channels must be at least 1")
+        self.signs = self.rng.choice((-1.0, 1.0), size=self.n_channels)
+        self.range_sign = float(self.rng.choice((-1.0, 1.0)))
+
+    def bearings(self, truth: Sequence[np.ndarray], range_true_m: float) -> list[float]:
+        bound = float(self.model.bearing_bound(range_true_m)) * (1 - self.margin)
+        if len(truth) != self.n_channels:
+            raise ValueError(f"expected {self.n_channels} channels, got {len(truth)}")
+        return [float(t[0] + s * bound) for t, s in zip(truth, self.signs, strict=True)]
+
+    def range(self, range_true_m: float) -> float:
+        b = self.model.range_rel_bound * (1 - self.margin)
+        return float(range_true_m * (1 + self.range_sign * b))
 
     def observe(self, impulses: Sequence[float | Impulse]) -> None:
         pass

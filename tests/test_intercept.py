@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from estim.infoset import InformationSetEstimator
 from estim.model import ChannelModel
-from experiments.noise import game_bearing, game_range
+from experiments.noise import BiasNoise, game_bearing, game_range
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from guidance.intercept.truth import TwoBodyTruth
 
@@ -119,6 +119,28 @@ def test_game_range_always_contains_the_truth(d, xw):
         assert abs(d_m - xw) <= b * xw * (1 + 1e-12)
 
 
+@given(seed=st.integers(0, 2**32 - 1), range_m=st.floats(6e3, 7e6))
+def test_bias_noise_sits_at_the_bound_with_one_sign_per_run_and_channel(seed, range_m):
+    """SPEC 1.6 "bias at the bound": every error is admissible, within 1e-9 of the bound,
+    and keeps the sign drawn for its channel; the same generator seed gives the same signs."""
+    truth = [np.array([1e-3, 0.0, range_m]), np.array([-2e-3, 0.0, range_m])]
+    noise = BiasNoise(MODEL, np.random.default_rng(seed), 2)
+    bound = float(MODEL.bearing_bound(range_m))
+    errs = []
+    for _ in range(3):
+        errs.append(np.subtract(noise.bearings(truth, range_m), [1e-3, -2e-3]))
+        d = noise.range(range_m)
+        rel = (d - range_m) / range_m
+        assert abs(rel) <= MODEL.range_rel_bound
+        assert abs(rel) == pytest.approx(MODEL.range_rel_bound, rel=1e-6)
+    errs = np.array(errs)
+    assert np.all(np.abs(errs) <= bound)
+    np.testing.assert_allclose(np.abs(errs), bound, rtol=1e-6)
+    np.testing.assert_array_equal(np.sign(errs), np.sign(errs[:1]).repeat(3, axis=0))
+    again = BiasNoise(MODEL, np.random.default_rng(seed), 2)
+    np.testing.assert_array_equal(again.signs, noise.signs)
+
+
 SHORT_ENGAGEMENT = """
 name = "short_property"
 [model]
@@ -145,7 +167,7 @@ vertical = {vertical}
 @settings(max_examples=60, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
-    noise=st.sampled_from(["random", "game"]),
+    noise=st.sampled_from(["random", "game", "bias"]),
     range_on=st.booleans(),
     vertical=st.booleans(),
 )
