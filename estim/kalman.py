@@ -63,6 +63,19 @@ Initial belief: the exact first two moments of ``alpha = y/x`` and
 small-angle map with ``c = e``) for ``y, Vy, x, c`` independent and uniform in
 their boxes (variance ``width^2/12``), with the closed-form moments of ``x^-k``.
 
+Range constraint (optional, ``range_constraint=True``; off by default). The
+information set knows a priori that the true range lies in the initial ``x`` box
+moved by the closing-speed interval ``[e_lo, e_hi]``:
+``x(t) in [x_lo - e_hi t, x_hi - e_lo t]``. With the option on the belief carries
+that interval (:attr:`~estim.kalman_belief.GaussianBelief.x_bounds_m`, set by
+:meth:`KalmanChannelEstimator.initial`, moved by every prediction) and a mean whose
+``x`` leaves it is projected back onto the violated bound in the ``P^-1`` metric
+(estimate projection with ``W = P^-1``, Simon & Chia 2002; D. Simon, IET Control
+Theory Appl. 2010): the minimiser of ``(m - mu)^T P^-1 (m - mu)`` subject to
+``m_x = bound`` is ``mu + P[:, x]/P[x, x] (bound - mu_x)``, so the correlated
+``alpha`` and ``r`` move with ``x`` (:func:`project_on_bound`). The covariance is
+left unchanged (:meth:`KalmanChannelEstimator.constrain`).
+
 filterpy objects are mutable: each call builds a fresh filter from the belief's
 ``(mean, cov)`` (copies), runs one filterpy step and returns a new
 :class:`~estim.kalman_belief.GaussianBelief`; no filter is ever stored. The
@@ -122,6 +135,38 @@ def _uniform_moments(lo: float, hi: float) -> tuple[float, float]:
     return mean, mean**2 + (hi - lo) ** 2 / 12.0
 
 
+def project_on_bound(mean, cov, k: int, bound: float) -> FloatArray:
+    """Estimate projection of ``mean`` onto ``{m : m[k] = bound}`` in the ``cov^-1`` metric.
+
+    The minimiser of ``(m - mean)^T cov^-1 (m - mean)`` subject to ``m[k] = bound``
+    (Simon 2010, estimate projection with ``W = P^-1``, one equality row ``D = e_k``):
+    ``mean + cov[:, k]/cov[k, k] (bound - mean[k])``. A zero ``cov[k, k]`` (an exactly
+    known component, hence uncorrelated: ``cov[:, k] = 0``) moves ``mean[k]`` alone.
+
+    Parameters
+    ----------
+    mean : array (n,)
+        Unconstrained mean.
+    cov : array (n, n)
+        Its covariance (positive semi-definite).
+    k : int
+        Index of the constrained component.
+    bound : float
+        Value the component is projected onto (the active bound).
+
+    Returns
+    -------
+    array (n,)
+        The projected mean (a new array).
+    """
+    mean = np.array(mean, dtype=float)
+    cov = np.asarray(cov, dtype=float)
+    if cov[k, k] > 0.0:
+        return mean + cov[:, k] / cov[k, k] * (bound - mean[k])
+    mean[k] = bound
+    return mean
+
+
 @dataclass(frozen=True)
 class KalmanChannelEstimator(Estimator[GaussianBelief]):
     """EKF or UKF of one guidance channel behind the estimator interface.
@@ -138,6 +183,12 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         Second state coordinate: zero-effort miss ``w`` or bearing rate ``omega``.
     ukf_alpha, ukf_beta, ukf_kappa : float
         Van der Merwe sigma-point parameters (UKF only).
+    range_constraint : bool
+        Project the mean's range onto the a-priori interval of the true range
+        (module docstring, :meth:`constrain`); off by default.
+    closing_speed_mps : (float, float) or None
+        Interval ``[e_lo, e_hi]`` of the true closing speed that moves that interval;
+        ``None`` means the nominal ``e`` exactly (as the information set).
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -147,6 +198,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     ukf_alpha: float = 1.0
     ukf_beta: float = 2.0
     ukf_kappa: float = 0.0
+    range_constraint: bool = False
+    closing_speed_mps: tuple[float, float] | None = None
     _points: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -158,6 +211,10 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             raise ValueError("n_sigma must be positive")
         if not (self.ukf_alpha > 0 and 3 + self.ukf_kappa > 0):
             raise ValueError("ukf_alpha must be positive and 3 + ukf_kappa positive")
+        if self.closing_speed_mps is not None:
+            lo, hi = self.closing_speed_mps
+            if not 0 < lo <= hi:
+                raise ValueError("closing_speed_mps must be an interval 0 < lo <= hi")
         # the sigma-point generator holds weights only (never mutated by filterpy);
         # the PSD square root accepts an exactly known direction (zero variance)
         points = MerweScaledSigmaPoints(
@@ -169,10 +226,19 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         )
         object.__setattr__(self, "_points", points)
 
+    @property
+    def speed_interval(self) -> tuple[float, float]:
+        """``[e_lo, e_hi]`` of the true closing speed (``[e, e]`` when not given)."""
+        if self.closing_speed_mps is None:
+            return self.model.e, self.model.e
+        return self.closing_speed_mps
+
     # -- construction ----------------------------------------------------------------
-    def belief(self, mean, cov) -> GaussianBelief:
+    def belief(self, mean, cov, x_bounds_m=None) -> GaussianBelief:
         """A belief in this estimator's coordinates with its ``n_sigma``."""
-        return GaussianBelief(mean, cov, self.n_sigma, self.coords, self.model.e)
+        return GaussianBelief(
+            mean, cov, self.n_sigma, self.coords, self.model.e, x_bounds_m=x_bounds_m
+        )
 
     def initial(
         self,
@@ -185,7 +251,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
 
         ``alpha = y/x``, ``omega = Vy/x + c y/x^2`` or ``w = (Vy x + c y)/e`` with
         ``c = -Vx`` uniform in the ``vx_mps`` box (``c = e`` when it is not given)
-        and ``x`` uniform in ``x_m``; all four independent.
+        and ``x`` uniform in ``x_m``; all four independent. With ``range_constraint``
+        the belief carries ``x_m`` as the interval of the true range.
         """
         (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
         e = self.model.e
@@ -217,7 +284,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         known = np.diag(cov) <= 1e-12 * np.diag(second)
         cov[known, :] = 0.0
         cov[:, known] = 0.0
-        return self.belief(mean, cov)
+        return self.belief(mean, cov, (xa, xb) if self.range_constraint else None)
 
     # -- model pieces ------------------------------------------------------------------
     def step(self, q, dt_s: float) -> FloatArray:
@@ -329,7 +396,13 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             f = self._ukf(belief, fx)
             f.Q = q
             f.predict(dt=dt_s)
-        return replace(belief, mean=f.x, cov=f.P)
+        bounds = belief.x_bounds_m
+        if bounds is not None:  # the true range moves at any speed of the interval
+            e_lo, e_hi = self.speed_interval
+            bounds = (bounds[0] - e_hi * dt_s, bounds[1] - e_lo * dt_s)
+        # the map moves x at the nominal e, inside the interval's speeds, but the
+        # threshold's truncation (and an e outside [e_lo, e_hi]) can push the mean out
+        return self.constrain(replace(belief, mean=f.x, cov=f.P, x_bounds_m=bounds))
 
     def shift(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
         """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``.
@@ -360,7 +433,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             f = self._ukf(belief, fx)
             f.Q = np.zeros((3, 3))
             f.predict(dt=0.0)
-        return replace(belief, mean=f.x, cov=f.P)
+        # x is unchanged by the impulse (the UKF's recombination only to rounding)
+        return self.constrain(replace(belief, mean=f.x, cov=f.P))
 
     def update(self, belief: GaussianBelief, measurement: Bearing | Range) -> GaussianBelief:
         """Kalman update with a bearing (linear) or a range (nonlinear) measurement."""
@@ -403,12 +477,40 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         innovation = float(np.ravel(f.y)[0])
         s_var = float(np.ravel(f.S)[0])
         outlier = innovation**2 > belief.n_sigma**2 * s_var
-        return replace(
-            belief,
-            mean=np.ravel(f.x),
-            cov=f.P,
-            innovation_outliers=belief.innovation_outliers + int(outlier),
+        # the update is where the bearings drag the range estimate (game noise
+        # drives it far under the truth): the constraint acts here
+        return self.constrain(
+            replace(
+                belief,
+                mean=np.ravel(f.x),
+                cov=f.P,
+                innovation_outliers=belief.innovation_outliers + int(outlier),
+            )
         )
+
+    def constrain(self, belief: GaussianBelief) -> GaussianBelief:
+        """Project the mean onto the range interval ``x_bounds_m`` (when it is violated).
+
+        Off (the belief returned as is) unless ``range_constraint`` is set and the
+        belief carries an interval. A mean with ``x`` outside ``[lo, hi]`` moves to
+        the violated bound by :func:`project_on_bound` (the ``P^-1``-metric
+        projection, which also corrects ``alpha`` and ``r`` through their
+        correlation with ``x``). The covariance is kept: the constraint is an
+        inequality and the truth lies *inside* the interval, not on the bound, so the
+        equality projection ``P - P[:, x] P[x, :]/P[x, x]`` (zero variance of ``x``)
+        would claim the range known at the bound and freeze it (no later bearing
+        could move it). Keeping ``P`` is conservative: the interval is convex and
+        holds the truth, so projecting onto it never increases the error in the
+        ``P^-1`` norm (Simon & Chia 2002 show the same for equality constraints).
+        """
+        bounds = belief.x_bounds_m
+        if not self.range_constraint or bounds is None or belief.is_empty:
+            return belief
+        x = float(belief.mean[2])
+        if bounds[0] <= x <= bounds[1]:
+            return belief
+        bound = bounds[0] if x < bounds[0] else bounds[1]
+        return replace(belief, mean=project_on_bound(belief.mean, belief.cov, 2, bound))
 
     # -- helpers -----------------------------------------------------------------------
     def _check(self, belief: GaussianBelief) -> None:

@@ -114,6 +114,10 @@ class GaussianBelief(Belief):
     innovation_outliers : int
         Number of measurements so far whose innovation exceeded ``n_sigma``
         standard deviations (the Kalman filter's analogue of a contradiction).
+    x_bounds_m : (float, float) or None
+        A-priori interval ``[lo, hi]`` of the true range ``x`` at this belief's
+        time (the initial ``x`` box moved by the closing-speed interval), carried
+        for the estimator's optional range constraint; ``None`` when not tracked.
     """
 
     mean: FloatArray
@@ -124,6 +128,7 @@ class GaussianBelief(Belief):
     status: str = "ok"
     contradictions: int = 0
     innovation_outliers: int = 0
+    x_bounds_m: tuple[float, float] | None = None
     _root: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -139,6 +144,11 @@ class GaussianBelief(Belief):
             raise ValueError(f"coords must be one of {COORDS}, got {self.coords!r}")
         if not self.closing_speed_mps > 0:
             raise ValueError("closing_speed_mps must be positive")
+        if self.x_bounds_m is not None:
+            lo, hi = (float(v) for v in self.x_bounds_m)
+            if not lo <= hi:
+                raise ValueError("x_bounds_m must be an interval lo <= hi")
+            object.__setattr__(self, "x_bounds_m", (lo, hi))
         p = 0.5 * (p + p.T)
         if np.any(np.diag(p) < 0):
             raise ValueError("covariance has a negative variance")

@@ -82,7 +82,13 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
             from estim.kalman import KalmanChannelEstimator
         except ImportError:
             raise InputError(f"estimator '{name}' is not available in this version") from None
-        est = KalmanChannelEstimator(model, kind=name, n_sigma=sc.estimator["kalman_sigma"])
+        est = KalmanChannelEstimator(
+            model,
+            kind=name,
+            n_sigma=sc.estimator["kalman_sigma"],
+            range_constraint=sc.estimator["kalman_range_constraint"],
+            closing_speed_mps=tuple(v * 1e3 for v in sc.estimator["closing_speed_kmps"]),
+        )
         return est, est.initial(**boxes)
     raise InputError(f"unknown estimator '{name}' (allowed: {', '.join(ESTIMATORS)})")
 

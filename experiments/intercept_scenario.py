@@ -43,9 +43,17 @@ ESTIMATOR_RULES = {
     "sections": Choice(("slabs", "points")),
     "closing_speed_kmps": Interval(Num(0.1, 100.0)),
     "kalman_sigma": Num(0.5, 10.0),
+    # EKF/UKF: project the range estimate onto [x_lo - e_hi t, x_hi - e_lo t]
+    "kalman_range_constraint": Bool(),
 }
 TRUTH_RULES = dict(ESTIMATOR_RULES)
-for _k in ("n_sections", "sections", "closing_speed_kmps", "kalman_sigma"):
+for _k in (
+    "n_sections",
+    "sections",
+    "closing_speed_kmps",
+    "kalman_sigma",
+    "kalman_range_constraint",
+):
     del TRUTH_RULES[_k]
 RANGE_RULES = {
     "enabled": Bool(),
@@ -108,6 +116,7 @@ DEFAULTS = {
         "sections": "slabs",
         "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
         "kalman_sigma": 3.0,
+        "kalman_range_constraint": False,
     },
     "range_finder": {"enabled": False, "rel_bound": 0.05, "first_s": 1.0, "period_s": 2.0},
     "guidance": {
@@ -179,6 +188,17 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
     )
     for f in TRUTH_RULES:
         _contained(source, tables["truth"][f], tables["estimator"][f], f)
+    if est["kalman_range_constraint"]:
+        # the constraint's interval moves at the closing-speed interval's speeds: it
+        # holds the truth only if every true closing speed -vx lies in that interval
+        closing = tuple(sorted(-v for v in tables["truth"]["vx_kmps"]))
+        lo, hi = est["closing_speed_kmps"]
+        if closing[0] < lo or closing[1] > hi:
+            raise InputError(
+                f"{source}: field 'estimator.closing_speed_kmps' {[lo, hi]} must contain "
+                f"the truth's closing speeds -truth.vx_kmps {list(closing)} when "
+                f"'estimator.kalman_range_constraint' is true (the interval must hold the truth)"
+            )
     m, g = tables["model"], tables["guidance"]
     if g["min_impulse_mps"] > g["max_impulse_mps"]:
         raise InputError(f"{source}: field 'guidance.min_impulse_mps' must be <= max_impulse_mps")

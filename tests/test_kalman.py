@@ -7,6 +7,7 @@ of the n-sigma ellipsoid.
 """
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -333,3 +334,193 @@ def test_one_engagement_on_fig3_runs_with_the_ekf():
     assert 0 <= res.truth_outside <= res.checked_steps
     assert 0 < res.fuel_mps <= sc.guidance["reserve_mps"]
     assert res.miss_m < 8000.0 / 10  # far below the 8 km zero-effort miss
+
+
+# -- optional range constraint (estimate projection) ---------------------------------
+def _kkt_projection(mu, p, k, bound):
+    """argmin (m - mu)^T P^-1 (m - mu) s.t. m_k = bound, from the KKT linear system
+    [[2 P^-1, d], [d^T, 0]] [m, lambda] = [2 P^-1 mu, bound], d = e_k."""
+    n = len(mu)
+    w = np.linalg.inv(p)
+    d = np.eye(n)[k]
+    kkt = np.zeros((n + 1, n + 1))
+    kkt[:n, :n], kkt[:n, n], kkt[n, :n] = 2.0 * w, d, d
+    return np.linalg.solve(kkt, np.append(2.0 * w @ mu, bound))[:n]
+
+
+def test_range_projection_is_the_simon_2010_estimate_projection():
+    """Simon (IET CTA 2010) estimate projection with W = P^-1 and one equality row
+    D = e_k: project_on_bound equals the KKT solution of the constrained weighted
+    least squares and scipy's SLSQP minimiser; the covariance is left unchanged and
+    a mean inside the interval is not touched."""
+    from scipy.optimize import minimize
+
+    from estim.kalman import project_on_bound
+
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        a = rng.normal(size=(3, 3))
+        p = a @ a.T + 0.1 * np.eye(3)
+        mu, k, bound = rng.normal(size=3), int(rng.integers(0, 3)), float(rng.normal())
+        got = project_on_bound(mu, p, k, bound)
+        np.testing.assert_allclose(got, _kkt_projection(mu, p, k, bound), rtol=1e-10, atol=1e-12)
+        assert got[k] == pytest.approx(bound, abs=1e-15)
+    w = np.linalg.inv(p)
+    res = minimize(
+        lambda m: (m - mu) @ w @ (m - mu),
+        mu,
+        jac=lambda m: 2.0 * w @ (m - mu),
+        constraints=[{"type": "eq", "fun": lambda m: m[k] - bound}],
+        method="SLSQP",
+        options={"ftol": 1e-14},
+    )
+    np.testing.assert_allclose(project_on_bound(mu, p, k, bound), res.x, atol=1e-6)
+    # on a filter's belief (units 1e-4 rad .. 6e6 m, alpha and w correlated with x):
+    # the KKT solve in units of the standard deviations
+    est = KalmanChannelEstimator(MODEL, range_constraint=True)
+    b = est.initial(B_Y, D_VY, B_X, D_VX)
+    for i in range(40):
+        b = est.predict(est.update(b, Bearing(2e-4 + 1e-6 * i)), DT)
+    lo = b.x_bounds_m[0]
+    under = replace(b, mean=b.mean - np.array([0.0, 0.0, b.mean[2] - lo + 2e5]))
+    low = est.constrain(under)
+    s = b.std()
+    ref = _kkt_projection(under.mean / s, b.cov / np.outer(s, s), 2, lo / s[2])
+    np.testing.assert_allclose(low.mean / s, ref, rtol=1e-9, atol=1e-9)
+    assert low.mean[2] == lo and np.array_equal(low.cov, b.cov)
+    assert np.all(np.abs(low.mean[:2] - under.mean[:2]) > 1e-3 * s[:2])  # not a bare clip
+    assert est.constrain(b) is b  # inside [x_lo, x_hi]: untouched
+
+
+class _Recording(KalmanChannelEstimator):
+    """The constrained filter, recording every belief it hands out and each projection."""
+
+    log: list = []
+
+    def update(self, belief, measurement):
+        out = super().update(belief, measurement)
+        self.log.append(("update", out))
+        return out
+
+    def shift(self, belief, control):
+        out = super().shift(belief, control)
+        self.log.append(("shift", out))
+        return out
+
+    def predict(self, belief, dt_s):
+        out = super().predict(belief, dt_s)
+        self.log.append(("predict", out))
+        return out
+
+    def constrain(self, belief):
+        out = super().constrain(belief)
+        self.log.append(("projected", out is not belief))
+        return out
+
+
+@pytest.mark.parametrize("kind", ["ekf", "ukf"])
+def test_constrained_range_stays_in_the_moving_interval_that_holds_the_truth(kind, monkeypatch):
+    """One game-noise engagement of kp_fig5_kalman_constrained (where the unconstrained
+    filters' range collapses to tens of km): every belief handed out has its mean's x
+    in [x_lo - e_hi t, x_hi - e_lo t] (checked against that formula), the projection
+    acts, and the interval holds the truth's x at every measurement."""
+    import experiments.engagement as eng
+    from experiments.intercept_scenario import load_scenario
+
+    sc = load_scenario("data/scenarios/kp_fig5_kalman_constrained.toml")
+    e_lo, e_hi = (v * 1e3 for v in sc.estimator["closing_speed_kmps"])
+    x_lo, x_hi = (v * 1e3 for v in sc.estimator["x_km"])
+    truth_x = []
+    built = eng.build_estimator
+
+    def build(name, sc_, model, channel):
+        est, b0 = built(name, sc_, model, channel)
+        assert est.range_constraint and b0.x_bounds_m == (x_lo, x_hi)
+        fields = {f: getattr(est, f) for f in ("model", "kind", "n_sigma", "coords")}
+        return _Recording(**fields, range_constraint=True, closing_speed_mps=(e_lo, e_hi)), b0
+
+    real_noise = eng.build_noise
+
+    def noise(*args, **kw):
+        gen = real_noise(*args, **kw)
+        bearings = gen.bearings
+
+        def recorded(truth, range_m):
+            truth_x.append(float(truth[0][2]))
+            return bearings(truth, range_m)
+
+        gen.bearings = recorded
+        return gen
+
+    _Recording.log = []
+    monkeypatch.setattr(eng, "build_estimator", build)
+    monkeypatch.setattr(eng, "build_noise", noise)
+    eng.run_engagement(sc, kind, "game", np.random.default_rng(1))
+    log = _Recording.log
+    assert any(v for tag, v in log if tag == "projected")  # the constraint acted
+    beliefs = [(tag, b) for tag, b in log if tag != "projected" and not b.is_empty]
+    n_pred = n_upd = 0
+    for tag, b in beliefs:
+        n_pred += tag == "predict"
+        t = n_pred * sc.model["dt_s"]
+        lo, hi = b.x_bounds_m
+        assert lo == pytest.approx(x_lo - e_hi * t, rel=1e-12)
+        assert hi == pytest.approx(x_hi - e_lo * t, rel=1e-12)
+        assert lo <= b.mean[2] <= hi
+        if tag == "update":
+            assert lo <= truth_x[n_upd] <= hi
+            n_upd += 1
+    assert n_upd == len(truth_x) > 100
+
+
+@pytest.mark.parametrize("kind", ["ekf", "ukf"])
+def test_range_constraint_off_reproduces_the_unconstrained_filter(kind):
+    """Default off: no interval in the beliefs and the means and variances of the code
+    before the option (recorded on this fixed sequence); on but never active: the same
+    beliefs bit for bit."""
+    golden = {
+        "ekf": (
+            [2.0620513258444884e-04, 3.3080256419098059e03, 4.0910557447259934e06],
+            [7.6571288794937086e-10, 3.3247356265314633e05, 3.2336268762094507e09],
+        ),
+        "ukf": (
+            [2.0622074115217323e-04, 3.3076883195844152e03, 4.0910585167751876e06],
+            [7.6571534958136015e-10, 3.3247420947183541e05, 3.2336245777903204e09],
+        ),
+    }
+    out = []
+    for on, speeds in ((False, None), (True, (40e3, 80e3))):
+        est = KalmanChannelEstimator(
+            MODEL, kind=kind, range_constraint=on, closing_speed_mps=speeds
+        )
+        b = est.initial(B_Y, D_VY, B_X, D_VX)
+        rng = np.random.default_rng(11)
+        for i in range(60):
+            b = est.update(b, Bearing(rng.normal(2e-4 * i / 60, 1e-4)))
+            if i % 10 == 3:
+                b = est.update(b, Range(rng.normal(5.8e6 - 29e3 * i, 1e5)))
+            b = est.shift(b, 2.0 if i % 5 == 0 else 0.0)
+            b = est.predict(b, DT)
+            assert (b.x_bounds_m is None) == (not on)
+        out.append(b)
+    off, wide = out
+    mean, var = golden[kind]
+    np.testing.assert_allclose(off.mean, mean, rtol=1e-9)
+    np.testing.assert_allclose(np.diag(off.cov), var, rtol=1e-9)
+    assert np.array_equal(off.mean, wide.mean) and np.array_equal(off.cov, wide.cov)
+
+
+def test_scenario_key_kalman_range_constraint_is_validated():
+    from experiments.errors import InputError
+    from experiments.intercept_scenario import parse_scenario
+
+    assert parse_scenario({}).estimator["kalman_range_constraint"] is False
+    on = {"estimator": {"kalman_range_constraint": True, "closing_speed_kmps": [57.0, 59.0]}}
+    assert parse_scenario(on).estimator["kalman_range_constraint"] is True
+    with pytest.raises(InputError, match="estimator.kalman_range_constraint' must be true or"):
+        parse_scenario({"estimator": {"kalman_range_constraint": 1}})
+    with pytest.raises(InputError, match="unknown key 'truth.kalman_range_constraint'"):
+        parse_scenario({"truth": {"kalman_range_constraint": True}})
+    # the default truth's vx box [-59, -57] km/s is not covered by closing speed [58, 58]
+    with pytest.raises(InputError, match="must contain the truth's closing speeds"):
+        parse_scenario({"estimator": {"kalman_range_constraint": True}})
