@@ -65,7 +65,10 @@ point sections keep the seed's ``nu``.
 An empty intersection means the measurement contradicts the model: the update is
 rejected (the predicted set is kept), ``contradictions`` is incremented and the
 status becomes ``"contradiction"``; the caller counts it. When every section has
-passed under ``eps`` the set is empty with status ``"terminal"``.
+passed under ``eps`` the set is empty with status ``"terminal"``. When a slab
+set's zero-effort-miss bound exceeds ``DIVERGED_W_PER_X`` times its range (the
+kinematic margin of wide slabs near ``eps`` feeding on itself: the set knows nothing
+any more) the set is emptied with status ``"diverged"``; the caller counts it.
 """
 
 from __future__ import annotations
@@ -87,6 +90,8 @@ FloatArray = NDArray[np.float64]
 STRIP_MARGIN = 1.0e-9
 #: bearing (rad) up to which the slab set's kinematic margin is a bound (~86 deg)
 MAX_BEARING_RAD = 1.5
+#: |w| / x above which a slab set is reported ``"diverged"`` (emptied, not propagated)
+DIVERGED_W_PER_X = 1.0e3
 
 
 def _frozen(a: ArrayLike) -> FloatArray:
@@ -309,6 +314,10 @@ class InformationSetEstimator(Estimator[InformationSet]):
         Outer simplification after each prediction: edges whose removal adds less
         than ``simplify_rel_area`` of a section's area are removed, and sections are
         kept to ``max_vertices`` vertices (conservatively: the set only grows).
+    kinematic_margin : bool
+        Add the bound of the neglected kinematic term to ``nu`` (module docstring;
+        ``"slabs"`` only). Off reproduces the set with the model's ``nu`` alone,
+        which holds the truth only while that term stays under ``nu``.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -319,6 +328,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
     w_scale_m: float = 1.0
     simplify_rel_area: float = 1.0e-6
     max_vertices: int = 16
+    kinematic_margin: bool = True
 
     def __post_init__(self) -> None:
         if self.n_sections < 1:
@@ -487,6 +497,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
         points = self.sections == "points"
         if not points:
             w_abs = np.maximum.reduceat(np.abs(polys.xy[:, 1]), polys.offsets[:-1])
+        if not points and self.kinematic_margin:
             a_abs = np.maximum.reduceat(np.abs(polys.xy[:, 0]), polys.offsets[:-1])
             # the kinematic term the linear model neglects (module docstring)
             nu = nu + kinematic_margin_mps2(
@@ -495,6 +506,15 @@ class InformationSetEstimator(Estimator[InformationSet]):
             )  # fmt: skip
         g_alpha = nu * dt_s**2 / (2.0 * x_lo1) / self.alpha_scale_rad
         g_w = nu * dt_s * (belief.x_hi_m + x_hi1) / (2.0 * self.model.e) / self.w_scale_m
+        if not points and not np.all(
+            (w_abs + g_w) * self.w_scale_m <= DIVERGED_W_PER_X * belief.x_hi_m
+        ):
+            # a zero-effort miss of a thousand ranges (or an overflow): the set says
+            # nothing any more and would overflow in a few steps (wide slabs near
+            # eps, whose nearest states swing at rad/s); reported, not propagated
+            return replace(
+                self._select(belief, np.zeros(belief.n_sections, bool)), status="diverged"
+            )
         if not points:
             # the other shears of the interval, as a horizontal segment
             g_alpha = g_alpha + 0.5 * (c_hi - c_lo) * ratio * w_abs

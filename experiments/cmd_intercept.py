@@ -81,7 +81,8 @@ def render(result: dict[str, Any]) -> str:
             f"  fuel m/s  mean {f['mean']:.1f}  p50 {f['p50']:.1f}  p90 {f['p90']:.1f}  "
             f"max {f['max']:.1f}",
             f"  truth outside belief: {result['truth_outside']} steps; empty set: "
-            f"{result['empty_set']} runs; failures: {result['failures']}",
+            f"{result['empty_set']} runs; diverged: {result['diverged']} runs; "
+            f"failures: {result['failures']}",
             f"  results in {result['out']} ({result['wall_s']:.1f} s)",
         ]
     )

@@ -68,6 +68,7 @@ def infoset_estimator(sc: InterceptScenario, model: ChannelModel) -> Information
         n_sections=e["n_sections"],
         sections=e["sections"],
         closing_speed_mps=tuple(v * 1e3 for v in e["closing_speed_kmps"]),
+        kinematic_margin=e["kinematic_margin"],
     )
 
 

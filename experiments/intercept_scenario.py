@@ -41,6 +41,8 @@ ESTIMATOR_RULES = {
     "vx_kmps": Interval(Num(-100.0, -0.1)),
     "n_sections": Num(2, 400, integer=True),
     "sections": Choice(("slabs", "points")),
+    # slabs: bound the kinematic term the linear model neglects (estim.infoset)
+    "kinematic_margin": Bool(),
     "closing_speed_kmps": Interval(Num(0.1, 100.0)),
     "kalman_sigma": Num(0.5, 10.0),
     # EKF/UKF: project the range estimate onto [x_lo - e_hi t, x_hi - e_lo t]
@@ -50,6 +52,7 @@ TRUTH_RULES = dict(ESTIMATOR_RULES)
 for _k in (
     "n_sections",
     "sections",
+    "kinematic_margin",
     "closing_speed_kmps",
     "kalman_sigma",
     "kalman_range_constraint",
@@ -114,6 +117,7 @@ DEFAULTS = {
         "vx_kmps": (-59.0, -57.0),
         "n_sections": 29,
         "sections": "slabs",
+        "kinematic_margin": True,
         "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
         "kalman_sigma": 3.0,
         "kalman_range_constraint": False,

@@ -79,6 +79,7 @@ def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path):
         out[noise] = json.loads(r.stdout.strip().splitlines()[-1])
         assert out[noise]["truth_outside"] == 0
         assert out[noise]["empty_set"] == 0 and out[noise]["failures"] == 0
+        assert out[noise]["diverged"] == 0
     assert out["random"]["miss_m"]["max"] <= 10.0
     assert 150.0 <= out["random"]["fuel_mps"]["max"] <= 400.0
     assert out["game"]["fuel_mps"]["mean"] > out["random"]["fuel_mps"]["mean"]

@@ -311,6 +311,27 @@ def test_kinematic_margin_bounds_the_exact_neglected_term_of_free_motion(y0, vy,
         assert np.max(np.abs(v)) > bound / 50
 
 
+def test_wide_slab_near_eps_is_reported_diverged_not_overflowed():
+    """A slab reaching eps while spanning hundreds of km holds states that swing at
+    rad/s; their kinematic margin feeds on itself. The set is reported ``"diverged"``
+    (empty, counted by the caller) instead of overflowing to inf/nan; without the
+    margin the same set stays finite (and unguaranteed)."""
+    boxes = ((-1e3, 1e3), (-100.0, 100.0), (40e3, 400e3))
+    statuses = {}
+    for margin in (True, False):
+        est = InformationSetEstimator(
+            MODEL, n_sections=3, closing_speed_mps=(57e3, 59e3), kinematic_margin=margin
+        )
+        s = est.initial(*boxes)
+        for _ in range(12):
+            s = est.predict(s, 0.5)
+            if s.is_empty:
+                break
+            assert np.all(np.isfinite(s.polygons.xy))
+        statuses[margin] = s.status
+    assert statuses == {True: "diverged", False: "ok"}
+
+
 def test_uncertain_impulse_keeps_every_possible_truth():
     """An Impulse(k, dk) widens the set so that any actual impulse in [k-dk, k+dk]
     keeps the truth inside (thrust misalignment from a pointing error)."""
