@@ -282,6 +282,32 @@ def polygon_contains(xy, offsets, index, px, py, tol):
     return False
 
 
+@njit(cache=True)
+def section_abs_max(xy, offsets):
+    """Largest ``|x|`` and ``|y|`` of every polygon (0 for an empty one), one pass."""
+    n = offsets.shape[0] - 1
+    ax, ay = np.zeros(n), np.zeros(n)
+    for i in range(n):
+        for j in range(offsets[i], offsets[i + 1]):
+            ax[i] = max(ax[i], abs(xy[j, 0]))
+            ay[i] = max(ay[i], abs(xy[j, 1]))
+    return ax, ay
+
+
+@njit(cache=True)
+def kinematic_margin(w0, a0, x_min, x_max, dt, e, nu, max_bearing):
+    """Elementwise body of :func:`estim.infoset.kinematic_margin_mps2` (see there)."""
+    n = w0.shape[0]
+    out = np.empty(n)
+    rho_factor = nu * dt / np.cos(max_bearing)
+    for i in range(n):
+        a = min(abs(a0[i]), max_bearing)
+        h = e * abs(w0[i]) / np.cos(a) ** 2 + rho_factor * x_max[i]
+        ag = min(a + h * dt / x_min[i] ** 2, np.pi / 6.0)
+        out[i] = 2.0 * h * h / x_min[i] ** 3 * np.cos(ag) ** 3 * np.sin(ag)
+    return out
+
+
 def warm_up() -> None:
     """Load every kernel (from numba's on-disk cache, or compile) in this process.
 
@@ -296,3 +322,5 @@ def warm_up() -> None:
     predict_sections(xy, off, zero, one, one, True, 1e-6, 16)
     polygon_contains(xy, off, np.zeros(1, dtype=np.int64), 0.5, 0.5, 1e-9)
     dedupe(xy, off)
+    section_abs_max(xy, off)
+    kinematic_margin(one, zero, one, one, 0.5, 1.0, 0.0, 1.5)

@@ -148,15 +148,14 @@ def kinematic_margin_mps2(
     array
         The margin (m/s^2) to add to ``nu`` for each section.
     """
-    w0 = np.abs(np.asarray(w_abs_m, dtype=float))
-    a0 = np.minimum(np.abs(np.asarray(alpha_abs_rad, dtype=float)), MAX_BEARING_RAD)
-    x_min = np.asarray(x_min_m, dtype=float)
-    x_max = np.asarray(x_max_m, dtype=float)
     # rho <= x_max / cos(MAX_BEARING_RAD): crude, but the nu term is ~1e-4 of h0 or
-    # less wherever the margin is not negligible anyway
-    h_max = e_mps * w0 / np.cos(a0) ** 2 + nu_mps2 * dt_s * x_max / np.cos(MAX_BEARING_RAD)
-    a_g = np.minimum(a0 + h_max * dt_s / x_min**2, np.pi / 6.0)
-    return 2.0 * h_max**2 / x_min**3 * np.cos(a_g) ** 3 * np.sin(a_g)
+    # less wherever the margin is not negligible anyway (compiled: one loop)
+    w0, a0, x_min, x_max = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (w_abs_m, alpha_abs_rad, x_min_m, x_max_m))
+    )
+    flat = (np.ravel(v) for v in (w0, a0, x_min, x_max))
+    out = _k.kinematic_margin(*flat, float(dt_s), float(e_mps), float(nu_mps2), MAX_BEARING_RAD)
+    return out.reshape(w0.shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -465,8 +464,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
         half = half + dk * belief.x_hi_m / self.model.e / self.w_scale_m
         if self.sections != "points":
             # the true change is omega += k cos^2(alpha)/x: widen by k sin^2(alpha) x/e
-            polys = belief.polygons
-            a_abs = np.maximum.reduceat(np.abs(polys.xy[:, 0]), polys.offsets[:-1])
+            a_abs, _ = _k.section_abs_max(belief.polygons.xy, belief.polygons.offsets)
             sin2 = np.sin(np.minimum(a_abs * self.alpha_scale_rad, 0.5 * np.pi)) ** 2
             half = half + (abs(k) + dk) * sin2 * belief.x_hi_m / self.model.e / self.w_scale_m
         polys = belief.polygons.shift_band(scale * belief.x_mid_m, half)
@@ -496,13 +494,12 @@ class InformationSetEstimator(Estimator[InformationSet]):
         polys = belief.polygons
         points = self.sections == "points"
         if not points:
-            w_abs = np.maximum.reduceat(np.abs(polys.xy[:, 1]), polys.offsets[:-1])
+            a_abs, w_abs = _k.section_abs_max(polys.xy, polys.offsets)
         if not points and self.kinematic_margin:
-            a_abs = np.maximum.reduceat(np.abs(polys.xy[:, 0]), polys.offsets[:-1])
             # the kinematic term the linear model neglects (module docstring)
-            nu = nu + kinematic_margin_mps2(
+            nu = nu + _k.kinematic_margin(
                 w_abs * self.w_scale_m, a_abs * self.alpha_scale_rad, x_lo1,
-                belief.x_hi_m, dt_s, self.model.e, nu,
+                belief.x_hi_m, dt_s, self.model.e, nu, MAX_BEARING_RAD,
             )  # fmt: skip
         g_alpha = nu * dt_s**2 / (2.0 * x_lo1) / self.alpha_scale_rad
         g_w = nu * dt_s * (belief.x_hi_m + x_hi1) / (2.0 * self.model.e) / self.w_scale_m
