@@ -122,6 +122,83 @@ def minkowski_segment(xy, offsets, gx, gy):
 
 
 @njit(cache=True)
+def _orient_sorted(pts, i, j, k):
+    """Orientation of ``(pts[i], pts[j], pts[k])`` computed with the lowest index first,
+    so that every ordering of the same three points gets exactly the same magnitude
+    (the two chains of the hull then never both keep a nearly collinear point)."""
+    a, b, c = i, j, k
+    sign = 1.0
+    if a > b:
+        a, b = b, a
+        sign = -sign
+    if b > c:
+        b, c = c, b
+        sign = -sign
+    if a > b:
+        a, b = b, a
+        sign = -sign
+    cr = (pts[b, 0] - pts[a, 0]) * (pts[c, 1] - pts[a, 1]) - (pts[b, 1] - pts[a, 1]) * (
+        pts[c, 0] - pts[a, 0]
+    )
+    return sign * cr
+
+
+@njit(cache=True)
+def convex_hulls(xy, offsets):
+    """Convex hull of every polygon's vertices (CCW, collinear points dropped).
+
+    An outer operation (the hull contains the polygon). Rounding can leave a
+    vertex a hair reflex after a shear (a cross product of -1e-11 on a 2e4 scale);
+    the outer simplification would then extend that fold into a visible one, so the
+    prediction takes the hull first (Andrew's monotone chain, insertion sort: a
+    section has tens of vertices at most)."""
+    n = offsets.shape[0] - 1
+    out = np.empty((xy.shape[0], 2))
+    new_off = np.zeros(n + 1, dtype=np.int64)
+    k = 0
+    for i in range(n):
+        s0 = offsets[i]
+        m = offsets[i + 1] - s0
+        pts = xy[s0 : s0 + m].copy()
+        for a in range(1, m):  # sort by (x, y)
+            px, py = pts[a, 0], pts[a, 1]
+            b = a - 1
+            while b >= 0 and (pts[b, 0] > px or (pts[b, 0] == px and pts[b, 1] > py)):
+                pts[b + 1, 0] = pts[b, 0]
+                pts[b + 1, 1] = pts[b, 1]
+                b -= 1
+            pts[b + 1, 0] = px
+            pts[b + 1, 1] = py
+        if m < 3:
+            for a in range(m):
+                out[k, 0] = pts[a, 0]
+                out[k, 1] = pts[a, 1]
+                k += 1
+            new_off[i + 1] = k
+            continue
+        hull = np.empty(2 * m, dtype=np.int64)  # indices into pts
+        h = 0
+        for a in range(m):  # lower chain
+            while h >= 2 and _orient_sorted(pts, hull[h - 2], hull[h - 1], a) <= 0.0:
+                h -= 1
+            hull[h] = a
+            h += 1
+        low = h + 1
+        for a in range(m - 2, -1, -1):  # upper chain
+            while h >= low and _orient_sorted(pts, hull[h - 2], hull[h - 1], a) <= 0.0:
+                h -= 1
+            hull[h] = a
+            h += 1
+        h = max(h - 1, 1)  # the last point repeats the first
+        for a in range(h):
+            out[k, 0] = pts[hull[a], 0]
+            out[k, 1] = pts[hull[a], 1]
+            k += 1
+        new_off[i + 1] = k
+    return out[:k].copy(), new_off
+
+
+@njit(cache=True)
 def simplify(xy, offsets, rel_tol, max_vertices):
     """Outer simplification (see ConvexPolygons.simplify): greedily remove the edge
     whose removal (extending its two neighbours to their intersection) adds the least
@@ -233,7 +310,8 @@ def predict_sections(xy, offsets, shear, ga, gw, points, rel_tol, max_vertices):
     else:
         xy1, off1 = minkowski_segment(moved, offsets, ga, np.zeros(n))
         xy2, off2 = minkowski_segment(xy1, off1, np.zeros(n), gw)
-    return simplify(xy2, off2, rel_tol, max_vertices)
+    xy3, off3 = convex_hulls(xy2, off2)
+    return simplify(xy3, off3, rel_tol, max_vertices)
 
 
 @njit(cache=True)
@@ -323,4 +401,5 @@ def warm_up() -> None:
     polygon_contains(xy, off, np.zeros(1, dtype=np.int64), 0.5, 0.5, 1e-9)
     dedupe(xy, off)
     section_abs_max(xy, off)
+    convex_hulls(xy, off)
     kinematic_margin(one, zero, one, one, 0.5, 1.0, 0.0, 1.5)

@@ -317,6 +317,13 @@ class InformationSetEstimator(Estimator[InformationSet]):
         Add the bound of the neglected kinematic term to ``nu`` (module docstring;
         ``"slabs"`` only). Off reproduces the set with the model's ``nu`` alone,
         which holds the truth only while that term stays under ``nu``.
+    split_ratio, max_sections : float, int
+        ``"slabs"`` only: before each prediction a slab with ``x_hi / x_lo`` above
+        ``split_ratio`` is split into copies over geometric sub-intervals of at most
+        that ratio (the union is unchanged, so nothing is lost), while the set has
+        at most ``max_sections`` sections. Thin slabs keep the link between range
+        and zero-effort miss that a wide slab loses near the target (module
+        docstring); ``split_ratio = inf`` turns splitting off.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -328,6 +335,8 @@ class InformationSetEstimator(Estimator[InformationSet]):
     simplify_rel_area: float = 1.0e-6
     max_vertices: int = 16
     kinematic_margin: bool = True
+    split_ratio: float = 1.5
+    max_sections: int = 128
 
     def __post_init__(self) -> None:
         if self.n_sections < 1:
@@ -342,6 +351,10 @@ class InformationSetEstimator(Estimator[InformationSet]):
             raise ValueError("scales must be positive")
         if self.max_vertices < 4:
             raise ValueError("max_vertices must be >= 4")
+        if not self.split_ratio > 1.0:
+            raise ValueError("split_ratio must be > 1 (inf: no splitting)")
+        if self.max_sections < self.n_sections:
+            raise ValueError("max_sections must be >= n_sections")
 
     @property
     def speed_interval(self) -> tuple[float, float]:
@@ -475,6 +488,8 @@ class InformationSetEstimator(Estimator[InformationSet]):
         segment for the rest of the interval, the disturbance box; threshold at eps."""
         if belief.is_empty:
             return belief
+        if self.sections != "points":
+            belief = self._split(belief)
         e_lo, e_hi = self.speed_interval
         eps = self.model.eps_m
         x_lo1, x_hi1 = belief.x_lo_m - e_hi * dt_s, belief.x_hi_m - e_lo * dt_s
@@ -525,6 +540,34 @@ class InformationSetEstimator(Estimator[InformationSet]):
         return InformationSet._new(belief, x_lo1, x_hi1, ConvexPolygons._make(xy, off))
 
     # -- internals -------------------------------------------------------------------
+    def _split(self, belief: InformationSet) -> InformationSet:
+        """Split wide slabs into geometric pieces (``split_ratio``, ``max_sections``)."""
+        lo_all = np.maximum(belief.x_lo_m, self.model.eps_m)  # no zero range
+        ratio = belief.x_hi_m / lo_all
+        wide = ratio > self.split_ratio
+        if not wide.any() or belief.n_sections >= self.max_sections:
+            return belief
+        pieces = np.ones(belief.n_sections, dtype=np.int64)
+        pieces[wide] = np.ceil(np.log(ratio[wide]) / np.log(self.split_ratio)).astype(np.int64)
+        room = self.max_sections - belief.n_sections
+        extra = pieces - 1
+        if extra.sum() > room:
+            # not enough room: split the sections nearest the target first
+            order = np.argsort(belief.x_lo_m)
+            take = np.minimum(
+                extra[order], np.maximum(room - np.cumsum(extra[order]) + extra[order], 0)
+            )
+            extra[order] = take
+            pieces = extra + 1
+        idx = np.repeat(np.arange(belief.n_sections), pieces)
+        # piece j of k covers x_lo (x_hi/x_lo)^(j/k) .. x_lo (x_hi/x_lo)^((j+1)/k)
+        j = np.arange(idx.size) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+        k = pieces[idx]
+        lo, r = lo_all[idx], ratio[idx]
+        x_lo = np.where(j == 0, belief.x_lo_m[idx], lo * r ** (j / k))
+        x_hi = np.where(j == k - 1, belief.x_hi_m[idx], lo * r ** ((j + 1) / k))
+        return InformationSet._new(belief, x_lo, x_hi, belief.polygons.select(idx))
+
     @staticmethod
     def _select(belief: InformationSet, keep, polygons: ConvexPolygons | None = None):
         polys = (belief.polygons if polygons is None else polygons).select(keep)

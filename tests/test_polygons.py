@@ -129,3 +129,31 @@ def test_all_sections_empty():
     assert not out.nonempty().any()
     assert out.select(out.nonempty()).n == 0
     assert out.minkowski_segment([1.0, 1.0]).n == 4
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(1, 14),
+    scale=st.floats(1e-3, 1e5),
+    collinear=st.booleans(),
+)
+def test_convex_hulls_kernel_equals_shapely_convex_hull(seed, n, scale, collinear):
+    """The prediction's hull step (estim._kernels.convex_hulls) is shapely's convex hull
+    of the vertices, counter-clockwise, also with (nearly) collinear points."""
+    from estim import _kernels as k
+
+    rng = np.random.default_rng(seed)
+    pts = rng.normal(size=(n, 2)) * scale
+    if collinear and n >= 3:
+        pts[1] = 0.5 * (pts[0] + pts[2])
+    xy, off = k.convex_hulls(pts, np.array([0, n], dtype=np.int64))
+    assert off.tolist() == [0, len(xy)]
+    assert _same_set(xy, shapely.MultiPoint(pts).convex_hull)
+    if len(xy) >= 3 and shapely.Polygon(xy).area > 1e-9 * np.abs(xy).max() ** 2:
+        # (a sliver of nearly collinear points has no meaningful orientation)
+        assert shapely.Polygon(xy).exterior.is_ccw
+        d1, d2 = np.roll(xy, -1, 0) - xy, np.roll(xy, -2, 0) - np.roll(xy, -1, 0)
+        cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+        # convex: no reflex vertex left (beyond the rounding of nearly collinear input)
+        assert np.all(cross > -1e-12 * np.abs(xy).max() ** 2)
