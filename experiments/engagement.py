@@ -69,6 +69,7 @@ def infoset_estimator(sc: InterceptScenario, model: ChannelModel) -> Information
         sections=e["sections"],
         closing_speed_mps=tuple(v * 1e3 for v in e["closing_speed_kmps"]),
         kinematic_margin=e["kinematic_margin"],
+        split_ratio=e["split_ratio"],
     )
 
 

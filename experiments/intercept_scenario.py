@@ -43,6 +43,9 @@ ESTIMATOR_RULES = {
     "sections": Choice(("slabs", "points")),
     # slabs: bound the kinematic term the linear model neglects (estim.infoset)
     "kinematic_margin": Bool(),
+    # slabs: split a slab wider than x_hi/x_lo = split_ratio before each prediction
+    # (1e6 turns splitting off in practice)
+    "split_ratio": Num(1.0, 1e6, open_lo=True),
     "closing_speed_kmps": Interval(Num(0.1, 100.0)),
     "kalman_sigma": Num(0.5, 10.0),
     # EKF/UKF: project the range estimate onto [x_lo - e_hi t, x_hi - e_lo t]
@@ -53,6 +56,7 @@ for _k in (
     "n_sections",
     "sections",
     "kinematic_margin",
+    "split_ratio",
     "closing_speed_kmps",
     "kalman_sigma",
     "kalman_range_constraint",
@@ -118,6 +122,7 @@ DEFAULTS = {
         "n_sections": 29,
         "sections": "slabs",
         "kinematic_margin": True,
+        "split_ratio": 1.5,
         "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
         "kalman_sigma": 3.0,
         "kalman_range_constraint": False,

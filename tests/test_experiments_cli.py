@@ -94,6 +94,8 @@ BAD = {
     "bad interval": ("[estimator]\ny_km = [5.0, -5.0]\n", "field 'estimator.y_km'"),
     "truth outside box": ("[truth]\ny_km = [-20.0, 0.0]\n", "must lie inside"),
     "bad toml": ("[model\n", "invalid TOML"),
+    "no split": ("[estimator]\nsplit_ratio = 1.0\n", "field 'estimator.split_ratio' must be"),
+    "margin not bool": ("[estimator]\nkinematic_margin = 1\n", "'estimator.kinematic_margin'"),
 }
 
 
