@@ -390,16 +390,30 @@ def warm_up() -> None:
     """Load every kernel (from numba's on-disk cache, or compile) in this process.
 
     Worker processes forked afterwards inherit the loaded machine code instead of
-    each loading it again (about a second per process)."""
+    each loading it again (about a second per process). Numba compiles one version
+    per argument type and read-only arrays are a type of their own: the set's
+    polygons are read-only, so each kernel is loaded with the argument kinds it
+    meets in use as well as with plain arrays."""
+
+    def ro(a):
+        a = a.copy()
+        a.setflags(write=False)
+        return a
+
     xy = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     off = np.array([0, 4], dtype=np.int64)
     one, zero = np.ones(1), np.zeros(1)
-    clip_slab(xy, off, 0, zero, one)
-    shift_band(xy, off, zero, one)
-    predict_sections(xy, off, zero, one, one, False, 1e-6, 16)
-    predict_sections(xy, off, zero, one, one, True, 1e-6, 16)
-    polygon_contains(xy, off, np.zeros(1, dtype=np.int64), 0.5, 0.5, 1e-9)
-    dedupe(xy, off)
-    section_abs_max(xy, off)
-    convex_hulls(xy, off)
-    kinematic_margin(one, zero, one, one, 0.5, 1.0, 0.0, 1.5)
+    idx = np.zeros(1, dtype=np.int64)
+    for p, o in ((xy, off), (ro(xy), ro(off))):
+        clip_slab(p, o, 0, zero, one)
+        clip_slab(p, o, 0, ro(zero), ro(one))
+        shift_band(p, o, zero, one)
+        minkowski_segment(p, o, zero, one)
+        predict_sections(p, o, zero, one, one, False, 1e-6, 16)
+        predict_sections(p, o, zero, one, one, True, 1e-6, 16)
+        polygon_contains(p, o, idx, 0.5, 0.5, 1e-9)
+        dedupe(p, o)
+        section_abs_max(p, o)
+        convex_hulls(p, o)
+    for x_max in (one, ro(one)):
+        kinematic_margin(one, zero, one, x_max, 0.5, 1.0, 0.0, 1.5)
