@@ -219,3 +219,20 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
     res = run_engagement(load_scenario(p), "infoset", noise, np.random.default_rng(seed))
     assert res.checked_steps > 20
     assert res.truth_outside == 0 and res.contradictions == 0
+
+
+def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
+    """Forked Monte Carlo workers inherit what the parent loaded: after warm_up an
+    engagement (random, game and bias noise) must not need a new compiled version of
+    any kernel (read-only polygon arrays are a type of their own for numba)."""
+    from estim import _kernels as k
+    from experiments.engagement import run_engagement
+    from experiments.intercept_scenario import load_scenario
+
+    k.warm_up()
+    kernels = {n: getattr(k, n) for n in dir(k) if hasattr(getattr(k, n), "signatures")}
+    before = {n: len(f.signatures) for n, f in kernels.items()}
+    sc = load_scenario("data/scenarios/kp_fig5.toml")
+    for noise in ("random", "game", "bias"):
+        run_engagement(sc, "infoset", noise, np.random.default_rng(2))
+    assert {n: len(f.signatures) for n, f in kernels.items()} == before
