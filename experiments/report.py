@@ -19,14 +19,15 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
         "miss mean / p50 / p90 / max, m",
         "fuel mean / p50 / p90 / max, m/s",
     ]
-    head += ["truth outside (steps)", "empty set (runs)", "failures"]
+    head += ["truth outside (steps)", "empty set (runs)", "diverged (runs)", "failures"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         m, f = r["miss_m"], r["fuel_mps"]
         cells = [str(r[k]) for k in label_keys] + [str(r["runs"])]
         cells.append(f"{m['mean']:.2f} / {m['p50']:.2f} / {m['p90']:.2f} / {m['max']:.2f}")
         cells.append(f"{f['mean']:.1f} / {f['p50']:.1f} / {f['p90']:.1f} / {f['max']:.1f}")
-        cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r["failures"])]
+        cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r.get("diverged", 0))]
+        cells.append(str(r["failures"]))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
