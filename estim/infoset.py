@@ -56,9 +56,10 @@ the truth is one of its motions with ``v = cos(alpha) a_perp - 2 omega^2 x tan(a
 the second term is the kinematic term the linear model neglects. It is negligible
 far out, but grows like ``w^2 e^2 / x^3`` near the target and where the line of
 sight swings (a 9 km offset at 800 km with saturated guidance took the truth out of
-a set built with ``nu`` alone). The slab set therefore uses, per section and step,
-``nu + 2 w^2 e^2 / x^3 tan|alpha|`` bounded over the section and the step
-(:func:`kinematic_margin_mps2`), and widens an impulse by the same geometry: an
+a set built with ``nu`` alone). The slab set therefore adds to ``nu``, per section
+and step, a bound of that term over the section and the step, written through the
+planar angular momentum ``h`` (:func:`kinematic_margin_mps2`), and widens an impulse
+by the same geometry: an
 impulse ``k`` changes ``omega`` by ``k cos^2(alpha) / x``, not ``k / x``. The seed's
 point sections keep the seed's ``nu``.
 

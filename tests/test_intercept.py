@@ -164,6 +164,19 @@ vertical = {vertical}
 """
 
 
+def _assert_set_keeps_the_truth(tmp_path_factory, scenario_text, noise, seed):
+    """Run one infoset engagement of the scenario text: the truth is inside the set at
+    every checked step (more than 20) and no measurement contradicts it."""
+    from experiments.engagement import run_engagement
+    from experiments.intercept_scenario import load_scenario
+
+    p = tmp_path_factory.mktemp("sc") / "engagement.toml"
+    p.write_text(scenario_text)
+    res = run_engagement(load_scenario(p), "infoset", noise, np.random.default_rng(seed))
+    assert res.checked_steps > 20
+    assert res.truth_outside == 0 and res.contradictions == 0
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
@@ -180,15 +193,8 @@ def test_full_engagement_never_loses_the_truth(tmp_path_factory, seed, noise, ra
     ranges), guided impulses: the truth is inside the set at every checked step and the
     set never becomes empty. The truth box keeps the engagement within the impulses'
     authority (the small-angle regime); the next test leaves it."""
-    from experiments.engagement import run_engagement
-    from experiments.intercept_scenario import load_scenario
-
-    p = tmp_path_factory.mktemp("sc") / "short.toml"
     text = SHORT_ENGAGEMENT.format(range=str(range_on).lower(), vertical=str(vertical).lower())
-    p.write_text(text)
-    res = run_engagement(load_scenario(p), "infoset", noise, np.random.default_rng(seed))
-    assert res.checked_steps > 20
-    assert res.truth_outside == 0 and res.contradictions == 0
+    _assert_set_keeps_the_truth(tmp_path_factory, text, noise, seed)
 
 
 @settings(max_examples=40, deadline=None)
@@ -206,19 +212,12 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
     linear model's neglected term ``2 omega^2 x tan(alpha)`` exceeds nu by orders of
     magnitude. Before the slab set's kinematic margin (estim.infoset) such runs put the
     truth outside (e.g. this example: 1 step of 29, miss 5.8 km); with it, none."""
-    from experiments.engagement import run_engagement
-    from experiments.intercept_scenario import load_scenario
-
-    p = tmp_path_factory.mktemp("sc") / "wide.toml"
     text = SHORT_ENGAGEMENT.format(range="false", vertical=str(vertical).lower())
     text = text.replace("y_km = [-1.0, 1.0]", "y_km = [-9.5, 9.5]")
     text = text.replace(
         "[estimator]\n", "[estimator]\ny_km = [-10.0, 10.0]\nz_km = [-10.0, 10.0]\n"
     )
-    p.write_text(text)
-    res = run_engagement(load_scenario(p), "infoset", noise, np.random.default_rng(seed))
-    assert res.checked_steps > 20
-    assert res.truth_outside == 0 and res.contradictions == 0
+    _assert_set_keeps_the_truth(tmp_path_factory, text, noise, seed)
 
 
 def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
