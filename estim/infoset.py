@@ -440,13 +440,15 @@ class InformationSetEstimator(Estimator[InformationSet]):
                 return self._contradiction(belief)
             return self._select(belief, keep, polygons=clipped)
         if isinstance(measurement, Range):
-            return self._update_range(belief, measurement.range_m)
+            return self._update_range(belief, measurement)
         raise TypeError(f"unsupported measurement {type(measurement).__name__}")
 
-    def _update_range(self, belief: InformationSet, range_m: float) -> InformationSet:
-        b = self.model.range_rel_bound
+    def _update_range(self, belief: InformationSet, measurement: Range) -> InformationSet:
+        b, range_m = self.model.range_rel_bound, measurement.range_m
         # the sections are in x = d cos(off-axis angle), not in the measured range d
-        lo = range_m / (1.0 + b) * np.cos(self.model.max_off_axis_rad)
+        phi = measurement.off_axis_rad
+        phi = self.model.max_off_axis_rad if phi is None else phi
+        lo = range_m / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN)
         hi = range_m / (1.0 - b) * (1.0 + STRIP_MARGIN)
         if self.sections == "points":
             inside = (belief.x_lo_m >= lo) & (belief.x_hi_m <= hi)

@@ -51,6 +51,9 @@ class BearingBound:
     def __post_init__(self) -> None:
         if not (self.start_rad > 0 and self.end_rad > 0 and self.ref_range_m > 0):
             raise ValueError("bearing bounds and reference range must be positive")
+        if self.start_rad > self.end_rad:
+            # estimators take the bound at the smallest range of an interval as its widest
+            raise ValueError("start_rad must be <= end_rad (the bound grows as the range closes)")
 
     @property
     def max_range_m(self) -> float:
@@ -73,9 +76,49 @@ class Bearing:
 
 @dataclass(frozen=True)
 class Range:
-    """A range-finder measurement (m)."""
+    """A range-finder measurement (m).
+
+    The range finder measures ``d``, the estimators work in ``x = d cos(phi)``,
+    ``phi`` the line of sight's total off-axis angle (both axes). ``off_axis_rad``
+    bounds ``phi`` at this measurement (the caller derives it from the bearings of
+    both axes: :func:`off_axis_bound_rad`); ``None`` falls back on the model's
+    ``max_off_axis_rad``, an assumption rather than a measurement.
+    """
 
     range_m: float
+    off_axis_rad: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.off_axis_rad is not None and not 0 <= self.off_axis_rad <= np.pi / 2:
+            raise ValueError("off_axis_rad must be in [0, pi/2] (or None)")
+
+
+def off_axis_bound_rad(bearings_rad: ArrayLike, bounds_rad: ArrayLike) -> float:
+    """Bound of the line of sight's total off-axis angle from one bearing per axis.
+
+    With ``alpha = atan2(y, x)`` and ``beta = atan2(z, x)`` the range is
+    ``d = x sqrt(1 + tan^2 alpha + tan^2 beta)``, so ``x = d cos(phi)`` with
+    ``tan^2 phi = tan^2 alpha + tan^2 beta``. A bearing ``a_m`` measured within
+    ``+-b`` of the truth gives ``|alpha| <= |a_m| + b``, hence::
+
+        phi <= atan( sqrt( sum_i tan^2 min(|a_m,i| + b_i, pi/2) ) )
+
+    Parameters
+    ----------
+    bearings_rad, bounds_rad : array
+        Measured bearing of each axis (both axes, guided or not) and the bound of
+        its error at this range (the largest over the ranges the range measurement
+        allows: the bound grows as the range closes).
+
+    Returns
+    -------
+    float
+        The bound (rad), in ``[0, pi/2]``.
+    """
+    a = np.minimum(
+        np.abs(np.asarray(bearings_rad, float)) + np.asarray(bounds_rad, float), np.pi / 2
+    )
+    return float(min(np.arctan(np.sqrt(np.sum(np.tan(a) ** 2))), np.pi / 2))
 
 
 @dataclass(frozen=True)
@@ -107,8 +150,9 @@ class ChannelModel:
     bearing_bound: BearingBound = field(default_factory=BearingBound)
     range_rel_bound: float = 0.05
     eps_m: float = 5.0e3
-    #: bound on the line of sight's total off-axis angle (both channels): the range
-    #: finder measures d, the sections are in x = d cos(angle) >= d cos(max_off_axis)
+    #: assumed bound on the line of sight's total off-axis angle (both channels) for a
+    #: range measurement that carries none (``Range.off_axis_rad``): the range finder
+    #: measures d, the sections are in x = d cos(angle) >= d cos(max_off_axis)
     max_off_axis_rad: float = 0.1
 
     def __post_init__(self) -> None:

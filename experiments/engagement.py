@@ -24,7 +24,7 @@ import numpy as np
 
 from estim.base import Belief, Estimator
 from estim.infoset import InformationSetEstimator
-from estim.model import Bearing, BearingBound, ChannelModel, Range
+from estim.model import Bearing, BearingBound, ChannelModel, Range, off_axis_bound_rad
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
 from experiments.noise import NOISES, BiasNoise, GameNoise, RandomNoise
@@ -176,6 +176,9 @@ def run_engagement(
     est: list[Estimator] = [b[0] for b in built]
     beliefs: list[Belief] = [b[1] for b in built]
     noise = build_noise(noise_name, sc, model, channels, rng, sensor)
+    # bearings of unguided axes (they bound the range finder's off-axis angle only):
+    # an independent stream, so the runs' other draws do not depend on it
+    axis_rng = rng.spawn(1)[0]
     g = sc.guidance
     law = ForecastCentringLaw(
         model, ImpulseLimits(g["min_impulse_mps"], g["max_impulse_mps"], g["reserve_mps"])
@@ -215,7 +218,14 @@ def run_engagement(
         if rf["enabled"] and t >= rf["first_s"] - 1e-9:
             phase = (t - rf["first_s"]) / rf["period_s"]
             if abs(phase - round(phase)) < 1e-9:
-                meas = Range(noise.range(d_m))
+                meas = _range_measurement(
+                    noise.range(d_m),
+                    model,
+                    r_km,
+                    x_m,
+                    dict(zip(channels, alphas, strict=True)),
+                    axis_rng,
+                )
                 beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
         if x_m > check_floor_m:
             checked += 1
@@ -261,6 +271,33 @@ def run_engagement(
         miss_m, fuel, n_imp, outside, checked, beliefs, step, step * dt + t_ca, fuel_floor_mps,
         issued, (*pos_km, *vel_kmps), pointing,
     )  # fmt: skip
+
+
+def _range_measurement(
+    d_meas_m: float,
+    model: ChannelModel,
+    r_km: np.ndarray,
+    x_m: float,
+    measured: dict[str, float],
+    axis_rng: np.random.Generator,
+) -> Range:
+    """The range measurement with the bound of its off-axis angle (``Range``).
+
+    The seeker measures the bearing of both axes; a guided channel's is the one its
+    estimator used, an unguided axis's is drawn here uniformly within the bound.
+    The bound is taken at the smallest range ``d_meas / (1 + b)`` the measurement
+    allows (it grows as the range closes), so it holds for the true range.
+    """
+    bound = float(model.bearing_bound(d_meas_m / (1.0 + model.range_rel_bound)))
+    bearings = []
+    for c in CHANNELS:
+        if c in measured:
+            bearings.append(measured[c])
+        else:
+            a_true = math.atan2(r_km[CHANNELS.index(c) + 1] * 1e3, x_m)
+            b_true = float(model.bearing_bound(float(np.linalg.norm(r_km)) * 1e3))
+            bearings.append(a_true + axis_rng.uniform(-b_true, b_true))
+    return Range(d_meas_m, off_axis_rad=off_axis_bound_rad(bearings, [bound, bound]))
 
 
 def _result(

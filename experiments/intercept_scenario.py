@@ -213,6 +213,13 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
         raise InputError(f"{source}: field 'guidance.min_impulse_mps' must be <= max_impulse_mps")
     if not (g["lateral"] or g["vertical"]):
         raise InputError(f"{source}: field 'guidance.lateral' or 'guidance.vertical' must be true")
+    if m["bearing_bound_start_rad"] > m["bearing_bound_end_rad"]:
+        # the set's bearing strip and the range finder's off-axis bound take the bound
+        # at the smallest range: sound only if it grows as the range closes
+        raise InputError(
+            f"{source}: field 'model.bearing_bound_start_rad' must be <= "
+            f"'model.bearing_bound_end_rad' (the bound grows as the range closes)"
+        )
     if tables["estimator"]["x_km"][0] <= m["eps_km"]:
         raise InputError(f"{source}: field 'estimator.x_km' must start above 'model.eps_km'")
     attitude = data.get("attitude")

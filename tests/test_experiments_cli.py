@@ -95,6 +95,10 @@ BAD = {
     "truth outside box": ("[truth]\ny_km = [-20.0, 0.0]\n", "must lie inside"),
     "bad toml": ("[model\n", "invalid TOML"),
     "no split": ("[estimator]\nsplit_ratio = 1.0\n", "field 'estimator.split_ratio' must be"),
+    "bound shrinks as range closes": (
+        "[model]\nbearing_bound_start_rad = 3e-4\nbearing_bound_end_rad = 2e-4\n",
+        "'model.bearing_bound_start_rad' must be <=",
+    ),
     "margin not bool": ("[estimator]\nkinematic_margin = 1\n", "'estimator.kinematic_margin'"),
 }
 

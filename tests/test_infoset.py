@@ -12,7 +12,7 @@ from estim.infoset import (
     InformationSetEstimator,
     kinematic_margin_mps2,
 )
-from estim.model import Bearing, ChannelModel, Range
+from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 SLABS = InformationSetEstimator(MODEL, n_sections=29)
@@ -143,6 +143,37 @@ def test_range_update_intersects_intervals():
         POINTS.initial(B_Y, D_VY, B_X).x_lo_m <= hi
     )
     assert p.n_sections == min(inside.sum() + 2, 29)  # one neighbour each side
+
+
+@given(
+    y_m=st.floats(-3e3, 3e3),
+    z_m=st.floats(-3e3, 3e3),
+    x_m=st.floats(5e3, 1e6),
+    err=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)),
+)
+@example(y_m=1.3e3, z_m=0.0, x_m=7.77e3, err=(1.0, 1.0, 1.0))  # 0.17 rad > the 0.1 default
+def test_range_update_with_measured_off_axis_bound_keeps_the_true_x(y_m, z_m, x_m, err):
+    """Geometry of a range measurement (``off_axis_bound_rad``): with bearings of both
+    axes and the range measured within their bounds, the range update keeps a section
+    holding the true ``x = d cos(phi)`` (brute force: the Cartesian truth itself), and
+    the bound is never below the true off-axis angle."""
+    d_true = float(np.sqrt(x_m**2 + y_m**2 + z_m**2))
+    bound = 2e-3
+    a_meas = [np.arctan2(y_m, x_m) + err[0] * bound, np.arctan2(z_m, x_m) + err[1] * bound]
+    d_meas = d_true * (1 + err[2] * MODEL.range_rel_bound)
+    phi = off_axis_bound_rad(a_meas, [bound, bound])
+    assert phi >= np.arccos(x_m / d_true) - 1e-12
+    s = SLABS.initial(B_Y, D_VY, (0.5 * x_m, 2.0 * x_m))
+    u = SLABS.update(s, Range(d_meas, off_axis_rad=phi))
+    assert u.status == "ok"
+    assert np.any((u.x_lo_m <= x_m) & (u.x_hi_m >= x_m))
+
+
+def test_range_measurement_rejects_an_off_axis_bound_outside_0_to_pi_over_2():
+    with pytest.raises(ValueError, match="off_axis_rad"):
+        Range(1e5, off_axis_rad=-0.1)
+    with pytest.raises(ValueError, match="off_axis_rad"):
+        Range(1e5, off_axis_rad=2.0)
 
 
 def test_contradicting_measurement_is_a_status_not_a_crash():
