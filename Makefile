@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench clean
+.PHONY: run test fuzz lint bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -20,6 +20,17 @@ test: $(STAMP)
 	$(BIN)/ruff check --no-cache .
 	$(BIN)/ruff format --check --no-cache .
 	$(BIN)/python -m pytest
+
+# Random exploration of the property tests (the suite itself is derandomized):
+# FUZZ_ROUNDS rounds from seed FUZZ_SEED on; a failure names the seed to replay.
+FUZZ_ROUNDS ?= 10
+FUZZ_SEED ?= $(shell date +%s)
+fuzz: $(STAMP)
+	@for i in $$(seq 0 $$(($(FUZZ_ROUNDS) - 1))); do \
+	  s=$$(($(FUZZ_SEED) + i)); echo "fuzz round $$i: --hypothesis-seed=$$s"; \
+	  HYPOTHESIS_PROFILE=fuzz $(BIN)/python -m pytest -q -p no:cacheprovider \
+	    --hypothesis-seed=$$s $$(grep -l '@given' tests/*.py) || exit 1; \
+	done
 
 lint: $(STAMP)
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .
