@@ -10,6 +10,8 @@
   run, the resolved scenario as JSON beside it; both written atomically
   (temporary file + ``os.replace``). Rerunning the same command completes only the
   missing runs; a failing run is recorded with its error and does not stop the others.
+  The JSON also records which code wrote the runs (:mod:`experiments.provenance`);
+  a file written by another scenario or other sources is refused, not extended.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from estim import _kernels as _k
 from experiments.engagement import timed_engagement
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
+from experiments.provenance import code_identity
 from experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
@@ -116,16 +119,17 @@ def run_experiment(
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
-    meta = {"scenario": sc.to_dict(), "estimator": estimator, "noise": noise, "seed": seed}
+    meta = {
+        "scenario": sc.to_dict(),
+        "estimator": estimator,
+        "noise": noise,
+        "seed": seed,
+        "code": code_identity(),
+    }
     meta_path = path.with_suffix(".json")
     rows: list[dict[str, Any]] = []
     if path.exists():
-        if meta_path.exists() and json.loads(meta_path.read_text())["scenario"] != json.loads(
-            json.dumps(meta["scenario"])
-        ):
-            raise InputError(
-                f"{path}: results of a different scenario; use another --out or delete the file"
-            )
+        _check_resumable(path, meta_path, meta)
         try:
             rows = pd.read_parquet(path).to_dict("records")
         except Exception as exc:  # a corrupt file is never produced by atomic writes
@@ -160,6 +164,26 @@ def run_experiment(
                 _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
     return df
+
+
+def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
+    """Refuse (one line) to add runs to results of another scenario or other code."""
+    fix = "use another --out or delete the file"
+    try:
+        old = json.loads(meta_path.read_text())
+    except (OSError, ValueError):
+        raise InputError(
+            f"{path}: no readable {meta_path.name} to check it against; {fix}"
+        ) from None
+    if old.get("scenario") != json.loads(json.dumps(meta["scenario"])):
+        raise InputError(f"{path}: results of a different scenario; {fix}")
+    before = (old.get("code") or {}).get("sources_sha256")
+    if before != meta["code"]["sources_sha256"]:
+        was = f"sources {before[:12]}" if before else "code that recorded no identity"
+        raise InputError(
+            f"{path}: results written by other code ({was}, now "
+            f"{meta['code']['sources_sha256'][:12]}); {fix}"
+        )
 
 
 class WorkerLost(RuntimeError):

@@ -333,3 +333,35 @@ def test_attitude_table_is_validated_at_load(tmp_path, capsys):
     p.write_text(SHORT + "\n[attitude]\ncontroller = 'bangbang'\n")
     r = cli_inproc(capsys, "intercept", p)
     assert r.returncode == 2 and "attitude.controller" in r.stderr
+
+
+def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_path, capsys):
+    """Resuming must not mix runs: the JSON beside the results records the scenario and
+    the code identity (version, SHA-256 of the sources, git commit); a mismatch in
+    either is one line and exit 2, and the stored runs are left untouched."""
+    from experiments.provenance import code_identity
+
+    sc = load_scenario(short)
+    run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
+    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    meta_path = path.with_suffix(".json")
+    meta = json.loads(meta_path.read_text())
+    assert meta["code"] == json.loads(json.dumps(code_identity()))
+    assert len(meta["code"]["sources_sha256"]) == 64
+    stored = path.read_bytes()
+    cases = {
+        "other code": {**meta, "code": {**meta["code"], "sources_sha256": "0" * 64}},
+        "code that recorded no identity": {k: v for k, v in meta.items() if k != "code"},
+        "different scenario": {**meta, "scenario": {**meta["scenario"], "name": "other"}},
+    }
+    for message, changed in cases.items():
+        meta_path.write_text(json.dumps(changed))
+        with pytest.raises(runner.InputError, match=message):
+            run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+        assert path.read_bytes() == stored
+    r = cli_inproc(capsys, "intercept", short, "--runs", "4", "--out", tmp_path, "--no-progress")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "different scenario" in r.stderr and "Traceback" not in r.stderr
+    meta_path.write_text(json.dumps(meta))  # the same code and scenario: it resumes
+    done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+    assert sorted(done["run"]) == [0, 1, 2, 3]
