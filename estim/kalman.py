@@ -40,7 +40,8 @@ Model (SPEC 1.3, :meth:`estim.model.ChannelModel.step_coefficients`), one step
 
 with ``g_alpha = Delta^2/(2 x1)``, ``g_w = Delta (x0 + x1)/(2 e)``,
 ``g_omega = Delta (x0 + x1)/(2 x1^2)``; ``v`` uniform in ``[-nu, nu]``: process
-noise ``Q = G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at the mean range. EKF
+noise ``Q = G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at the mean range (all noise
+variances times ``noise_inflation``, 1 by default). EKF
 Jacobians ``F = d q1/d q0`` (besides the unit diagonal and the constant ``dx1/dx0 = 1``):
 
 * zem: ``d alpha1/d w0 = e Delta/(x0 x1)``, ``d alpha1/d x0 = -w0 e Delta (x0 + x1)/(x0 x1)^2``;
@@ -189,6 +190,11 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     closing_speed_mps : (float, float) or None
         Interval ``[e_lo, e_hi]`` of the true closing speed that moves that interval;
         ``None`` means the nominal ``e`` exactly (as the information set).
+    noise_inflation : float
+        Factor on every noise variance, ``R`` and ``Q`` (>= 1). 1 is the variance of
+        an error uniform within its bound (``a^2/3``); 3 is the largest variance any
+        error within the bound can have (``a^2``: all of it at the bound), the
+        natural choice when the statistics are unknown; more is hand-tuning.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -200,6 +206,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
     ukf_kappa: float = 0.0
     range_constraint: bool = False
     closing_speed_mps: tuple[float, float] | None = None
+    noise_inflation: float = 1.0
     _points: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -209,6 +216,8 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             raise ValueError(f"coords must be one of {COORDS}, got {self.coords!r}")
         if not self.n_sigma > 0:
             raise ValueError("n_sigma must be positive")
+        if not 1.0 <= self.noise_inflation < np.inf:
+            raise ValueError("noise_inflation must be a finite number >= 1")
         if not (self.ukf_alpha > 0 and 3 + self.ukf_kappa > 0):
             raise ValueError("ukf_alpha must be positive and 3 + ukf_kappa positive")
         if self.closing_speed_mps is not None:
@@ -296,11 +305,12 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         return np.stack([q[..., 0] + c["a_w"] * q[..., 1], q[..., 1], c["x1"]], axis=-1)
 
     def process_noise(self, x_m: float, dt_s: float) -> FloatArray:
-        """``Q = G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at range ``x_m``."""
+        """``Q = s G G^T nu^2/3``, ``G = (g_alpha, g_r, 0)`` at range ``x_m``, ``s``
+        the noise inflation."""
         c = self.model.step_coefficients(x_m, dt_s)
         g_r = c["g_omega"] if self.coords == "rate" else c["g_w"]
         g = np.array([float(c["g_alpha"]), float(g_r), 0.0])
-        return np.outer(g, g) * self.model.nu_mps2**2 / 3.0
+        return np.outer(g, g) * self.model.nu_mps2**2 / 3.0 * self.noise_inflation
 
     def step_jacobian(self, q, dt_s: float) -> FloatArray:
         """``F = d step(q)/d q`` at ``q = (alpha, r, x)`` (module docstring)."""
@@ -444,7 +454,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         if isinstance(measurement, Bearing):
             z = float(measurement.alpha_rad)
             a = float(self.model.bearing_bound(abs(float(belief.mean[2]))))
-            r = a * a / 3.0
+            r = a * a / 3.0 * self.noise_inflation
 
             def hx(s):
                 return np.array([s[0]])
@@ -454,7 +464,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         elif isinstance(measurement, Range):
             z = float(measurement.range_m)
             d_hat = float(self.range_of(belief.mean))
-            r = (self.model.range_rel_bound * d_hat) ** 2 / 3.0
+            r = (self.model.range_rel_bound * d_hat) ** 2 / 3.0 * self.noise_inflation
 
             def hx(s):
                 return np.array([s[2] / math.cos(s[0])])

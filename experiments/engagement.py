@@ -89,6 +89,7 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
             kind=name,
             n_sigma=sc.estimator["kalman_sigma"],
             range_constraint=sc.estimator["kalman_range_constraint"],
+            noise_inflation=sc.estimator["kalman_noise_inflation"],
             closing_speed_mps=tuple(v * 1e3 for v in sc.estimator["closing_speed_kmps"]),
         )
         return est, est.initial(**boxes)

@@ -50,6 +50,9 @@ ESTIMATOR_RULES = {
     "kalman_sigma": Num(0.5, 10.0),
     # EKF/UKF: project the range estimate onto [x_lo - e_hi t, x_hi - e_lo t]
     "kalman_range_constraint": Bool(),
+    # EKF/UKF: factor on every noise variance (1: uniform errors; 3: the largest
+    # variance of an error within its bound)
+    "kalman_noise_inflation": Num(1.0, 1e6),
 }
 TRUTH_RULES = dict(ESTIMATOR_RULES)
 for _k in (
@@ -60,6 +63,7 @@ for _k in (
     "closing_speed_kmps",
     "kalman_sigma",
     "kalman_range_constraint",
+    "kalman_noise_inflation",
 ):
     del TRUTH_RULES[_k]
 RANGE_RULES = {
@@ -126,6 +130,7 @@ DEFAULTS = {
         "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
         "kalman_sigma": 3.0,
         "kalman_range_constraint": False,
+        "kalman_noise_inflation": 1.0,
     },
     "range_finder": {"enabled": False, "rel_bound": 0.05, "first_s": 1.0, "period_s": 2.0},
     "guidance": {

@@ -524,3 +524,61 @@ def test_scenario_key_kalman_range_constraint_is_validated():
     # the default truth's vx box [-59, -57] km/s is not covered by closing speed [58, 58]
     with pytest.raises(InputError, match="must contain the truth's closing speeds"):
         parse_scenario({"estimator": {"kalman_range_constraint": True}})
+
+
+@pytest.mark.parametrize("kind,coords", FILTERS)
+def test_noise_inflation_scales_r_and_q_in_the_exact_kalman_update(kind, coords):
+    """``noise_inflation = s``: the bearing update is the exact Kalman update with
+    ``R = s a^2/3`` (computed here independently), and ``Q`` is ``s`` times the
+    uninflated one; s = 3 is ``a^2``, the largest variance of an error within +-a."""
+    s = 3.0
+    est = KalmanChannelEstimator(MODEL, kind=kind, coords=coords, noise_inflation=s)
+    b = est.initial(B_Y, D_VY, B_X, D_VX)
+    p, m = b.cov, b.mean
+    r = s * MODEL.bearing_bound(m[2]) ** 2 / 3.0
+    z = 1.3e-3
+    k = p[:, 0] / (p[0, 0] + r)
+    u = est.update(b, Bearing(z))
+    scale = np.sqrt(np.diag(p))
+    np.testing.assert_allclose((u.mean - m) / scale, k * (z - m[0]) / scale, atol=1e-12)
+    expected = p - np.outer(k, k) * (p[0, 0] + r)
+    np.testing.assert_allclose(
+        u.cov / np.outer(scale, scale), expected / np.outer(scale, scale), atol=1e-12
+    )
+    np.testing.assert_allclose(
+        est.process_noise(3e6, DT), s * _est(kind, coords).process_noise(3e6, DT), rtol=1e-15
+    )
+
+
+def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
+    from experiments.errors import InputError
+    from experiments.intercept_scenario import parse_scenario
+
+    for bad in (0.5, float("inf"), float("nan")):
+        with pytest.raises(ValueError, match="noise_inflation"):
+            KalmanChannelEstimator(MODEL, noise_inflation=bad)
+    assert parse_scenario({}).estimator["kalman_noise_inflation"] == 1.0
+    with pytest.raises(InputError, match="estimator.kalman_noise_inflation"):
+        parse_scenario({"estimator": {"kalman_noise_inflation": 0.5}})
+
+
+@pytest.mark.parametrize(
+    "variant,key,value",
+    [
+        ("kp_fig5_kalman_constrained", "kalman_range_constraint", True),
+        ("kp_fig5_kalman_inflated", "kalman_noise_inflation", 3.0),
+    ],
+)
+def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, key, value):
+    """The variants' files say "everything else identical to kp_fig5.toml": the same
+    truths, boxes, guidance and seed, so their Kalman rows pair with kp_fig5's."""
+    from experiments.intercept_scenario import load_scenario
+
+    base = load_scenario("data/scenarios/kp_fig5.toml").to_dict()
+    var = load_scenario(f"data/scenarios/{variant}.toml").to_dict()
+    assert var["name"] == variant and var["estimator"][key] == value
+    assert base["estimator"][key] != value
+    var["estimator"][key] = base["estimator"][key]
+    for k in ("name", "description", "source"):
+        del base[k], var[k]
+    assert var == base
