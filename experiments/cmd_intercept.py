@@ -39,6 +39,16 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--out", help="output directory (default: results/<scenario name>)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        dest="overrides",
+        help="override a scenario field with a TOML value, e.g. "
+        "estimator.kalman_noise_inflation=10 (repeatable; validated like the file; "
+        "the scenario's name gets a +key=value suffix)",
+    )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -48,7 +58,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def resolve(args) -> tuple[Any, int, int, Path]:
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, args.overrides)
     runs = args.runs or sc.experiment["runs"]
     seed = sc.experiment["seed"] if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / sc.name

@@ -11,13 +11,24 @@ Every field is checked; unknown keys are errors.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from experiments.errors import InputError
 from experiments.noise import NOISES
-from experiments.schema import Bool, Choice, Interval, Num, Str, load_toml, validate_table
+from experiments.schema import (
+    Bool,
+    Choice,
+    Interval,
+    Num,
+    Str,
+    apply_overrides,
+    load_toml,
+    override_suffix,
+    validate_table,
+)
 
 POS = Num(0.0, open_lo=True)
 NONNEG = Num(0.0)
@@ -244,6 +255,13 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
     )
 
 
-def load_scenario(path: str | Path) -> InterceptScenario:
-    """Read and validate an intercept scenario file."""
-    return parse_scenario(load_toml(path), str(path))
+def load_scenario(path: str | Path, overrides: Sequence[str] = ()) -> InterceptScenario:
+    """Read and validate an intercept scenario file, with optional ``TABLE.KEY=VALUE``
+    overrides (:func:`~experiments.schema.apply_overrides`; the name gets a
+    ``+key=value`` suffix per override)."""
+    data = load_toml(path)
+    if not overrides:
+        return parse_scenario(data, str(path))
+    data = apply_overrides(data, overrides)
+    data["name"] = str(data.get("name", Path(path).stem)) + override_suffix(overrides)
+    return parse_scenario(data, f"{path} (with --set)")

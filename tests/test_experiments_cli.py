@@ -125,6 +125,11 @@ def test_bad_scenario_input_exits_2_with_one_line(tmp_path, capsys, case):
         ["intercept", str(FIG3), "--out", "/proc/no/such/folder"],
         ["attitude", str(ROOT / "data/scenarios/gyrostat_game.toml"), "--out", "/proc/no/such"],
         ["nonsense"],
+        ["intercept", str(FIG3), "--set", "model.nu_mps2"],  # no value
+        ["intercept", str(FIG3), "--set", "model.nu_mps2=fast"],  # not TOML
+        ["intercept", str(FIG3), "--set", "model.nu_mps2=-1"],  # validated as the file
+        ["compare", str(FIG3), "--set", "estimator.colour=1"],  # unknown key
+        ["intercept", str(FIG3), "--set", "name=other"],  # the name is derived
     ],
 )
 def test_bad_command_line_exits_2_with_one_line(capsys, args):
@@ -365,3 +370,27 @@ def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_pat
     meta_path.write_text(json.dumps(meta))  # the same code and scenario: it resumes
     done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
     assert sorted(done["run"]) == [0, 1, 2, 3]
+
+
+def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tmp_path, capsys):
+    """``--set range_finder.enabled=false`` resolves to the same scenario as the file
+    with that line edited (the name aside, which gets a ``+key=value`` suffix), gives
+    the same runs, and writes its own result files beside the original's."""
+    edited = tmp_path / "edited.toml"
+    edited.write_text(SHORT.replace("enabled = true", "enabled = false"))
+    over = load_scenario(short, ["range_finder.enabled=false"])
+    assert over.name == "short+range_finder.enabled=false"
+    a, b = over.to_dict(), load_scenario(edited).to_dict()
+    for k in ("name", "source"):
+        del a[k], b[k]
+    assert a == b
+    out = tmp_path / "out"
+    for extra in ([], ["--set", "range_finder.enabled=false"]):
+        r = cli_inproc(capsys, "intercept", short, "--out", out, "--no-progress", *extra)
+        assert r.returncode == 0, r.stderr
+    mine = runner.results_path(out, over, "infoset", "random", 11)
+    orig = runner.results_path(out, load_scenario(short), "infoset", "random", 11)
+    assert mine != orig and mine.exists() and orig.exists()
+    ref = run_experiment(load_scenario(edited), "infoset", "random", 4, 11, tmp_path / "e", 1,
+                         progress=False)  # fmt: skip
+    pd.testing.assert_frame_equal(_table(pd.read_parquet(mine)), _table(ref))
