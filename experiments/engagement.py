@@ -1,7 +1,8 @@
 """One intercept engagement: truth, noise, estimator and guidance law in a loop (SPEC 1).
 
 Per decision step ``t_i = i Delta``: measure the bearings (and the range when the
-range finder is due), update every channel's belief, count the steps where the
+range finder is due, with the bound of its off-axis angle taken from the bearings of
+both axes: :func:`_range_measurement`), update every channel's belief, count the steps where the
 truth lies outside it, compute and issue the impulses (shifting the beliefs and
 the truth), then propagate the truth and predict the beliefs to ``t_i+1``.
 The engagement ends at the truth's closest approach (found by minimising the
