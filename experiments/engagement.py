@@ -229,6 +229,7 @@ def run_engagement(
                     axis_rng,
                 )
                 beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
+                noise.observe_range(meas)
         if x_m > check_floor_m:
             checked += 1
             outside += any(

@@ -23,8 +23,10 @@ If (a) and (b) are incompatible the interval is put as close as possible to
 the worst point. The range measurement is chosen the same way on ``x``.
 
 Generators are per-run objects driven by the engagement loop: ``bearings`` and
-``range`` issue measurements, ``observe`` reports the impulses issued, and
-``predict`` advances the generator's own sets.
+``range`` issue measurements, ``observe_range`` hands back the range measurement as
+the pursuer receives it (the adversary updates its sets with exactly that),
+``observe`` reports the impulses issued, and ``predict`` advances the generator's
+own sets.
 """
 
 from __future__ import annotations
@@ -86,6 +88,9 @@ class RandomNoise:
         b = self.model.range_rel_bound
         return float(range_true_m * (1 + self.rng.uniform(-b, b)))
 
+    def observe_range(self, measurement: Range) -> None:
+        pass
+
     def observe(self, impulses: Sequence[float | Impulse]) -> None:
         pass
 
@@ -123,6 +128,9 @@ class BiasNoise:
     def range(self, range_true_m: float) -> float:
         b = self.model.range_rel_bound * (1 - self.margin)
         return float(range_true_m * (1 + self.range_sign * b))
+
+    def observe_range(self, measurement: Range) -> None:
+        pass
 
     def observe(self, impulses: Sequence[float | Impulse]) -> None:
         pass
@@ -167,9 +175,11 @@ class GameNoise:
                     worst, worst_val = arg, abs(val)
         x_lo = min(s.x_range_m()[0] for s in live)
         x_hi = max(s.x_range_m()[1] for s in live)
-        d_m = game_range(range_true_m, self.model.range_rel_bound, float(worst[2]), x_lo, x_hi)
-        self.sets = [self.estimator.update(s, Range(d_m)) for s in self.sets]
-        return d_m
+        return game_range(range_true_m, self.model.range_rel_bound, float(worst[2]), x_lo, x_hi)
+
+    def observe_range(self, measurement: Range) -> None:
+        """The range measurement as the pursuer receives it (with its off-axis bound)."""
+        self.sets = [self.estimator.update(s, measurement) for s in self.sets]
 
     def observe(self, impulses: Sequence[float | Impulse]) -> None:
         """The pursuer's impulses (numbers or :class:`Impulse` with uncertainty)."""

@@ -238,3 +238,25 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     for noise in ("random", "game", "bias"):
         run_engagement(sc, "infoset", noise, np.random.default_rng(2))
     assert {n: len(f.signatures) for n, f in kernels.items()} == before
+
+
+def test_game_adversary_updates_its_sets_with_the_pursuers_range_measurement():
+    """Seed 003 section 6: the adversary's own set is built from the measurements it
+    issues. ``range`` only chooses the value; the set is updated in ``observe_range``
+    with the measurement as the pursuer receives it (here: with an off-axis bound
+    tighter than the model's assumed 0.1 rad), so both sets see the same data."""
+    from estim.model import Range
+    from experiments.noise import GameNoise
+
+    est = InformationSetEstimator(MODEL, n_sections=9, closing_speed_mps=(57.9e3, 58.1e3))
+    s0 = est.initial((-1e3, 1e3), (-100.0, 100.0), (700e3, 900e3))
+    noise = GameNoise(est, [s0])
+    d = noise.range(800e3)
+    assert abs(d - 800e3) <= MODEL.range_rel_bound * 800e3
+    assert noise.sets[0] is s0  # choosing the value does not update the set
+    meas = Range(d, off_axis_rad=2e-3)
+    noise.observe_range(meas)
+    expected = est.update(s0, meas)
+    np.testing.assert_array_equal(noise.sets[0].x_lo_m, expected.x_lo_m)
+    np.testing.assert_array_equal(noise.sets[0].polygons.xy, expected.polygons.xy)
+    assert noise.sets[0].x_lo_m.min() > est.update(s0, Range(d)).x_lo_m.min()
