@@ -40,6 +40,8 @@ from estim.attitude_model import (
 from estim.attitude_ukf import UkfAttitudeEstimator
 from estim.base import PerfectEstimator, PointBelief
 from experiments.errors import InputError
+from experiments.files import atomic_write
+from experiments.provenance import code_identity
 
 ESTIMATORS = ("perfect", "ukf", "box")
 
@@ -125,10 +127,9 @@ def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: di
     out_dir.mkdir(parents=True, exist_ok=True)
     df = pd.DataFrame(rows)
     table = out_dir / f"{stem}-runs.parquet"
-    tmp = table.with_suffix(".parquet.tmp")
-    df.to_parquet(tmp, index=False)
-    tmp.replace(table)
-    (out_dir / f"{stem}-scenario.json").write_text(json.dumps(meta, indent=1, default=str))
+    atomic_write(table, lambda tmp: df.to_parquet(tmp, index=False))
+    text = json.dumps({**meta, "code": code_identity()}, indent=1, default=str)
+    atomic_write(out_dir / f"{stem}-scenario.json", lambda tmp: Path(tmp).write_text(text))
     fig, axes = plots.plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
     styles = ["-", "--", "-.", ":"]
     groups = list(df.groupby(["controller", "estimator", "noise"], sort=True))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -59,10 +60,52 @@ def cdf_figure(
     return fig
 
 
+def sweep_figure(table: pd.DataFrame, key: str, title: str):
+    """Mean miss and mean fuel against a swept value: one colour per estimator, one
+    marker and line style per noise.
+
+    ``table`` has one row per (value, estimator, noise) with ``value`` as JSON text
+    and the summary columns flattened (``miss_m_mean``, ``fuel_mps_mean``, ...).
+    Numeric values are plotted on a numeric axis (logarithmic when positive and
+    spanning a decade or more); others (intervals, booleans) one tick each.
+    """
+    values = [json.loads(v) for v in table["value"]]
+    numeric = all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+    labels = list(dict.fromkeys(table["value"]))
+    x = (
+        np.array(values, dtype=float)
+        if numeric
+        else np.array([labels.index(v) for v in table["value"]], dtype=float)
+    )
+    colours = {e: f"C{i}" for i, e in enumerate(dict.fromkeys(table["estimator"]))}
+    looks = ["o-", "s--", "^-.", "D:"]
+    noises = {n: looks[i % 4] for i, n in enumerate(dict.fromkeys(table["noise"]))}
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    groups = table.assign(_x=x).groupby(["estimator", "noise"], sort=False)
+    for ax, (col, ylabel) in zip(axes, PANELS, strict=True):
+        for (est, noise), grp in groups:
+            grp = grp.sort_values("_x")
+            ax.plot(grp["_x"], grp[f"{col}_mean"], noises[noise], color=colours[est], lw=1.5,
+                    label=f"{est} / {noise}")  # fmt: skip
+        if numeric and (x > 0).all() and x.max() >= 10 * x.min():
+            ax.set_xscale("log")
+        if not numeric:
+            ax.set_xticks(range(len(labels)), labels, fontsize=7)
+        if col == "miss_m" and (table[f"{col}_mean"] > 0).all():
+            ax.set_yscale("log")
+        ax.set_xlabel(key)
+        ax.set_ylabel(f"{ylabel}, mean over runs")
+        ax.grid(True, alpha=0.3)
+    axes[1].legend(fontsize=7, loc="best", ncol=2)
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
 def save(fig, path_stem: Path) -> list[Path]:
     """Write ``<stem>.png`` and ``<stem>.svg``; returns the paths."""
     path_stem.parent.mkdir(parents=True, exist_ok=True)
-    out = [path_stem.with_suffix(".png"), path_stem.with_suffix(".svg")]
+    # appended, not with_suffix: names may hold dots (--set suffixes, "fig5.v2")
+    out = [path_stem.parent / f"{path_stem.name}.{ext}" for ext in ("png", "svg")]
     for p in out:
         fig.savefig(p, dpi=130)
     plt.close(fig)

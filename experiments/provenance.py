@@ -17,6 +17,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: the packages whose sources decide a run's result
 PACKAGES = ("estim", "guidance", "experiments")
+#: presentation only (command line, tables, figures, file writing): not hashed, so
+#: a new plot does not refuse a resume
+PRESENTATION = ("cli.py", "__main__.py", "cmd_*.py", "plots.py", "report.py", "files.py")
 
 
 @cache
@@ -24,12 +27,15 @@ def code_identity() -> dict[str, str | None]:
     """Package version, SHA-256 over the sources of :data:`PACKAGES`, and the git
     commit when the sources are a git checkout (informational: the hash decides).
 
-    The hash covers every ``*.py`` file by relative path and content, so it changes
-    with uncommitted edits too, and needs no git.
+    The hash covers every ``*.py`` file but the :data:`PRESENTATION` modules, by
+    relative path and content, so it changes with uncommitted edits too, and needs
+    no git.
     """
     h = hashlib.sha256()
     for pkg in PACKAGES:
         for f in sorted((ROOT / pkg).rglob("*.py")):
+            if any(f.match(pattern) for pattern in PRESENTATION):
+                continue
             h.update(f.relative_to(ROOT).as_posix().encode() + b"\0")
             h.update(f.read_bytes() + b"\0")
     try:

@@ -8,7 +8,7 @@ from typing import Any
 
 import pandas as pd
 
-from experiments.runner import _atomic_write
+from experiments.files import atomic_write
 
 
 def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:
@@ -34,12 +34,13 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
 
 def write_tables(df: pd.DataFrame, stem: Path) -> list[Path]:
     """Per-run table as Parquet and CSV, atomically."""
-    pq, csv = stem.with_suffix(".parquet"), stem.with_suffix(".csv")
-    _atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
-    _atomic_write(csv, lambda tmp: df.to_csv(tmp, index=False))
+    # appended, not with_suffix: names may hold dots (--set suffixes, "fig5.v2")
+    pq, csv = (stem.parent / f"{stem.name}.{ext}" for ext in ("parquet", "csv"))
+    atomic_write(pq, lambda tmp: df.to_parquet(tmp, index=False))
+    atomic_write(csv, lambda tmp: df.to_csv(tmp, index=False))
     return [pq, csv]
 
 
 def write_text(path: Path, text: str) -> Path:
-    _atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
     return path

@@ -19,9 +19,8 @@ from __future__ import annotations
 import json
 import os
 import sys
-import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from concurrent.futures import (
     BrokenExecutor,
     CancelledError,
@@ -40,6 +39,7 @@ from tqdm import tqdm
 from estim import _kernels as _k
 from experiments.engagement import timed_engagement
 from experiments.errors import InputError
+from experiments.files import atomic_write
 from experiments.intercept_scenario import InterceptScenario
 from experiments.provenance import code_identity
 from experiments.stats import summary_stats
@@ -80,25 +80,13 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name, suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
     return Path(out_dir) / f"{sc.name}-{estimator}-{noise}-s{seed}.parquet"
 
 
 def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
-    _atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
 
 
 def run_experiment(
@@ -135,7 +123,7 @@ def run_experiment(
         except Exception as exc:  # a corrupt file is never produced by atomic writes
             raise InputError(f"{path}: cannot read previous results ({exc})") from None
         rows = [r for r in rows if r["run"] < runs]
-    _atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
+    atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
     done = {int(r["run"]) for r in rows}
     todo = [j for j in range(runs) if j not in done]
     base = {"scenario": sc.name, "estimator": estimator, "noise": noise, "seed": seed}

@@ -394,3 +394,84 @@ def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tm
     ref = run_experiment(load_scenario(edited), "infoset", "random", 4, 11, tmp_path / "e", 1,
                          progress=False)  # fmt: skip
     pd.testing.assert_frame_equal(_table(pd.read_parquet(mine)), _table(ref))
+
+
+def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
+    """``sweep`` runs every value as a ``--set`` override: its rows equal ``intercept``
+    with that override (same seed, same truths), and it writes the table and the
+    figure. Names with dots (the key) keep their file extensions."""
+    out = tmp_path / "sw"
+    r = cli_inproc(
+        capsys, "sweep", short, "--key", "model.nu_mps2", "--values", "[0.002, 0.02]",
+        "--estimators", "infoset,ekf", "--noise", "random", "--runs", "2", "--out", out,
+        "--no-progress", "--json",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout.strip().splitlines()[-1])
+    assert res["key"] == "model.nu_mps2" and res["values"] == [0.002, 0.02]
+    assert [(row["value"], row["estimator"]) for row in res["rows"]] == [
+        ("0.002", "infoset"), ("0.002", "ekf"), ("0.02", "infoset"), ("0.02", "ekf"),
+    ]  # fmt: skip
+    for ext in ("csv", "md", "png", "svg"):
+        assert (out / f"short-sweep-model.nu_mps2.{ext}").is_file()
+    r2 = cli_inproc(
+        capsys, "intercept", short, "--set", "model.nu_mps2=0.02", "--estimator", "ekf",
+        "--noise", "random", "--runs", "2", "--out", tmp_path / "one", "--no-progress", "--json",
+    )  # fmt: skip
+    one = json.loads(r2.stdout.strip().splitlines()[-1])
+    assert one["miss_m"] == res["rows"][3]["miss_m"]
+    assert one["fuel_mps"] == res["rows"][3]["fuel_mps"]
+    assert res["rows"][0]["miss_m"] != res["rows"][2]["miss_m"]  # nu changes the set
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--key", "nu_mps2", "--values", "[1]"], "expected TABLE.KEY"),
+        (["--key", "model.nu_mps2", "--values", "[]"], "non-empty TOML array"),
+        (["--key", "model.nu_mps2", "--values", "0.1"], "non-empty TOML array"),
+        (["--key", "model.nu_mps2", "--values", "[0.1, -1]"], "field 'model.nu_mps2' must be"),
+    ],
+)
+def test_sweep_bad_input_exits_2_before_any_run(short, tmp_path, capsys, args, message):
+    r = cli_inproc(capsys, "sweep", short, "--out", tmp_path / "x", "--no-progress", *args)
+    assert r.returncode == 2 and message in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    assert not (tmp_path / "x" / "runs").exists()  # every value checked first
+
+
+def test_compare_files_keep_their_extensions_when_the_name_has_dots(short, tmp_path, capsys):
+    """A ``--set`` suffix puts dots into the scenario name; output files must still be
+    ``<name>-compare.parquet`` etc., not truncated at the first dot."""
+    r = cli_inproc(
+        capsys, "compare", short, "--set", "model.nu_mps2=0.01", "--estimators", "infoset",
+        "--noise", "random", "--runs", "1", "--out", tmp_path, "--no-progress",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    stem = "short+model.nu_mps2=0.01-compare"
+    for name in (f"{stem}.parquet", f"{stem}.csv", f"{stem}.md", f"{stem}-cdf.png"):
+        assert (tmp_path / name).is_file(), name
+
+
+def test_code_identity_follows_the_sources_that_decide_a_run(tmp_path, monkeypatch):
+    """The hash changes with an estimator's source (even uncommitted) and not with a
+    presentation module (plots, tables, command line)."""
+    import shutil
+
+    from experiments import provenance
+
+    for pkg in provenance.PACKAGES:
+        shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    identity = provenance.code_identity.__wrapped__  # uncached
+    real = identity()["sources_sha256"]
+    monkeypatch.setattr(provenance, "ROOT", tmp_path)
+    h0 = identity()["sources_sha256"]
+    assert h0 == real  # the copy hashes as the package does
+    with (tmp_path / "experiments" / "plots.py").open("a") as fh:
+        fh.write("\n# a new figure\n")
+    with (tmp_path / "experiments" / "cmd_compare.py").open("a") as fh:
+        fh.write("\n# a new option\n")
+    assert identity()["sources_sha256"] == h0
+    with (tmp_path / "estim" / "infoset.py").open("a") as fh:
+        fh.write("\n# an edit\n")
+    assert identity()["sources_sha256"] != h0
