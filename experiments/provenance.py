@@ -55,3 +55,8 @@ def _git_commit() -> str | None:
     if out.returncode != 0:
         return None
     return out.stdout.strip() or None
+
+
+def sources_sha256() -> str:
+    """This process's :func:`code_identity` hash (run on Dask workers to compare)."""
+    return str(code_identity()["sources_sha256"])

@@ -37,6 +37,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from estim import _kernels as _k
+from experiments import provenance
 from experiments.engagement import timed_engagement
 from experiments.errors import InputError
 from experiments.files import atomic_write
@@ -67,6 +68,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         except (OSError, TimeoutError) as exc:
             raise InputError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
         try:
+            _check_workers_code(client, scheduler)
             yield client.get_executor()
         finally:
             client.close()
@@ -78,6 +80,24 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         yield pool
     finally:
         pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _check_workers_code(client, scheduler: str) -> None:
+    """Refuse a cluster whose workers run other sources than this process: their rows
+    would be recorded under this process's code identity."""
+    here = code_identity()["sources_sha256"]
+    try:
+        theirs = client.run(provenance.sources_sha256)  # imported on each worker
+    except Exception as exc:  # e.g. the package is not installed on a worker
+        raise InputError(
+            f"Dask workers at {scheduler} cannot run this package ({type(exc).__name__}: {exc})"
+        ) from None
+    for worker, h in sorted(theirs.items()):
+        if h != here:
+            raise InputError(
+                f"Dask worker {worker} runs other code (sources {h[:12]}, here {here[:12]}); "
+                "install the same version on every worker"
+            )
 
 
 def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
