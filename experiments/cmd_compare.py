@@ -47,9 +47,8 @@ def add_arguments(p) -> None:
     )
 
 
-def run(args) -> dict[str, Any]:
-    sc, runs, seed, out = resolve(args)
-    t0 = time.perf_counter()
+def run_grid(sc, args, runs: int, seed: int, out) -> tuple[list[dict], list[pd.DataFrame]]:
+    """Every estimator x noise of ``args`` on the same seeds: summaries and run tables."""
     rows, frames = [], []
     for est in args.estimators:
         for noise in args.noise:
@@ -60,6 +59,13 @@ def run(args) -> dict[str, Any]:
             )  # fmt: skip
             rows.append(summarise(df, sc, est, noise, seed, time.perf_counter() - t1))
             frames.append(df)
+    return rows, frames
+
+
+def run(args) -> dict[str, Any]:
+    sc, runs, seed, out = resolve(args)
+    t0 = time.perf_counter()
+    rows, frames = run_grid(sc, args, runs, seed, out)
     table = pd.concat(frames, ignore_index=True)
     stem = out / f"{sc.name}-compare"
     files = write_tables(table, stem)

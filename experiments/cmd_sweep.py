@@ -25,11 +25,11 @@ import pandas as pd
 
 from experiments import plots
 from experiments.cmd_compare import add_arguments as add_compare_arguments
+from experiments.cmd_compare import run_grid
 from experiments.errors import InputError
 from experiments.files import atomic_write
 from experiments.intercept_scenario import load_scenario
 from experiments.report import summary_markdown, write_text
-from experiments.runner import run_experiment, summarise
 
 
 def _toml_values(text: str) -> list[Any]:
@@ -73,15 +73,8 @@ def run(args) -> dict[str, Any]:
     ]
     rows = []
     for value, sc in zip(args.values, scenarios, strict=True):
-        for est in args.estimators:
-            for noise in args.noise:
-                t1 = time.perf_counter()
-                df = run_experiment(
-                    sc, est, noise, runs, seed, out / "runs", args.workers, args.scheduler,
-                    not args.no_progress,
-                )  # fmt: skip
-                row = summarise(df, sc, est, noise, seed, time.perf_counter() - t1)
-                rows.append({"value": json.dumps(value), **row})
+        summaries, _ = run_grid(sc, args, runs, seed, out)
+        rows += [{"value": json.dumps(value), **row} for row in summaries]
     stem = f"{base.name}-sweep-{key}"
     flat = pd.json_normalize(rows, sep="_")
     csv = out / f"{stem}.csv"
