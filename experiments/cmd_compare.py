@@ -38,7 +38,12 @@ def _list_of(allowed):
 
 def add_arguments(p) -> None:
     add_common(p)
-    p.add_argument("--estimators", type=_list_of(ESTIMATORS), default=list(ESTIMATORS))
+    p.add_argument(
+        "--estimators",
+        type=_list_of(ESTIMATORS),
+        default=list(ESTIMATORS),
+        help=f"comma-separated, from {','.join(ESTIMATORS)} (default: all)",
+    )
     p.add_argument(
         "--noise",
         type=_list_of(NOISES),

@@ -63,7 +63,9 @@ def run(args) -> dict[str, Any]:
     base = load_scenario(args.scenario, args.overrides)
     runs = args.runs or base.experiment["runs"]
     seed = base.experiment["seed"] if args.seed is None else args.seed
-    out = Path(args.out) if args.out else Path("results") / f"{base.name}-sweep"
+    # the default is compare's folder: the runs' files carry the +key=value suffix and
+    # the tables the key, so nothing collides
+    out = Path(args.out) if args.out else Path("results") / base.name
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: not a directory")
     # every value is validated before the first run starts
