@@ -18,7 +18,6 @@ import argparse
 import json
 import time
 import tomllib
-from pathlib import Path
 from typing import Any
 
 import pandas as pd
@@ -26,6 +25,7 @@ import pandas as pd
 from experiments import plots
 from experiments.cmd_compare import add_arguments as add_compare_arguments
 from experiments.cmd_compare import run_grid
+from experiments.cmd_intercept import resolve
 from experiments.errors import InputError
 from experiments.files import atomic_write
 from experiments.intercept_scenario import load_scenario
@@ -60,14 +60,9 @@ def run(args) -> dict[str, Any]:
     if key.count(".") != 1 or not all(key.split(".")):
         raise InputError(f"--key {args.key!r}: expected TABLE.KEY (e.g. model.nu_mps2)")
     t0 = time.perf_counter()
-    base = load_scenario(args.scenario, args.overrides)
-    runs = args.runs or base.experiment["runs"]
-    seed = base.experiment["seed"] if args.seed is None else args.seed
-    # the default is compare's folder: the runs' files carry the +key=value suffix and
-    # the tables the key, so nothing collides
-    out = Path(args.out) if args.out else Path("results") / base.name
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: not a directory")
+    # compare's folder by default: the runs' files carry the +key=value suffix and the
+    # tables the key, so nothing collides
+    base, runs, seed, out = resolve(args)
     # every value is validated before the first run starts
     scenarios = [
         load_scenario(args.scenario, [*args.overrides, f"{key}={json.dumps(v)}"])
