@@ -73,8 +73,22 @@ def game_range(range_true_m: float, rel_bound: float, x_worst_m: float, x_lo: fl
     return float(np.clip(x_worst_m, range_true_m * (1 - b), range_true_m * (1 + b)))
 
 
+class _Memoryless:
+    """Generators whose errors do not depend on the engagement's history: the
+    engagement's reports (range measurement, impulses, prediction) are ignored."""
+
+    def observe_range(self, measurement: Range) -> None:
+        pass
+
+    def observe(self, impulses: Sequence[float | Impulse]) -> None:
+        pass
+
+    def predict(self, dt_s: float) -> None:
+        pass
+
+
 @dataclass
-class RandomNoise:
+class RandomNoise(_Memoryless):
     """Uniform errors within the bounds (seeded generator, no global state)."""
 
     model: ChannelModel
@@ -88,18 +102,9 @@ class RandomNoise:
         b = self.model.range_rel_bound
         return float(range_true_m * (1 + self.rng.uniform(-b, b)))
 
-    def observe_range(self, measurement: Range) -> None:
-        pass
-
-    def observe(self, impulses: Sequence[float | Impulse]) -> None:
-        pass
-
-    def predict(self, dt_s: float) -> None:
-        pass
-
 
 @dataclass
-class BiasNoise:
+class BiasNoise(_Memoryless):
     """Errors at the bound with a per-run sign per channel (module docstring).
 
     The signs are drawn from ``rng`` when the generator is built (the engagement builds
@@ -128,15 +133,6 @@ class BiasNoise:
     def range(self, range_true_m: float) -> float:
         b = self.model.range_rel_bound * (1 - self.margin)
         return float(range_true_m * (1 + self.range_sign * b))
-
-    def observe_range(self, measurement: Range) -> None:
-        pass
-
-    def observe(self, impulses: Sequence[float | Impulse]) -> None:
-        pass
-
-    def predict(self, dt_s: float) -> None:
-        pass
 
 
 class GameNoise:
