@@ -224,7 +224,7 @@ def run_engagement(
                     noise.range(d_m),
                     model,
                     r_km,
-                    x_m,
+                    d_m,
                     dict(zip(channels, alphas, strict=True)),
                     axis_rng,
                 )
@@ -280,7 +280,7 @@ def _range_measurement(
     d_meas_m: float,
     model: ChannelModel,
     r_km: np.ndarray,
-    x_m: float,
+    d_true_m: float,
     measured: dict[str, float],
     axis_rng: np.random.Generator,
 ) -> Range:
@@ -292,13 +292,13 @@ def _range_measurement(
     allows (it grows as the range closes), so it holds for the true range.
     """
     bound = float(model.bearing_bound(d_meas_m / (1.0 + model.range_rel_bound)))
+    b_true = float(model.bearing_bound(d_true_m))
     bearings = []
-    for c in CHANNELS:
+    for i, c in enumerate(CHANNELS, start=1):  # r_km rows: x, then the channels' axes
         if c in measured:
             bearings.append(measured[c])
         else:
-            a_true = math.atan2(r_km[CHANNELS.index(c) + 1] * 1e3, x_m)
-            b_true = float(model.bearing_bound(float(np.linalg.norm(r_km)) * 1e3))
+            a_true = math.atan2(r_km[i] * 1e3, r_km[0] * 1e3)  # as x_m, in m
             bearings.append(a_true + axis_rng.uniform(-b_true, b_true))
     return Range(d_meas_m, off_axis_rad=off_axis_bound_rad(bearings, [bound, bound]))
 
