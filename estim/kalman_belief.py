@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from estim.base import Belief, Extremes, StateFunction
+from estim.costs import MissForecast
 from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
@@ -222,8 +223,8 @@ class GaussianBelief(Belief):
     def extremes(self, fn: StateFunction) -> Extremes:
         """Min and max of ``fn`` over the n-sigma ellipsoid, with the points.
 
-        The miss forecast ``Pi`` of a :class:`~estim.model.ChannelModel` (recognised
-        as the bound method ``model.miss_forecast_m``) takes the exact route of
+        The miss forecast ``Pi`` (a :class:`~estim.costs.MissForecast`, recognised by
+        type) takes the exact route of
         :meth:`_forecast_extremes`. Any other function: samples of the ball (the
         centre, a half-radius shell and 1024 surface points), then from the best
         surface samples the fixed-point iteration ``u <- +-grad/|grad|`` on the unit
@@ -234,11 +235,8 @@ class GaussianBelief(Belief):
         """
         if self.is_empty:
             raise ValueError(f"extremes of an empty Gaussian belief (status {self.status})")
-        model = getattr(fn, "__self__", None)
-        if getattr(fn, "__func__", None) is ChannelModel.miss_forecast_m and isinstance(
-            model, ChannelModel
-        ):
-            return self._forecast_extremes(fn, model)
+        if isinstance(fn, MissForecast):
+            return self._forecast_extremes(fn, fn.model)
         return self._generic_extremes(fn)
 
     # -- extremes ------------------------------------------------------------------

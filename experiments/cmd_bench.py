@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from estim.costs import MissForecast
 from estim.model import Bearing
 from experiments.cmd_intercept import positive_int
 from experiments.engagement import build_estimator, channel_model, run_engagement
@@ -67,7 +68,7 @@ def step_cost_us(name: str, sc, steps: int, repeat: int) -> float:
         t0 = time.perf_counter()
         for a in alphas:
             b = est.update(b, Bearing(a))
-            b.extremes(model.miss_forecast_m)
+            b.extremes(MissForecast(model))
             b = est.shift(b, 0.5)
             b = est.predict(b, dt)
         times.append((time.perf_counter() - t0) / steps * 1e6)

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from estim.costs import MissForecast
 from estim.infoset import InformationSet, InformationSetEstimator
 from estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
 
@@ -48,7 +49,7 @@ def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -
     model = belief.model
     if belief.is_empty:
         return alpha_true + bound_true
-    ext = belief.extremes(model.miss_forecast_m)
+    ext = belief.extremes(MissForecast(model))
     worst = ext.argmax if abs(ext.max_value) >= abs(ext.min_value) else ext.argmin
     a_w, x_w = float(worst[0]), float(worst[2])
     # a tiny inward margin keeps both points strictly inside after rounding
@@ -165,7 +166,7 @@ class GameNoise:
             return range_true_m
         worst, worst_val = None, -1.0
         for s in live:
-            ext = s.extremes(self.model.miss_forecast_m)
+            ext = s.extremes(MissForecast(self.model))
             for val, arg in ((ext.max_value, ext.argmax), (ext.min_value, ext.argmin)):
                 if abs(val) > worst_val:
                     worst, worst_val = arg, abs(val)

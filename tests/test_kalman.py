@@ -13,6 +13,7 @@ import pytest
 from scipy import stats
 from scipy.spatial.distance import mahalanobis
 
+from estim.costs import MissForecast
 from estim.kalman import KalmanChannelEstimator
 from estim.kalman_belief import GaussianBelief, psd_cholesky
 from estim.model import Bearing, ChannelModel, Range
@@ -165,7 +166,7 @@ def test_wrappers_never_mutate_the_beliefs_they_are_given(kind, coords):
         est.predict(b, DT),
         est.threshold(b, 100.0),
     ]
-    b.extremes(MODEL.miss_forecast_m)
+    b.extremes(MissForecast(MODEL))
     b.extremes(lambda s: s[:, 0])
     b.contains([0.0, 0.0, 5.8e6])
     c = b.centre()
@@ -220,7 +221,7 @@ def test_extremes_of_the_miss_forecast_against_brute_force_sampling(coords, stra
     rng = np.random.default_rng(11 + straddle)
     for _ in range(4):
         b = _random_belief(rng, coords, centre_r=0.0 if straddle else None)
-        ext = b.extremes(MODEL.miss_forecast_m)
+        ext = b.extremes(MissForecast(MODEL))
         d = rng.normal(size=(300_000, 3))
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         radius = np.where(np.arange(len(d)) < 100_000, rng.uniform(size=len(d)) ** (1 / 3), 1.0)

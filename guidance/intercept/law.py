@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from estim.base import Belief, Extremes
+from estim.costs import MissForecast
 from estim.model import ChannelModel
 
 
@@ -57,7 +58,7 @@ class ForecastCentringLaw:
 
     def forecast(self, belief: Belief) -> Extremes:
         """Extremes of ``Pi`` over the belief (with the states attaining them)."""
-        return belief.extremes(self.model.miss_forecast_m)
+        return belief.extremes(MissForecast(self.model))
 
     def command_mps(self, belief: Belief) -> float:
         """Unlimited impulse ``k = -(Pi_min + Pi_max) e / (x* + x**)``; 0 if empty."""
