@@ -1,0 +1,503 @@
+"""Compiled (numba) loops of the node set (:mod:`estim.nodeset`).
+
+Two kernels, so that a step costs a few calls whatever the number of nodes:
+
+* :func:`apply_ops` runs a sequence of recorded operations (bearing strip, impulse,
+  range interval, prediction with threshold) on a batch of node polygons: one
+  operation on the live set each step, or the whole log on new nodes when a piece is
+  re-gridded;
+* :func:`cell_bounds` bounds the zero-effort miss and the lateral position over every
+  cell between nodes from the concavity of support functions
+  (:mod:`estim.nodeset_bounds` has the derivation).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from estim._kernels import _dedupe_tail
+
+#: operation codes of the log
+BEARING, IMPULSE, RANGE, PREDICT = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _convex_pass(out, start, k, tol):
+    """Drop the vertices of ``out[start:k]`` (a CCW polygon, convex up to rounding)
+    that do not turn left by more than ``tol`` (a stack pass from the lowest-x vertex:
+    linear time). Returns the new end."""
+    m = k - start
+    if m < 3:
+        return k
+    first = start
+    for v in range(start + 1, k):
+        if out[v, 0] < out[first, 0] or (out[v, 0] == out[first, 0] and out[v, 1] < out[first, 1]):
+            first = v
+    buf = np.empty((m + 1, 2))
+    h = 0
+    for r in range(m + 1):
+        v = start + (first - start + r) % m
+        px, py = out[v, 0], out[v, 1]
+        while h >= 2:
+            ax, ay = buf[h - 2, 0], buf[h - 2, 1]
+            bx, by = buf[h - 1, 0], buf[h - 1, 1]
+            if (bx - ax) * (py - ay) - (by - ay) * (px - ax) > tol:
+                break
+            h -= 1
+        buf[h, 0], buf[h, 1] = px, py
+        h += 1
+    h -= 1  # the last point repeats the first
+    for r in range(h):
+        out[start + r, 0], out[start + r, 1] = buf[r, 0], buf[r, 1]
+    return start + h
+
+
+@njit(cache=True)
+def _clip1(src, m, nx, ny, bound, dst):
+    """Sutherland-Hodgman of one polygon against ``nx x + ny y <= bound``."""
+    k = 0
+    sc_max = 0.0
+    for j in range(m):
+        sc_max = max(sc_max, abs(src[j, 0]), abs(src[j, 1]))
+    for j in range(m):
+        c = (j + 1) % m
+        sa = src[j, 0] * nx + src[j, 1] * ny - bound
+        sb = src[c, 0] * nx + src[c, 1] * ny - bound
+        if sa <= 0.0:
+            dst[k, 0], dst[k, 1] = src[j, 0], src[j, 1]
+            k += 1
+        if (sa <= 0.0) != (sb <= 0.0):
+            t = sa / (sa - sb)
+            dst[k, 0] = src[j, 0] + t * (src[c, 0] - src[j, 0])
+            dst[k, 1] = src[j, 1] + t * (src[c, 1] - src[j, 1])
+            k += 1
+    return _dedupe_tail(dst, 0, k, 1e-15 * max(sc_max, 1.0))
+
+
+@njit(cache=True)
+def _segment1(src, m, g0, g1, dst):
+    """One polygon plus the segment ``[-g, g]`` (as ``_kernels.minkowski_segment``)."""
+    if m == 0:
+        return 0
+    if g0 == 0.0 and g1 == 0.0:
+        for j in range(m):
+            dst[j, 0], dst[j, 1] = src[j, 0], src[j, 1]
+        return m
+    scale = 0.0
+    for j in range(m):
+        scale = max(scale, abs(src[j, 0]), abs(src[j, 1]))
+    tol = 1e-14 * scale * max(abs(g0), abs(g1))
+    flat = True
+    for j in range(m):
+        c = (j + 1) % m
+        cr = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
+        if abs(cr) > tol:
+            flat = False
+    k = 0
+    for j in range(m):
+        if flat:
+            sp, sc = -1.0, 1.0
+        else:
+            p = (j - 1) % m
+            c = (j + 1) % m
+            crp = g0 * (src[j, 1] - src[p, 1]) - g1 * (src[j, 0] - src[p, 0])
+            crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
+            sp = 1.0 if crp > 0.0 else -1.0
+            sc = 1.0 if crc > 0.0 else -1.0
+        dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
+        k += 1
+        if sc != sp:
+            dst[k, 0], dst[k, 1] = src[j, 0] + sc * g0, src[j, 1] + sc * g1
+            k += 1
+    return k
+
+
+@njit(cache=True)
+def _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps):
+    """Time at the start of every operation and the hard label limits after it."""
+    n_ops = kinds.shape[0]
+    n_p = u_lo.shape[0]
+    times = np.empty(n_ops + 1)
+    lo = np.empty((n_ops + 1, n_p))
+    hi = np.empty((n_ops + 1, n_p))
+    lo[0], hi[0] = hard_lo, hard_hi
+    times[0] = t
+    for o in range(n_ops):
+        lo[o + 1], hi[o + 1] = lo[o], hi[o]
+        times[o + 1] = times[o]
+        if kinds[o] == RANGE:
+            for b in range(n_p):
+                lo[o + 1, b] = max(lo[o, b], pa[o] * u_lo[b] + times[o])
+                hi[o + 1, b] = min(hi[o, b], pb[o] * u_hi[b] + times[o])
+        elif kinds[o] == PREDICT:
+            times[o + 1] = times[o] + pa[o]
+            for b in range(n_p):
+                # every state of a node under eps for all e of its piece leaves the set
+                lo[o + 1, b] = max(lo[o, b], eps * u_lo[b] + times[o + 1])
+    return times, lo, hi
+
+
+@njit(cache=True)
+def apply_ops(
+    xy, off, label, piece, u_lo, u_hi, hard_lo, hard_hi, t,
+    kinds, pa, pb, q_lo, q_hi,
+    scale, e_nom, eps, bb_end, bb_start, bb_ref, strip_margin,
+):  # fmt: skip
+    """Apply the operations ``kinds[o]`` in order to the node polygons.
+
+    Parameters (per operation ``o``): ``BEARING``: ``pa`` = measured bearing (rad);
+    ``IMPULSE``: ``q_lo, q_hi`` = the interval of the ``V~`` increment per piece;
+    ``RANGE``: ``pa, pb`` = the interval of ``x`` (m); ``PREDICT``: ``pa`` = step (s),
+    ``q_hi`` = the bound of ``v u`` per piece. Nodes have labels ``label`` (time to go
+    at ``t = 0``) and pieces ``piece``; ``hard_lo, hard_hi`` (per piece, labels) are
+    narrowed by range intervals and the threshold. Each node runs through all the
+    operations in two scratch buffers (no allocation per operation). Returns the
+    polygons, the time and the hard limits.
+    """
+    n = off.shape[0] - 1
+    n_ops = kinds.shape[0]
+    times, h_lo, h_hi = _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps)
+    floor = 1e-3 * min(bb_start, bb_end)
+    vmax = 4
+    for i in range(n):
+        vmax = max(vmax, off[i + 1] - off[i])
+    cap = vmax + 2 * n_ops + 8
+    a_buf = np.empty((cap, 2))
+    b_buf = np.empty((cap, 2))
+    out = np.empty((off[n] + n * (2 * n_ops + 8), 2))
+    new_off = np.zeros(n + 1, dtype=np.int64)
+    k_out = 0
+    for i in range(n):
+        m = off[i + 1] - off[i]
+        for j in range(m):
+            a_buf[j, 0], a_buf[j, 1] = xy[off[i] + j, 0], xy[off[i] + j, 1]
+        b = piece[i]
+        for o in range(n_ops):
+            if m == 0:
+                break
+            kind = kinds[o]
+            tau = label[i] - times[o]
+            if kind == BEARING:
+                # widest strip over the piece: the bound at its smallest range
+                x = tau / u_hi[b]
+                a = max(bb_end + (bb_start - bb_end) * x / bb_ref, floor)
+                h = a / scale * (1.0 + strip_margin) + strip_margin
+                c = pa[o] / scale
+                m = _clip1(a_buf, m, 1.0, 0.0, c + h, b_buf)
+                m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
+            elif kind == IMPULSE:
+                zs = e_nom * tau
+                dy = 0.5 * (q_lo[o, b] + q_hi[o, b]) * zs
+                for j in range(m):
+                    a_buf[j, 1] += dy
+                m = _segment1(a_buf, m, 0.0, 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs, b_buf)
+                for j in range(m):
+                    a_buf[j, 0], a_buf[j, 1] = b_buf[j, 0], b_buf[j, 1]
+            elif kind == RANGE:
+                if label[i] < h_lo[o + 1, b] or label[i] > h_hi[o + 1, b]:
+                    m = 0
+            else:  # PREDICT
+                dt = pa[o]
+                t1 = tau - dt
+                if t1 <= 0.0 or label[i] < h_lo[o + 1, b]:
+                    m = 0
+                    break
+                nu_s = q_hi[o, b]
+                shear = dt / (tau * t1) / (e_nom * scale)
+                for j in range(m):
+                    a_buf[j, 0] += shear * a_buf[j, 1]
+                ga = nu_s * dt * dt / (2.0 * t1) / scale
+                gz = nu_s * dt * (tau + t1) / 2.0 * e_nom
+                m = _segment1(a_buf, m, ga, gz, b_buf)
+                sc = 0.0
+                for j in range(m):
+                    sc = max(sc, abs(b_buf[j, 0]), abs(b_buf[j, 1]))
+                m = _dedupe_tail(b_buf, 0, m, 1e-15 * sc)
+                m = _convex_pass(b_buf, 0, m, 0.0)
+                for j in range(m):
+                    a_buf[j, 0], a_buf[j, 1] = b_buf[j, 0], b_buf[j, 1]
+        for j in range(m):
+            out[k_out, 0], out[k_out, 1] = a_buf[j, 0], a_buf[j, 1]
+            k_out += 1
+        new_off[i + 1] = k_out
+    return out[:k_out].copy(), new_off, times[n_ops], h_lo[n_ops], h_hi[n_ops]
+
+
+@njit(cache=True)
+def _support(xy, off, j, tau, p, q, scale, e_nom):
+    """Max and min of ``p Y~ + q V~`` over node ``j``'s polygon (-inf/inf if empty)."""
+    hi, lo = -np.inf, np.inf
+    if j < 0:
+        return hi, lo
+    ca = scale * (p * tau - q)
+    cz = q / (e_nom * tau)
+    for v in range(off[j], off[j + 1]):
+        val = xy[v, 0] * ca + xy[v, 1] * cz
+        hi = max(hi, val)
+        lo = min(lo, val)
+    return hi, lo
+
+
+@njit(cache=True)
+def _secant(t4, f4, lo_s, hi_s, rtol):
+    """Max over ``[lo_s, hi_s]`` of the concave bound from four samples (see
+    :func:`estim.nodeset_bounds.secant_bound`); returns the bound and its argument."""
+    f0, f1, f2, f3 = f4[0], f4[1], f4[2], f4[3]
+    t0, t1, t2, t3 = t4[0], t4[1], t4[2], t4[3]
+    if not np.isfinite(f1) and not np.isfinite(f2):
+        return -np.inf, lo_s
+    has_l = np.isfinite(f0) and np.isfinite(f1)
+    has_r = np.isfinite(f2) and np.isfinite(f3)
+    s_l = (f1 - f0) / (t1 - t0) if has_l else 0.0
+    s_r = (f3 - f2) / (t3 - t2) if has_r else 0.0
+    best, arg = -np.inf, lo_s
+    cands = np.empty(3)
+    cands[0], cands[1], cands[2] = lo_s, hi_s, lo_s
+    if has_l and has_r and s_l != s_r:
+        tx = (f2 - f1 + s_l * t1 - s_r * t2) / (s_l - s_r)
+        cands[2] = min(max(tx, lo_s), hi_s)
+    for c in range(3):
+        tt = cands[c]
+        v = np.inf
+        if has_l:
+            v = min(v, f1 + s_l * (tt - t1))
+        if has_r:
+            v = min(v, f2 + s_r * (tt - t2))
+        if v > best:
+            best, arg = v, tt
+    # the node values bound their own slice exactly
+    if np.isfinite(f1) and lo_s <= t1 <= hi_s and not best >= f1:
+        best, arg = f1, t1
+    if np.isfinite(f2) and lo_s <= t2 <= hi_s and not best >= f2:
+        best, arg = f2, t2
+    if np.isfinite(best):
+        best += rtol * abs(best)
+    return best, arg
+
+
+@njit(cache=True)
+def cell_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
+    """Bounds over each cell of ``zs = e_nom (Y~ + V~ tau)`` and of ``Y~``.
+
+    ``zs`` over the cell is at most the larger of the bounds of the two fixed
+    directions ``e_nom (1, tau_i)`` and ``e_nom (1, tau_i+1)`` (a convex combination
+    of them at any ``tau`` of the cell). Returns arrays ``(m, 4)``: ``zs_hi,
+    arg_hi, zs_lo, arg_lo`` and ``(m, 2)``: ``y_hi, y_lo``.
+    """
+    m = table.shape[0]
+    zs = np.empty((m, 4))
+    yb = np.empty((m, 2))
+    f_hi = np.empty(4)
+    f_lo = np.empty(4)
+    for c in range(m):
+        best_hi, arg_hi = -np.inf, lo_s[c]
+        best_lo, arg_lo = np.inf, lo_s[c]
+        for r in range(3):  # directions (1, tau_i), (1, tau_i+1), then (1, 0) for Y~
+            if r < 2:
+                t_ref = tau4[c, 1 + r]
+                p, q = e_nom, e_nom * t_ref
+            else:
+                p, q = 1.0, 0.0
+            for k in range(4):
+                j = table[c, k]
+                tj = tau[j] if j >= 0 else 1.0
+                h, lo = _support(xy, off, j, tj, p, q, scale, e_nom)
+                f_hi[k] = h
+                f_lo[k] = -lo
+            up, a_up = _secant(tau4[c], f_hi, lo_s[c], hi_s[c], rtol)
+            dn, a_dn = _secant(tau4[c], f_lo, lo_s[c], hi_s[c], rtol)
+            if r < 2:
+                if up > best_hi:
+                    best_hi, arg_hi = up, a_up
+                if -dn < best_lo:
+                    best_lo, arg_lo = -dn, a_dn
+            else:
+                yb[c, 0] = up
+                yb[c, 1] = -dn
+        zs[c, 0], zs[c, 1], zs[c, 2], zs[c, 3] = best_hi, arg_hi, best_lo, arg_lo
+    return zs, yb
+
+
+@njit(cache=True)
+def support_table(xy, off, tau, nodes4, p, q, scale, e_nom):
+    """Max of ``p[d] Y~ + q[d] V~`` over each of the four nodes ``nodes4`` (m, 4)
+    for every direction ``d`` (-inf for an empty or missing node)."""
+    m = p.shape[0]
+    out = np.empty((m, 4))
+    for d in range(m):
+        for k in range(4):
+            j = nodes4[k]
+            tj = tau[j] if j >= 0 else 1.0
+            out[d, k] = _support(xy, off, j, tj, p[d], q[d], scale, e_nom)[0]
+    return out
+
+
+@njit(cache=True)
+def _lines(xy, off, j, tau_j, scale, e_nom, sign, a_out, b_out):
+    """The vertices of node ``j`` as lines ``sign e_nom (Y~ + V~ tau) = A + B tau``;
+    returns their number (0 for an empty or missing node)."""
+    if j < 0:
+        return 0
+    m = off[j + 1] - off[j]
+    for v in range(m):
+        a = xy[off[j] + v, 0] * scale
+        zs = xy[off[j] + v, 1]
+        a_out[v] = sign * e_nom * a * tau_j
+        b_out[v] = sign * (zs / tau_j - e_nom * a)
+    return m
+
+
+@njit(cache=True)
+def _envelope_at(a, b, m, t):
+    """Index of the line of ``a + b t`` that is largest at ``t`` (upper envelope)."""
+    best, arg = -np.inf, -1
+    for v in range(m):
+        val = a[v] + b[v] * t
+        if val > best:
+            best, arg = val, v
+    return arg
+
+
+@njit(cache=True)
+def _quad(l0, l1, d0, d1, s0, s1):
+    """Coefficients of ``(l0 + l1 t) + (d0 + d1 t)(s0 + s1 t)`` in powers of ``t``."""
+    return l0 + d0 * s0, l1 + d0 * s1 + d1 * s0, d1 * s1
+
+
+@njit(cache=True)
+def _zem_bound_cell(xy, off, tau, nodes, t4, lo_s, hi_s, scale, e_nom, sign, buf_a, buf_b, rtol):
+    """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``sign zs`` (see
+    :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained."""
+    counts = np.zeros(4, dtype=np.int64)
+    for k in range(4):
+        j = nodes[k]
+        tj = tau[j] if j >= 0 else 1.0
+        counts[k] = _lines(xy, off, j, tj, scale, e_nom, sign, buf_a[k], buf_b[k])
+    if counts[1] == 0 and counts[2] == 0:
+        return -np.inf, lo_s
+    has_l = counts[0] > 0 and counts[1] > 0
+    has_r = counts[2] > 0 and counts[3] > 0
+    if not has_l and not has_r:
+        return np.inf, lo_s
+    # breakpoints: where the largest line of a node changes (consecutive vertices tie)
+    nbk = 0
+    for k in range(4):
+        nbk += counts[k]
+    pts = np.empty(nbk + 2)
+    pts[0], pts[1] = lo_s, hi_s
+    npts = 2
+    for k in range(4):
+        m = counts[k]
+        for v in range(m):
+            w = (v + 1) % m
+            db = buf_b[k, v] - buf_b[k, w]
+            if db != 0.0:
+                tx = (buf_a[k, w] - buf_a[k, v]) / db
+                if lo_s < tx < hi_s:
+                    pts[npts] = tx
+                    npts += 1
+    pts = np.sort(pts[:npts])
+    h_l = t4[1] - t4[0]
+    h_r = t4[3] - t4[2]
+    best, arg = -np.inf, lo_s
+    cand = np.empty(8)
+    for s in range(npts - 1):
+        p, q = pts[s], pts[s + 1]
+        if q < p:
+            continue
+        mid = 0.5 * (p + q)
+        coef = np.zeros((2, 3))
+        for side in range(2):
+            k_in, k_out = (1, 0) if side == 0 else (2, 3)
+            if (side == 0 and not has_l) or (side == 1 and not has_r):
+                coef[side, 0] = np.inf
+                continue
+            vi = _envelope_at(buf_a[k_in], buf_b[k_in], counts[k_in], mid)
+            vo = _envelope_at(buf_a[k_out], buf_b[k_out], counts[k_out], mid)
+            l0, l1 = buf_a[k_in, vi], buf_b[k_in, vi]
+            d0, d1 = l0 - buf_a[k_out, vo], l1 - buf_b[k_out, vo]
+            if side == 0:  # secant through nodes i-1, i, extended to the right
+                s0, s1 = -t4[1] / h_l, 1.0 / h_l
+            else:  # secant through nodes i+2, i+1, extended to the left
+                s0, s1 = t4[2] / h_r, -1.0 / h_r
+            c0, c1, c2 = _quad(l0, l1, d0, d1, s0, s1)
+            coef[side, 0], coef[side, 1], coef[side, 2] = c0, c1, c2
+        nc = 0
+        cand[nc] = p
+        cand[nc + 1] = q
+        nc += 2
+        for side in range(2):
+            if np.isfinite(coef[side, 0]) and coef[side, 2] != 0.0:
+                tv = -coef[side, 1] / (2.0 * coef[side, 2])
+                if p < tv < q:
+                    cand[nc] = tv
+                    nc += 1
+        if np.isfinite(coef[0, 0]) and np.isfinite(coef[1, 0]):
+            ea = coef[0, 2] - coef[1, 2]
+            eb = coef[0, 1] - coef[1, 1]
+            ec = coef[0, 0] - coef[1, 0]
+            if ea != 0.0:
+                disc = eb * eb - 4.0 * ea * ec
+                if disc >= 0.0:
+                    r = np.sqrt(disc)
+                    for root in ((-eb + r) / (2.0 * ea), (-eb - r) / (2.0 * ea)):
+                        if p < root < q:
+                            cand[nc] = root
+                            nc += 1
+            elif eb != 0.0:
+                root = -ec / eb
+                if p < root < q:
+                    cand[nc] = root
+                    nc += 1
+        for c in range(nc):
+            t = cand[c]
+            val = np.inf
+            for side in range(2):
+                if np.isfinite(coef[side, 0]):
+                    val = min(val, coef[side, 0] + coef[side, 1] * t + coef[side, 2] * t * t)
+            if val > best:
+                best, arg = val, t
+    # the node values bound their own slice exactly
+    for k in (1, 2):
+        if counts[k] > 0 and lo_s <= t4[k] <= hi_s:
+            v = _envelope_at(buf_a[k], buf_b[k], counts[k], t4[k])
+            f = buf_a[k, v] + buf_b[k, v] * t4[k]
+            if not best >= f:
+                best, arg = f, t4[k]
+    if np.isfinite(best):
+        best += rtol * (abs(best) + 1e-300)
+    return best, arg
+
+
+@njit(cache=True)
+def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
+    """Bounds of ``zs = e_nom (Y~ + V~ tau)`` over every cell, in the direction of
+    each ``tau``.
+
+    At a fixed ``tau`` the zero-effort miss is the support of the slice in the
+    direction ``(1, tau)``; for that fixed direction the support is concave along the
+    body, so the secants of its values at the four nodes around the cell bound it
+    at ``tau``. Node ``k``'s value in direction ``(1, tau)`` is the upper envelope of
+    its vertices' lines ``A_v + B_v tau`` (linear between breakpoints), so the bound
+    is a minimum of two quadratics of ``tau`` between breakpoints, maximised exactly
+    (ends, vertices, crossings). Returns ``(m, 4)``: ``zs_hi, arg_hi, zs_lo, arg_lo``.
+    """
+    m = table.shape[0]
+    vmax = 1
+    for j in range(off.shape[0] - 1):
+        vmax = max(vmax, off[j + 1] - off[j])
+    buf_a = np.empty((4, vmax))
+    buf_b = np.empty((4, vmax))
+    out = np.empty((m, 4))
+    for c in range(m):
+        up, a_up = _zem_bound_cell(
+            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, 1.0,
+            buf_a, buf_b, rtol,
+        )  # fmt: skip
+        dn, a_dn = _zem_bound_cell(
+            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, -1.0,
+            buf_a, buf_b, rtol,
+        )  # fmt: skip
+        out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
+    return out

@@ -1,0 +1,426 @@
+"""The information set of one guidance channel as exact slices at moving nodes.
+
+Seed 003's information set is the set of all states compatible with the data. Its
+auxiliary model is *linear* in physical coordinates: with the lateral position
+``Y = alpha x`` and ``V = dY/dt``, ``Y'' = v`` (``|v| <= nu``), the range closes at a
+constant speed ``e`` (``x' = -e``), an impulse ``k`` adds ``k`` to ``V``, and a bearing
+``alpha_m`` says ``|Y - alpha_m x| <= a(x) x``. Scaling by ``u = 1/e`` (``Y~ = Y u``,
+``V~ = V u``, time to go ``tau = x u``) removes ``e`` from the bearings::
+
+    Y~'' = v u,   tau' = -1,   |Y~ - alpha_m tau| <= a(tau / u) tau,   V~ += k u
+
+so for ``u`` in a piece ``[u_lo, u_hi]`` the *relaxed* model -- ``v u`` bounded by
+``nu u_hi``, the bearing bound taken at the piece's smallest range ``tau / u_hi``,
+each impulse's ``k u`` anywhere in ``k [u_lo, u_hi]`` -- contains the true one, and
+its information set is a convex body ``K`` in ``(Y~, V~, tau)`` (``a(x) x`` is
+concave; every operation is a linear map, a Minkowski sum with a segment or an
+intersection with a convex set). With the closing speed known (one piece of zero
+width) ``K`` is the seed's information set exactly; a piece of width
+``du / u = 2e-3`` (Fig. 5's 57.9..58.1 km/s) relaxes only the impulses' and the
+disturbance's scale by that much, and bands can be split (``n_bands``).
+
+The estimator keeps the slices of ``K`` at nodes ``tau_j = label_j - t`` exactly
+(each slice is a polygon moved by the seed's own exact operations: bearing strip,
+shear, Minkowski sum with the disturbance segment, shift by the impulse), and
+bounds ``K`` between nodes by the concavity of its support functions
+(:mod:`estim.nodeset_bounds`): no state is lost between nodes, and the bound is
+tight where the nodes are dense. As bearings pin the range, nodes whose slice
+becomes empty are dropped; when fewer than ``min_live_nodes`` remain in a piece, the
+piece is re-gridded with ``n_nodes`` new nodes over the surviving interval and the
+recorded operations are replayed on them (:meth:`NodeSetEstimator.refine`), so the
+nodes follow the surviving range interval.
+
+What the slices do not know: the kinematic term the linear model neglects near the
+target (``2 omega^2 x tan alpha``, :func:`estim.infoset.kinematic_margin_mps2`) is
+added to ``nu`` for the whole piece each step, from the piece's own extremes, and an
+impulse's geometry (``k cos^2 alpha``) widens it; both are common to the piece, which
+keeps ``K`` convex. Polygons are kept in ``(a, zs) = (alpha / alpha_scale, e_nom
+(Y~ + V~ tau))``: ``zs`` is the zero-effort miss in metres for ``e = e_nom``, and the
+prediction is the unit-determinant shear of the seed.
+
+An update that empties every node (after refinement) contradicts the model: it is
+rejected, the set before it kept and the status set to ``"contradiction"``. When every
+node has passed under eps the set is empty with status ``"terminal"``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from estim import _kernels as _k
+from estim import _nodeset_kernels as _nk
+from estim.base import Estimator
+from estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
+from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
+from estim.nodeset_belief import NodeSet
+from estim.nodeset_bounds import OpLog
+from estim.polygons import ConvexPolygons
+
+__all__ = ["NodeSet", "NodeSetEstimator"]
+
+FloatArray = NDArray[np.float64]
+
+#: refinement stops when the new nodes are closer than this (relative to tau)
+MIN_SPACING_REL = 1e-12
+
+
+@dataclass(frozen=True)
+class NodeSetEstimator(Estimator[NodeSet]):
+    """Set-membership estimator of one channel on exact node slices; configuration only.
+
+    Parameters
+    ----------
+    model : ChannelModel
+        Nominal closing speed ``e_nom``, disturbance bound, measurement bounds, eps.
+    closing_speed_mps : (float, float) or None
+        Interval of the true closing speed; ``None``: exactly ``e_nom``.
+    n_bands : int or None
+        Number of bands the closing-speed interval is split into (in ``u = 1/e``);
+        ``None``: 1 for a known closing speed, else 2.
+    n_nodes : int
+        Nodes per piece after (re)gridding.
+    split_ratio, max_pieces : float, int
+        Before each prediction a piece whose ranges span more than ``split_ratio``
+        (largest over smallest) is split in two at a node near its geometric middle,
+        while there are fewer than ``max_pieces`` pieces: each piece sizes its own
+        kinematic margin (large only near the target) and impulse widening.
+    min_live_nodes : int
+        A piece with fewer live nodes is re-gridded (at least 4: the bounds between
+        nodes need three live nodes in a row).
+    alpha_scale_rad : float
+        ``a = alpha / alpha_scale_rad`` in the stored polygons.
+    kinematic_margin : bool
+        Add the bound of the neglected kinematic term to ``nu`` (module docstring).
+    """
+
+    model: ChannelModel = field(default_factory=ChannelModel)
+    closing_speed_mps: tuple[float, float] | None = None
+    n_bands: int | None = None
+    n_nodes: int = 16
+    min_live_nodes: int = 6
+    split_ratio: float = 1.5
+    max_pieces: int = 24
+    alpha_scale_rad: float = 1.0e-4
+    kinematic_margin: bool = True
+
+    def __post_init__(self) -> None:
+        if self.closing_speed_mps is not None:
+            lo, hi = self.closing_speed_mps
+            if not 0 < lo <= hi:
+                raise ValueError("closing_speed_mps must be an interval 0 < lo <= hi")
+        if self.n_bands is not None and self.n_bands < 1:
+            raise ValueError("n_bands must be >= 1")
+        if not 4 <= self.min_live_nodes <= self.n_nodes:
+            raise ValueError("need 4 <= min_live_nodes <= n_nodes")
+        if not self.alpha_scale_rad > 0:
+            raise ValueError("alpha_scale_rad must be positive")
+        if not self.split_ratio > 1.0:
+            raise ValueError("split_ratio must be > 1 (inf: no splitting)")
+        if self.max_pieces < 1:
+            raise ValueError("max_pieces must be >= 1")
+
+    # -- construction ----------------------------------------------------------------
+    def bands(self) -> tuple[FloatArray, FloatArray]:
+        """``u_lo, u_hi`` of each piece (``u = 1/e``, equal pieces of the interval)."""
+        e_lo, e_hi = self.closing_speed_mps or (self.model.e, self.model.e)
+        n = self.n_bands or (1 if e_lo == e_hi else 2)
+        edges = np.linspace(1.0 / e_hi, 1.0 / e_lo, n + 1) if e_lo < e_hi else np.full(2, 1 / e_lo)
+        return edges[:-1], edges[1:]
+
+    def initial(
+        self,
+        lateral_m: tuple[float, float],
+        lateral_vel_mps: tuple[float, float],
+        x_m: tuple[float, float],
+    ) -> NodeSet:
+        """The exact slices of the a-priori box at ``n_nodes`` labels per piece.
+
+        At label ``tau0`` a state of piece ``[u_lo, u_hi]`` has ``x0 = tau0 / u`` in the
+        box, so ``u`` ranges over ``U = [tau0/x_hi, tau0/x_lo] & [u_lo, u_hi]`` and the
+        slice is ``{u (y, Vy)}`` over ``U`` and the box: the convex hull of the box's
+        corners scaled by both ends of ``U`` (exact; it is the slice of a convex body).
+        """
+        (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
+        if not (y0 <= y1 and v0 <= v1 and 0 < xa <= xb):
+            raise ValueError("boxes must be [lo, hi] with lo <= hi and positive range")
+        u_lo, u_hi = self.bands()
+        hard_lo, hard_hi = xa * u_lo, xb * u_hi
+        labels = [
+            np.linspace(lo, hi, self.n_nodes) for lo, hi in zip(hard_lo, hard_hi, strict=True)
+        ]
+        piece = np.repeat(np.arange(len(u_lo)), self.n_nodes)
+        prior = ((y0, y1), (v0, v1), (xa, xb))
+        empty = ConvexPolygons(np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
+        base = NodeSet(
+            self.model, u_lo, u_hi, np.zeros(0, np.int64), np.zeros(0), empty, hard_lo,
+            hard_hi, 0.0, OpLog.empty(len(u_lo)), prior, self.alpha_scale_rad,
+        )  # fmt: skip
+        label = np.concatenate(labels)
+        return replace(base, piece=piece, label_s=label, polygons=self._prior(base, piece, label))
+
+    def _prior(self, s: NodeSet, piece: NDArray[np.int64], label: FloatArray) -> ConvexPolygons:
+        """The prior slices at ``label`` (see :meth:`initial`)."""
+        (y0, y1), (v0, v1), (xa, xb) = s.prior
+        u1 = np.maximum(label / xb, s.u_lo[piece])
+        u2 = np.minimum(label / xa, s.u_hi[piece])
+        ok = u1 <= u2 * (1 + 1e-12)
+        corners = np.array([[y0, v0], [y1, v0], [y1, v1], [y0, v1]])
+        pts = []
+        for u in (u1, u2):
+            yt = np.outer(u, corners[:, 0])
+            vt = np.outer(u, corners[:, 1])
+            tau = label[:, None]
+            pts.append(np.stack([yt / tau / self.alpha_scale_rad, (yt + vt * tau) * s.e_nom], -1))
+        xy = np.concatenate(pts, axis=1)  # (n, 8, 2)
+        counts = np.where(ok, 8, 0)
+        xy = xy[ok].reshape(-1, 2)
+        off = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        return ConvexPolygons._make(*_k.convex_hulls(xy, off))
+
+    # -- Estimator interface ---------------------------------------------------------
+    def update(self, belief: NodeSet, measurement: Bearing | Range) -> NodeSet:
+        """Intersect every node with a bearing strip, or drop the nodes outside a
+        range interval; re-grid a piece left with too few nodes; reject (status
+        ``"contradiction"``) an update that leaves nothing."""
+        if belief.is_empty:
+            return belief
+        nb_ = len(belief.u_lo)
+        if isinstance(measurement, Bearing):
+            op = OpLog.one(_nk.BEARING, nb_, measurement.alpha_rad)
+        elif isinstance(measurement, Range):
+            b, d = self.model.range_rel_bound, measurement.range_m
+            # the nodes are in x = d cos(off-axis angle), not in the measured range d
+            phi = measurement.off_axis_rad
+            phi = self.model.max_off_axis_rad if phi is None else phi
+            lo = d / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN)
+            op = OpLog.one(_nk.RANGE, nb_, lo, d / (1.0 - b) * (1.0 + STRIP_MARGIN))
+        else:
+            raise TypeError(f"unsupported measurement {type(measurement).__name__}")
+        out = self._record(belief, op)
+        out = self.refine(out, before=belief)
+        if out.is_empty:
+            return replace(belief, status="contradiction", contradictions=belief.contradictions + 1)
+        return out
+
+    def shift(self, belief: NodeSet, control: float | Impulse) -> NodeSet:
+        """Impulse ``k`` (m/s, relative velocity): ``V += k cos^2(alpha)``, i.e.
+        ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece and ``alpha`` up to
+        the piece's largest bearing; an :class:`~estim.model.Impulse` known to ``+-dk``
+        adds ``dk u_hi`` either way."""
+        k, dk = impulse_parts(control)
+        if (k == 0.0 and dk == 0.0) or belief.is_empty:
+            return belief
+        a_abs = self._band_alpha_abs(belief)
+        sin2 = np.sin(np.minimum(a_abs, 0.5 * np.pi)) ** 2
+        ends = np.stack([k * belief.u_lo * (1.0 - sin2), k * belief.u_hi])
+        lo = ends.min(axis=0) - dk * belief.u_hi
+        hi = ends.max(axis=0) + dk * belief.u_hi
+        return self._record(belief, OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi))
+
+    def predict(self, belief: NodeSet, dt_s: float) -> NodeSet:
+        """Move every node over ``dt_s`` (exact shear, disturbance segment), drop the
+        nodes under eps, re-grid thinned bands."""
+        if belief.is_empty:
+            return belief
+        belief = self.refine(self._split(belief))
+        nu = np.full(len(belief.u_lo), self.model.nu_mps2)
+        if self.kinematic_margin:
+            nu = nu + self._margin(belief, dt_s)
+            w_lo, w_hi = belief.w_bounds_m()
+            x_hi = belief.x_range_m()[1]
+            if not max(abs(w_lo), abs(w_hi)) <= DIVERGED_W_PER_X * x_hi:
+                empty = belief.polygons.clip_slab(0, np.full(belief.polygons.n, np.inf), 0.0)
+                return replace(belief, polygons=empty, status="diverged")
+        out = self._record(belief, OpLog.one(_nk.PREDICT, len(nu), dt_s, q_hi=nu * belief.u_hi))
+        out = self.refine(out, before=belief)
+        if out.is_empty and out.status == "ok":
+            return replace(out, status="terminal")
+        return out
+
+    # -- the operations (applied to the set, and replayed on new nodes) -----------------
+    def _record(self, s: NodeSet, op: OpLog) -> NodeSet:
+        polys, t, hard_lo, hard_hi = self._apply(s, s.piece, s.label_s, s.polygons, op, s.t_s)
+        return replace(
+            s, polygons=polys, t_s=t, log=s.log + op, hard_lo_s=hard_lo, hard_hi_s=hard_hi,
+            status="ok",
+        )  # fmt: skip
+
+    def _apply(self, s: NodeSet, piece, label, polys: ConvexPolygons, ops: OpLog, t: float):
+        """Operations ``ops`` on the nodes ``(piece, label)`` from time ``t``; returns the
+        new polygons, time and hard label limits (compiled: :func:`_nk.apply_ops`)."""
+        bb = self.model.bearing_bound
+        xy, off, t, hard_lo, hard_hi = _nk.apply_ops(
+            polys.xy, polys.offsets, np.ascontiguousarray(label, dtype=float),
+            np.ascontiguousarray(piece, dtype=np.int64), s.u_lo, s.u_hi, s.hard_lo_s,
+            s.hard_hi_s, float(t), *ops.parts(), self.alpha_scale_rad, s.e_nom,
+            self.model.eps_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
+        )  # fmt: skip
+        return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi
+
+    # -- refinement --------------------------------------------------------------------
+    def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
+        """Re-grid every piece with fewer than ``min_live_nodes`` live nodes.
+
+        The piece's feasible labels form an interval (the body is convex) inside the
+        bracket of its live run: from the dead node below it (or the hard limit) to the
+        dead node above. ``n_nodes`` new labels spread over the bracket get the prior
+        and every recorded operation (exact slices again), repeated a few times while
+        the piece stays thin. A piece emptied by a bearing is searched
+        (:meth:`_search`) in the bracket it had ``before``.
+        """
+        for p in range(len(s.u_lo)):
+            live = s.live & (s.piece == p)
+            if live.sum() >= self.min_live_nodes:
+                continue
+            if not live.any():
+                had = before is not None and bool((before.live & (before.piece == p)).any())
+                if had and int(s.log.kinds[-1]) == _nk.BEARING:
+                    s = self._search(s, p, *self._bracket(before, p))
+                continue
+            for _ in range(4):
+                lo, hi = self._bracket(s, p)
+                lo, hi = max(lo, s.hard_lo_s[p]), min(hi, s.hard_hi_s[p])
+                if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
+                    break
+                s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
+                if (s.live & (s.piece == p)).sum() >= self.min_live_nodes:
+                    break
+        return s
+
+    def _search(self, s: NodeSet, p: int, lo: float, hi: float) -> NodeSet:
+        """Find the states of piece ``p`` that the last bearing left between its nodes.
+
+        Before the last bearing the piece had states in ``[lo, hi]``. How far a slice
+        misses the bearing's strip (in ``Y~``: ``min Y~ - (alpha_m + a) tau`` or
+        ``(alpha_m - a) tau - max Y~``) is convex in ``tau`` (the body is convex and
+        ``a(x) x`` concave), so if no node of a fine grid meets the strip, any states
+        left lie next to the node that misses it least: the search narrows to that
+        node's neighbours, down to a spacing of ``MIN_SPACING_REL``. The piece is
+        empty when nothing is found.
+        """
+        head = OpLog(*(a[:-1] for a in s.log.parts()))
+        alpha_m = float(s.log.pa[-1])
+        piece = np.full(self.n_nodes, p)
+        for _ in range(40):
+            labels = np.linspace(lo, hi, self.n_nodes)
+            if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
+                break
+            polys, t, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), head, 0.0)
+            out = self._regrid(s, p, labels, polys_before_last=(polys, t))
+            if (out.live & (out.piece == p)).any():
+                return self.refine(out)
+            tau = labels - t
+            bb = self.model.bearing_bound
+            half = bb(tau / s.u_hi[p]) * (1.0 + STRIP_MARGIN) + STRIP_MARGIN * self.alpha_scale_rad
+            bounds = polys.bounds() * self.alpha_scale_rad  # a_min, zs_min, a_max, zs_max
+            miss = np.maximum(bounds[:, 0] - (alpha_m + half), (alpha_m - half) - bounds[:, 2])
+            miss = np.where(np.isnan(miss), np.inf, miss * tau)
+            k = int(np.argmin(miss))
+            if not np.isfinite(miss[k]):
+                break
+            lo, hi = labels[max(k - 1, 0)], labels[min(k + 1, self.n_nodes - 1)]
+        return s
+
+    @staticmethod
+    def _bracket(s: NodeSet, b: int) -> tuple[float, float]:
+        idx = np.flatnonzero(s.piece == b)
+        live = np.flatnonzero(s.live[idx])
+        first, last = idx[live[0]], idx[live[-1]]
+        lo = s.label_s[first - 1] if first - 1 >= idx[0] else s.hard_lo_s[b]
+        hi = s.label_s[last + 1] if last + 1 <= idx[-1] else s.hard_hi_s[b]
+        return float(lo), float(hi)
+
+    def _regrid(self, s: NodeSet, b: int, labels: FloatArray, polys_before_last=None) -> NodeSet:
+        """Piece ``b`` with new nodes at ``labels``: the prior, then the whole log (or
+        only its last operation on ``polys_before_last = (polygons, t)``)."""
+        piece = np.full(len(labels), b)
+        if polys_before_last is None:
+            prior = self._prior(s, piece, labels)
+            polys, _, _, _ = self._apply(s, piece, labels, prior, s.log, 0.0)
+        else:
+            last = OpLog(*(a[-1:] for a in s.log.parts()))
+            polys, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
+                                         polys_before_last[1])  # fmt: skip
+        keep = s.piece != b
+        order = np.argsort(np.r_[s.piece[keep], piece] + 0.0, kind="stable")
+        new_piece = np.r_[s.piece[keep], piece][order]
+        new_label = np.r_[s.label_s[keep], labels][order]
+        merged = _concat(s.polygons.select(keep), polys).select(order)
+        return replace(s, piece=new_piece, label_s=new_label, polygons=merged)
+
+    def _split(self, s: NodeSet) -> NodeSet:
+        """Split wide pieces in two at a live node near their geometric middle (the
+        node is kept in both halves: each half's slices there are exact)."""
+        c = s._cells
+        for p in range(len(s.u_lo)):
+            if len(s.u_lo) >= self.max_pieces:
+                break
+            mine = c["piece"] == p
+            if not mine.any():
+                continue
+            lo = max(float(c["lo"][mine].min()), self.model.eps_m * float(s.u_lo[p]))
+            hi = float(c["hi"][mine].max())
+            if not hi > self.split_ratio * lo:
+                continue
+            idx = np.flatnonzero((s.piece == p) & s.live)
+            if len(idx) < 3:
+                continue
+            mid = np.sqrt(lo * hi) + s.t_s
+            j = idx[1 + int(np.argmin(np.abs(s.label_s[idx[1:-1]] - mid)))]
+            s = _split_at(s, p, j)
+        return s
+
+    # -- piece-wide quantities ----------------------------------------------------------
+    @staticmethod
+    def _band_alpha_abs(s: NodeSet) -> FloatArray:
+        a_lo, a_hi = s._alpha_bounds
+        b = s._cells["piece"]
+        out = np.zeros(len(s.u_lo))
+        np.maximum.at(out, b, np.maximum(np.abs(a_lo), np.abs(a_hi)))
+        return out
+
+    def _margin(self, s: NodeSet, dt_s: float) -> FloatArray:
+        """The kinematic margin of each piece over the next step (m/s^2)."""
+        c, z = s._cells, s._zs_bounds
+        b = c["piece"]
+        nb_ = len(s.u_lo)
+        big = (1.0 / s.u_lo[b] / s.e_nom) ** 2
+        w_abs = np.zeros(nb_)
+        np.maximum.at(w_abs, b, np.maximum(np.abs(z["hi"]), np.abs(z["lo"])) * big)
+        x_min = np.full(nb_, np.inf)
+        np.minimum.at(x_min, b, np.maximum(c["lo"] - dt_s, 1e-9) / s.u_hi[b])
+        x_max = np.zeros(nb_)
+        np.maximum.at(x_max, b, c["hi"] / s.u_lo[b])
+        x_min = np.maximum(np.minimum(x_min, x_max), self.model.eps_m)
+        a_abs = self._band_alpha_abs(s)
+        return _k.kinematic_margin(
+            w_abs, a_abs, x_min, x_max, float(dt_s), s.e_nom, self.model.nu_mps2, MAX_BEARING_RAD
+        )
+
+
+def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:
+    """Piece ``p`` split at node ``j``: labels above go to a new piece (a copy of
+    ``p``'s band, log columns and upper hard limit), node ``j`` to both."""
+    new = len(s.u_lo)
+    cut = float(s.label_s[j])
+    upper = (s.piece == p) & (s.label_s > cut)
+    piece = np.where(upper, new, s.piece)
+    piece = np.r_[piece, new]
+    label = np.r_[s.label_s, cut]
+    polys = _concat(s.polygons, s.polygons.select([j]))
+    order = np.lexsort((label, piece))
+    log = s.log.with_copied_column(p)
+    hard_hi = np.where(np.arange(new) == p, cut, s.hard_hi_s)
+    return replace(
+        s, piece=piece[order], label_s=label[order], polygons=polys.select(order),
+        u_lo=np.r_[s.u_lo, s.u_lo[p]], u_hi=np.r_[s.u_hi, s.u_hi[p]],
+        hard_lo_s=np.r_[s.hard_lo_s, cut], hard_hi_s=np.r_[hard_hi, s.hard_hi_s[p]], log=log,
+    )  # fmt: skip
+
+
+def _concat(a: ConvexPolygons, b: ConvexPolygons) -> ConvexPolygons:
+    off = np.concatenate([a.offsets, a.offsets[-1] + b.offsets[1:]]).astype(np.int64)
+    return ConvexPolygons._make(np.vstack([a.xy, b.xy]), off)

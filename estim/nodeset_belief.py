@@ -1,0 +1,349 @@
+"""The node set as a value: exact slices of the information set and what lies between.
+
+The estimator (:mod:`estim.nodeset`) explains the model; this module holds the
+immutable belief and answers the questions guidance and the harness ask of it. Per
+closing-speed piece ``b`` (``u = 1/e`` in ``[u_lo, u_hi]``) the information set is a
+convex body in ``(Y~, V~, tau)``; the belief stores its slices at the nodes'
+times to go ``tau_j`` as polygons in ``(a, zs)`` (:mod:`estim.nodeset_bounds`), and
+bounds the body between nodes through the concavity of support functions.
+
+Quantities in the package's coordinates, for a state of piece ``b`` at ``tau``::
+
+    alpha = Y~ / tau            (bearing, rad)
+    x     = e tau               (range along the axis, m), e = 1/u in the piece
+    w     = (e / e_nom)^2 zs    (zero-effort miss omega x^2 / e_nom, m)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from estim import _nodeset_kernels as _nk
+from estim import nodeset_bounds as nb
+from estim.base import Belief, Extremes, StateFunction
+from estim.costs import MissForecast, ZeroEffortMiss
+from estim.model import ChannelModel
+from estim.polygons import ConvexPolygons
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def _ro(a: ArrayLike, dtype=float) -> NDArray:
+    arr = np.array(a, dtype=dtype)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class NodeSet(Belief):
+    """An immutable node set (see the module docstring).
+
+    Attributes
+    ----------
+    model : ChannelModel
+        Nominal closing speed ``e_nom``, bounds, threshold.
+    u_lo, u_hi : arrays (bands,)
+        Each piece's interval of ``u = 1/e`` (s/m).
+    piece : int array (n,)
+        Band of each node; nodes are sorted by piece, then by ``label_s``.
+    label_s : array (n,)
+        Each node's time to go at ``t = 0`` (s); now ``tau = label_s - t_s``.
+    polygons : ConvexPolygons
+        The exact slice of each node in ``(a, zs)``; empty = infeasible node.
+    hard_lo_s, hard_hi_s : arrays (bands,)
+        Labels outside which no state can lie (prior box, range measurements,
+        threshold): the bounds never reach beyond them.
+    t_s : float
+        Time since the initial set (s).
+    log : tuple
+        The operations applied since the initial set (replayed on new nodes).
+    prior : tuple
+        ``(y box, Vy box, x box)`` of the initial set, SI units.
+    alpha_scale_rad : float
+        ``a = alpha / alpha_scale_rad``.
+    status : str
+        ``"ok"``, ``"contradiction"`` (the last measurement contradicted the model and
+        was rejected), ``"terminal"`` (every state passed under eps) or ``"diverged"``.
+    contradictions : int
+        Number of rejected measurements so far.
+    """
+
+    model: ChannelModel
+    u_lo: FloatArray
+    u_hi: FloatArray
+    piece: IntArray
+    label_s: FloatArray
+    polygons: ConvexPolygons
+    hard_lo_s: FloatArray
+    hard_hi_s: FloatArray
+    t_s: float
+    log: tuple
+    prior: tuple
+    alpha_scale_rad: float = 1.0e-4
+    status: str = "ok"
+    contradictions: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("u_lo", "u_hi", "label_s", "hard_lo_s", "hard_hi_s"):
+            object.__setattr__(self, name, _ro(getattr(self, name)))
+        object.__setattr__(self, "piece", _ro(self.piece, np.int64))
+        if len(self.piece) != self.polygons.n or len(self.label_s) != self.polygons.n:
+            raise ValueError("one piece index and one label per node polygon")
+
+    # -- basic views -----------------------------------------------------------------
+    @property
+    def e_nom(self) -> float:
+        return self.model.e
+
+    @property
+    def tau_s(self) -> FloatArray:
+        return self.label_s - self.t_s
+
+    @cached_property
+    def live(self) -> NDArray[np.bool_]:
+        return self.polygons.counts > 0
+
+    @property
+    def is_empty(self) -> bool:
+        return not bool(self.live.any())
+
+    @property
+    def n_sections(self) -> int:
+        """Number of live nodes (exact slices)."""
+        return int(self.live.sum())
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.polygons.counts.sum())
+
+    # -- bounds between nodes --------------------------------------------------------
+    @cached_property
+    def _cells(self) -> dict[str, Any]:
+        """Cells with at least one live end, their four nodes, ``tau`` parts and piece."""
+        table = nb.cell_table(self.tau_s, self.piece)
+        live = self.live
+        keep = live[table[:, 1]] | live[table[:, 2]]
+        table = table[keep]
+        tau4 = nb.gather_tau(self.tau_s, table)
+        b = self.piece[table[:, 1]]
+        lo = np.maximum(tau4[:, 1], self.hard_lo_s[b] - self.t_s)
+        hi = np.minimum(tau4[:, 2], self.hard_hi_s[b] - self.t_s)
+        ok = lo <= hi
+        return {"table": table[ok], "tau4": tau4[ok], "piece": b[ok], "lo": lo[ok], "hi": hi[ok]}
+
+    @cached_property
+    def _bounds(self) -> tuple[FloatArray, FloatArray]:
+        """Per cell: ``zs`` bounds with their taus ``(m, 4)`` and ``Y~`` bounds ``(m, 2)``
+        (compiled: :func:`estim._nodeset_kernels.cell_bounds`)."""
+        c = self._cells
+        return _nk.cell_bounds(
+            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s),
+            c["table"], c["tau4"], c["lo"], c["hi"], self.alpha_scale_rad, self.e_nom,
+            nb.BOUND_RTOL,
+        )  # fmt: skip
+
+    @cached_property
+    def _zs_bounds(self) -> dict[str, FloatArray]:
+        """Bounds of ``zs = e_nom (Y~ + V~ tau)`` over each cell (and their taus),
+        in the exact direction of every ``tau`` (:func:`_nk.zem_bounds`)."""
+        c = self._cells
+        zs = _nk.zem_bounds(
+            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s),
+            c["table"], c["tau4"], c["lo"], c["hi"], self.alpha_scale_rad, self.e_nom,
+            nb.BOUND_RTOL,
+        )  # fmt: skip
+        return {"hi": zs[:, 0], "arg_hi": zs[:, 1], "lo": zs[:, 2], "arg_lo": zs[:, 3]}
+
+    @cached_property
+    def _alpha_bounds(self) -> tuple[FloatArray, FloatArray]:
+        """Bounds of ``alpha = Y~ / tau`` over each cell (``Y~`` bounded by its secants;
+        ``Y~ / tau`` is monotone in ``tau`` on each line, so both ends suffice)."""
+        c = self._cells
+        y_up, y_dn = self._bounds[1][:, 0], self._bounds[1][:, 1]
+        t_lo, t_hi = c["lo"], c["hi"]
+        return np.minimum(y_dn / t_lo, y_dn / t_hi), np.maximum(y_up / t_lo, y_up / t_hi)
+
+    def _w_scale(self, zs: FloatArray, upper: bool) -> FloatArray:
+        """``w = (e/e_nom)^2 zs`` at its extreme over each cell's piece of ``e``."""
+        b = self._cells["piece"]
+        big, small = (1.0 / self.u_lo[b] / self.e_nom) ** 2, (1.0 / self.u_hi[b] / self.e_nom) ** 2
+        if upper:
+            return np.where(zs > 0, zs * big, zs * small)
+        return np.where(zs < 0, zs * big, zs * small)
+
+    def w_bounds_m(self) -> tuple[float, float]:
+        """The interval of the zero-effort miss ``w`` over the whole set (m)."""
+        z = self._zs_bounds
+        return float(self._w_scale(z["lo"], False).min()), float(self._w_scale(z["hi"], True).max())
+
+    def alpha_range_rad(self) -> tuple[float, float]:
+        a_lo, a_hi = self._alpha_bounds
+        return float(a_lo.min()), float(a_hi.max())
+
+    def x_range_m(self) -> tuple[float, float]:
+        c = self._cells
+        return float((c["lo"] / self.u_hi[c["piece"]]).min()), float(
+            (c["hi"] / self.u_lo[c["piece"]]).max()
+        )
+
+    # -- Belief interface ------------------------------------------------------------
+    def centre(self) -> FloatArray:
+        """The mean of the live nodes' vertex centroids, as ``(alpha, omega, x)``."""
+        if self.is_empty:
+            return np.full(3, np.nan)
+        own = self.polygons.owner()
+        cnt = np.maximum(self.polygons.counts, 1)
+        cen = [np.bincount(own, weights=self.polygons.xy[:, k], minlength=len(cnt)) / cnt
+               for k in range(2)]  # fmt: skip
+        live = self.live
+        e_mid = 2.0 / (self.u_lo + self.u_hi)[self.piece[live]]
+        x = float(np.mean(self.tau_s[live] * e_mid))
+        alpha = float(cen[0][live].mean()) * self.alpha_scale_rad
+        w = float(cen[1][live].mean())
+        return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
+
+    def extremes(self, fn: StateFunction) -> Extremes:
+        """Min and max of ``fn`` over the set.
+
+        :class:`~estim.costs.MissForecast` and :class:`~estim.costs.ZeroEffortMiss`
+        (recognised by type) get sound bounds over the whole body (nodes and the
+        cells between them); the rows returned are representative states at the
+        range where each bound is attained (``x = e_nom tau``). Any other function
+        is evaluated at the node polygons' vertices (exact at the nodes only).
+        """
+        if self.is_empty:
+            raise ValueError(f"extremes of an empty node set (status {self.status})")
+        if isinstance(fn, MissForecast | ZeroEffortMiss):
+            return self._forecast_extremes(isinstance(fn, MissForecast))
+        pts = self.vertices()
+        vals = np.asarray(fn(pts), dtype=float)
+        i_lo, i_hi = int(np.argmin(vals)), int(np.argmax(vals))
+        return Extremes(float(vals[i_lo]), pts[i_lo], float(vals[i_hi]), pts[i_hi])
+
+    def _forecast_extremes(self, forecast: bool) -> Extremes:
+        z, c = self._zs_bounds, self._cells
+        b = c["piece"]
+        w_hi, w_lo = self._w_scale(z["hi"], True), self._w_scale(z["lo"], False)
+        if forecast:
+            # Pi = w + sign(w) nu (x/e_nom)^2/2, x in [tau_lo/u_hi, tau_hi/u_lo]
+            half_nu = 0.5 * self.model.nu_mps2 / self.e_nom**2
+            c_max = half_nu * (c["hi"] / self.u_lo[b]) ** 2
+            c_min = half_nu * (c["lo"] / self.u_hi[b]) ** 2
+            v_hi = np.where(w_hi >= 0, w_hi + c_max, w_hi - c_min)
+            v_lo = np.where(w_lo <= 0, w_lo - c_max, w_lo + c_min)
+        else:
+            v_hi, v_lo = w_hi, w_lo
+        i_hi, i_lo = int(np.argmax(v_hi)), int(np.argmin(v_lo))
+        a_lo, a_hi = self._alpha_bounds
+
+        def row(i: int, tau: float, w: float) -> FloatArray:
+            x = self.e_nom * tau
+            alpha = 0.5 * (a_lo[i] + a_hi[i])
+            return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
+
+        return Extremes(
+            float(v_lo[i_lo]), row(i_lo, z["arg_lo"][i_lo], w_lo[i_lo]),
+            float(v_hi[i_hi]), row(i_hi, z["arg_hi"][i_hi], w_hi[i_hi]),
+        )  # fmt: skip
+
+    def vertices(self) -> FloatArray:
+        """Vertices of the live node polygons as rows ``(alpha, omega, x)`` at the
+        piece's middle closing speed (``x = tau / u_mid``)."""
+        own = self.polygons.owner()
+        u_mid = 0.5 * (self.u_lo + self.u_hi)[self.piece[own]]
+        x = self.tau_s[own] / u_mid
+        e = 1.0 / u_mid
+        w = self.polygons.xy[:, 1] * (e / self.e_nom) ** 2
+        alpha = self.polygons.xy[:, 0] * self.alpha_scale_rad
+        return np.column_stack([alpha, self.model.omega_from_w(w, x), x])
+
+    def contains(self, state: ArrayLike, tol: float = 1e-9) -> bool:
+        """Whether ``(alpha, omega, x)`` lies in the set for some closing speed.
+
+        For ``u = 1/e`` in a piece the state is the point ``s(u) = (alpha x u, omega x u
+        - alpha)`` at ``tau = x u``: a segment in ``u``. Every edge normal ``d`` of the
+        two nodes around a cell gives ``d.s(u) <= min(L_left, L_right)(x u)`` (the
+        secant bounds of ``d``'s support), linear in ``u``; the state is inside when
+        some ``u`` of the piece satisfies all of them in some cell (an outer test:
+        sound, and exact at the nodes up to the directions used). ``tol`` is
+        relative to each bound's magnitude.
+        """
+        if self.is_empty:
+            return False
+        alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float)[:3])
+        c = self._cells
+        for ci in range(len(c["lo"])):
+            b = int(c["piece"][ci])
+            u_lo = max(float(self.u_lo[b]), float(c["lo"][ci]) / x)
+            u_hi = min(float(self.u_hi[b]), float(c["hi"][ci]) / x)
+            if u_lo > u_hi * (1 + 1e-12):
+                continue
+            if self._cell_admits(ci, alpha, omega, x, u_lo, u_hi, tol):
+                return True
+        return False
+
+    def _cell_admits(self, ci, alpha, omega, x, u_lo, u_hi, tol) -> bool:
+        c = self._cells
+        table = c["table"][ci]
+        d = self._cell_normals(table)
+        if len(d) == 0:
+            return False
+        hi4 = _nk.support_table(
+            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s), table,
+            np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
+            self.alpha_scale_rad, self.e_nom,
+        )  # fmt: skip
+        tau4 = np.broadcast_to(c["tau4"][ci], hi4.shape)
+        # d.s(u) = A u + B
+        a_coef = d[:, 0] * alpha * x + d[:, 1] * omega * x
+        b_coef = -d[:, 1] * alpha
+        lo_u, hi_u = u_lo, u_hi
+        scale = np.abs(np.where(np.isfinite(hi4), hi4, 0.0)).max(axis=1) + 1e-300
+        for left in (True, False):
+            i0, i1 = (0, 1) if left else (3, 2)
+            f0, f1 = hi4[:, i0], hi4[:, i1]
+            ok = np.isfinite(f0) & np.isfinite(f1)
+            t0, t1 = tau4[:, i0], tau4[:, i1]
+            slope = np.where(ok, (f1 - f0) / np.where(ok, t1 - t0, 1.0), 0.0)
+            # A u + B <= f1 + slope (x u - t1) + tol scale  <=>  k u <= r
+            k = a_coef - slope * x
+            r = f1 - slope * t1 - b_coef + tol * scale
+            k, r = k[ok], r[ok]
+            pos, neg = k > 0, k < 0
+            if np.any((k == 0) & (r < 0)):
+                return False
+            if pos.any():
+                hi_u = min(hi_u, float((r[pos] / k[pos]).min()))
+            if neg.any():
+                lo_u = max(lo_u, float((r[neg] / k[neg]).max()))
+        # node values bound their own slice: also check at the nodes directly
+        return lo_u <= hi_u * (1 + 1e-12) + 1e-300
+
+    def _cell_normals(self, table: IntArray) -> FloatArray:
+        """Outward edge normals of the two cell-end polygons as ``(Y~, V~)`` directions."""
+        out = []
+        for k in (1, 2):
+            j = int(table[k])
+            if j < 0 or not self.live[j]:
+                continue
+            poly = self.polygons.polygon(j)
+            tau = float(self.tau_s[j])
+            if len(poly) == 1:
+                nrm = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+            else:
+                edge = np.roll(poly, -1, axis=0) - poly
+                nrm = np.column_stack([edge[:, 1], -edge[:, 0]])
+                if len(poly) == 2:
+                    nrm = np.vstack([nrm, edge, -edge])
+            nrm = nrm[np.any(nrm != 0.0, axis=1)]
+            # n . (a, zs) = n_a Y~/(tau A) + n_z e (Y~ + V~ tau)
+            p = nrm[:, 0] / (tau * self.alpha_scale_rad) + nrm[:, 1] * self.e_nom
+            q = nrm[:, 1] * self.e_nom * tau
+            out.append(np.column_stack([p, q]))
+        return np.vstack(out) if out else np.zeros((0, 2))

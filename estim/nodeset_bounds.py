@@ -1,0 +1,119 @@
+"""Sound bounds of a convex body between its exact slices (the node set's geometry).
+
+The node set (:mod:`estim.nodeset`) keeps, per closing-speed piece, exact slices
+``P(tau_j)`` of a convex body ``K`` in ``(Y~, V~, tau)`` (scaled lateral position and
+velocity, time to go) at a few values ``tau_j`` (the nodes). Between nodes nothing is
+stored; what the body can hold there follows from convexity alone:
+
+for a fixed direction ``d`` the support function ``f(tau) = max {d.s : s in P(tau)}``
+of the slices of a convex body is *concave* in ``tau`` (``-inf`` where the slice is
+empty). A concave function lies below every secant line outside the secant's own
+interval, so on the cell ``[tau_i, tau_i+1]``::
+
+    f(tau) <= L_left(tau)   = f_i   + (f_i   - f_i-1) (tau - tau_i)   / (tau_i   - tau_i-1)
+    f(tau) <= L_right(tau)  = f_i+1 + (f_i+1 - f_i+2) (tau_i+1 - tau) / (tau_i+2 - tau_i+1)
+
+whenever the nodes named are not empty. The bound is exact at the nodes and tight
+wherever ``f`` is nearly linear between them; it needs three live nodes in a row,
+which the estimator keeps by refining the nodes. A cell with both ends empty holds
+nothing (the live nodes lie elsewhere and the feasible ``tau`` form an interval).
+
+Node polygons are stored in the scaled coordinates ``(a, zs)`` of the estimator:
+``a = alpha / alpha_scale`` (bearing) and ``zs = e_nom z`` (the scaled zero-effort
+miss ``z = Y~ + V~ tau`` times the nominal closing speed: metres of zero-effort miss
+for ``e = e_nom``). At ``tau`` they map linearly to ``(Y~, V~) = (alpha tau,
+zs / (e_nom tau) - alpha)``, so a direction ``d = (p, q)`` of ``(Y~, V~)`` reads, on a
+vertex of node ``j``, ``d.s = a alpha_scale (p tau_j - q) + zs q / (e_nom tau_j)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from estim._nodeset_kernels import BEARING, IMPULSE, PREDICT, RANGE
+
+FloatArray = NDArray[np.float64]
+
+#: relative safety margin on every bound (rounding of the node polygons and of the
+#: secant arithmetic; the strips are already rounded outward by 1e-9)
+BOUND_RTOL = 1.0e-8
+
+
+def cell_table(tau_s: FloatArray, piece: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Indices ``(i-1, i, i+1, i+2)`` of the four nodes around every cell.
+
+    Nodes are sorted by piece, then by ``tau``; a cell is a pair of consecutive nodes
+    of one piece. A missing outer neighbour (piece edge) is given as ``-1``.
+    """
+    n = len(tau_s)
+    i = np.flatnonzero(piece[:-1] == piece[1:]) if n > 1 else np.zeros(0, np.int64)
+    prev = np.where((i >= 1) & (piece[np.maximum(i - 1, 0)] == piece[i]), i - 1, -1)
+    nxt = np.where((i + 2 < n) & (piece[np.minimum(i + 2, n - 1)] == piece[i]), i + 2, -1)
+    return np.stack([prev, i, i + 1, nxt], axis=1).astype(np.int64)
+
+
+def gather_tau(tau_s: FloatArray, idx: NDArray[np.int64]) -> FloatArray:
+    """Node times to go around each cell; a missing neighbour gets a dummy value."""
+    t = tau_s[np.maximum(idx, 0)]
+    # a dummy outside the cell keeps the (unused) secant arithmetic finite
+    t[:, 0] = np.where(idx[:, 0] >= 0, t[:, 0], t[:, 1] - 1.0)
+    t[:, 3] = np.where(idx[:, 3] >= 0, t[:, 3], t[:, 2] + 1.0)
+    return t
+
+
+@dataclass(frozen=True, eq=False)
+class OpLog:
+    """The operations applied to a node set since its initial set, as arrays (the
+    compiled :func:`~estim._nodeset_kernels.apply_ops` replays them on new nodes).
+
+    ``kinds[o]`` is ``BEARING`` (``pa`` = measured bearing, rad), ``IMPULSE``
+    (``q_lo, q_hi`` = interval of the ``V~`` increment per piece), ``RANGE`` (``pa, pb``
+    = interval of ``x``, m) or ``PREDICT`` (``pa`` = step, s; ``q_hi`` = bound of
+    ``v u`` per piece).
+    """
+
+    kinds: NDArray[np.int64]
+    pa: FloatArray
+    pb: FloatArray
+    q_lo: FloatArray
+    q_hi: FloatArray
+
+    @classmethod
+    def empty(cls, n_pieces: int) -> OpLog:
+        z = np.zeros(0)
+        return cls(np.zeros(0, np.int64), z, z, np.zeros((0, n_pieces)), np.zeros((0, n_pieces)))
+
+    @staticmethod
+    def one(kind: int, n_pieces: int, pa=0.0, pb=0.0, q_lo=None, q_hi=None) -> OpLog:
+        """A log of one operation."""
+        zeros = np.zeros((1, n_pieces))
+        return OpLog(
+            np.array([kind], np.int64), np.array([float(pa)]), np.array([float(pb)]),
+            zeros if q_lo is None else np.asarray(q_lo, float).reshape(1, -1),
+            zeros if q_hi is None else np.asarray(q_hi, float).reshape(1, -1),
+        )  # fmt: skip
+
+    def __len__(self) -> int:
+        return len(self.kinds)
+
+    def __add__(self, other: OpLog) -> OpLog:
+        return OpLog(
+            *(np.concatenate([a, b]) for a, b in zip(self.parts(), other.parts(), strict=True))
+        )
+
+    def with_copied_column(self, p: int) -> OpLog:
+        """The log with piece ``p``'s parameters copied into a new last column (a
+        piece split in two keeps its history in both halves)."""
+        return OpLog(
+            self.kinds, self.pa, self.pb, np.c_[self.q_lo, self.q_lo[:, p]],
+            np.c_[self.q_hi, self.q_hi[:, p]],
+        )  # fmt: skip
+
+    def parts(self) -> tuple:
+        return self.kinds, self.pa, self.pb, self.q_lo, self.q_hi
+
+
+__all__ = ["BEARING", "IMPULSE", "PREDICT", "RANGE", "BOUND_RTOL", "OpLog", "cell_table"]
