@@ -1,0 +1,10 @@
+"""Set representations for set-membership estimation: ellipsoids, zonotopes, boxes.
+
+Pure numpy value types, independent of the estimator interface: each is immutable,
+and each operation returns a new set containing the exact result (an outer bound).
+"""
+
+from estim.sets._common import EmptyIntersectionError
+from estim.sets.ellipsoid import Ellipsoid
+
+__all__ = ["Ellipsoid", "EmptyIntersectionError"]
