@@ -1,7 +1,7 @@
 """Random sets and points inside them, for the brute-force containment tests of estim.sets.
 
 Every sampler returns interior points *and* extreme points (the sphere for an
-ellipsoid), so that an outer bound
+ellipsoid, sign vertices for a zonotope), so that an outer bound
 that cuts a corner is caught.
 """
 
@@ -9,13 +9,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from estim.sets import Ellipsoid
+from estim.sets import Ellipsoid, Zonotope
 
 
 def random_ellipsoid(rng: np.random.Generator, n: int, rank: int | None = None) -> Ellipsoid:
     rank = n if rank is None else rank
     f = rng.normal(size=(n, rank)) * rng.uniform(0.2, 2.0, size=rank)
     return Ellipsoid(rng.normal(size=n) * 3.0, f @ f.T)
+
+
+def random_zonotope(rng: np.random.Generator, n: int, m: int) -> Zonotope:
+    return Zonotope(rng.normal(size=n) * 3.0, rng.normal(size=(n, m)))
 
 
 def sample_ellipsoid(e: Ellipsoid, rng: np.random.Generator, k: int = 400) -> np.ndarray:
@@ -25,6 +29,13 @@ def sample_ellipsoid(e: Ellipsoid, rng: np.random.Generator, k: int = 400) -> np
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     u[k // 2 :] *= rng.uniform(size=(k - k // 2, 1)) ** (1.0 / e.dim)  # half on the sphere
     return e.centre + u @ root.T
+
+
+def sample_zonotope(z: Zonotope, rng: np.random.Generator, k: int = 400) -> np.ndarray:
+    m = z.n_generators
+    xi = rng.uniform(-1.0, 1.0, size=(k, m))
+    xi[: k // 2] = np.sign(xi[: k // 2])  # half are vertices (sign vectors)
+    return z.centre + xi @ z.generators.T
 
 
 def cutting_strip(
