@@ -1,7 +1,7 @@
 """Random sets and points inside them, for the brute-force containment tests of estim.sets.
 
 Every sampler returns interior points *and* extreme points (the sphere for an
-ellipsoid, sign vertices for a zonotope), so that an outer bound
+ellipsoid, sign vertices for a zonotope, corners for a box), so that an outer bound
 that cuts a corner is caught.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from estim.sets import Ellipsoid, Zonotope
+from estim.sets import Box, Ellipsoid, Zonotope
 
 
 def random_ellipsoid(rng: np.random.Generator, n: int, rank: int | None = None) -> Ellipsoid:
@@ -20,6 +20,12 @@ def random_ellipsoid(rng: np.random.Generator, n: int, rank: int | None = None) 
 
 def random_zonotope(rng: np.random.Generator, n: int, m: int) -> Zonotope:
     return Zonotope(rng.normal(size=n) * 3.0, rng.normal(size=(n, m)))
+
+
+def random_box(rng: np.random.Generator, n: int) -> Box:
+    c = rng.normal(size=n) * 3.0
+    r = rng.uniform(0.1, 2.0, size=n)
+    return Box(c - r, c + r)
 
 
 def sample_ellipsoid(e: Ellipsoid, rng: np.random.Generator, k: int = 400) -> np.ndarray:
@@ -36,6 +42,12 @@ def sample_zonotope(z: Zonotope, rng: np.random.Generator, k: int = 400) -> np.n
     xi = rng.uniform(-1.0, 1.0, size=(k, m))
     xi[: k // 2] = np.sign(xi[: k // 2])  # half are vertices (sign vectors)
     return z.centre + xi @ z.generators.T
+
+
+def sample_box(b: Box, rng: np.random.Generator, k: int = 400) -> np.ndarray:
+    u = rng.uniform(size=(k, b.dim))
+    u[: k // 2] = np.round(u[: k // 2])  # half are corners
+    return b.lo + u * (b.hi - b.lo)
 
 
 def cutting_strip(

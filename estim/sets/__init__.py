@@ -6,6 +6,7 @@ and each operation returns a new set containing the exact result (an outer bound
 
 from estim.sets._common import EmptyIntersectionError
 from estim.sets.ellipsoid import Ellipsoid
+from estim.sets.interval import Box
 from estim.sets.zonotope import Zonotope
 
-__all__ = ["Ellipsoid", "EmptyIntersectionError", "Zonotope"]
+__all__ = ["Box", "Ellipsoid", "EmptyIntersectionError", "Zonotope"]
