@@ -114,6 +114,10 @@ class Box:
         m, s = float(d @ self.centre), float(np.abs(d) @ self.radius)
         return m - s, m + s
 
+    def interval_hull(self) -> tuple[FloatArray, FloatArray]:
+        """``(lo, hi)``, for the same interface as the other families."""
+        return self.lo, self.hi
+
     def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
         """Whether ``x`` (shape (n,) or (k, n)) lies in the box, up to ``tol`` times the
         largest of 1 and the box's half-width."""
