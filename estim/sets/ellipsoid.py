@@ -229,7 +229,9 @@ class Ellipsoid:
         lo, hi = strip_bounds(b, r)
         return self._intersect_slab(vector(a, self.dim, "a"), lo, hi, criterion)
 
-    def intersect_halfspace(self, a: ArrayLike, b: float, criterion: Criterion = "volume"):
+    def intersect_halfspace(
+        self, a: ArrayLike, b: float, criterion: Criterion = "volume"
+    ) -> Ellipsoid:
         """An ellipsoid containing ``E ∩ {x : a.x <= b}`` (same update)."""
         return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, float(b), criterion)
 
