@@ -74,7 +74,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import LinAlgError, cho_factor, cho_solve, eigh
+from scipy.linalg import cho_solve, eigh
 
 __all__ = ["HInfinityEstimate", "HInfinityModel", "hinf_filter", "hinf_step"]
 
@@ -166,20 +166,31 @@ class HInfinityEstimate:
         object.__setattr__(self, "x", x)
         object.__setattr__(self, "P", p)
 
+    @classmethod
+    def _make(cls, x: FloatArray, p: FloatArray) -> HInfinityEstimate:
+        """Internal constructor for the filter's own outputs (no checks: ``P+ = F M^-1 F^T
+        + Q`` is positive semidefinite; a singular one is refused by the next step)."""
+        obj = object.__new__(cls)
+        x.setflags(write=False)
+        p.setflags(write=False)
+        object.__setattr__(obj, "x", x)
+        object.__setattr__(obj, "P", p)
+        return obj
+
     def estimate(self, model: HInfinityModel) -> FloatArray:
         """``zhat_k = L xhat_k``."""
         return model.L @ self.x
 
 
-def _check_pd(m: FloatArray, base: FloatArray, model: HInfinityModel, what: str):
-    """Cholesky factor of ``m = base - theta Sbar``, or a ``ValueError`` naming ``what``
-    and the largest admissible ``theta`` (``1 / max eig(Sbar relative to base)``)."""
+def _check_pd(m: FloatArray, base: FloatArray, model: HInfinityModel, what: str) -> FloatArray:
+    """Lower Cholesky factor of ``m = base - theta Sbar``, or a ``ValueError`` naming
+    ``what`` and the largest admissible ``theta`` (``1 / max eig(Sbar relative to base)``)."""
     m = 0.5 * (m + m.T)
     try:
-        factor = cho_factor(m)
-        if np.min(np.abs(np.diag(factor[0]))) > 1e-12 * np.sqrt(np.abs(np.diag(m)).max()):
+        factor = np.linalg.cholesky(m)
+        if np.min(np.diag(factor)) > 1e-12 * np.sqrt(np.abs(np.diag(m)).max()):
             return factor
-    except LinAlgError:
+    except np.linalg.LinAlgError:
         pass
     mu = eigh(model.s_bar, 0.5 * (base + base.T), eigvals_only=True)[-1]
     bound = np.inf if mu <= 0 else 1.0 / mu
@@ -189,9 +200,12 @@ def _check_pd(m: FloatArray, base: FloatArray, model: HInfinityModel, what: str)
     )
 
 
-def _existence_factor(p: FloatArray, model: HInfinityModel):
+def _existence_factor(p: FloatArray, model: HInfinityModel) -> FloatArray:
     """Cholesky factor of ``M = P^-1 - theta Sbar + H^T R^-1 H`` after the checks."""
-    p_inv = np.linalg.inv(p)
+    try:
+        p_inv = np.linalg.inv(p)
+    except np.linalg.LinAlgError:
+        raise ValueError("P must be positive definite") from None
     if model.condition == "a_priori":
         _check_pd(p_inv - model.theta * model.s_bar, p_inv, model, "P^-1 - theta Sbar")
     info = p_inv + model.H.T @ model.r_inv @ model.H
@@ -214,14 +228,14 @@ def hinf_step(
     if est.x.size != model.dim:
         raise ValueError("estimate and model dimensions differ")
     y = np.asarray(y, dtype=float).reshape(-1)
-    factor = _existence_factor(est.P, model)
-    gain = cho_solve(factor, model.H.T @ model.r_inv)  # K = M^-1 H^T R^-1
-    m_inv_ft = cho_solve(factor, model.F.T)  # M^-1 F^T
+    factor = (_existence_factor(est.P, model), True)
+    gain = cho_solve(factor, model.H.T @ model.r_inv, check_finite=False)  # M^-1 H^T R^-1
+    m_inv_ft = cho_solve(factor, model.F.T, check_finite=False)  # M^-1 F^T
     x_next = model.F @ (est.x + gain @ (y - model.H @ est.x))
     if input_term is not None:
         x_next = x_next + np.asarray(input_term, dtype=float).reshape(-1)
     p_next = model.F @ m_inv_ft + model.Q
-    return HInfinityEstimate(x_next, 0.5 * (p_next + p_next.T))
+    return HInfinityEstimate._make(x_next, 0.5 * (p_next + p_next.T))
 
 
 def hinf_filter(

@@ -58,7 +58,6 @@ from functools import cached_property
 from typing import Literal
 
 import numpy as np
-from numpy.polynomial import Polynomial
 from numpy.typing import ArrayLike
 from scipy.linalg import eigh
 from scipy.optimize import brentq
@@ -280,12 +279,14 @@ def _trace_rho(tr: float, mn: float, gn: float, eps: float) -> float:
     """Minimum-trace weight. With ``D = 1 + G rho``, ``tr P+ = A(rho) B(rho) / D^2`` where
     ``A = G rho^2 + (1 + G - eps) rho + 1`` and ``B = T + (T G - M) rho`` (``T = tr P``,
     ``M = |P a|^2 / r^2``); stationary points are the roots of ``(A B)' D - 2 G A B``."""
-    num = Polynomial([1.0, 1.0 + gn - eps, gn]) * Polynomial([tr, tr * gn - mn])
-    den = Polynomial([1.0, gn])
-    roots = (num.deriv() * den - 2.0 * gn * num).roots()
-    real = [float(z.real) for z in roots if abs(z.imag) < 1e-9 * (1.0 + abs(z))]
-    cands = [0.0] + [z for z in real if z > 0.0]
-    return min(cands, key=lambda rho: num(rho) / den(rho) ** 2)
+    b1 = tr * gn - mn
+    n3, n2, n1, n0 = gn * b1, gn * tr + (1.0 + gn - eps) * b1, (1.0 + gn - eps) * tr + b1, tr
+    # (A B)' D - 2 G A B, expanded (the rho^3 terms of the two products partly cancel)
+    roots = np.roots([gn * n3, 3.0 * n3, 2.0 * n2 - gn * n1, n1 - 2.0 * gn * n0])
+    real = roots.real[np.abs(roots.imag) < 1e-9 * (1.0 + np.abs(roots))]
+    cands = np.concatenate([[0.0], real[real > 0.0]])
+    size = (((n3 * cands + n2) * cands + n1) * cands + n0) / (1.0 + gn * cands) ** 2
+    return float(cands[np.argmin(size)])
 
 
 def _volume_sum_parameter(p1, p2, rank1: int, rank2: int, fallback: float) -> float:
