@@ -1,0 +1,12 @@
+"""Set representations for set-membership estimation: ellipsoids, zonotopes, boxes.
+
+Pure numpy value types, independent of the estimator interface: each is immutable,
+and each operation returns a new set containing the exact result (an outer bound).
+"""
+
+from estim.sets._common import EmptyIntersectionError
+from estim.sets.ellipsoid import Ellipsoid
+from estim.sets.interval import Box
+from estim.sets.zonotope import Zonotope
+
+__all__ = ["Box", "Ellipsoid", "EmptyIntersectionError", "Zonotope"]

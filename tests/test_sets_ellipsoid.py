@@ -1,0 +1,202 @@
+"""estim.sets.ellipsoid: brute-force containment, optimality of the chosen parameters,
+and worked examples (the parallel-cut ellipsoid of Todd 1982, exact 1-D intervals)."""
+
+import numpy as np
+import pytest
+import sets_sampling as S
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from estim.sets import Ellipsoid, EmptyIntersectionError
+
+SEEDS = st.integers(0, 2**32 - 1)
+DIMS = st.integers(1, 4)
+FEW = settings(max_examples=40, deadline=None)
+
+
+def _logvol(e: Ellipsoid) -> float:
+    return float(np.linalg.slogdet(e.shape)[1])
+
+
+def _size(criterion: str, q: np.ndarray) -> np.ndarray:
+    """Trace or log-determinant of one shape matrix or a stack of them."""
+    if criterion == "trace":
+        return np.trace(q, axis1=-2, axis2=-1)
+    return np.linalg.slogdet(q)[1]
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_affine_contains_mapped_points(seed, n):
+    rng = np.random.default_rng(seed)
+    e = S.random_ellipsoid(rng, n)
+    a = rng.normal(size=(rng.integers(1, 5), n))
+    b = rng.normal(size=a.shape[0])
+    pts = S.sample_ellipsoid(e, rng)
+    assert np.all(e.affine(a, b).contains(pts @ a.T + b, tol=1e-7))
+
+
+@FEW
+@given(SEEDS, DIMS, st.sampled_from(["trace", "volume"]))
+def test_minkowski_sum_contains_sums(seed, n, criterion):
+    rng = np.random.default_rng(seed)
+    e1 = S.random_ellipsoid(rng, n)
+    e2 = S.random_ellipsoid(rng, n, rank=int(rng.integers(1, n + 1)))
+    out = e1.minkowski_sum(e2, criterion)
+    p1, p2 = S.sample_ellipsoid(e1, rng), S.sample_ellipsoid(e2, rng)
+    assert np.all(out.contains(p1 + p2, tol=1e-7))
+    assert np.all(out.contains(p1 + p2[::-1], tol=1e-7))
+
+
+@pytest.mark.parametrize("criterion", ["trace", "volume"])
+def test_minkowski_parameter_is_optimal_over_the_family(criterion):
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        e1, e2 = S.random_ellipsoid(rng, 3), S.random_ellipsoid(rng, 3)
+        out = e1.minkowski_sum(e2, criterion)
+        ps = np.geomspace(1e-3, 1e3, 4001)[:, None, None]
+        fam = (1 + 1 / ps) * e1.shape + (1 + ps) * e2.shape
+        best = _size(criterion, fam).min()
+        assert _size(criterion, out.shape) <= best + 1e-9 * abs(best)
+
+
+@FEW
+@given(SEEDS, DIMS, st.sampled_from(["trace", "volume"]), st.integers(0, 2))
+def test_strip_contains_points_of_the_intersection(seed, n, criterion, deficit):
+    rng = np.random.default_rng(seed)
+    e = S.random_ellipsoid(rng, n, rank=max(n - deficit, 1))
+    pts = S.sample_ellipsoid(e, rng, 800)
+    a, b, r = S.cutting_strip(pts, rng)
+    out = e.intersect_strip(a, b, r, criterion)
+    inside = S.points_in_slab(pts, a, b - r, b + r)
+    assert len(inside) > 0
+    assert np.all(out.contains(inside, tol=1e-7))
+    if criterion == "volume" and e.rank == n:
+        assert _logvol(out) <= _logvol(e) + 1e-12
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_halfspace_contains_points_of_the_intersection(seed, n):
+    rng = np.random.default_rng(seed)
+    e = S.random_ellipsoid(rng, n)
+    pts = S.sample_ellipsoid(e, rng, 800)
+    a, b, _ = S.cutting_strip(pts, rng)
+    out = e.intersect_halfspace(a, b)
+    assert np.all(out.contains(S.points_in_slab(pts, a, -np.inf, b), tol=1e-7))
+
+
+@pytest.mark.parametrize("criterion", ["trace", "volume"])
+def test_strip_weight_is_optimal_over_the_fogel_huang_family(criterion):
+    """The closed-form (volume) and cubic-root (trace) weights beat a 20 001-point grid."""
+    rng = np.random.default_rng(11)
+    for _ in range(8):
+        e = S.random_ellipsoid(rng, 3)
+        c, p = e.centre, e.shape
+        a = rng.normal(size=3)
+        g, m = a @ p @ a, a @ c
+        b, r = m + rng.uniform(-0.7, 0.7) * np.sqrt(g), rng.uniform(0.05, 0.5) * np.sqrt(g)
+        out = e.intersect_strip(a, b, r, criterion)
+        lo, hi = max(b - r, m - np.sqrt(g)), min(b + r, m + np.sqrt(g))
+        y, s = (lo + hi) / 2, (hi - lo) / 2
+        pa = p @ a
+        rho = np.geomspace(1e-4, 1e4, 20001)[:, None, None]
+        den = s * s + rho * g
+        fam = (1 + rho - rho * (y - m) ** 2 / den) * (p - rho / den * np.outer(pa, pa))
+        best = min(_size(criterion, p), _size(criterion, fam).min())
+        assert _size(criterion, out.shape) <= best + 1e-9 * abs(best)
+
+
+@pytest.mark.parametrize("n", [2, 3, 5])
+@pytest.mark.parametrize("beta", [0.05, 0.3, 0.44])
+def test_parallel_cut_of_the_unit_ball_is_todds_minimum_ellipsoid(n, beta):
+    """Worked example: the minimum-volume ellipsoid containing ``{|x| <= 1, |x_1| <= beta}``
+    for ``beta < 1/sqrt(n)`` has semi-axes ``sqrt(n) beta`` along ``x_1`` and
+    ``sqrt(n (1 - beta^2) / (n - 1))`` across (Todd 1982; Groetschel, Lovasz & Schrijver
+    1988, the symmetric parallel cut). The Fogel-Huang volume update reproduces it."""
+    out = Ellipsoid.ball(np.zeros(n), 1.0).intersect_strip(np.eye(n)[0], 0.0, beta)
+    expected = np.diag([n * beta**2] + [n * (1 - beta**2) / (n - 1)] * (n - 1))
+    np.testing.assert_allclose(out.shape, expected, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(out.centre, 0.0, atol=1e-15)
+
+
+def test_shallow_cut_leaves_the_ellipsoid_unchanged_under_the_volume_criterion():
+    ball = Ellipsoid.ball(np.zeros(3), 1.0)
+    assert ball.intersect_strip([1, 0, 0], 0.0, 0.6) is ball  # 0.6 > 1/sqrt(3)
+    assert ball.intersect_strip([0, 1, 0], 0.0, 1.5) is ball  # holds the whole ball
+
+
+def test_one_dimensional_and_segment_cuts_are_exact():
+    e = Ellipsoid([0.0], [[4.0]])  # the interval [-2, 2]
+    out = e.intersect_strip([1.0], 1.5, 1.0)  # [0.5, 2.5]
+    assert out.extremes([1.0]) == pytest.approx((0.5, 2.0))
+    seg = Ellipsoid([1.0, 1.0], np.outer([1.0, 2.0], [1.0, 2.0]))  # from (0,-1) to (2,3)
+    cut = seg.intersect_halfspace([0.0, 1.0], 2.0)
+    assert cut.extremes([0.0, 1.0]) == pytest.approx((-1.0, 2.0))
+    assert cut.rank == 1
+
+
+def test_hyperplane_section_is_exact():
+    rng = np.random.default_rng(5)
+    e = S.random_ellipsoid(rng, 3)
+    a = rng.normal(size=3)
+    b = float(a @ e.centre + 0.3 * np.sqrt(a @ e.shape @ a))
+    sec = e.intersect_strip(a, b, 0.0)
+    pts = S.sample_ellipsoid(e, rng, 2000)
+    # points of the exact section: segments crossing the plane
+    on = S.points_in_slab(pts, a, b, b)
+    assert np.all(sec.contains(on, tol=1e-7))
+    assert sec.extremes(a) == pytest.approx((b, b), abs=1e-6)  # sqrt of a rounding error
+    # exact: the support point of the section in any direction lies in E and on the plane
+    for d in rng.normal(size=(5, 3)):
+        x = sec.support_point(d)
+        assert e.contains(x, tol=1e-7) and a @ x == pytest.approx(b, abs=1e-6)
+
+
+def test_empty_intersection_raises():
+    ball = Ellipsoid.ball(np.zeros(2), 1.0)
+    with pytest.raises(EmptyIntersectionError):
+        ball.intersect_strip([1.0, 0.0], 3.0, 1.5)
+    with pytest.raises(EmptyIntersectionError):
+        ball.intersect_halfspace([1.0, 0.0], -1.01)
+    touching = ball.intersect_halfspace([1.0, 0.0], -1.0)
+    np.testing.assert_allclose(touching.centre, [-1.0, 0.0], atol=1e-12)
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_support_function_and_extremes_are_exact(seed, n):
+    rng = np.random.default_rng(seed)
+    e = S.random_ellipsoid(rng, n, rank=int(rng.integers(1, n + 1)))
+    d = rng.normal(size=(6, n))
+    h = e.support(d)
+    pts = S.sample_ellipsoid(e, rng)
+    assert np.all(pts @ d.T <= h + 1e-9)
+    for k in range(6):
+        x = e.support_point(d[k])
+        assert e.contains(x, tol=1e-9)
+        assert x @ d[k] == pytest.approx(h[k])
+        lo, hi = e.extremes(d[k])
+        assert hi == pytest.approx(h[k]) and -lo == pytest.approx(e.support(-d[k]))
+
+
+def test_contains_and_degenerate_shapes():
+    e = Ellipsoid([0.0, 0.0], np.diag([4.0, 0.0]))  # the segment [-2, 2] x {0}
+    assert e.contains([1.9, 0.0]) and not e.contains([2.1, 0.0])
+    assert not e.contains([0.0, 1e-3])
+    assert e.interval_hull()[1] == pytest.approx([2.0, 0.0])
+    box = Ellipsoid.from_box([0.0, -1.0], [2.0, 3.0])
+    corners = np.array([[0, -1], [2, -1], [0, 3], [2, 3]], dtype=float)
+    assert np.all(box.contains(corners, tol=1e-12))
+
+
+def test_validation_and_immutability():
+    with pytest.raises(ValueError):
+        Ellipsoid([0.0, 0.0], [[1.0, 0.0], [0.0, -1.0]])
+    with pytest.raises(ValueError):
+        Ellipsoid([0.0, 0.0], np.eye(3))
+    e = Ellipsoid([0.0, 0.0], np.eye(2))
+    with pytest.raises(ValueError):
+        e.centre[0] = 1.0
+    with pytest.raises(AttributeError):
+        e.centre = np.ones(2)

@@ -1,0 +1,124 @@
+"""estim.sets.interval: brute-force containment, and the one-pass contraction against the
+exact interval hull of box ∩ strip computed by linear programming."""
+
+import numpy as np
+import pytest
+import sets_sampling as S
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import linprog
+
+from estim.sets import Box, EmptyIntersectionError
+
+SEEDS = st.integers(0, 2**32 - 1)
+DIMS = st.integers(1, 5)
+FEW = settings(max_examples=40, deadline=None)
+
+
+def _hull_by_lp(box: Box, a: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """min and max of each coordinate over box ∩ {lo <= a.x <= hi}, by 2n LPs."""
+    n = box.dim
+    a_ub = np.vstack([a, -a])
+    b_ub = np.array([hi, -lo])
+    keep = np.isfinite(b_ub)
+    bounds = list(zip(box.lo, box.hi, strict=True))
+    out = np.zeros((2, n))
+    for i in range(n):
+        for k, sign in enumerate((1.0, -1.0)):
+            cost = np.zeros(n)
+            cost[i] = sign
+            res = linprog(cost, A_ub=a_ub[keep], b_ub=b_ub[keep], bounds=bounds)
+            assert res.status == 0
+            out[k, i] = sign * res.fun
+    return out[0], out[1]
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_affine_and_minkowski_sum_contain_mapped_points(seed, n):
+    rng = np.random.default_rng(seed)
+    b1, b2 = S.random_box(rng, n), S.random_box(rng, n)
+    a = rng.normal(size=(int(rng.integers(1, 5)), n))
+    p1, p2 = S.sample_box(b1, rng), S.sample_box(b2, rng)
+    img = b1.affine(a, np.ones(a.shape[0]))
+    assert np.all(img.contains(p1 @ a.T + 1.0))
+    # the interval hull is exact: each face is reached by a mapped corner
+    corners = b1.lo + np.array(np.meshgrid(*[[0, 1]] * n)).reshape(n, -1).T * (b1.hi - b1.lo)
+    mapped = corners @ a.T + 1.0
+    np.testing.assert_allclose(img.lo, mapped.min(axis=0), atol=1e-12)
+    np.testing.assert_allclose(img.hi, mapped.max(axis=0), atol=1e-12)
+    assert np.all(b1.minkowski_sum(b2).contains(p1 + p2))
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_strip_contraction_is_the_exact_interval_hull(seed, n):
+    rng = np.random.default_rng(seed)
+    box = S.random_box(rng, n)
+    pts = S.sample_box(box, rng, 600)
+    a, b, r = S.cutting_strip(pts, rng)
+    a[rng.uniform(size=n) < 0.2] = 0.0  # some coordinates the strip does not involve
+    if not np.any(a):
+        a[0] = 1.0
+    s = pts @ a
+    b = float(np.clip(b, s.min(), s.max()))  # zeroing moved the range of a.x
+    out = box.intersect_strip(a, b, r)
+    assert np.all(out.contains(S.points_in_slab(pts, a, b - r, b + r)))
+    lo, hi = _hull_by_lp(box, a, b - r, b + r)
+    np.testing.assert_allclose(out.lo, lo, atol=1e-9)
+    np.testing.assert_allclose(out.hi, hi, atol=1e-9)
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_halfspace_contraction_is_the_exact_interval_hull(seed, n):
+    rng = np.random.default_rng(seed)
+    box = S.random_box(rng, n)
+    pts = S.sample_box(box, rng, 600)
+    a, b, _ = S.cutting_strip(pts, rng)
+    out = box.intersect_halfspace(a, b)
+    assert np.all(out.contains(S.points_in_slab(pts, a, -np.inf, b)))
+    lo, hi = _hull_by_lp(box, a, -np.inf, b)
+    np.testing.assert_allclose(out.lo, lo, atol=1e-9)
+    np.testing.assert_allclose(out.hi, hi, atol=1e-9)
+
+
+def test_strip_contraction_worked_by_hand():
+    box = Box([-1.0, -1.0], [1.0, 1.0])
+    # x + y in [1.4, 1.6]: x >= 1.4 - max(y) = 0.4, same for y; the upper bounds stay
+    out = box.intersect_strip([1.0, 1.0], 1.5, 0.1)
+    np.testing.assert_allclose(out.lo, [0.4, 0.4])
+    np.testing.assert_allclose(out.hi, [1.0, 1.0])
+    # 2x - y in [-0.5, 0.5] with y in [-1, 1]: 2x in [-1.5, 1.5] -> x in [-0.75, 0.75]
+    out = box.intersect_strip([2.0, -1.0], 0.0, 0.5)
+    np.testing.assert_allclose(out.lo, [-0.75, -1.0])
+    np.testing.assert_allclose(out.hi, [0.75, 1.0])
+    assert box.intersect_strip([1.0, 0.0], 0.0, 2.0) is box
+    with pytest.raises(EmptyIntersectionError):
+        box.intersect_strip([1.0, 1.0], 3.0, 0.5)
+    corner = box.intersect_halfspace([-1.0, -1.0], -2.0)  # touches the corner (1, 1)
+    np.testing.assert_allclose([corner.lo, corner.hi], [[1.0, 1.0], [1.0, 1.0]])
+
+
+@FEW
+@given(SEEDS, DIMS)
+def test_support_and_extremes_are_exact(seed, n):
+    rng = np.random.default_rng(seed)
+    box = S.random_box(rng, n)
+    d = rng.normal(size=(8, n))
+    corners = box.lo + (d > 0) * (box.hi - box.lo)  # the maximising corner per direction
+    np.testing.assert_allclose(box.support(d), np.einsum("ij,ij->i", corners, d))
+    assert np.all(S.sample_box(box, rng) @ d.T <= box.support(d) + 1e-12)
+    lo, hi = box.extremes(d[0])
+    assert (lo, hi) == pytest.approx((-box.support(-d[0]), box.support(d[0])))
+
+
+def test_validation_and_immutability():
+    with pytest.raises(ValueError):
+        Box([1.0], [0.0])
+    with pytest.raises(ValueError):
+        Box([0.0, 0.0], [1.0])
+    box = Box.from_centre([1.0, 2.0], 0.5)
+    assert box.contains([1.5, 2.5]) and not box.contains([1.6, 2.0])
+    with pytest.raises(ValueError):
+        box.lo[0] = 0.0
