@@ -61,9 +61,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from estim.attitude_model import (
+    AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
+    AttitudePrior,
     cross,
     qexp,
     qinv,
@@ -71,7 +73,7 @@ from estim.attitude_model import (
     qmatrix,
     qmul,
 )
-from estim.base import Belief, Estimator, Extremes, StateFunction
+from estim.base import Estimator, Extremes, StateFunction, Status
 
 FloatArray = NDArray[np.float64]
 BCH_K = 0.25
@@ -160,11 +162,10 @@ def _frozen_view(a: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class BoxAttitudeBelief(Belief):
+class BoxAttitudeBelief(AttitudeBelief):
     """Reference quaternions ``(R, 4)`` and boxes (centre, radius) of ``e`` and ``w`` ``(R, 3)``.
 
-    ``control`` holds the known inputs of the next step (set by ``shift``); ``n_empty``
-    counts, per run, the updates whose intersection was empty; ``last_empty`` flags
+    ``n_empty`` counts, per run, the updates whose intersection was empty; ``last_empty`` flags
     the runs whose last update was; ``n_unbounded`` counts the predictions whose
     enclosure could not be closed (step far too long for the rates): the set then is
     the whole space until the next measurement (still guaranteed, and reported).
@@ -175,7 +176,6 @@ class BoxAttitudeBelief(Belief):
     e_r: FloatArray
     w_c: FloatArray
     w_r: FloatArray
-    control: AttitudeControl | None = None
     n_empty: FloatArray = field(default=None)  # type: ignore[assignment]
     last_empty: FloatArray = field(default=None)  # type: ignore[assignment]
     n_unbounded: int = 0
@@ -196,6 +196,19 @@ class BoxAttitudeBelief(Belief):
     @property
     def is_empty(self) -> bool:
         return bool(np.any(self.last_empty))
+
+    @property
+    def status(self) -> Status:
+        """``CONTRADICTION`` when some run's last update was empty, else ``OK``."""
+        return Status.CONTRADICTION if self.is_empty else Status.OK
+
+    @property
+    def contradictions(self) -> int:
+        return int(np.sum(self.n_empty))
+
+    @property
+    def empty_counts(self) -> NDArray[np.int_]:
+        return np.asarray(self.n_empty, dtype=int)
 
     def centre(self) -> FloatArray:
         """``(q, w)`` of the box centre, ``(R, 7)``."""
@@ -244,7 +257,7 @@ class BoxAttitudeBelief(Belief):
 
 
 @dataclass(frozen=True)
-class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
+class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
     """Guaranteed box estimator of attitude and rate (see the module docstring)."""
 
     model: AttitudeModel
@@ -264,18 +277,13 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
         w_r = np.broadcast_to(self.model.meas_rate_bound_radps, z.shape)
         return e_c, _inflate(e_c, e_r, 0.0), meas.rate_radps, w_r.copy()
 
-    def initial(self, meas: AttitudeMeasurement) -> BoxAttitudeBelief:
+    def initial(self, prior: AttitudePrior) -> BoxAttitudeBelief:
         """The box of the first measurement (reference = the measured attitude)."""
+        meas = prior.measurement
         e_c, e_r, w_c, w_r = self.measurement_box(meas.quat, meas)
         return self._recentre(BoxAttitudeBelief(meas.quat, e_c, e_r, w_c, w_r))
 
     # -- Estimator interface -----------------------------------------------------------
-    def shift(self, belief: BoxAttitudeBelief, control: Any) -> BoxAttitudeBelief:
-        """Record the known inputs (:class:`AttitudeControl`) of the next step."""
-        if not isinstance(control, AttitudeControl):
-            raise TypeError("control must be an AttitudeControl")
-        return _with(belief, control=control)
-
     def _rate_field(self, wc, wr, ctrl: AttitudeControl):
         """Enclosure of ``J_b^-1 (M_u + d - w x (J_g w + h))`` over ``w in (wc, wr)``, ``h``, ``d``
         (interval cross product per component)."""
@@ -286,19 +294,29 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
         gc, gr = icross(wc, wr, jc + hc, jr + hr)
         return imat(m.j_b_inv, ctrl.torque_Nm - gc, gr + m.disturbance_bound_Nm)
 
-    def predict(self, belief: BoxAttitudeBelief, dt_s: float) -> BoxAttitudeBelief:
-        """Enclosure after ``dt_s``; a step too long for the a-priori enclosure is halved
-        (the known inputs hold over the whole step, so each half is enclosed as well)."""
+    def predict(
+        self, belief: BoxAttitudeBelief, dt_s: float, control: AttitudeControl | None = None
+    ) -> BoxAttitudeBelief:
+        """Enclosure after ``dt_s`` under the known inputs ``control`` held over the step
+        (:class:`AttitudeControl`; None: no torque, no momentum); a step too long for the
+        a-priori enclosure is halved (the inputs hold over the whole step, so each half is
+        enclosed as well)."""
         if not dt_s > 0:
             raise ValueError("dt_s must be positive")
-        return self._predict(belief, dt_s, depth=0)
+        if control is None:
+            control = AttitudeControl.zero(belief.runs)
+        elif not isinstance(control, AttitudeControl):
+            raise TypeError("control must be an AttitudeControl")
+        return self._predict(belief, dt_s, control, depth=0)
 
-    def _predict(self, belief: BoxAttitudeBelief, dt_s: float, depth: int) -> BoxAttitudeBelief:
+    def _predict(
+        self, belief: BoxAttitudeBelief, dt_s: float, ctrl: AttitudeControl, depth: int
+    ) -> BoxAttitudeBelief:
         if not np.all(np.isfinite(belief.e_r)):
             return belief  # already "any state": stays so until the next measurement
         try:
             with np.errstate(over="ignore", invalid="ignore"):
-                return self._predict_once(belief, dt_s)
+                return self._predict_once(belief, dt_s, ctrl)
         except (_NoEnclosure, FloatingPointError):
             if depth >= 6:
                 # no enclosure: the guaranteed set is the whole state space (the next
@@ -308,11 +326,12 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief]):
                     belief, e_c=np.zeros_like(inf), e_r=inf, w_r=inf.copy(),
                     n_unbounded=belief.n_unbounded + 1,
                 )  # fmt: skip
-            half = self._predict(belief, 0.5 * dt_s, depth + 1)
-            return self._predict(half, 0.5 * dt_s, depth + 1)
+            half = self._predict(belief, 0.5 * dt_s, ctrl, depth + 1)
+            return self._predict(half, 0.5 * dt_s, ctrl, depth + 1)
 
-    def _predict_once(self, belief: BoxAttitudeBelief, dt_s: float) -> BoxAttitudeBelief:
-        ctrl = belief.control if belief.control is not None else AttitudeControl.zero(belief.runs)
+    def _predict_once(
+        self, belief: BoxAttitudeBelief, dt_s: float, ctrl: AttitudeControl
+    ) -> BoxAttitudeBelief:
         w0c, w0r = belief.w_c, belief.w_r
         # a-priori enclosure W* of w(s), s in [0, dt]: W0 + [0, dt] F(W*) subset W*
         fc, fr = self._rate_field(w0c, w0r, ctrl)

@@ -26,10 +26,13 @@ Quaternions are scalar last (scipy's ``Rotation``); ``exp``/``log`` are
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from estim.base import Belief
 
 FloatArray = NDArray[np.float64]
 
@@ -147,6 +150,38 @@ class AttitudeMeasurement:
             arr.setflags(write=False)
         object.__setattr__(self, "quat", q)
         object.__setattr__(self, "rate_radps", w)
+
+
+@dataclass(frozen=True)
+class AttitudePrior:
+    """What an attitude estimator knows before its first update (the prior of
+    :meth:`estim.base.Estimator.initial` for attitude): the first measurement, whose
+    errors are within the model's bounds."""
+
+    measurement: AttitudeMeasurement
+
+
+class AttitudeBelief(Belief):
+    """Beliefs about ``(q, w)`` of a batch of ``R`` runs (one estimator, paired runs):
+    what an attitude loop asks besides the :class:`~estim.base.Belief` questions."""
+
+    @property
+    @abstractmethod
+    def runs(self) -> int:
+        """Number of runs in the batch."""
+
+    @abstractmethod
+    def inside(self, state: ArrayLike) -> NDArray[np.bool_]:
+        """Per run: whether the true state ``(q, w, ...)`` lies in the belief."""
+
+    @abstractmethod
+    def attitude_bound_rad(self) -> FloatArray:
+        """Per run: bound of the angle between the true and the centre attitude."""
+
+    @property
+    @abstractmethod
+    def empty_counts(self) -> NDArray[np.int_]:
+        """Per run: updates so far whose data contradicted the model."""
 
 
 def draw_measurement(

@@ -50,16 +50,18 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from estim.attitude_model import (
+    AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
+    AttitudePrior,
     qexp,
     qinv,
     qlog,
     qmul,
     rk4_attitude,
 )
-from estim.base import Belief, Estimator, Extremes, StateFunction
+from estim.base import Estimator, Extremes, StateFunction, Status
 
 FloatArray = NDArray[np.float64]
 DIM = 9  # (a, w, d): attitude error, rate, disturbance torque
@@ -99,14 +101,16 @@ def tangent_mean(sigmas: FloatArray, wm: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True, eq=False)
-class UkfAttitudeBelief(Belief):
+class UkfAttitudeBelief(AttitudeBelief):
     """Reference quaternions ``(R, 4)``, error-state means ``(R, 9)``, covariances ``(R, 9, 9)``."""
 
     q_ref: FloatArray
     mean: FloatArray
     cov: FloatArray
     gate: float = float(np.sqrt(chi2.ppf(0.997, DIM_Z)))
-    control: AttitudeControl | None = None
+    #: a Kalman update is never contradicted (outliers are kept, not rejected)
+    status: Status = Status.OK
+    contradictions: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "q_ref", _frozen(np.atleast_2d(self.q_ref)))
@@ -125,6 +129,10 @@ class UkfAttitudeBelief(Belief):
     @property
     def is_empty(self) -> bool:
         return False
+
+    @property
+    def empty_counts(self) -> NDArray[np.int_]:
+        return np.zeros(self.runs, dtype=int)
 
     def centre(self) -> FloatArray:
         """``(q, w)`` of the mean, ``(R, 7)``."""
@@ -180,7 +188,7 @@ def _with(belief: UkfAttitudeBelief, **changes: Any) -> UkfAttitudeBelief:
 
 
 @dataclass(frozen=True)
-class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
+class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     """UKF on the multiplicative error state (see the module docstring)."""
 
     model: AttitudeModel
@@ -223,7 +231,9 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
         floor = self.floor_accel_radps2 * np.diag(self.model.effective_inertia_kgm2)
         return np.maximum(self.model.disturbance_bound_Nm, floor) ** 2 / 3.0
 
-    def initial(self, meas: AttitudeMeasurement) -> UkfAttitudeBelief:
+    def initial(self, prior: AttitudePrior) -> UkfAttitudeBelief:
+        """Mean at the first measurement, its error covariance; disturbance at zero."""
+        meas = prior.measurement
         runs = meas.quat.shape[0]
         mean = np.concatenate([np.zeros((runs, 3)), meas.rate_radps, np.zeros((runs, 3))], -1)
         cov0 = np.zeros((DIM, DIM))
@@ -231,11 +241,6 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
         cov0[6:9, 6:9] = np.diag(self._var_d)
         cov = np.broadcast_to(cov0, (runs, DIM, DIM)).copy()
         return UkfAttitudeBelief(meas.quat, mean, cov, gate=self.gate)
-
-    def shift(self, belief: UkfAttitudeBelief, control: Any) -> UkfAttitudeBelief:
-        if not isinstance(control, AttitudeControl):
-            raise TypeError("control must be an AttitudeControl")
-        return _with(belief, control=control)
 
     # -- shared pieces -------------------------------------------------------------------
     def _sigma_points(self, mean: FloatArray, cov: FloatArray) -> FloatArray:
@@ -246,9 +251,17 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
         x = mean[:, None, :]
         return np.concatenate([x, x + rows, x - rows], axis=1)
 
-    def _propagate(self, belief, sigmas, dt_s):
-        """Full-state propagation of error-state points ``(R, S, 6)`` -> quats, rates."""
-        ctrl = belief.control if belief.control is not None else AttitudeControl.zero(belief.runs)
+    @staticmethod
+    def _control(belief, control: AttitudeControl | None) -> AttitudeControl:
+        if control is None:
+            return AttitudeControl.zero(belief.runs)
+        if not isinstance(control, AttitudeControl):
+            raise TypeError("control must be an AttitudeControl")
+        return control
+
+    def _propagate(self, belief, sigmas, dt_s, ctrl: AttitudeControl):
+        """Full-state propagation of error-state points ``(R, S, 6)`` -> quats, rates,
+        under the known inputs ``ctrl`` held over the step."""
         q = qmul(belief.q_ref[:, None, :], qexp(sigmas[..., 0:3]))
         h_mid = 0.5 * (ctrl.h_lo_Nms + ctrl.h_hi_Nms)
         return rk4_attitude(
@@ -268,11 +281,16 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
         return _with(belief, q_ref=q_new, mean=mean, cov=cov)
 
     # -- batched filter ------------------------------------------------------------------
-    def predict(self, belief: UkfAttitudeBelief, dt_s: float) -> UkfAttitudeBelief:
+    def predict(
+        self, belief: UkfAttitudeBelief, dt_s: float, control: AttitudeControl | None = None
+    ) -> UkfAttitudeBelief:
+        """Sigma points through the model under the known inputs ``control`` held over
+        the step (None: no torque, no momentum)."""
         if not dt_s > 0:
             raise ValueError("dt_s must be positive")
+        ctrl = self._control(belief, control)
         sig = self._sigma_points(belief.mean, belief.cov)
-        q1, w1 = self._propagate(belief, sig, dt_s)
+        q1, w1 = self._propagate(belief, sig, dt_s, ctrl)
         q_ref = q1[:, 0]  # the propagated mean point (sigma point 0 is the mean)
         chi = np.concatenate([qlog(qmul(qinv(q_ref)[:, None, :], q1)), w1, sig[..., 6:9]], -1)
         wm, wc = self.points.Wm, self.points.Wc
@@ -322,13 +340,16 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief]):
         ukf.P = np.array(belief.cov[0])
         return ukf
 
-    def predict_filterpy(self, belief: UkfAttitudeBelief, dt_s: float) -> UkfAttitudeBelief:
+    def predict_filterpy(
+        self, belief: UkfAttitudeBelief, dt_s: float, control: AttitudeControl | None = None
+    ) -> UkfAttitudeBelief:
+        ctrl = self._control(belief, control)
         mean_pt = belief.mean[:, None, :]
-        q1, _ = self._propagate(belief, mean_pt, dt_s)
+        q1, _ = self._propagate(belief, mean_pt, dt_s, ctrl)
         q_ref = q1[:, 0]
 
         def fx(s, dt):
-            qs, ws = self._propagate(belief, np.asarray(s, float)[None, None, :], dt)
+            qs, ws = self._propagate(belief, np.asarray(s, float)[None, None, :], dt, ctrl)
             return np.concatenate([qlog(qmul(qinv(q_ref), qs[:, 0]))[0], ws[0, 0], s[6:9]])
 
         ukf = self._filterpy(belief, fx, dt_s)

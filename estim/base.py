@@ -1,8 +1,13 @@
 """The estimator interface shared by every estimator in the package.
 
 Design (after Stone Soup): an *estimator* is an algorithm that holds configuration
-only; a *belief* is an immutable value. ``predict``, ``update`` and ``shift`` take a
-belief and return a new one; nothing is mutated in place. Consumers (the intercept
+only; a *belief* is an immutable value. ``initial`` builds the first belief from the
+problem's prior (one prior type per problem: :class:`estim.model.ChannelPrior` for an
+intercept channel, :class:`estim.attitude_model.AttitudePrior` for attitude);
+``predict`` and ``update`` take a belief and return a new one; nothing is mutated in
+place. A known control enters ``predict(belief, dt_s, control)`` with one meaning
+everywhere: it acts over the step being predicted (an impulse at its start, a torque
+held over it). Consumers (the intercept
 guidance law, the attitude controllers) depend on this module only, never on a
 concrete estimator, which is what makes estimators interchangeable on the same
 noise realisation.
@@ -13,11 +18,15 @@ A belief answers four questions:
 * ``extremes(fn)``: min and max of a scalar function over the belief, with the
   points where they are attained (the set itself, or the k-sigma ellipsoid);
 * ``contains(state)``: whether a state lies inside the belief;
-* ``is_empty``: whether the belief is empty (measurements contradicted the model).
+* ``is_empty``: whether the belief is empty (measurements contradicted the model);
+
+and carries its ``status`` (:class:`Status`) and the number of ``contradictions``
+(updates rejected because the data contradicted the model) as fields.
 """
 
 from __future__ import annotations
 
+import enum
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -45,8 +54,31 @@ class Extremes:
             raise ValueError(f"min_value {self.min_value} exceeds max_value {self.max_value}")
 
 
+class Status(enum.StrEnum):
+    """What a belief reports about itself (a field of every belief, never parsed)."""
+
+    #: a regular belief
+    OK = "ok"
+    #: the last update contradicted the model (rejected; counted in ``contradictions``)
+    CONTRADICTION = "contradiction"
+    #: every state has passed the end of the problem (e.g. under the blind range eps)
+    TERMINAL = "terminal"
+    #: the belief grew beyond use and was emptied (reported, not propagated)
+    DIVERGED = "diverged"
+
+
 class Belief(ABC):
     """An immutable state of knowledge about the system state."""
+
+    @property
+    @abstractmethod
+    def status(self) -> Status:
+        """The belief's :class:`Status` (a field of every concrete belief)."""
+
+    @property
+    @abstractmethod
+    def contradictions(self) -> int:
+        """Number of updates so far whose data contradicted the model."""
 
     @property
     @abstractmethod
@@ -67,22 +99,24 @@ class Belief(ABC):
 
 
 B = TypeVar("B", bound=Belief)
+P = TypeVar("P")
 
 
-class Estimator(ABC, Generic[B]):
+class Estimator(ABC, Generic[B, P]):
     """An estimation algorithm: configuration only, beliefs in and out."""
 
     @abstractmethod
-    def predict(self, belief: B, dt_s: float) -> B:
-        """Propagate the belief over ``dt_s`` seconds."""
+    def initial(self, prior: P) -> B:
+        """The first belief, from the problem's prior (a-priori box, first measurement)."""
+
+    @abstractmethod
+    def predict(self, belief: B, dt_s: float, control: Any = None) -> B:
+        """Propagate the belief over ``dt_s`` seconds under a known ``control`` acting
+        over that step (an impulse at its start, a torque held over it; None: none)."""
 
     @abstractmethod
     def update(self, belief: B, measurement: Any) -> B:
         """Condition the belief on one measurement."""
-
-    @abstractmethod
-    def shift(self, belief: B, control: Any) -> B:
-        """Apply a known control (an impulse, a torque) to the belief."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +128,8 @@ class PointBelief(Belief):
     """
 
     state: NDArray[np.float64]
+    status: Status = Status.OK
+    contradictions: int = 0
 
     def __post_init__(self) -> None:
         state = np.array(self.state, dtype=float)
@@ -115,18 +151,18 @@ class PointBelief(Belief):
         return bool(np.array_equal(np.asarray(state, dtype=float), self.state))
 
 
-class PerfectEstimator(Estimator[PointBelief]):
+class PerfectEstimator(Estimator[PointBelief, Any]):
     """The zero-noise estimator: the measurement *is* the state.
 
-    ``predict`` and ``shift`` keep the point (the next measurement replaces it);
-    ``update`` expects the full state vector as the measurement.
+    ``initial`` takes the state itself as the prior; ``predict`` keeps the point (the
+    next measurement replaces it); ``update`` expects the full state vector.
     """
 
-    def predict(self, belief: PointBelief, dt_s: float) -> PointBelief:
+    def initial(self, prior: Any) -> PointBelief:
+        return PointBelief(np.asarray(prior, dtype=float))
+
+    def predict(self, belief: PointBelief, dt_s: float, control: Any = None) -> PointBelief:
         return belief
 
     def update(self, belief: PointBelief, measurement: Any) -> PointBelief:
         return PointBelief(np.asarray(measurement, dtype=float))
-
-    def shift(self, belief: PointBelief, control: Any) -> PointBelief:
-        return belief

@@ -67,24 +67,28 @@ point sections keep the seed's ``nu``.
 
 An empty intersection means the measurement contradicts the model: the update is
 rejected (the predicted set is kept), ``contradictions`` is incremented and the
-status becomes ``"contradiction"``; the caller counts it. When every section has
-passed under ``eps`` the set is empty with status ``"terminal"``. When a slab
+status becomes ``Status.CONTRADICTION``; the caller counts it. When every section has
+passed under ``eps`` the set is empty with status ``Status.TERMINAL``. When a slab
 set's zero-effort-miss bound exceeds ``DIVERGED_W_PER_X`` times its range (the
 kinematic margin of wide slabs near ``eps`` feeding on itself: the set knows nothing
-any more) the set is emptied with status ``"diverged"``; the caller counts it.
+any more) the set is emptied with status ``Status.DIVERGED``; the caller counts it.
+
+A control (an impulse, :class:`~estim.model.Impulse` or m/s) enters
+:meth:`InformationSetEstimator.predict`: it acts at the start of the predicted step.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from estim import _kernels as _k
-from estim.base import Estimator
+from estim.base import Estimator, Status
 from estim.infoset_belief import InformationSet
-from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
+from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 from estim.polygons import ConvexPolygons
 
 __all__ = ["InformationSet", "InformationSetEstimator", "kinematic_margin_mps2"]
@@ -150,7 +154,7 @@ def kinematic_margin_mps2(
 
 
 @dataclass(frozen=True)
-class InformationSetEstimator(Estimator[InformationSet]):
+class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     """Set-membership estimator of one channel; configuration only.
 
     Parameters
@@ -221,7 +225,17 @@ class InformationSetEstimator(Estimator[InformationSet]):
         return self.closing_speed_mps
 
     # -- construction ----------------------------------------------------------------
-    def initial(
+    def initial(self, prior: ChannelPrior | None = None, **box: Any) -> InformationSet:
+        """The initial set of the a-priori box (:meth:`from_boxes`; the prior's closing
+        speed is not used: the set's propagation takes ``closing_speed_mps``).
+
+        ``initial(lateral_m=..., lateral_vel_mps=..., x_m=...)`` is short for
+        ``initial(ChannelPrior(...))``.
+        """
+        prior = ChannelPrior(**box) if prior is None else prior
+        return self.from_boxes(prior.lateral_m, prior.lateral_vel_mps, prior.x_m)
+
+    def from_boxes(
         self,
         lateral_m: tuple[float, float],
         lateral_vel_mps: tuple[float, float],
@@ -323,7 +337,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
             return self._contradiction(belief)
         return replace(self._select(belief, keep), x_lo_m=x_lo[keep], x_hi_m=x_hi[keep])
 
-    def shift(self, belief: InformationSet, control: float | Impulse) -> InformationSet:
+    def _impulse(self, belief: InformationSet, control: float | Impulse) -> InformationSet:
         """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``.
 
         ``control`` may be an :class:`~estim.model.Impulse` whose magnitude is only
@@ -343,9 +357,14 @@ class InformationSetEstimator(Estimator[InformationSet]):
         polys = belief.polygons.shift_band(scale * belief.x_mid_m, half)
         return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, polys)
 
-    def predict(self, belief: InformationSet, dt_s: float) -> InformationSet:
-        """Move every section over ``dt_s``: exact shear at the interval's middle, a
-        segment for the rest of the interval, the disturbance box; threshold at eps."""
+    def predict(
+        self, belief: InformationSet, dt_s: float, control: float | Impulse | None = None
+    ) -> InformationSet:
+        """Apply the impulse ``control`` (at the step's start; :meth:`_impulse`), then move
+        every section over ``dt_s``: exact shear at the interval's middle, a segment for
+        the rest of the interval, the disturbance box; threshold at eps."""
+        if control is not None:
+            belief = self._impulse(belief, control)
         if belief.is_empty:
             return belief
         if self.sections != "points":
@@ -358,7 +377,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
             belief = self._select(belief, keep)
             x_lo1, x_hi1 = x_lo1[keep], x_hi1[keep]
             if belief.is_empty:
-                return replace(belief, status="terminal")
+                return replace(belief, status=Status.TERMINAL)
         x_lo1 = np.maximum(x_lo1, eps)  # states that pass under eps leave the set
         # shear coefficient c = e dt / (x0 x1) over the interval's states
         x0_lo = np.maximum(belief.x_lo_m, eps + e_lo * dt_s)
@@ -385,7 +404,7 @@ class InformationSetEstimator(Estimator[InformationSet]):
             # nothing any more and would overflow in a few steps (wide slabs near
             # eps, whose nearest states swing at rad/s); reported, not propagated
             return replace(
-                self._select(belief, np.zeros(belief.n_sections, bool)), status="diverged"
+                self._select(belief, np.zeros(belief.n_sections, bool)), status=Status.DIVERGED
             )
         if not points:
             # the other shears of the interval, as a horizontal segment
@@ -435,4 +454,6 @@ class InformationSetEstimator(Estimator[InformationSet]):
 
     @staticmethod
     def _contradiction(belief: InformationSet) -> InformationSet:
-        return replace(belief, status="contradiction", contradictions=belief.contradictions + 1)
+        return replace(
+            belief, status=Status.CONTRADICTION, contradictions=belief.contradictions + 1
+        )

@@ -13,7 +13,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from estim.base import Belief, Extremes, StateFunction
+from estim.base import Belief, Extremes, StateFunction, Status
 from estim.model import ChannelModel
 from estim.polygons import ConvexPolygons
 
@@ -44,7 +44,7 @@ class InformationSet(Belief):
     polygons: ConvexPolygons
     alpha_scale_rad: float
     w_scale_m: float
-    status: str = "ok"
+    status: Status = Status.OK
     contradictions: int = 0
 
     def __post_init__(self) -> None:

@@ -57,7 +57,7 @@ transformed by the UKF), i.e. ``w -> w + k x/e`` (zem: exactly linear).
 
 Threshold (the set's ``eps``, SPEC 1.4): before each prediction ``x`` is
 conditioned on ``x >= eps + e Delta`` (a truncated normal, :meth:`threshold`);
-when the whole ellipsoid is below, the belief is empty (status ``"terminal"``).
+when the whole ellipsoid is below, the belief is empty (status ``Status.TERMINAL``).
 
 Initial belief: the exact first two moments of ``alpha = y/x`` and
 ``omega = Vy/x + c y/x^2`` or ``w = (Vy x + c y)/e`` (``c = -Vx``; the set's
@@ -96,9 +96,9 @@ from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, Unscen
 from numpy.typing import NDArray
 from scipy import special
 
-from estim.base import Estimator
+from estim.base import Estimator, Status
 from estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
-from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
+from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 
 FloatArray = NDArray[np.float64]
 
@@ -169,7 +169,7 @@ def project_on_bound(mean, cov, k: int, bound: float) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class KalmanChannelEstimator(Estimator[GaussianBelief]):
+class KalmanChannelEstimator(Estimator[GaussianBelief, ChannelPrior]):
     """EKF or UKF of one guidance channel behind the estimator interface.
 
     Parameters
@@ -249,7 +249,19 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
             mean, cov, self.n_sigma, self.coords, self.model.e, x_bounds_m=x_bounds_m
         )
 
-    def initial(
+    def initial(self, prior: ChannelPrior | None = None, **box: Any) -> GaussianBelief:
+        """Moment-matched Gaussian of the a-priori box (:meth:`from_boxes`, ``c = -Vx``
+        uniform in the prior's closing-speed interval, ``e`` when it has none).
+
+        ``initial(lateral_m=..., lateral_vel_mps=..., x_m=...)`` is short for
+        ``initial(ChannelPrior(...))``.
+        """
+        prior = ChannelPrior(**box) if prior is None else prior
+        speed = prior.closing_speed_mps
+        vx = None if speed is None else (-speed[1], -speed[0])
+        return self.from_boxes(prior.lateral_m, prior.lateral_vel_mps, prior.x_m, vx)
+
+    def from_boxes(
         self,
         lateral_m: tuple[float, float],
         lateral_vel_mps: tuple[float, float],
@@ -365,7 +377,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         ``lambda = phi(b)/(1 - Phi(b))``) and the other coordinates follow through
         their regression on ``x`` (Simon & Simon's truncation of a Gaussian). When the
         whole ellipsoid is under ``x_lo`` the belief becomes empty, status
-        ``"terminal"``: guidance ends, as with an emptied set.
+        ``Status.TERMINAL``: guidance ends, as with an emptied set.
         """
         if belief.is_empty:
             return belief
@@ -374,7 +386,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         sx = math.sqrt(p[2, 2])
         n = belief.n_sigma
         if m[2] + n * sx < x_lo:
-            return replace(belief, status="terminal")
+            return replace(belief, status=Status.TERMINAL)
         if m[2] - n * sx >= x_lo or sx == 0.0:
             return belief
         b = (x_lo - m[2]) / sx
@@ -385,9 +397,14 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         cov = p - np.outer(gain, gain) * (p[2, 2] - new_var)
         return replace(belief, mean=mean, cov=cov)
 
-    def predict(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
-        """Threshold (:meth:`threshold`), then propagate over ``dt_s`` (exact map, ``Q``)."""
+    def predict(
+        self, belief: GaussianBelief, dt_s: float, control: float | Impulse | None = None
+    ) -> GaussianBelief:
+        """The impulse ``control`` at the step's start (:meth:`_impulse`), the threshold
+        (:meth:`threshold`), then the propagation over ``dt_s`` (exact map, ``Q``)."""
         self._check(belief)
+        if control is not None:
+            belief = self._impulse(belief, control)
         belief = self.threshold(belief, dt_s)
         if belief.is_empty:
             return belief
@@ -422,7 +439,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief]):
         # threshold's truncation (and an e outside [e_lo, e_hi]) can push the mean out
         return self.constrain(replace(belief, mean=f.x, cov=f.P, x_bounds_m=bounds))
 
-    def shift(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
+    def _impulse(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
         """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``.
 
         An :class:`~estim.model.Impulse` known to ``+-dk`` adds the variance of a

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.base import Belief, Extremes, StateFunction
+from estim.base import Belief, Extremes, StateFunction, Status
 from estim.costs import MissForecast
 from estim.model import ChannelModel
 
@@ -107,8 +107,8 @@ class GaussianBelief(Belief):
         ``e`` of the map ``omega = w e / x^2`` (``"zem"`` only).
     n_sigma : float
         Radius of the ellipsoid in standard deviations.
-    status : str
-        ``"ok"``, or ``"terminal"`` once the mean range has passed under ``eps``
+    status : Status
+        ``Status.OK``, or ``Status.TERMINAL`` once the mean range has passed under ``eps``
         (the belief is then empty, as the information set after its threshold).
     contradictions : int
         Always 0: a Kalman update cannot be contradicted (kept for the interface).
@@ -126,7 +126,7 @@ class GaussianBelief(Belief):
     n_sigma: float = 3.0
     coords: str = "rate"
     closing_speed_mps: float = 58.0e3
-    status: str = "ok"
+    status: Status = Status.OK
     contradictions: int = 0
     innovation_outliers: int = 0
     x_bounds_m: tuple[float, float] | None = None
@@ -163,7 +163,7 @@ class GaussianBelief(Belief):
     # -- Belief interface ------------------------------------------------------------
     @property
     def is_empty(self) -> bool:
-        return self.status == "terminal"
+        return self.status is Status.TERMINAL
 
     def centre(self) -> FloatArray:
         """The mean as a row ``(alpha, omega, x)``."""

@@ -236,3 +236,59 @@ class ChannelModel:
         alpha = np.arctan2(y, x)
         omega = (x * vy - y * vx) / (x**2 + y**2)
         return np.stack([alpha, omega, x + 0.0 * alpha], axis=-1)
+
+
+def _interval(value: ArrayLike, name: str) -> tuple[float, float]:
+    lo, hi = (float(v) for v in value)
+    if not lo <= hi:
+        raise ValueError(f"{name} must be an interval [lo, hi] with lo <= hi")
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class ChannelPrior:
+    """The a-priori box of one intercept channel in SI units: what every estimator of
+    the channel starts from (:meth:`estim.base.Estimator.initial`).
+
+    Parameters
+    ----------
+    lateral_m, lateral_vel_mps : (float, float)
+        Intervals of the channel's offset ``y`` (m) and velocity ``Vy`` (m/s).
+    x_m : (float, float)
+        Interval of the range along the nominal axis (m, positive).
+    closing_speed_mps : (float, float) or None
+        Interval of the closing speed ``-Vx`` (m/s, positive); None: the model's
+        nominal ``e`` exactly.
+    """
+
+    lateral_m: tuple[float, float]
+    lateral_vel_mps: tuple[float, float]
+    x_m: tuple[float, float]
+    closing_speed_mps: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("lateral_m", "lateral_vel_mps", "x_m"):
+            object.__setattr__(self, name, _interval(getattr(self, name), name))
+        if not self.x_m[0] > 0:
+            raise ValueError("x_m must be positive")
+        if self.closing_speed_mps is not None:
+            speed = _interval(self.closing_speed_mps, "closing_speed_mps")
+            if not speed[0] > 0:
+                raise ValueError("closing_speed_mps must be positive")
+            object.__setattr__(self, "closing_speed_mps", speed)
+
+    def centre_state(self, model: ChannelModel) -> NDArray[np.float64]:
+        """``(alpha, omega, x)`` of the box's centre (closing at the interval's middle)."""
+        mid = [0.5 * (lo + hi) for lo, hi in (self.lateral_m, self.lateral_vel_mps, self.x_m)]
+        speed = self.closing_speed_mps or (model.e, model.e)
+        return model.from_cartesian(*mid, -0.5 * (speed[0] + speed[1]))
+
+
+@dataclass(frozen=True)
+class ChannelSetting:
+    """What an intercept estimator is built with besides its own options: the channel's
+    auxiliary model and the interval of the true closing speed its propagation may
+    assume (None: the nominal ``e`` exactly, the seed's model)."""
+
+    model: ChannelModel
+    closing_speed_mps: tuple[float, float] | None = None

@@ -1,14 +1,12 @@
 """Attitude loops as consumers of estimators (SPEC 2.5): shared plumbing for the loops.
 
 Every attitude loop (:mod:`experiments.attitude_rw`, :mod:`experiments.attitude_cmg`,
-:mod:`experiments.attitude_gyrostat`) feeds the same estimator wrapper:
+:mod:`experiments.attitude_gyrostat`) runs the estimator registered under a name
+(:mod:`estim.registry`, problem ``"attitude"``: ``perfect``, ``ukf``, ``box`` and any
+other registered one) through :class:`EstimatorLoop`:
 
-* ``perfect``: :class:`estim.base.PerfectEstimator` fed the (noisy) measurement;
-* ``ukf``: :class:`estim.attitude_ukf.UkfAttitudeEstimator`;
-* ``box``: :class:`estim.attitude_box.BoxAttitudeEstimator` (guaranteed).
-
-Per control step: ``shift`` with the known inputs (delivered torque, momentum
-interval), ``predict`` over the period, ``update`` with the new measurement; the
+per control step ``predict`` over the period with the known inputs held over it
+(delivered torque, momentum interval), then ``update`` with the new measurement; the
 controller reads ``centre()`` = ``(q, w)`` per run; ``truth_outside`` counts the
 (run, step) pairs where the truth is not in the belief (for ``perfect`` that is every
 noisy step: a point is not a set). Measurement errors are uniform within the model's
@@ -21,29 +19,25 @@ energy index and final error, one curve per controller x estimator x noise).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from estim.attitude_box import BoxAttitudeEstimator
+from estim import registry
 from estim.attitude_model import (
+    AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
-    qinv,
-    qlog,
-    qmul,
+    AttitudePrior,
 )
-from estim.attitude_ukf import UkfAttitudeEstimator
-from estim.base import PerfectEstimator, PointBelief
+from estim.base import Estimator
 from experiments.errors import InputError
 from experiments.files import atomic_write
 from experiments.provenance import code_identity
-
-ESTIMATORS = ("perfect", "ukf", "box")
 
 
 def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str) -> list[str]:
@@ -51,65 +45,52 @@ def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str
     if arg is None:
         arg = scenario_default or ("perfect" if noise == "none" else "box")
     names = [s.strip() for s in str(arg).split(",") if s.strip()]
-    bad = [n for n in names if n not in ESTIMATORS]
+    allowed = registry.names("attitude")
+    bad = [n for n in names if n not in allowed]
     if not names or bad:
-        raise InputError(f"--estimator must be one or more of {', '.join(ESTIMATORS)}, got '{arg}'")
+        raise InputError(f"--estimator must be one or more of {', '.join(allowed)}, got '{arg}'")
     return list(dict.fromkeys(names))
 
 
 @dataclass(frozen=True)
 class EstimatorLoop:
-    """One estimator run over a batch of runs, behind the ``estim.base`` interface."""
+    """One registered attitude estimator run over a batch of runs."""
 
     name: str
     model: AttitudeModel
+    estimator: Estimator = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.name not in ESTIMATORS:
-            raise ValueError(f"estimator must be one of {ESTIMATORS}, got {self.name!r}")
-        est: Any
-        if self.name == "box":
-            est = BoxAttitudeEstimator(self.model)
-        elif self.name == "ukf":
-            est = UkfAttitudeEstimator(self.model)
-        else:
-            est = PerfectEstimator()
-        object.__setattr__(self, "estimator", est)
+        try:
+            reg = registry.get("attitude", self.name)
+        except KeyError as exc:
+            raise ValueError(exc.args[0]) from None
+        object.__setattr__(self, "estimator", reg.build(None, self.model))
 
-    def start(self, meas: AttitudeMeasurement):
-        if self.name == "perfect":
-            return PointBelief(np.concatenate([meas.quat, meas.rate_radps], axis=-1))
-        return self.estimator.initial(meas)
+    def start(self, meas: AttitudeMeasurement) -> AttitudeBelief:
+        return self.estimator.initial(AttitudePrior(meas))
 
     def step(self, belief, control: AttitudeControl, dt_s: float, meas: AttitudeMeasurement):
-        """``shift`` (known inputs), ``predict`` over ``dt_s``, ``update`` with ``meas``."""
+        """``predict`` over ``dt_s`` with the inputs held over it, ``update`` with ``meas``."""
         est = self.estimator
-        if self.name == "perfect":
-            z = np.concatenate([meas.quat, meas.rate_radps], axis=-1)
-            return est.update(est.predict(belief, dt_s), z)
-        return est.update(est.predict(est.shift(belief, control), dt_s), meas)
+        return est.update(est.predict(belief, dt_s, control), meas)
 
     @staticmethod
-    def centre(belief) -> np.ndarray:
+    def centre(belief: AttitudeBelief) -> np.ndarray:
         """``(q, w)`` per run, ``(R, 7)``."""
         return np.atleast_2d(belief.centre())
 
-    def inside(self, belief, truth: np.ndarray) -> np.ndarray:
-        """Per run: truth ``(q, w, ...)`` in the belief (perfect: equal within 1e-12)."""
-        x = np.atleast_2d(truth)
-        if self.name != "perfect":
-            return belief.inside(x[:, 0:7])
-        c = self.centre(belief)
-        da = qlog(qmul(qinv(c[:, 0:4]), x[:, 0:4]))
-        return np.all(np.abs(np.concatenate([da, c[:, 4:7] - x[:, 4:7]], axis=-1)) <= 1e-12, -1)
+    @staticmethod
+    def inside(belief: AttitudeBelief, truth: np.ndarray) -> np.ndarray:
+        """Per run: truth ``(q, w, ...)`` in the belief."""
+        return belief.inside(np.atleast_2d(truth)[:, 0:7])
 
-    def empty_steps(self, belief) -> np.ndarray:
-        runs = self.centre(belief).shape[0]
-        return np.asarray(getattr(belief, "n_empty", np.zeros(runs)), dtype=int)
+    @staticmethod
+    def empty_steps(belief: AttitudeBelief) -> np.ndarray:
+        return belief.empty_counts
 
-    def attitude_bound_rad(self, belief) -> np.ndarray:
-        if self.name == "perfect":
-            return np.zeros(self.centre(belief).shape[0])
+    @staticmethod
+    def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:
         return belief.attitude_bound_rad()
 
 

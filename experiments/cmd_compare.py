@@ -14,10 +14,10 @@ from typing import Any
 
 import pandas as pd
 
+from estim import registry
 from experiments import plots
 from experiments.cmd_fig5 import miss_floor_m
 from experiments.cmd_intercept import add_common, resolve
-from experiments.engagement import ESTIMATORS
 from experiments.noise import NOISES
 from experiments.report import summary_markdown, write_tables, write_text
 from experiments.runner import run_experiment, summarise
@@ -31,6 +31,9 @@ def _list_of(allowed):
             raise argparse.ArgumentTypeError(
                 f"expected a comma-separated list of {', '.join(allowed)}; got {text!r}"
             )
+        twice = sorted({t for t in items if items.count(t) > 1})
+        if twice:  # each would be run and tabled twice
+            raise argparse.ArgumentTypeError(f"{', '.join(twice)} given twice in {text!r}")
         return items
 
     return parse
@@ -38,11 +41,12 @@ def _list_of(allowed):
 
 def add_arguments(p) -> None:
     add_common(p)
+    estimators = registry.names("intercept")
     p.add_argument(
         "--estimators",
-        type=_list_of(ESTIMATORS),
-        default=list(ESTIMATORS),
-        help=f"comma-separated, from {','.join(ESTIMATORS)} (default: all)",
+        type=_list_of(estimators),
+        default=list(estimators),
+        help=f"comma-separated, from {','.join(estimators)} (default: all)",
     )
     p.add_argument(
         "--noise",

@@ -14,9 +14,9 @@ from typing import Any
 
 import pandas as pd
 
+from estim import registry
 from experiments import plots
 from experiments.cmd_intercept import positive_int, seed_int
-from experiments.engagement import ESTIMATORS
 from experiments.intercept_scenario import load_scenario
 from experiments.report import summary_markdown, write_tables, write_text
 from experiments.runner import run_experiment, summarise
@@ -27,7 +27,7 @@ VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + 
 def add_arguments(p) -> None:
     p.add_argument("--runs", type=positive_int, default=50, help="runs per variant (default 50)")
     p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
-    p.add_argument("--estimator", choices=ESTIMATORS, default="infoset")
+    p.add_argument("--estimator", choices=registry.names("intercept"), default="infoset")
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
     p.add_argument("--scheduler", help="Dask scheduler address")
     p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")

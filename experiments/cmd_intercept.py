@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from experiments.engagement import ESTIMATORS
+from estim import registry
 from experiments.errors import InputError
 from experiments.intercept_scenario import load_scenario
 from experiments.noise import NOISES
@@ -53,7 +53,8 @@ def add_common(p: argparse.ArgumentParser) -> None:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p)
-    p.add_argument("--estimator", choices=ESTIMATORS, help="default: the scenario's")
+    estimators = registry.names("intercept")
+    p.add_argument("--estimator", choices=estimators, help="default: the scenario's")
     p.add_argument("--noise", choices=NOISES, help="default: the scenario's")
 
 

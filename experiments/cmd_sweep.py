@@ -41,6 +41,10 @@ def _toml_values(text: str) -> list[Any]:
         raise argparse.ArgumentTypeError(
             f'expected a non-empty TOML array, e.g. "[1, 3, 10]"; got {text!r}'
         )
+    seen = [json.dumps(v) for v in values]
+    twice = sorted({v for v in seen if seen.count(v) > 1})
+    if twice:  # the same value would be run and tabled twice
+        raise argparse.ArgumentTypeError(f"{', '.join(twice)} given twice in {text!r}")
     return values
 
 

@@ -23,9 +23,17 @@ from typing import Any
 
 import numpy as np
 
-from estim.base import Belief, Estimator
-from estim.infoset import InformationSetEstimator
-from estim.model import Bearing, BearingBound, ChannelModel, Range, off_axis_bound_rad
+from estim import registry
+from estim.base import Belief, Estimator, Status
+from estim.model import (
+    Bearing,
+    BearingBound,
+    ChannelModel,
+    ChannelPrior,
+    ChannelSetting,
+    Range,
+    off_axis_bound_rad,
+)
 from experiments.errors import InputError
 from experiments.intercept_scenario import InterceptScenario
 from experiments.noise import NOISES, BiasNoise, GameNoise, RandomNoise
@@ -33,7 +41,7 @@ from experiments.pointing import PointingCoupling
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from guidance.intercept.truth import TwoBodyTruth
 
-ESTIMATORS = ("infoset", "ekf", "ukf")
+ESTIMATORS = registry.names("intercept")
 CHANNELS = ("lateral", "vertical")
 
 
@@ -50,51 +58,46 @@ def channel_model(sc: InterceptScenario) -> ChannelModel:
     )
 
 
-def channel_boxes(sc: InterceptScenario, channel: str) -> dict[str, tuple[float, float]]:
-    """A-priori boxes of one channel in SI units."""
+def channel_prior(sc: InterceptScenario, channel: str) -> ChannelPrior:
+    """A-priori box of one channel in SI units."""
     e = sc.estimator
     pos, vel = ("y_km", "vy_kmps") if channel == "lateral" else ("z_km", "vz_kmps")
-    return {
-        "lateral_m": tuple(v * 1e3 for v in e[pos]),
-        "lateral_vel_mps": tuple(v * 1e3 for v in e[vel]),
-        "x_m": tuple(v * 1e3 for v in e["x_km"]),
-        "vx_mps": tuple(v * 1e3 for v in e["vx_kmps"]),
-    }
-
-
-def infoset_estimator(sc: InterceptScenario, model: ChannelModel) -> InformationSetEstimator:
-    e = sc.estimator
-    return InformationSetEstimator(
-        model,
-        n_sections=e["n_sections"],
-        sections=e["sections"],
-        closing_speed_mps=tuple(v * 1e3 for v in e["closing_speed_kmps"]),
-        kinematic_margin=e["kinematic_margin"],
-        split_ratio=e["split_ratio"],
+    vx = [v * 1e3 for v in e["vx_kmps"]]
+    return ChannelPrior(
+        tuple(v * 1e3 for v in e[pos]),
+        tuple(v * 1e3 for v in e[vel]),
+        tuple(v * 1e3 for v in e["x_km"]),
+        (-vx[1], -vx[0]),
     )
+
+
+def _options(sc: InterceptScenario, name: str) -> dict[str, Any]:
+    e = sc.estimator
+    if name == "infoset":
+        keys = ("n_sections", "sections", "kinematic_margin", "split_ratio")
+        return {k: e[k] for k in keys}
+    if name in ("ekf", "ukf"):
+        return {
+            "n_sigma": e["kalman_sigma"],
+            "range_constraint": e["kalman_range_constraint"],
+            "noise_inflation": e["kalman_noise_inflation"],
+        }
+    return {}
+
+
+def make_estimator(name: str, sc: InterceptScenario, model: ChannelModel) -> Estimator:
+    try:
+        reg = registry.get("intercept", name)
+    except KeyError as exc:
+        raise InputError(exc.args[0]) from None
+    speed = tuple(v * 1e3 for v in sc.estimator["closing_speed_kmps"])
+    return reg.build(_options(sc, name), ChannelSetting(model, speed))
 
 
 def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, channel: str):
     """Estimator of one channel and its initial belief, by name."""
-    boxes = channel_boxes(sc, channel)
-    if name == "infoset":
-        est = infoset_estimator(sc, model)
-        return est, est.initial(boxes["lateral_m"], boxes["lateral_vel_mps"], boxes["x_m"])
-    if name in ("ekf", "ukf"):
-        try:
-            from estim.kalman import KalmanChannelEstimator
-        except ImportError:
-            raise InputError(f"estimator '{name}' is not available in this version") from None
-        est = KalmanChannelEstimator(
-            model,
-            kind=name,
-            n_sigma=sc.estimator["kalman_sigma"],
-            range_constraint=sc.estimator["kalman_range_constraint"],
-            noise_inflation=sc.estimator["kalman_noise_inflation"],
-            closing_speed_mps=tuple(v * 1e3 for v in sc.estimator["closing_speed_kmps"]),
-        )
-        return est, est.initial(**boxes)
-    raise InputError(f"unknown estimator '{name}' (allowed: {', '.join(ESTIMATORS)})")
+    est = make_estimator(name, sc, model)
+    return est, est.initial(channel_prior(sc, channel))
 
 
 def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None):
@@ -106,11 +109,8 @@ def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels,
     if name == "bias":
         return BiasNoise(sensor, rng, len(channels))
     if name == "game":
-        est = infoset_estimator(sc, model)
-        sets = []
-        for ch in channels:
-            b = channel_boxes(sc, ch)
-            sets.append(est.initial(b["lateral_m"], b["lateral_vel_mps"], b["x_m"]))
+        est = make_estimator("infoset", sc, model)
+        sets = [est.initial(channel_prior(sc, ch)) for ch in channels]
         return GameNoise(est, sets, sensor.bearing_bound)
     raise InputError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
 
@@ -136,6 +136,7 @@ class EngagementResult:
     steps: int
     ca_time_s: float
     final_status: str
+    diverged: bool
     fuel_perfect_info_mps: float
     max_impulse_mps: float
     min_impulse_mps: float
@@ -250,8 +251,6 @@ def run_engagement(
         controls: list[Any] = ks
         if pointing is not None:
             dv, controls = pointing.impulse(dv, channels)
-        beliefs = [e.shift(b, u) for e, b, u in zip(est, beliefs, controls, strict=True)]
-        noise.observe(controls)
         state = truth_model.apply_impulse(state, dv)
         new_state = truth_model.propagate(state, dt)
         r1, v1 = truth_model.relative(new_state)
@@ -261,8 +260,9 @@ def run_engagement(
                 miss_m, fuel, n_imp, outside, checked, beliefs, step + 1, t + t_ca, fuel_floor_mps,
                 issued, (*pos_km, *vel_kmps), pointing,
             )  # fmt: skip
-        beliefs = [e.predict(b, dt) for e, b in zip(est, beliefs, strict=True)]
-        noise.predict(dt)
+        # the impulses act at the start of the step the beliefs are predicted over
+        beliefs = [e.predict(b, dt, u) for e, b, u in zip(est, beliefs, controls, strict=True)]
+        noise.predict(dt, controls)
         if pointing is not None:
             pointing.step(dt)
         state = new_state
@@ -306,8 +306,8 @@ def _range_measurement(
 def _result(
     miss_m, fuel, n_imp, outside, checked, beliefs, steps, t_ca, floor, issued, truth0, pointing
 ) -> EngagementResult:
-    contradictions = sum(getattr(b, "contradictions", 0) for b in beliefs)
-    statuses = {getattr(b, "status", "ok") for b in beliefs}
+    contradictions = sum(b.contradictions for b in beliefs)
+    statuses = {b.status for b in beliefs}
     return EngagementResult(
         miss_m=float(miss_m),
         fuel_mps=float(fuel),
@@ -317,7 +317,8 @@ def _result(
         contradictions=int(contradictions),
         steps=int(steps),
         ca_time_s=float(t_ca),
-        final_status=",".join(sorted(statuses)),
+        final_status=",".join(sorted(s.value for s in statuses)),
+        diverged=Status.DIVERGED in statuses,
         fuel_perfect_info_mps=float(floor),
         max_impulse_mps=float(max(issued, default=0.0)),
         min_impulse_mps=float(min(issued, default=0.0)),

@@ -24,9 +24,9 @@ the worst point. The range measurement is chosen the same way on ``x``.
 
 Generators are per-run objects driven by the engagement loop: ``bearings`` and
 ``range`` issue measurements, ``observe_range`` hands back the range measurement as
-the pursuer receives it (the adversary updates its sets with exactly that),
-``observe`` reports the impulses issued, and ``predict`` advances the generator's
-own sets.
+the pursuer receives it (the adversary updates its sets with exactly that), and
+``predict(dt_s, control)`` advances the generator's own sets over a step with the
+pursuer's impulses acting at its start (the estimators' ``predict`` API).
 """
 
 from __future__ import annotations
@@ -81,10 +81,7 @@ class _Memoryless:
     def observe_range(self, measurement: Range) -> None:
         pass
 
-    def observe(self, impulses: Sequence[float | Impulse]) -> None:
-        pass
-
-    def predict(self, dt_s: float) -> None:
+    def predict(self, dt_s: float, control: Sequence[float | Impulse] | None = None) -> None:
         pass
 
 
@@ -178,9 +175,10 @@ class GameNoise:
         """The range measurement as the pursuer receives it (with its off-axis bound)."""
         self.sets = [self.estimator.update(s, measurement) for s in self.sets]
 
-    def observe(self, impulses: Sequence[float | Impulse]) -> None:
-        """The pursuer's impulses (numbers or :class:`Impulse` with uncertainty)."""
-        self.sets = [self.estimator.shift(s, k) for s, k in zip(self.sets, impulses, strict=True)]
-
-    def predict(self, dt_s: float) -> None:
-        self.sets = [self.estimator.predict(s, dt_s) for s in self.sets]
+    def predict(self, dt_s: float, control: Sequence[float | Impulse] | None = None) -> None:
+        """Advance the sets over ``dt_s`` with the pursuer's impulses (one per channel:
+        numbers or :class:`Impulse` with uncertainty) acting at the step's start."""
+        controls = [None] * len(self.sets) if control is None else control
+        self.sets = [
+            self.estimator.predict(s, dt_s, k) for s, k in zip(self.sets, controls, strict=True)
+        ]

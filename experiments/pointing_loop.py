@@ -40,6 +40,7 @@ from estim.attitude_model import (
     AttitudeModel,
     draw_measurement,
 )
+from estim.attitude_perfect import PerfectAttitudeEstimator
 from estim.base import PointBelief
 from experiments.attitude_est import EstimatorLoop
 from experiments.errors import InputError
@@ -204,7 +205,7 @@ class PointingLoop:
     @property
     def knowledge_bound_rad(self) -> float:
         """Bound on the angle between :attr:`true_error` and :attr:`estimated_error`."""
-        if self.loop.name == "perfect":
+        if isinstance(self.loop.estimator, PerfectAttitudeEstimator):
             return float(np.linalg.norm(self.loop.model.meas_angle_bound_rad))
         return float(self.loop.attitude_bound_rad(self.belief)[0])
 

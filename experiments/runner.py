@@ -248,10 +248,8 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "fuel_mps": summary_stats(ok["fuel_mps"].to_numpy(dtype=float) if len(ok) else []),
         "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
         "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
-        # sets reported "diverged" (estim.infoset): emptied, so guidance stopped early
-        "diverged": int(ok["final_status"].str.contains("diverged").sum())
-        if len(ok) and "final_status" in ok
-        else 0,
+        # beliefs reported Status.DIVERGED: emptied, so guidance stopped early
+        "diverged": int(ok["diverged"].sum()) if len(ok) else 0,
         "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
         "wall_s": float(wall_s),
     }

@@ -8,9 +8,40 @@ the README under random exploration; ``make fuzz`` is how to keep looking.
 """
 
 import os
+from pathlib import Path
 
+import pytest
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, print_blob=True)
 settings.register_profile("fuzz", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+# Tests write only to temporary folders (issue 15, defect o: `make test` used to write
+# into the user's results/): every test module is checked against a snapshot of the
+# repository's results/ folder taken before it ran.
+_RESULTS = Path(__file__).resolve().parents[1] / "results"
+
+
+def _snapshot(root: Path) -> dict[str, tuple[int, int]]:
+    if not root.is_dir():
+        return {}
+    return {
+        str(p.relative_to(root)): (p.stat().st_size, p.stat().st_mtime_ns)
+        for p in root.rglob("*")
+        if p.is_file()
+    }
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _results_folder_untouched(request):
+    before = _snapshot(_RESULTS)
+    yield
+    after = _snapshot(_RESULTS)
+    changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
+    if changed:
+        pytest.fail(
+            f"{request.module.__name__} wrote into {_RESULTS}: {changed[:3]} "
+            "(tests must write only to temporary folders)"
+        )

@@ -20,6 +20,7 @@ from estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
+    AttitudePrior,
     draw_measurement,
     qexp,
     qlog,
@@ -81,15 +82,15 @@ def test_box_never_loses_the_truth(seed, rate_scale, at_bounds, dt_s):
     def signs() -> np.ndarray:
         return rng.choice([-1.0, 1.0], 6) if at_bounds else rng.uniform(-1, 1, 6)
 
-    belief = est.initial(_measure_at(state.as_vector(), model, signs()))
+    belief = est.initial(AttitudePrior(_measure_at(state.as_vector(), model, signs())))
     assert belief.contains(state.as_vector()[None, 0:7])
     for _ in range(25):
         torque = rng.uniform(-0.5, 0.5, 3)
         d = rng.choice([-1.0, 1.0], 3) * model.disturbance_bound_Nm
-        belief = est.shift(belief, AttitudeControl.held(torque, state.h_Nms, dt_s))
+        known = AttitudeControl.held(torque, state.h_Nms, dt_s)
         state = propagate(body, state, torque, dt_s, d)
         belief = est.update(
-            est.predict(belief, dt_s), _measure_at(state.as_vector(), model, signs())
+            est.predict(belief, dt_s, known), _measure_at(state.as_vector(), model, signs())
         )
         assert not belief.is_empty
         assert belief.contains(state.as_vector()[None, 0:7])
@@ -108,13 +109,13 @@ def _rw_loop(est, model, runs=10, steps=300, dt=0.05, d_const=True, seed=3):
     x[:, 0:4] = Rotation.random(runs, rng=rng).as_quat()
     x[:, 4:7] = rng.uniform(-0.05, 0.05, (runs, 3))
     d = rng.uniform(-1, 1, (runs, 3)) * model.disturbance_bound_Nm if d_const else 0.0
-    belief = est.initial(draw_measurement(x, model, rng))
+    belief = est.initial(AttitudePrior(draw_measurement(x, model, rng)))
     flags, beliefs, nees = [], [], []
     for k in range(steps):
         u = 0.02 * np.sin(0.05 * k + np.arange(3)) * np.ones((runs, 3))
-        belief = est.shift(belief, AttitudeControl.held(u, x[:, 7:10], dt))
+        known = AttitudeControl.held(u, x[:, 7:10], dt)
         x = rk4_step(body, x, u, dt, d)
-        belief = est.update(est.predict(belief, dt), draw_measurement(x, model, rng))
+        belief = est.update(est.predict(belief, dt, known), draw_measurement(x, model, rng))
         flags.append(belief.inside(x[:, 0:7]))
         beliefs.append(belief)
         if hasattr(belief, "mahalanobis"):
@@ -142,30 +143,32 @@ def test_box_is_tighter_than_one_measurement_and_immutable():
 def test_box_inadmissible_measurement_is_a_reported_empty_status():
     est = BoxAttitudeEstimator(MODEL)
     x = np.array([[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])
-    belief = est.initial(AttitudeMeasurement(x[:, 0:4], x[:, 4:7]))
-    belief = est.shift(belief, AttitudeControl.zero(1))
+    belief = est.initial(AttitudePrior(AttitudeMeasurement(x[:, 0:4], x[:, 4:7])))
     far = Rotation.from_rotvec([20 * MODEL.meas_angle_bound_rad[0], 0, 0]).as_quat()
-    new = est.update(est.predict(belief, 0.01), AttitudeMeasurement(far, x[:, 4:7]))
+    new = est.update(
+        est.predict(belief, 0.01, AttitudeControl.zero(1)), AttitudeMeasurement(far, x[:, 4:7])
+    )
     assert new.is_empty and int(new.n_empty[0]) == 1
     assert new.contains(np.concatenate([far, x[0, 4:7]])[None])  # restarted from the data
     ok = est.update(
-        est.predict(est.shift(new, AttitudeControl.zero(1)), 0.01),
+        est.predict(new, 0.01, AttitudeControl.zero(1)),
         AttitudeMeasurement(far, x[:, 4:7]),
     )
     assert not ok.is_empty and int(ok.n_empty[0]) == 1
 
 
 def _random_ukf_belief(rng, runs=1):
+    """A belief and the known inputs of its next step."""
     a = rng.normal(size=(9, 9))
     cov = a @ a.T * 1e-8 + np.eye(9) * 1e-10
     mean = np.concatenate([np.zeros(3), rng.normal(size=3) * 0.05, rng.normal(size=3) * 1e-4])
     ctrl = AttitudeControl.held(rng.normal(size=(runs, 3)) * 0.01, rng.normal(size=(runs, 3)), 0.1)
-    return UkfAttitudeBelief(
+    belief = UkfAttitudeBelief(
         Rotation.random(runs, rng=rng).as_quat(),
         np.tile(mean, (runs, 1)),
         np.broadcast_to(cov, (runs, 9, 9)),
-        control=ctrl,
     )
+    return belief, ctrl
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -174,8 +177,8 @@ def test_batched_ukf_equals_filterpy(seed):
     inertia = np.diag(rng.uniform(1, 5, 3))
     model = AttitudeModel(inertia, 1e-3, 1e-4, 1e-5)
     est = UkfAttitudeEstimator(model)
-    belief = _random_ukf_belief(rng)
-    a, b = est.predict(belief, 0.1), est.predict_filterpy(belief, 0.1)
+    belief, ctrl = _random_ukf_belief(rng)
+    a, b = est.predict(belief, 0.1, ctrl), est.predict_filterpy(belief, 0.1, ctrl)
     np.testing.assert_allclose(a.q_ref, b.q_ref, atol=1e-14)
     np.testing.assert_allclose(a.mean, b.mean, atol=1e-14)
     np.testing.assert_allclose(a.cov, b.cov, rtol=1e-9, atol=1e-20)

@@ -118,13 +118,14 @@ def test_constrained_lqr_converges_globally_and_V_decreases(j, q_w, q_l, seed):
     assert v[-1] < 1e-4 * v[0]
 
 
-def test_attitude_command_lqr_scenario_json(capsys):
+def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
     """SPEC 3.1 attitude contract on data/scenarios/lqr_large_angle.toml."""
     import json
 
     from experiments.cli import main
 
-    assert main(["attitude", "data/scenarios/lqr_large_angle.toml", "--runs", "2", "--json"]) == 0
+    args = ["attitude", "data/scenarios/lqr_large_angle.toml", "--runs", "2", "--json"]
+    assert main([*args, "--out", str(tmp_path)]) == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     for key in ("settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps"):
         assert set(out[key]) == {"mean", "p50", "p90", "max"}

@@ -43,7 +43,7 @@ def _cartesian(y, vy, x):
 def test_initial_set_contains_the_image_of_the_boxes_seed003_section4(est):
     """Brute force: (y, Vy, x) drawn in B x D map into the set; points: the section
     at x_j is the parallelogram of area box area x |det| of the linear map."""
-    s = est.initial(B_Y, D_VY, B_X)
+    s = est.from_boxes(B_Y, D_VY, B_X)
     assert s.n_sections == 29
     rng = np.random.default_rng(1)
     for _ in range(300):
@@ -60,7 +60,7 @@ def test_initial_set_contains_the_image_of_the_boxes_seed003_section4(est):
 
 
 def test_bearing_update_equals_shapely_intersection_with_range_dependent_strips():
-    s = SLABS.initial(B_Y, D_VY, B_X)
+    s = SLABS.from_boxes(B_Y, D_VY, B_X)
     alpha_m = 3e-4
     u = SLABS.update(s, Bearing(alpha_m))
     half = MODEL.bearing_bound(s.x_lo_m) * (1 + STRIP_MARGIN) + STRIP_MARGIN * 1e-4
@@ -75,7 +75,7 @@ def test_bearing_update_equals_shapely_intersection_with_range_dependent_strips(
 def test_point_prediction_is_the_seed_map_plus_the_disturbance_segment():
     """Points (the seed's model): the predicted section equals the convex hull of the
     section's vertices propagated by the exact step with v = -nu and v = +nu."""
-    s = POINTS.update(POINTS.initial(B_Y, D_VY, B_X), Bearing(1e-4))
+    s = POINTS.update(POINTS.from_boxes(B_Y, D_VY, B_X), Bearing(1e-4))
     p = POINTS.predict(s, 0.5)
     np.testing.assert_allclose(p.x_lo_m, s.x_lo_m - MODEL.e * 0.5)
     for j in (0, 20):
@@ -92,7 +92,7 @@ def test_slab_prediction_contains_every_propagated_state():
     the interval, any constant |v| <= nu) land in the predicted set."""
     rng = np.random.default_rng(2)
     est = InformationSetEstimator(MODEL, closing_speed_mps=(57.0e3, 59.0e3))
-    s = est.update(est.initial(B_Y, D_VY, B_X), Bearing(1e-4))
+    s = est.update(est.from_boxes(B_Y, D_VY, B_X), Bearing(1e-4))
     p = est.predict(s, 0.5)
     pts = _sample_in_sections(s, rng, per=30)
     for _ in range(3):
@@ -104,9 +104,9 @@ def test_slab_prediction_contains_every_propagated_state():
 
 @pytest.mark.parametrize("est", [SLABS, POINTS], ids=["slabs", "points"])
 def test_impulse_shifts_omega_by_k_over_x(est):
-    s = est.initial(B_Y, D_VY, B_X)
+    s = est.from_boxes(B_Y, D_VY, B_X)
     k = 5.0
-    t = est.shift(s, k)
+    t = est._impulse(s, k)
     rng = np.random.default_rng(4)
     pts = _sample_in_sections(s, rng, per=20)
     shifted = pts + np.column_stack([np.zeros(len(pts)), k / pts[:, 2], np.zeros(len(pts))])
@@ -118,13 +118,13 @@ def test_impulse_shifts_omega_by_k_over_x(est):
 
 def test_threshold_drops_sections_passing_under_eps_and_ends_terminal():
     est = InformationSetEstimator(MODEL, n_sections=5, sections="points")
-    s = est.initial(B_Y, D_VY, (20e3, 80e3))  # sections at 20, 35, 50, 65, 80 km
+    s = est.from_boxes(B_Y, D_VY, (20e3, 80e3))  # sections at 20, 35, 50, 65, 80 km
     p = est.predict(s, 0.5)  # 29 km per step: the 20 km section passes under 5 km
     np.testing.assert_allclose(p.x_lo_m, [6e3, 21e3, 36e3, 51e3])
     for _ in range(3):
         p = est.predict(p, 0.5)
     assert p.is_empty and p.status == "terminal"
-    slabs = InformationSetEstimator(MODEL, n_sections=3).initial(B_Y, D_VY, (20e3, 80e3))
+    slabs = InformationSetEstimator(MODEL, n_sections=3).from_boxes(B_Y, D_VY, (20e3, 80e3))
     q = InformationSetEstimator(MODEL, n_sections=3).predict(slabs, 0.5)
     # [20, 40] -> [5 (clipped at eps), 11], the others move by 29 km
     np.testing.assert_allclose(q.x_lo_m, [5e3, 11e3, 31e3])
@@ -132,16 +132,16 @@ def test_threshold_drops_sections_passing_under_eps_and_ends_terminal():
 
 
 def test_range_update_intersects_intervals():
-    s = SLABS.initial(B_Y, D_VY, B_X)
+    s = SLABS.from_boxes(B_Y, D_VY, B_X)
     d_m = 5801.3e3
     u = SLABS.update(s, Range(d_m))
     lo, hi = d_m / 1.05 * np.cos(MODEL.max_off_axis_rad), d_m / 0.95
     assert u.x_lo_m.min() == pytest.approx(max(lo, B_X[0]))
     assert u.x_hi_m.max() == pytest.approx(min(hi, B_X[1]), rel=1e-8)
     assert u.n_sections == np.sum((s.x_hi_m >= lo) & (s.x_lo_m <= hi))
-    p = POINTS.update(POINTS.initial(B_Y, D_VY, B_X), Range(d_m))
-    inside = (POINTS.initial(B_Y, D_VY, B_X).x_lo_m >= lo) & (
-        POINTS.initial(B_Y, D_VY, B_X).x_lo_m <= hi
+    p = POINTS.update(POINTS.from_boxes(B_Y, D_VY, B_X), Range(d_m))
+    inside = (POINTS.from_boxes(B_Y, D_VY, B_X).x_lo_m >= lo) & (
+        POINTS.from_boxes(B_Y, D_VY, B_X).x_lo_m <= hi
     )
     assert p.n_sections == min(inside.sum() + 2, 29)  # one neighbour each side
 
@@ -164,7 +164,7 @@ def test_range_update_with_measured_off_axis_bound_keeps_the_true_x(y_m, z_m, x_
     d_meas = d_true * (1 + err[2] * MODEL.range_rel_bound)
     phi = off_axis_bound_rad(a_meas, [bound, bound])
     assert phi >= np.arccos(x_m / d_true) - 1e-12
-    s = SLABS.initial(B_Y, D_VY, (0.5 * x_m, 2.0 * x_m))
+    s = SLABS.from_boxes(B_Y, D_VY, (0.5 * x_m, 2.0 * x_m))
     u = SLABS.update(s, Range(d_meas, off_axis_rad=phi))
     assert u.status == "ok"
     assert np.any((u.x_lo_m <= x_m) & (u.x_hi_m >= x_m))
@@ -178,7 +178,7 @@ def test_range_measurement_rejects_an_off_axis_bound_outside_0_to_pi_over_2():
 
 
 def test_contradicting_measurement_is_a_status_not_a_crash():
-    s = SLABS.initial(B_Y, D_VY, B_X)
+    s = SLABS.from_boxes(B_Y, D_VY, B_X)
     u = SLABS.update(s, Bearing(0.5))  # far outside every section
     assert u.status == "contradiction" and u.contradictions == 1
     assert u.n_sections == s.n_sections and not u.is_empty
@@ -187,11 +187,11 @@ def test_contradicting_measurement_is_a_status_not_a_crash():
 
 
 def test_beliefs_are_immutable_values():
-    s = SLABS.initial(B_Y, D_VY, B_X)
+    s = SLABS.from_boxes(B_Y, D_VY, B_X)
     xy0, x0 = s.polygons.xy.copy(), s.x_lo_m.copy()
     for op in (
         lambda b: SLABS.update(b, Bearing(0.0)),
-        lambda b: SLABS.shift(b, 3.0),
+        lambda b: SLABS._impulse(b, 3.0),
         lambda b: SLABS.predict(b, 0.5),
         lambda b: SLABS.update(b, Range(5.8e6)),
     ):
@@ -211,7 +211,7 @@ def test_extremes_of_miss_forecast_bound_brute_force_samples(est):
     """Pi over the set (seed 003 section 5) is >= every sampled value and attained
     up to sampling resolution."""
     rng = np.random.default_rng(3)
-    s = est.update(est.initial(B_Y, D_VY, B_X), Bearing(-2e-4))
+    s = est.update(est.from_boxes(B_Y, D_VY, B_X), Bearing(-2e-4))
     ext = s.extremes(MODEL.miss_forecast_m)
     vals = MODEL.miss_forecast_m(_sample_in_sections(s, rng, per=400))
     assert vals.max() <= ext.max_value + 1e-9 and vals.min() >= ext.min_value - 1e-9
@@ -241,7 +241,7 @@ def _run_guarantee(est, s, truth, dt, mode, v_mode, rng, e_true, steps=200):
             s = est.update(s, Range(truth[2] * (1 + rng.choice([-b, b, rng.uniform(-b, b)]))))
             assert s.contains(truth), f"range, step {step}"
         k = rng.uniform(-7.5, 7.5) if step % 3 == 0 else 0.0
-        s = est.shift(s, k)
+        s = est._impulse(s, k)
         truth = truth + np.array([0.0, k / truth[2], 0.0])
         assert s.contains(truth), f"shift, step {step}"
         v = {"uniform": rng.uniform(-1, 1), "bounds": rng.choice([-1.0, 1.0]), "zero": 0.0}[v_mode]
@@ -301,7 +301,7 @@ def test_slab_set_contains_truth_under_admissible_noise_seed003_guarantee(
     update, range update, shift and prediction, for 200 steps or until the truth's
     bearing leaves the channel model's domain (|alpha| > MAX_BEARING_RAD)."""
     est = InformationSetEstimator(MODEL, closing_speed_mps=(57.0e3, 59.0e3))
-    s0 = est.initial(B_Y, D_VY, B_X)
+    s0 = est.from_boxes(B_Y, D_VY, B_X)
     truth = _cartesian(y, vy, x)
     assert s0.contains(truth)
     rng = np.random.default_rng(seed)
@@ -327,7 +327,7 @@ def test_slab_set_contains_truth_under_admissible_noise_seed003_guarantee(
 def test_point_sections_contain_an_on_grid_truth_seed003_model(y, vy, j, mode, v_mode, seed):
     """The seed's point sections are exact for a truth on a section's range moving at
     the nominal closing speed (the seed's own model)."""
-    s = POINTS.initial(B_Y, D_VY, B_X)
+    s = POINTS.from_boxes(B_Y, D_VY, B_X)
     truth = _cartesian(y, vy, s.x_lo_m[j])
     rng = np.random.default_rng(seed)
     _run_guarantee(POINTS, s, truth, 0.5, mode, v_mode, rng, MODEL.e)
@@ -381,7 +381,7 @@ def test_wide_slab_near_eps_splits_or_is_reported_diverged_not_overflowed():
             kinematic_margin=margin,
             split_ratio=split,
         )
-        s = est.update(est.initial(*boxes), Bearing(0.0))
+        s = est.update(est.from_boxes(*boxes), Bearing(0.0))
         for _ in range(5):
             s = est.update(est.predict(s, 0.5), Bearing(0.0))
             if s.is_empty:
@@ -399,12 +399,12 @@ def test_uncertain_impulse_keeps_every_possible_truth():
     from estim.model import Impulse
 
     rng = np.random.default_rng(5)
-    s = SLABS.update(SLABS.initial(B_Y, D_VY, B_X), Bearing(0.0))
-    t = SLABS.shift(s, Impulse(5.0, 0.5))
+    s = SLABS.update(SLABS.from_boxes(B_Y, D_VY, B_X), Bearing(0.0))
+    t = SLABS._impulse(s, Impulse(5.0, 0.5))
     pts = _sample_in_sections(s, rng, per=10)
     for k_true in (4.5, 5.5, 5.0):
         shifted = pts + np.column_stack(
             [np.zeros(len(pts)), k_true / pts[:, 2], np.zeros(len(pts))]
         )
         assert all(t.contains(q) for q in shifted[::2])
-    assert t.polygons.areas().sum() > SLABS.shift(s, 5.0).polygons.areas().sum()
+    assert t.polygons.areas().sum() > SLABS._impulse(s, 5.0).polygons.areas().sum()

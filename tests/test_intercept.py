@@ -56,11 +56,11 @@ def test_impulse_recentres_the_forecast_interval_seed003_law():
     """After the law's impulse the forecast at the two extreme points sums to zero
     (k = -(Pi_min + Pi_max) e / (x* + x**)); the interval's centre moves to ~0."""
     est = InformationSetEstimator(MODEL, sections="points")
-    s = est.initial((-10e3, 10e3), (-20.0, 60.0), (5301.3e3, 6301.3e3))
+    s = est.from_boxes((-10e3, 10e3), (-20.0, 60.0), (5301.3e3, 6301.3e3))
     law = ForecastCentringLaw(MODEL, ImpulseLimits(0.0, 1e6, 1e9))
     ext = law.forecast(s)
     k = law.command_mps(s)
-    after = est.shift(s, k)
+    after = est._impulse(s, k)
     pts = np.array([ext.argmin, ext.argmax]) + np.array([[0, k / ext.argmin[2], 0]])
     pts[1, 1] = ext.argmax[1] + k / ext.argmax[2]
     assert abs(MODEL.miss_forecast_m(pts).sum()) < 1e-6 * (ext.max_value - ext.min_value)
@@ -99,7 +99,7 @@ def test_game_bearing_always_contains_the_truth(y, vy, alpha_err, x):
     the truth is relative to the adversary's set; (b) when compatible, the strip at
     the worst point's range contains the worst point."""
     est = InformationSetEstimator(MODEL)
-    s = est.initial((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
+    s = est.from_boxes((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
     alpha_true = y / x + alpha_err
     bound = float(MODEL.bearing_bound(x))
     a_m = game_bearing(alpha_true, bound, s)
@@ -249,7 +249,7 @@ def test_game_adversary_updates_its_sets_with_the_pursuers_range_measurement():
     from experiments.noise import GameNoise
 
     est = InformationSetEstimator(MODEL, n_sections=9, closing_speed_mps=(57.9e3, 58.1e3))
-    s0 = est.initial((-1e3, 1e3), (-100.0, 100.0), (700e3, 900e3))
+    s0 = est.from_boxes((-1e3, 1e3), (-100.0, 100.0), (700e3, 900e3))
     noise = GameNoise(est, [s0])
     d = noise.range(800e3)
     assert abs(d - 800e3) <= MODEL.range_rel_bound * 800e3

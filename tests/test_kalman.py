@@ -54,7 +54,7 @@ def test_known_range_case_equals_closed_form_kalman_filter(kind, coords):
     P = F P F^T + Q, K = P H^T (H P H^T + R)^-1 to rounding."""
     x0 = 3000e3
     est = _est(kind, coords)
-    b = est.initial(B_Y, D_VY, (x0, x0))
+    b = est.from_boxes(B_Y, D_VY, (x0, x0))
     m, p = b.mean.copy(), b.cov.copy()
     assert p[2, 2] == 0.0 and np.all(p[:2, 2] == 0.0)
     h = np.array([[1.0, 0.0, 0.0]])
@@ -71,7 +71,7 @@ def test_known_range_case_equals_closed_form_kalman_filter(kind, coords):
         impulse = 3.0 if i % 3 == 0 else 0.0
         f, g, k_gain, x1 = _closed_form_step(coords, x)
         m = m + np.array([0.0, k_gain * impulse, 0.0])
-        b = est.shift(b, impulse)
+        b = est._impulse(b, impulse)
         m = f @ m
         m[2] = x1  # x drifts at the nominal closing speed
         p = f @ p @ f.T + np.outer(g, g) * NU**2 / 3.0
@@ -94,7 +94,7 @@ def test_bearing_update_from_the_a_priori_belief_is_the_exact_kalman_update(
     ``R = s a^2/3`` for noise inflation ``s`` (s = 3: ``a^2``, the largest variance of
     an error within +-a)."""
     est = KalmanChannelEstimator(MODEL, kind=kind, coords=coords, noise_inflation=inflation)
-    b = est.initial(B_Y, D_VY, B_X, D_VX)
+    b = est.from_boxes(B_Y, D_VY, B_X, D_VX)
     p, m = b.cov, b.mean
     r = inflation * MODEL.bearing_bound(m[2]) ** 2 / 3.0
     z = 1.3e-3
@@ -111,7 +111,7 @@ def test_bearing_update_from_the_a_priori_belief_is_the_exact_kalman_update(
 @pytest.mark.parametrize("coords", ["zem", "rate"])
 def test_initial_belief_has_the_monte_carlo_moments_of_the_boxes(coords):
     """y, Vy, x, Vx uniform and independent; alpha = y/x, omega = Vy/x - Vx y/x^2."""
-    b = _est(coords=coords).initial(B_Y, D_VY, B_X, D_VX)
+    b = _est(coords=coords).from_boxes(B_Y, D_VY, B_X, D_VX)
     rng = np.random.default_rng(0)
     n = 400_000
     y, vy = rng.uniform(*B_Y, n), rng.uniform(*D_VY, n)
@@ -154,7 +154,7 @@ def test_jacobians_equal_finite_differences_of_the_exact_maps(coords):
 @pytest.mark.parametrize("kind,coords", FILTERS)
 def test_wrappers_never_mutate_the_beliefs_they_are_given(kind, coords):
     est = _est(kind, coords)
-    b = est.update(est.initial(B_Y, D_VY, B_X, D_VX), Bearing(-1e-3))
+    b = est.update(est.from_boxes(B_Y, D_VY, B_X, D_VX), Bearing(-1e-3))
     assert not b.mean.flags.writeable and not b.cov.flags.writeable
     with pytest.raises(ValueError):
         b.mean[0] = 1.0
@@ -162,7 +162,7 @@ def test_wrappers_never_mutate_the_beliefs_they_are_given(kind, coords):
     outs = [
         est.update(b, Bearing(2e-4)),
         est.update(b, Range(5.9e6)),
-        est.shift(b, 5.0),
+        est._impulse(b, 5.0),
         est.predict(b, DT),
         est.threshold(b, 100.0),
     ]
@@ -179,7 +179,7 @@ def test_wrappers_never_mutate_the_beliefs_they_are_given(kind, coords):
 
 def _random_belief(rng, coords, centre_r=None):
     est = _est(coords=coords)
-    b = est.initial(B_Y, D_VY, B_X, D_VX)
+    b = est.from_boxes(B_Y, D_VY, B_X, D_VX)
     for _ in range(int(rng.integers(0, 40))):
         b = est.predict(est.update(b, Bearing(rng.normal(0, 2e-4))), DT)
     if centre_r is not None:
@@ -254,7 +254,7 @@ def test_contains_is_the_mahalanobis_distance_test(coords):
         if abs(dist - b.n_sigma) > 1e-6:
             assert b.contains(row) == (dist <= b.n_sigma)
     # a flat ellipsoid (known range): off its plane is outside at any distance
-    flat = _est().initial(B_Y, D_VY, (3e6, 3e6))
+    flat = _est().from_boxes(B_Y, D_VY, (3e6, 3e6))
     assert flat.contains(flat.centre())
     off = flat.centre() + np.array([0.0, 0.0, 1.0])
     assert not flat.contains(off)
@@ -304,7 +304,7 @@ def test_filters_on_the_auxiliary_model_pass_the_nees_test_early_on(kind):
     for j in range(runs):
         y, vy, x = rng.uniform(*B_Y), rng.uniform(*D_VY), rng.uniform(*B_X)
         s = np.array([y / x, vy / x + E * y / x**2, x])
-        b = est.initial(B_Y, D_VY, B_X)
+        b = est.from_boxes(B_Y, D_VY, B_X)
         for _ in range(steps):
             b = est.predict(b, DT)
             s = MODEL.step(s, DT, rng.uniform(-NU, NU))
@@ -370,7 +370,7 @@ def test_range_projection_is_the_simon_2010_estimate_projection():
     # on a filter's belief (units 1e-4 rad .. 6e6 m, alpha and w correlated with x):
     # the KKT solve in units of the standard deviations
     est = KalmanChannelEstimator(MODEL, range_constraint=True)
-    b = est.initial(B_Y, D_VY, B_X, D_VX)
+    b = est.from_boxes(B_Y, D_VY, B_X, D_VX)
     for i in range(40):
         b = est.predict(est.update(b, Bearing(2e-4 + 1e-6 * i)), DT)
     lo = b.x_bounds_m[0]
@@ -394,13 +394,13 @@ class _Recording(KalmanChannelEstimator):
         self.log.append(("update", out))
         return out
 
-    def shift(self, belief, control):
-        out = super().shift(belief, control)
+    def _impulse(self, belief, control):
+        out = super()._impulse(belief, control)
         self.log.append(("shift", out))
         return out
 
-    def predict(self, belief, dt_s):
-        out = super().predict(belief, dt_s)
+    def predict(self, belief, dt_s, control=None):
+        out = super().predict(belief, dt_s, control)
         self.log.append(("predict", out))
         return out
 
@@ -485,13 +485,13 @@ def test_range_constraint_off_reproduces_the_unconstrained_filter(kind):
         est = KalmanChannelEstimator(
             MODEL, kind=kind, range_constraint=on, closing_speed_mps=speeds
         )
-        b = est.initial(B_Y, D_VY, B_X, D_VX)
+        b = est.from_boxes(B_Y, D_VY, B_X, D_VX)
         rng = np.random.default_rng(11)
         for i in range(60):
             b = est.update(b, Bearing(rng.normal(2e-4 * i / 60, 1e-4)))
             if i % 10 == 3:
                 b = est.update(b, Range(rng.normal(5.8e6 - 29e3 * i, 1e5)))
-            b = est.shift(b, 2.0 if i % 5 == 0 else 0.0)
+            b = est._impulse(b, 2.0 if i % 5 == 0 else 0.0)
             b = est.predict(b, DT)
             assert (b.x_bounds_m is None) == (not on)
         out.append(b)

@@ -1,0 +1,141 @@
+"""The package's own estimators and their options, registered by name (:mod:`estim.registry`).
+
+Intercept (one guidance channel): ``infoset`` (:mod:`estim.infoset`), ``ekf`` and
+``ukf`` (:mod:`estim.kalman`). Attitude (batched runs): ``perfect``
+(:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
+(:mod:`estim.attitude_box`). A scenario's ``[estimator.<name>]`` table is validated by
+the options model below (one declaration per field: type, bounds, default, unit, doc).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from estim.attitude_box import BoxAttitudeEstimator
+from estim.attitude_model import AttitudeModel
+from estim.attitude_perfect import PerfectAttitudeEstimator
+from estim.attitude_ukf import UkfAttitudeEstimator
+from estim.infoset import InformationSetEstimator
+from estim.kalman import KalmanChannelEstimator
+from estim.model import ChannelSetting
+from estim.registry import register
+
+_STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
+
+
+class InfosetOptions(BaseModel):
+    """Options of the information set (:class:`estim.infoset.InformationSetEstimator`)."""
+
+    model_config = _STRICT
+
+    n_sections: Annotated[int, Field(ge=2, le=400, description="sections of the initial set")] = 29
+    sections: Annotated[
+        Literal["slabs", "points"],
+        Field(description="slabs (guaranteed) or the seed's point sections"),
+    ] = "slabs"
+    kinematic_margin: Annotated[
+        bool, Field(description="slabs: bound the kinematic term the linear model neglects")
+    ] = True
+    split_ratio: Annotated[
+        float, Field(gt=1.0, le=1e6, description="slabs: split a slab wider than x_hi/x_lo")
+    ] = 1.5
+    max_sections: Annotated[
+        int, Field(ge=2, le=4000, description="slabs: most sections splitting may make")
+    ] = 128
+
+    @model_validator(mode="after")
+    def _room_for_the_sections(self) -> InfosetOptions:
+        if self.n_sections > self.max_sections:
+            raise ValueError(
+                f"n_sections ({self.n_sections}) must be <= max_sections ({self.max_sections})"
+            )
+        return self
+
+
+class KalmanOptions(BaseModel):
+    """Options of the EKF and UKF of a channel (:class:`estim.kalman.KalmanChannelEstimator`)."""
+
+    model_config = _STRICT
+
+    n_sigma: Annotated[
+        float, Field(ge=0.5, le=10.0, description="radius of the ellipsoid, standard deviations")
+    ] = 3.0
+    range_constraint: Annotated[
+        bool, Field(description="project the range estimate onto the a-priori interval")
+    ] = False
+    noise_inflation: Annotated[
+        float, Field(ge=1.0, le=1e6, description="factor on every noise variance, R and Q")
+    ] = 1.0
+
+
+class NoOptions(BaseModel):
+    """An estimator without options."""
+
+    model_config = _STRICT
+
+
+class BoxOptions(BaseModel):
+    """Options of the guaranteed attitude box (:class:`estim.attitude_box.BoxAttitudeEstimator`)."""
+
+    model_config = _STRICT
+
+    abs_inflation_rad: Annotated[
+        float, Field(ge=0.0, le=1e-3, description="absolute inflation per step, rad and rad/s")
+    ] = 1e-12
+
+
+class UkfAttitudeOptions(BaseModel):
+    """Options of the attitude UKF (:class:`estim.attitude_ukf.UkfAttitudeEstimator`)."""
+
+    model_config = _STRICT
+
+    gate_prob: Annotated[
+        float, Field(gt=0.0, lt=1.0, description="probability of the gate ellipsoid")
+    ] = 0.997
+
+
+def _infoset(opt: InfosetOptions, setting: ChannelSetting) -> InformationSetEstimator:
+    return InformationSetEstimator(
+        setting.model,
+        n_sections=opt.n_sections,
+        sections=opt.sections,
+        closing_speed_mps=setting.closing_speed_mps,
+        kinematic_margin=opt.kinematic_margin,
+        split_ratio=opt.split_ratio,
+        max_sections=opt.max_sections,
+    )
+
+
+def _kalman(kind: str):
+    def build(opt: KalmanOptions, setting: ChannelSetting) -> KalmanChannelEstimator:
+        return KalmanChannelEstimator(
+            setting.model,
+            kind=kind,
+            n_sigma=opt.n_sigma,
+            range_constraint=opt.range_constraint,
+            noise_inflation=opt.noise_inflation,
+            closing_speed_mps=setting.closing_speed_mps,
+        )
+
+    return build
+
+
+def _box(opt: BoxOptions, model: AttitudeModel) -> BoxAttitudeEstimator:
+    return BoxAttitudeEstimator(model, abs_inflation_rad=opt.abs_inflation_rad)
+
+
+def _ukf_attitude(opt: UkfAttitudeOptions, model: AttitudeModel) -> UkfAttitudeEstimator:
+    return UkfAttitudeEstimator(model, gate_prob=opt.gate_prob)
+
+
+register("infoset", "intercept", InfosetOptions, _infoset, "convex-section information set")
+register("ekf", "intercept", KalmanOptions, _kalman("ekf"), "EKF read as its n-sigma ellipsoid")
+register("ukf", "intercept", KalmanOptions, _kalman("ukf"), "UKF read as its n-sigma ellipsoid")
+register(
+    "perfect", "attitude", NoOptions, lambda opt, model: PerfectAttitudeEstimator(),
+    "the measurement taken as the state",
+)  # fmt: skip
+register("ukf", "attitude", UkfAttitudeOptions, _ukf_attitude, "UKF on the error state")
+register("box", "attitude", BoxOptions, _box, "guaranteed box on the error state")
