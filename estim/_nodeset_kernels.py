@@ -247,8 +247,8 @@ def _secant(t4, f4, lo_s, hi_s, rtol):
     t0, t1, t2, t3 = t4[0], t4[1], t4[2], t4[3]
     if not np.isfinite(f1) and not np.isfinite(f2):
         return -np.inf, lo_s
-    has_l = np.isfinite(f0) and np.isfinite(f1)
-    has_r = np.isfinite(f2) and np.isfinite(f3)
+    has_l = np.isfinite(f0) and np.isfinite(f1) and t1 > t0
+    has_r = np.isfinite(f2) and np.isfinite(f3) and t3 > t2
     s_l = (f1 - f0) / (t1 - t0) if has_l else 0.0
     s_r = (f3 - f2) / (t3 - t2) if has_r else 0.0
     best, arg = -np.inf, lo_s
@@ -274,49 +274,6 @@ def _secant(t4, f4, lo_s, hi_s, rtol):
     if np.isfinite(best):
         best += rtol * abs(best)
     return best, arg
-
-
-@njit(cache=True)
-def cell_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
-    """Bounds over each cell of ``zs = e_nom (Y~ + V~ tau)`` and of ``Y~``.
-
-    ``zs`` over the cell is at most the larger of the bounds of the two fixed
-    directions ``e_nom (1, tau_i)`` and ``e_nom (1, tau_i+1)`` (a convex combination
-    of them at any ``tau`` of the cell). Returns arrays ``(m, 4)``: ``zs_hi,
-    arg_hi, zs_lo, arg_lo`` and ``(m, 2)``: ``y_hi, y_lo``.
-    """
-    m = table.shape[0]
-    zs = np.empty((m, 4))
-    yb = np.empty((m, 2))
-    f_hi = np.empty(4)
-    f_lo = np.empty(4)
-    for c in range(m):
-        best_hi, arg_hi = -np.inf, lo_s[c]
-        best_lo, arg_lo = np.inf, lo_s[c]
-        for r in range(3):  # directions (1, tau_i), (1, tau_i+1), then (1, 0) for Y~
-            if r < 2:
-                t_ref = tau4[c, 1 + r]
-                p, q = e_nom, e_nom * t_ref
-            else:
-                p, q = 1.0, 0.0
-            for k in range(4):
-                j = table[c, k]
-                tj = tau[j] if j >= 0 else 1.0
-                h, lo = _support(xy, off, j, tj, p, q, scale, e_nom)
-                f_hi[k] = h
-                f_lo[k] = -lo
-            up, a_up = _secant(tau4[c], f_hi, lo_s[c], hi_s[c], rtol)
-            dn, a_dn = _secant(tau4[c], f_lo, lo_s[c], hi_s[c], rtol)
-            if r < 2:
-                if up > best_hi:
-                    best_hi, arg_hi = up, a_up
-                if -dn < best_lo:
-                    best_lo, arg_lo = -dn, a_dn
-            else:
-                yb[c, 0] = up
-                yb[c, 1] = -dn
-        zs[c, 0], zs[c, 1], zs[c, 2], zs[c, 3] = best_hi, arg_hi, best_lo, arg_lo
-    return zs, yb
 
 
 @njit(cache=True)
@@ -376,9 +333,12 @@ def _zem_bound_cell(xy, off, tau, nodes, t4, lo_s, hi_s, scale, e_nom, sign, buf
         counts[k] = _lines(xy, off, j, tj, scale, e_nom, sign, buf_a[k], buf_b[k])
     if counts[1] == 0 and counts[2] == 0:
         return -np.inf, lo_s
-    has_l = counts[0] > 0 and counts[1] > 0
-    has_r = counts[2] > 0 and counts[3] > 0
+    has_l = counts[0] > 0 and counts[1] > 0 and t4[1] > t4[0]
+    has_r = counts[2] > 0 and counts[3] > 0 and t4[3] > t4[2]
     if not has_l and not has_r:
+        if counts[1] > 0 and lo_s == hi_s == t4[1]:  # a lone node: its own slice
+            v = _envelope_at(buf_a[1], buf_b[1], counts[1], t4[1])
+            return buf_a[1, v] + buf_b[1, v] * t4[1], lo_s
         return np.inf, lo_s
     # breakpoints: where the largest line of a node changes (consecutive vertices tie)
     nbk = 0
@@ -501,3 +461,98 @@ def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
         )  # fmt: skip
         out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
     return out
+
+
+@njit(cache=True)
+def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_nom, rtol):
+    """Everything the node set is asked, in one pass over its cells.
+
+    A cell is a pair of consecutive nodes of one piece with at least one live end,
+    its part of ``tau`` clipped to the piece's hard limits. Returns
+
+    * ``table`` (m, 4): nodes ``i-1, i, i+1, i+2`` around each cell (-1: none);
+    * ``tau4`` (m, 4): their times to go (dummies for missing neighbours);
+    * ``span`` (m, 2): the cell's part of ``tau``; ``cpiece`` (m,): its piece;
+    * ``zs`` (m, 4): bounds of ``zs`` with their taus (:func:`zem_bounds`);
+    * ``w`` (m, 2): bounds of ``w = (e/e_nom)^2 zs`` over the piece's ``e``;
+    * ``alpha`` (m, 2): bounds of the bearing ``Y~ / tau``;
+    * ``per_piece`` (pieces, 4): largest ``|w|``, largest ``|alpha|``, smallest and
+      largest ``tau`` of each piece's cells (0, 0, inf, -inf when it has none).
+    """
+    n = off.shape[0] - 1
+    m_max = 2 * n
+    table = np.full((m_max, 4), -1, dtype=np.int64)
+    tau4 = np.empty((m_max, 4))
+    span = np.empty((m_max, 2))
+    cpiece = np.empty(m_max, dtype=np.int64)
+    m = 0
+    for i in range(n - 1):
+        p = piece[i]
+        if piece[i + 1] != p:
+            continue
+        if off[i + 1] == off[i] and off[i + 2] == off[i + 1]:
+            continue  # both ends empty: nothing in between
+        lo = max(label[i] - t, hard_lo[p] - t)
+        hi = min(label[i + 1] - t, hard_hi[p] - t)
+        if lo > hi:
+            continue
+        table[m, 1], table[m, 2] = i, i + 1
+        tau4[m, 1], tau4[m, 2] = label[i] - t, label[i + 1] - t
+        if i >= 1 and piece[i - 1] == p:
+            table[m, 0] = i - 1
+            tau4[m, 0] = label[i - 1] - t
+        else:
+            tau4[m, 0] = tau4[m, 1] - 1.0
+        if i + 2 < n and piece[i + 2] == p:
+            table[m, 3] = i + 2
+            tau4[m, 3] = label[i + 2] - t
+        else:
+            tau4[m, 3] = tau4[m, 2] + 1.0
+        span[m, 0], span[m, 1] = lo, hi
+        cpiece[m] = p
+        m += 1
+    for i in range(n):  # a live node alone in its piece is a cell of its own
+        p = piece[i]
+        if off[i + 1] == off[i]:
+            continue
+        alone = (i == 0 or piece[i - 1] != p) and (i == n - 1 or piece[i + 1] != p)
+        if alone:
+            table[m, 1] = i
+            tau4[m, 0], tau4[m, 1] = label[i] - t - 1.0, label[i] - t
+            tau4[m, 2], tau4[m, 3] = label[i] - t + 1.0, label[i] - t + 2.0
+            span[m, 0] = span[m, 1] = label[i] - t
+            cpiece[m] = p
+            m += 1
+    table, tau4, span, cpiece = table[:m], tau4[:m], span[:m], cpiece[:m]
+    tau = label - t
+    zs = zem_bounds(xy, off, tau, table, tau4, span[:, 0], span[:, 1], scale, e_nom, rtol)
+    w = np.empty((m, 2))
+    alpha = np.empty((m, 2))
+    n_p = u_lo.shape[0]
+    per_piece = np.zeros((n_p, 4))
+    for p in range(n_p):
+        per_piece[p, 2] = np.inf
+        per_piece[p, 3] = -np.inf
+    f_hi = np.empty(4)
+    f_lo = np.empty(4)
+    for c in range(m):
+        p = cpiece[c]
+        big = (1.0 / (u_lo[p] * e_nom)) ** 2
+        small = (1.0 / (u_hi[p] * e_nom)) ** 2
+        w[c, 1] = zs[c, 0] * (big if zs[c, 0] > 0 else small)
+        w[c, 0] = zs[c, 2] * (big if zs[c, 2] < 0 else small)
+        for k in range(4):
+            j = table[c, k]
+            h, lo_v = _support(xy, off, j, tau4[c, k], 1.0, 0.0, scale, e_nom)
+            f_hi[k] = h
+            f_lo[k] = -lo_v
+        y_up = _secant(tau4[c], f_hi, span[c, 0], span[c, 1], rtol)[0]
+        y_dn = -_secant(tau4[c], f_lo, span[c, 0], span[c, 1], rtol)[0]
+        # Y~ / tau is monotone in tau on each secant: both ends of the part suffice
+        alpha[c, 1] = max(y_up / span[c, 0], y_up / span[c, 1])
+        alpha[c, 0] = min(y_dn / span[c, 0], y_dn / span[c, 1])
+        per_piece[p, 0] = max(per_piece[p, 0], abs(w[c, 0]), abs(w[c, 1]))
+        per_piece[p, 1] = max(per_piece[p, 1], abs(alpha[c, 0]), abs(alpha[c, 1]))
+        per_piece[p, 2] = min(per_piece[p, 2], span[c, 0])
+        per_piece[p, 3] = max(per_piece[p, 3], span[c, 1])
+    return table, tau4, span, cpiece, zs, w, alpha, per_piece

@@ -52,9 +52,9 @@ from numpy.typing import NDArray
 
 from estim import _kernels as _k
 from estim import _nodeset_kernels as _nk
-from estim.base import Estimator
+from estim.base import Estimator, Status
 from estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
-from estim.model import Bearing, ChannelModel, Impulse, Range, impulse_parts
+from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 from estim.nodeset_belief import NodeSet
 from estim.nodeset_bounds import OpLog
 from estim.polygons import ConvexPolygons
@@ -68,7 +68,7 @@ MIN_SPACING_REL = 1e-12
 
 
 @dataclass(frozen=True)
-class NodeSetEstimator(Estimator[NodeSet]):
+class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
     """Set-membership estimator of one channel on exact node slices; configuration only.
 
     Parameters
@@ -87,6 +87,10 @@ class NodeSetEstimator(Estimator[NodeSet]):
         (largest over smallest) is split in two at a node near its geometric middle,
         while there are fewer than ``max_pieces`` pieces: each piece sizes its own
         kinematic margin (large only near the target) and impulse widening.
+    tighten_rtol, max_inserts : float, int
+        After each update, nodes are added (up to ``max_inserts``) in the cells where
+        the bounds of the zero-effort miss exceed the nodes' exact values by more than
+        ``tighten_rtol`` of the set's width (:meth:`NodeSetEstimator.tighten`).
     min_live_nodes : int
         A piece with fewer live nodes is re-gridded (at least 4: the bounds between
         nodes need three live nodes in a row).
@@ -99,10 +103,12 @@ class NodeSetEstimator(Estimator[NodeSet]):
     model: ChannelModel = field(default_factory=ChannelModel)
     closing_speed_mps: tuple[float, float] | None = None
     n_bands: int | None = None
-    n_nodes: int = 16
-    min_live_nodes: int = 6
+    n_nodes: int = 12
+    min_live_nodes: int = 5
     split_ratio: float = 1.5
     max_pieces: int = 24
+    tighten_rtol: float = 0.005
+    max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = True
 
@@ -121,6 +127,8 @@ class NodeSetEstimator(Estimator[NodeSet]):
             raise ValueError("split_ratio must be > 1 (inf: no splitting)")
         if self.max_pieces < 1:
             raise ValueError("max_pieces must be >= 1")
+        if not (self.tighten_rtol > 0 and self.max_inserts >= 0):
+            raise ValueError("need tighten_rtol > 0 and max_inserts >= 0")
 
     # -- construction ----------------------------------------------------------------
     def bands(self) -> tuple[FloatArray, FloatArray]:
@@ -130,28 +138,27 @@ class NodeSetEstimator(Estimator[NodeSet]):
         edges = np.linspace(1.0 / e_hi, 1.0 / e_lo, n + 1) if e_lo < e_hi else np.full(2, 1 / e_lo)
         return edges[:-1], edges[1:]
 
-    def initial(
-        self,
-        lateral_m: tuple[float, float],
-        lateral_vel_mps: tuple[float, float],
-        x_m: tuple[float, float],
-    ) -> NodeSet:
-        """The exact slices of the a-priori box at ``n_nodes`` labels per piece.
+    def initial(self, prior: ChannelPrior | None = None, **box) -> NodeSet:
+        """The exact slices of the a-priori box at ``n_nodes`` labels per piece (the
+        prior's closing speed is not used: the bands take ``closing_speed_mps``;
+        ``initial(lateral_m=..., lateral_vel_mps=..., x_m=...)`` is short for
+        ``initial(ChannelPrior(...))``).
 
         At label ``tau0`` a state of piece ``[u_lo, u_hi]`` has ``x0 = tau0 / u`` in the
         box, so ``u`` ranges over ``U = [tau0/x_hi, tau0/x_lo] & [u_lo, u_hi]`` and the
         slice is ``{u (y, Vy)}`` over ``U`` and the box: the convex hull of the box's
         corners scaled by both ends of ``U`` (exact; it is the slice of a convex body).
         """
-        (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
-        if not (y0 <= y1 and v0 <= v1 and 0 < xa <= xb):
-            raise ValueError("boxes must be [lo, hi] with lo <= hi and positive range")
+        prior = ChannelPrior(**box) if prior is None else prior
+        (y0, y1), (v0, v1), (xa, xb) = prior.lateral_m, prior.lateral_vel_mps, prior.x_m
         u_lo, u_hi = self.bands()
         hard_lo, hard_hi = xa * u_lo, xb * u_hi
+        # a known range (a point box) is one node
         labels = [
-            np.linspace(lo, hi, self.n_nodes) for lo, hi in zip(hard_lo, hard_hi, strict=True)
+            np.unique(np.linspace(lo, hi, self.n_nodes))
+            for lo, hi in zip(hard_lo, hard_hi, strict=True)
         ]
-        piece = np.repeat(np.arange(len(u_lo)), self.n_nodes)
+        piece = np.repeat(np.arange(len(u_lo)), [len(lab) for lab in labels])
         prior = ((y0, y1), (v0, v1), (xa, xb))
         empty = ConvexPolygons(np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
         base = NodeSet(
@@ -199,13 +206,16 @@ class NodeSetEstimator(Estimator[NodeSet]):
             op = OpLog.one(_nk.RANGE, nb_, lo, d / (1.0 - b) * (1.0 + STRIP_MARGIN))
         else:
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
-        out = self._record(belief, op)
-        out = self.refine(out, before=belief)
+        out = self.refine(self._record(belief, op), before=belief)
+        if not out.is_empty:
+            out = self.tighten(out)
         if out.is_empty:
-            return replace(belief, status="contradiction", contradictions=belief.contradictions + 1)
+            return replace(
+                belief, status=Status.CONTRADICTION, contradictions=belief.contradictions + 1
+            )
         return out
 
-    def shift(self, belief: NodeSet, control: float | Impulse) -> NodeSet:
+    def _impulse(self, belief: NodeSet, control: float | Impulse) -> NodeSet:
         """Impulse ``k`` (m/s, relative velocity): ``V += k cos^2(alpha)``, i.e.
         ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece and ``alpha`` up to
         the piece's largest bearing; an :class:`~estim.model.Impulse` known to ``+-dk``
@@ -213,16 +223,21 @@ class NodeSetEstimator(Estimator[NodeSet]):
         k, dk = impulse_parts(control)
         if (k == 0.0 and dk == 0.0) or belief.is_empty:
             return belief
-        a_abs = self._band_alpha_abs(belief)
+        a_abs = self._alpha_abs(belief)
         sin2 = np.sin(np.minimum(a_abs, 0.5 * np.pi)) ** 2
         ends = np.stack([k * belief.u_lo * (1.0 - sin2), k * belief.u_hi])
         lo = ends.min(axis=0) - dk * belief.u_hi
         hi = ends.max(axis=0) + dk * belief.u_hi
         return self._record(belief, OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi))
 
-    def predict(self, belief: NodeSet, dt_s: float) -> NodeSet:
-        """Move every node over ``dt_s`` (exact shear, disturbance segment), drop the
-        nodes under eps, re-grid thinned bands."""
+    def predict(
+        self, belief: NodeSet, dt_s: float, control: float | Impulse | None = None
+    ) -> NodeSet:
+        """Apply the impulse ``control`` (at the step's start; :meth:`_impulse`), then
+        move every node over ``dt_s`` (exact shear, disturbance segment), drop the
+        nodes under eps, split wide pieces and re-grid thinned ones."""
+        if control is not None:
+            belief = self._impulse(belief, control)
         if belief.is_empty:
             return belief
         belief = self.refine(self._split(belief))
@@ -233,11 +248,11 @@ class NodeSetEstimator(Estimator[NodeSet]):
             x_hi = belief.x_range_m()[1]
             if not max(abs(w_lo), abs(w_hi)) <= DIVERGED_W_PER_X * x_hi:
                 empty = belief.polygons.clip_slab(0, np.full(belief.polygons.n, np.inf), 0.0)
-                return replace(belief, polygons=empty, status="diverged")
+                return replace(belief, polygons=empty, status=Status.DIVERGED)
         out = self._record(belief, OpLog.one(_nk.PREDICT, len(nu), dt_s, q_hi=nu * belief.u_hi))
         out = self.refine(out, before=belief)
-        if out.is_empty and out.status == "ok":
-            return replace(out, status="terminal")
+        if out.is_empty and out.status == Status.OK:
+            return replace(out, status=Status.TERMINAL)
         return out
 
     # -- the operations (applied to the set, and replayed on new nodes) -----------------
@@ -245,7 +260,7 @@ class NodeSetEstimator(Estimator[NodeSet]):
         polys, t, hard_lo, hard_hi = self._apply(s, s.piece, s.label_s, s.polygons, op, s.t_s)
         return replace(
             s, polygons=polys, t_s=t, log=s.log + op, hard_lo_s=hard_lo, hard_hi_s=hard_hi,
-            status="ok",
+            status=Status.OK,
         )  # fmt: skip
 
     def _apply(self, s: NodeSet, piece, label, polys: ConvexPolygons, ops: OpLog, t: float):
@@ -338,31 +353,74 @@ class NodeSetEstimator(Estimator[NodeSet]):
         only its last operation on ``polys_before_last = (polygons, t)``)."""
         piece = np.full(len(labels), b)
         if polys_before_last is None:
-            prior = self._prior(s, piece, labels)
-            polys, _, _, _ = self._apply(s, piece, labels, prior, s.log, 0.0)
+            polys = self._exact_slices(s, piece, labels)
         else:
             last = OpLog(*(a[-1:] for a in s.log.parts()))
             polys, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
                                          polys_before_last[1])  # fmt: skip
-        keep = s.piece != b
-        order = np.argsort(np.r_[s.piece[keep], piece] + 0.0, kind="stable")
-        new_piece = np.r_[s.piece[keep], piece][order]
-        new_label = np.r_[s.label_s[keep], labels][order]
-        merged = _concat(s.polygons.select(keep), polys).select(order)
-        return replace(s, piece=new_piece, label_s=new_label, polygons=merged)
+        return _merge(s, s.piece != b, piece, labels, polys)
+
+    def _exact_slices(self, s: NodeSet, piece: NDArray[np.int64], labels: FloatArray):
+        """The slices at new nodes: the prior, then every recorded operation."""
+        polys, _, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), s.log, 0.0)
+        return polys
+
+    def tighten(self, s: NodeSet) -> NodeSet:
+        """Add nodes where the bounds of the zero-effort miss are loosest.
+
+        The extremes of ``w`` over the set sit in one cell each; where such a bound
+        exceeds the exact values at the cell's two nodes by more than
+        ``tighten_rtol`` of the set's width (typically a cell at the end of the
+        surviving range, bounded from one side only), a node is added at the cell's
+        middle (exact, by replay), up to ``max_inserts`` per call.
+        """
+        for _ in range(self.max_inserts):
+            sm = s._summary
+            w = sm["w"]
+            if len(w) == 0:
+                break
+            width = float(w[:, 1].max() - w[:, 0].min())
+            zs_hi, zs_lo = _node_extent(s)
+            new_piece, new_label = [], []
+            for c, side in ((int(np.argmax(w[:, 1])), 1), (int(np.argmin(w[:, 0])), 0)):
+                i, j = sm["table"][c, 1], sm["table"][c, 2]
+                p = int(sm["piece"][c])
+                big = (1.0 / (s.u_lo[p] * s.e_nom)) ** 2
+                small = (1.0 / (s.u_hi[p] * s.e_nom)) ** 2
+                if side == 1:
+                    node = max(zs_hi[i], zs_hi[j])
+                    node = node * (big if node > 0 else small)
+                    slack = w[c, 1] - node
+                else:
+                    node = min(zs_lo[i], zs_lo[j])
+                    node = node * (big if node < 0 else small)
+                    slack = node - w[c, 0]
+                lo, hi = sm["span"][c]
+                tiny = MIN_SPACING_REL * max(abs(hi), 1.0)
+                if slack > self.tighten_rtol * width and hi - lo > tiny:
+                    new_piece.append(p)
+                    new_label.append(0.5 * (lo + hi) + s.t_s)
+            if not new_piece:
+                break
+            piece = np.array(new_piece, dtype=np.int64)
+            labels = np.array(new_label)
+            if len(labels) == 2 and piece[0] == piece[1] and labels[0] == labels[1]:
+                piece, labels = piece[:1], labels[:1]
+            polys = self._exact_slices(s, piece, labels)
+            s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
+        return s
 
     def _split(self, s: NodeSet) -> NodeSet:
         """Split wide pieces in two at a live node near their geometric middle (the
         node is kept in both halves: each half's slices there are exact)."""
-        c = s._cells
-        for p in range(len(s.u_lo)):
+        per = s._summary["per_piece"]
+        for p in range(len(per)):
             if len(s.u_lo) >= self.max_pieces:
                 break
-            mine = c["piece"] == p
-            if not mine.any():
+            if not np.isfinite(per[p, 2]):
                 continue
-            lo = max(float(c["lo"][mine].min()), self.model.eps_m * float(s.u_lo[p]))
-            hi = float(c["hi"][mine].max())
+            lo = max(float(per[p, 2]), self.model.eps_m * float(s.u_lo[p]))
+            hi = float(per[p, 3])
             if not hi > self.split_ratio * lo:
                 continue
             idx = np.flatnonzero((s.piece == p) & s.live)
@@ -375,30 +433,36 @@ class NodeSetEstimator(Estimator[NodeSet]):
 
     # -- piece-wide quantities ----------------------------------------------------------
     @staticmethod
-    def _band_alpha_abs(s: NodeSet) -> FloatArray:
-        a_lo, a_hi = s._alpha_bounds
-        b = s._cells["piece"]
-        out = np.zeros(len(s.u_lo))
-        np.maximum.at(out, b, np.maximum(np.abs(a_lo), np.abs(a_hi)))
-        return out
+    def _alpha_abs(s: NodeSet) -> FloatArray:
+        return s._summary["per_piece"][:, 1]
 
     def _margin(self, s: NodeSet, dt_s: float) -> FloatArray:
         """The kinematic margin of each piece over the next step (m/s^2)."""
-        c, z = s._cells, s._zs_bounds
-        b = c["piece"]
-        nb_ = len(s.u_lo)
-        big = (1.0 / s.u_lo[b] / s.e_nom) ** 2
-        w_abs = np.zeros(nb_)
-        np.maximum.at(w_abs, b, np.maximum(np.abs(z["hi"]), np.abs(z["lo"])) * big)
-        x_min = np.full(nb_, np.inf)
-        np.minimum.at(x_min, b, np.maximum(c["lo"] - dt_s, 1e-9) / s.u_hi[b])
-        x_max = np.zeros(nb_)
-        np.maximum.at(x_max, b, c["hi"] / s.u_lo[b])
-        x_min = np.maximum(np.minimum(x_min, x_max), self.model.eps_m)
-        a_abs = self._band_alpha_abs(s)
+        per = s._summary["per_piece"]
+        x_max = np.maximum(per[:, 3], 0.0) / s.u_lo
+        x_min = np.maximum(np.minimum((per[:, 2] - dt_s) / s.u_hi, x_max), self.model.eps_m)
         return _k.kinematic_margin(
-            w_abs, a_abs, x_min, x_max, float(dt_s), s.e_nom, self.model.nu_mps2, MAX_BEARING_RAD
-        )
+            np.ascontiguousarray(per[:, 0]), np.ascontiguousarray(per[:, 1]), x_min, x_max,
+            float(dt_s), s.e_nom, self.model.nu_mps2, MAX_BEARING_RAD,
+        )  # fmt: skip
+
+
+def _node_extent(s: NodeSet) -> tuple[FloatArray, FloatArray]:
+    """Largest and smallest ``zs`` of every node polygon (-inf, inf when empty)."""
+    b = s.polygons.bounds()
+    return np.where(np.isnan(b[:, 3]), -np.inf, b[:, 3]), np.where(
+        np.isnan(b[:, 1]), np.inf, b[:, 1]
+    )
+
+
+def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
+    """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
+    by piece, then label."""
+    all_piece = np.r_[s.piece[keep], piece]
+    all_label = np.r_[s.label_s[keep], labels]
+    order = np.lexsort((all_label, all_piece))
+    merged = _concat(s.polygons.select(keep), polys).select(order)
+    return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
 
 
 def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:

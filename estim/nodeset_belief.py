@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from estim import _nodeset_kernels as _nk
 from estim import nodeset_bounds as nb
-from estim.base import Belief, Extremes, StateFunction
+from estim.base import Belief, Extremes, StateFunction, Status
 from estim.costs import MissForecast, ZeroEffortMiss
 from estim.model import ChannelModel
 from estim.polygons import ConvexPolygons
@@ -67,9 +67,9 @@ class NodeSet(Belief):
         ``(y box, Vy box, x box)`` of the initial set, SI units.
     alpha_scale_rad : float
         ``a = alpha / alpha_scale_rad``.
-    status : str
-        ``"ok"``, ``"contradiction"`` (the last measurement contradicted the model and
-        was rejected), ``"terminal"`` (every state passed under eps) or ``"diverged"``.
+    status : Status
+        ``OK``, ``CONTRADICTION`` (the last measurement contradicted the model and
+        was rejected), ``TERMINAL`` (every state passed under eps) or ``DIVERGED``.
     contradictions : int
         Number of rejected measurements so far.
     """
@@ -86,7 +86,7 @@ class NodeSet(Belief):
     log: tuple
     prior: tuple
     alpha_scale_rad: float = 1.0e-4
-    status: str = "ok"
+    status: Status = Status.OK
     contradictions: int = 0
 
     def __post_init__(self) -> None:
@@ -124,72 +124,29 @@ class NodeSet(Belief):
 
     # -- bounds between nodes --------------------------------------------------------
     @cached_property
-    def _cells(self) -> dict[str, Any]:
-        """Cells with at least one live end, their four nodes, ``tau`` parts and piece."""
-        table = nb.cell_table(self.tau_s, self.piece)
-        live = self.live
-        keep = live[table[:, 1]] | live[table[:, 2]]
-        table = table[keep]
-        tau4 = nb.gather_tau(self.tau_s, table)
-        b = self.piece[table[:, 1]]
-        lo = np.maximum(tau4[:, 1], self.hard_lo_s[b] - self.t_s)
-        hi = np.minimum(tau4[:, 2], self.hard_hi_s[b] - self.t_s)
-        ok = lo <= hi
-        return {"table": table[ok], "tau4": tau4[ok], "piece": b[ok], "lo": lo[ok], "hi": hi[ok]}
-
-    @cached_property
-    def _bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Per cell: ``zs`` bounds with their taus ``(m, 4)`` and ``Y~`` bounds ``(m, 2)``
-        (compiled: :func:`estim._nodeset_kernels.cell_bounds`)."""
-        c = self._cells
-        return _nk.cell_bounds(
-            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s),
-            c["table"], c["tau4"], c["lo"], c["hi"], self.alpha_scale_rad, self.e_nom,
-            nb.BOUND_RTOL,
+    def _summary(self) -> dict[str, Any]:
+        """Cells and their bounds (compiled: :func:`estim._nodeset_kernels.summarise`)."""
+        names = ("table", "tau4", "span", "piece", "zs", "w", "alpha", "per_piece")
+        out = _nk.summarise(
+            self.polygons.xy, self.polygons.offsets, self.label_s,
+            np.ascontiguousarray(self.piece), float(self.t_s), self.u_lo, self.u_hi,
+            self.hard_lo_s, self.hard_hi_s, self.alpha_scale_rad, self.e_nom, nb.BOUND_RTOL,
         )  # fmt: skip
-
-    @cached_property
-    def _zs_bounds(self) -> dict[str, FloatArray]:
-        """Bounds of ``zs = e_nom (Y~ + V~ tau)`` over each cell (and their taus),
-        in the exact direction of every ``tau`` (:func:`_nk.zem_bounds`)."""
-        c = self._cells
-        zs = _nk.zem_bounds(
-            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s),
-            c["table"], c["tau4"], c["lo"], c["hi"], self.alpha_scale_rad, self.e_nom,
-            nb.BOUND_RTOL,
-        )  # fmt: skip
-        return {"hi": zs[:, 0], "arg_hi": zs[:, 1], "lo": zs[:, 2], "arg_lo": zs[:, 3]}
-
-    @cached_property
-    def _alpha_bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Bounds of ``alpha = Y~ / tau`` over each cell (``Y~`` bounded by its secants;
-        ``Y~ / tau`` is monotone in ``tau`` on each line, so both ends suffice)."""
-        c = self._cells
-        y_up, y_dn = self._bounds[1][:, 0], self._bounds[1][:, 1]
-        t_lo, t_hi = c["lo"], c["hi"]
-        return np.minimum(y_dn / t_lo, y_dn / t_hi), np.maximum(y_up / t_lo, y_up / t_hi)
-
-    def _w_scale(self, zs: FloatArray, upper: bool) -> FloatArray:
-        """``w = (e/e_nom)^2 zs`` at its extreme over each cell's piece of ``e``."""
-        b = self._cells["piece"]
-        big, small = (1.0 / self.u_lo[b] / self.e_nom) ** 2, (1.0 / self.u_hi[b] / self.e_nom) ** 2
-        if upper:
-            return np.where(zs > 0, zs * big, zs * small)
-        return np.where(zs < 0, zs * big, zs * small)
+        return dict(zip(names, out, strict=True))
 
     def w_bounds_m(self) -> tuple[float, float]:
         """The interval of the zero-effort miss ``w`` over the whole set (m)."""
-        z = self._zs_bounds
-        return float(self._w_scale(z["lo"], False).min()), float(self._w_scale(z["hi"], True).max())
+        w = self._summary["w"]
+        return float(w[:, 0].min()), float(w[:, 1].max())
 
     def alpha_range_rad(self) -> tuple[float, float]:
-        a_lo, a_hi = self._alpha_bounds
-        return float(a_lo.min()), float(a_hi.max())
+        a = self._summary["alpha"]
+        return float(a[:, 0].min()), float(a[:, 1].max())
 
     def x_range_m(self) -> tuple[float, float]:
-        c = self._cells
-        return float((c["lo"] / self.u_hi[c["piece"]]).min()), float(
-            (c["hi"] / self.u_lo[c["piece"]]).max()
+        s = self._summary
+        return float((s["span"][:, 0] / self.u_hi[s["piece"]]).min()), float(
+            (s["span"][:, 1] / self.u_lo[s["piece"]]).max()
         )
 
     # -- Belief interface ------------------------------------------------------------
@@ -227,29 +184,29 @@ class NodeSet(Belief):
         return Extremes(float(vals[i_lo]), pts[i_lo], float(vals[i_hi]), pts[i_hi])
 
     def _forecast_extremes(self, forecast: bool) -> Extremes:
-        z, c = self._zs_bounds, self._cells
-        b = c["piece"]
-        w_hi, w_lo = self._w_scale(z["hi"], True), self._w_scale(z["lo"], False)
+        s = self._summary
+        span, zs, piece = s["span"], s["zs"], s["piece"]
+        w_lo, w_hi = s["w"][:, 0], s["w"][:, 1]
         if forecast:
             # Pi = w + sign(w) nu (x/e_nom)^2/2, x in [tau_lo/u_hi, tau_hi/u_lo]
             half_nu = 0.5 * self.model.nu_mps2 / self.e_nom**2
-            c_max = half_nu * (c["hi"] / self.u_lo[b]) ** 2
-            c_min = half_nu * (c["lo"] / self.u_hi[b]) ** 2
+            c_max = half_nu * (span[:, 1] / self.u_lo[piece]) ** 2
+            c_min = half_nu * (span[:, 0] / self.u_hi[piece]) ** 2
             v_hi = np.where(w_hi >= 0, w_hi + c_max, w_hi - c_min)
             v_lo = np.where(w_lo <= 0, w_lo - c_max, w_lo + c_min)
         else:
             v_hi, v_lo = w_hi, w_lo
         i_hi, i_lo = int(np.argmax(v_hi)), int(np.argmin(v_lo))
-        a_lo, a_hi = self._alpha_bounds
+        alpha = s["alpha"]
 
         def row(i: int, tau: float, w: float) -> FloatArray:
             x = self.e_nom * tau
-            alpha = 0.5 * (a_lo[i] + a_hi[i])
-            return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
+            a = 0.5 * (alpha[i, 0] + alpha[i, 1])
+            return np.array([a, float(self.model.omega_from_w(w, x)), x])
 
         return Extremes(
-            float(v_lo[i_lo]), row(i_lo, z["arg_lo"][i_lo], w_lo[i_lo]),
-            float(v_hi[i_hi]), row(i_hi, z["arg_hi"][i_hi], w_hi[i_hi]),
+            float(v_lo[i_lo]), row(i_lo, zs[i_lo, 3], w_lo[i_lo]),
+            float(v_hi[i_hi]), row(i_hi, zs[i_hi, 1], w_hi[i_hi]),
         )  # fmt: skip
 
     def vertices(self) -> FloatArray:
@@ -277,11 +234,11 @@ class NodeSet(Belief):
         if self.is_empty:
             return False
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float)[:3])
-        c = self._cells
-        for ci in range(len(c["lo"])):
-            b = int(c["piece"][ci])
-            u_lo = max(float(self.u_lo[b]), float(c["lo"][ci]) / x)
-            u_hi = min(float(self.u_hi[b]), float(c["hi"][ci]) / x)
+        s = self._summary
+        for ci in range(len(s["piece"])):
+            b = int(s["piece"][ci])
+            u_lo = max(float(self.u_lo[b]), float(s["span"][ci, 0]) / x)
+            u_hi = min(float(self.u_hi[b]), float(s["span"][ci, 1]) / x)
             if u_lo > u_hi * (1 + 1e-12):
                 continue
             if self._cell_admits(ci, alpha, omega, x, u_lo, u_hi, tol):
@@ -289,8 +246,8 @@ class NodeSet(Belief):
         return False
 
     def _cell_admits(self, ci, alpha, omega, x, u_lo, u_hi, tol) -> bool:
-        c = self._cells
-        table = c["table"][ci]
+        s = self._summary
+        table = s["table"][ci]
         d = self._cell_normals(table)
         if len(d) == 0:
             return False
@@ -299,7 +256,7 @@ class NodeSet(Belief):
             np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
             self.alpha_scale_rad, self.e_nom,
         )  # fmt: skip
-        tau4 = np.broadcast_to(c["tau4"][ci], hi4.shape)
+        tau4 = np.broadcast_to(s["tau4"][ci], hi4.shape)
         # d.s(u) = A u + B
         a_coef = d[:, 0] * alpha * x + d[:, 1] * omega * x
         b_coef = -d[:, 1] * alpha
@@ -310,7 +267,8 @@ class NodeSet(Belief):
             f0, f1 = hi4[:, i0], hi4[:, i1]
             ok = np.isfinite(f0) & np.isfinite(f1)
             t0, t1 = tau4[:, i0], tau4[:, i1]
-            slope = np.where(ok, (f1 - f0) / np.where(ok, t1 - t0, 1.0), 0.0)
+            with np.errstate(invalid="ignore"):  # -inf - -inf where ok is False
+                slope = np.where(ok, (f1 - f0) / np.where(ok, t1 - t0, 1.0), 0.0)
             # A u + B <= f1 + slope (x u - t1) + tol scale  <=>  k u <= r
             k = a_coef - slope * x
             r = f1 - slope * t1 - b_coef + tol * scale

@@ -42,28 +42,6 @@ FloatArray = NDArray[np.float64]
 BOUND_RTOL = 1.0e-8
 
 
-def cell_table(tau_s: FloatArray, piece: NDArray[np.int64]) -> NDArray[np.int64]:
-    """Indices ``(i-1, i, i+1, i+2)`` of the four nodes around every cell.
-
-    Nodes are sorted by piece, then by ``tau``; a cell is a pair of consecutive nodes
-    of one piece. A missing outer neighbour (piece edge) is given as ``-1``.
-    """
-    n = len(tau_s)
-    i = np.flatnonzero(piece[:-1] == piece[1:]) if n > 1 else np.zeros(0, np.int64)
-    prev = np.where((i >= 1) & (piece[np.maximum(i - 1, 0)] == piece[i]), i - 1, -1)
-    nxt = np.where((i + 2 < n) & (piece[np.minimum(i + 2, n - 1)] == piece[i]), i + 2, -1)
-    return np.stack([prev, i, i + 1, nxt], axis=1).astype(np.int64)
-
-
-def gather_tau(tau_s: FloatArray, idx: NDArray[np.int64]) -> FloatArray:
-    """Node times to go around each cell; a missing neighbour gets a dummy value."""
-    t = tau_s[np.maximum(idx, 0)]
-    # a dummy outside the cell keeps the (unused) secant arithmetic finite
-    t[:, 0] = np.where(idx[:, 0] >= 0, t[:, 0], t[:, 1] - 1.0)
-    t[:, 3] = np.where(idx[:, 3] >= 0, t[:, 3], t[:, 2] + 1.0)
-    return t
-
-
 @dataclass(frozen=True, eq=False)
 class OpLog:
     """The operations applied to a node set since its initial set, as arrays (the
@@ -116,4 +94,4 @@ class OpLog:
         return self.kinds, self.pa, self.pb, self.q_lo, self.q_hi
 
 
-__all__ = ["BEARING", "IMPULSE", "PREDICT", "RANGE", "BOUND_RTOL", "OpLog", "cell_table"]
+__all__ = ["BEARING", "IMPULSE", "PREDICT", "RANGE", "BOUND_RTOL", "OpLog"]
