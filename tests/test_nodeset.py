@@ -198,7 +198,7 @@ def test_forecast_extremes_bound_the_miss_of_every_node_vertex():
     est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS)
     b = est.initial(PRIOR)
     rng = np.random.default_rng(3)
-    for k in range(50):
+    for _ in range(50):
         b = est.predict(est.update(b, Bearing(rng.uniform(-2e-4, 2e-4))), DT, Impulse(1.0, 0.1))
     for cost in (MissForecast(MODEL), ZeroEffortMiss(MODEL)):
         ext = b.extremes(cost)
