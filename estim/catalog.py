@@ -1,6 +1,7 @@
 """The package's own estimators and their options, registered by name (:mod:`estim.registry`).
 
-Intercept (one guidance channel): ``infoset`` (:mod:`estim.infoset`), ``ekf`` and
+Intercept (one guidance channel): ``infoset`` (:mod:`estim.nodeset` by default, the
+slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
 ``ukf`` (:mod:`estim.kalman`). Attitude (batched runs): ``perfect``
 (:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
 (:mod:`estim.attitude_box`). A scenario's ``[estimator.<name>]`` table is validated by
@@ -20,6 +21,7 @@ from estim.attitude_ukf import UkfAttitudeEstimator
 from estim.infoset import InformationSetEstimator
 from estim.kalman import KalmanChannelEstimator
 from estim.model import ChannelSetting
+from estim.nodeset import NodeSetEstimator
 from estim.registry import register
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -30,11 +32,16 @@ class InfosetOptions(BaseModel):
 
     model_config = _STRICT
 
-    n_sections: Annotated[int, Field(ge=2, le=400, description="sections of the initial set")] = 29
     sections: Annotated[
-        Literal["slabs", "points"],
-        Field(description="slabs (guaranteed) or the seed's point sections"),
-    ] = "slabs"
+        Literal["nodes", "slabs", "points"],
+        Field(
+            description="nodes (exact slices, tight), slabs (guaranteed, coarse) or the "
+            "seed's point sections"
+        ),
+    ] = "nodes"
+    n_sections: Annotated[
+        int, Field(ge=2, le=400, description="slabs, points: sections of the initial set")
+    ] = 29
     kinematic_margin: Annotated[
         bool, Field(description="slabs: bound the kinematic term the linear model neglects")
     ] = True
@@ -45,11 +52,36 @@ class InfosetOptions(BaseModel):
         int, Field(ge=2, le=4000, description="slabs: most sections splitting may make")
     ] = 128
 
+    n_nodes: Annotated[
+        int, Field(ge=4, le=200, description="nodes: nodes per piece after (re)gridding")
+    ] = 12
+    min_live_nodes: Annotated[
+        int, Field(ge=4, le=200, description="nodes: a piece with fewer is re-gridded")
+    ] = 5
+    n_bands: Annotated[
+        int | None,
+        Field(ge=1, le=16, description="nodes: closing-speed bands (None: 1 if known, else 2)"),
+    ] = None
+    max_pieces: Annotated[
+        int, Field(ge=1, le=256, description="nodes: most pieces splitting may make")
+    ] = 24
+    node_split_ratio: Annotated[
+        float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
+    ] = 1.5
+    tighten_rtol: Annotated[
+        float,
+        Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
+    ] = 0.005
+
     @model_validator(mode="after")
     def _room_for_the_sections(self) -> InfosetOptions:
         if self.n_sections > self.max_sections:
             raise ValueError(
                 f"n_sections ({self.n_sections}) must be <= max_sections ({self.max_sections})"
+            )
+        if self.min_live_nodes > self.n_nodes:
+            raise ValueError(
+                f"min_live_nodes ({self.min_live_nodes}) must be <= n_nodes ({self.n_nodes})"
             )
         return self
 
@@ -96,7 +128,21 @@ class UkfAttitudeOptions(BaseModel):
     ] = 0.997
 
 
-def _infoset(opt: InfosetOptions, setting: ChannelSetting) -> InformationSetEstimator:
+def _infoset(
+    opt: InfosetOptions, setting: ChannelSetting
+) -> InformationSetEstimator | NodeSetEstimator:
+    if opt.sections == "nodes":
+        return NodeSetEstimator(
+            setting.model,
+            closing_speed_mps=setting.closing_speed_mps,
+            n_bands=opt.n_bands,
+            n_nodes=opt.n_nodes,
+            min_live_nodes=opt.min_live_nodes,
+            kinematic_margin=opt.kinematic_margin,
+            split_ratio=opt.node_split_ratio,
+            max_pieces=opt.max_pieces,
+            tighten_rtol=opt.tighten_rtol,
+        )
     return InformationSetEstimator(
         setting.model,
         n_sections=opt.n_sections,

@@ -51,7 +51,7 @@ ESTIMATOR_RULES = {
     "vz_kmps": Interval(Num(-10.0, 10.0)),
     "vx_kmps": Interval(Num(-100.0, -0.1)),
     "n_sections": Num(2, 400, integer=True),
-    "sections": Choice(("slabs", "points")),
+    "sections": Choice(("nodes", "slabs", "points")),
     # slabs: bound the kinematic term the linear model neglects (estim.infoset)
     "kinematic_margin": Bool(),
     # slabs: split a slab wider than x_hi/x_lo = split_ratio before each prediction
@@ -128,7 +128,7 @@ DEFAULTS = {
         "vz_kmps": (-0.1, 0.1),
         "vx_kmps": (-59.0, -57.0),
         "n_sections": 29,
-        "sections": "slabs",
+        "sections": "nodes",
         "kinematic_margin": True,
         "split_ratio": 1.5,
         "closing_speed_kmps": None,  # filled in: [e, e], the seed's known closing speed
