@@ -67,7 +67,7 @@ class InfosetOptions(BaseModel):
     ] = 24
     node_split_ratio: Annotated[
         float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
-    ] = 1.5
+    ] = 2.0
     tighten_rtol: Annotated[
         float,
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),

@@ -105,7 +105,7 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
     n_bands: int | None = None
     n_nodes: int = 12
     min_live_nodes: int = 5
-    split_ratio: float = 1.5
+    split_ratio: float = 2.0
     max_pieces: int = 24
     tighten_rtol: float = 0.005
     max_inserts: int = 4
@@ -215,42 +215,52 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
             )
         return out
 
-    def _impulse(self, belief: NodeSet, control: float | Impulse) -> NodeSet:
-        """Impulse ``k`` (m/s, relative velocity): ``V += k cos^2(alpha)``, i.e.
-        ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece and ``alpha`` up to
-        the piece's largest bearing; an :class:`~estim.model.Impulse` known to ``+-dk``
-        adds ``dk u_hi`` either way."""
+    def _impulse(self, s: NodeSet, control: float | Impulse, per: FloatArray) -> OpLog:
+        """The operation of an impulse ``k`` (m/s, relative velocity): ``V += k
+        cos^2(alpha)``, i.e. ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece
+        and ``alpha`` up to the piece's largest bearing (``per[:, 1]``); an
+        :class:`~estim.model.Impulse` known to ``+-dk`` adds ``dk u_hi`` either way.
+        ``per[:, 0]`` (largest ``|w|`` per piece) grows by what the impulse can add."""
         k, dk = impulse_parts(control)
-        if (k == 0.0 and dk == 0.0) or belief.is_empty:
-            return belief
-        a_abs = self._alpha_abs(belief)
-        sin2 = np.sin(np.minimum(a_abs, 0.5 * np.pi)) ** 2
-        ends = np.stack([k * belief.u_lo * (1.0 - sin2), k * belief.u_hi])
-        lo = ends.min(axis=0) - dk * belief.u_hi
-        hi = ends.max(axis=0) + dk * belief.u_hi
-        return self._record(belief, OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi))
+        sin2 = np.sin(np.minimum(per[:, 1], 0.5 * np.pi)) ** 2
+        ends = np.stack([k * s.u_lo * (1.0 - sin2), k * s.u_hi])
+        lo = ends.min(axis=0) - dk * s.u_hi
+        hi = ends.max(axis=0) + dk * s.u_hi
+        # zs moves by e_nom tau dV~, w = (e/e_nom)^2 zs
+        dv = np.maximum(np.abs(lo), np.abs(hi))
+        per[:, 0] += dv * s.e_nom * np.maximum(per[:, 3], 0.0) / (s.u_lo * s.e_nom) ** 2
+        return OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi)
 
     def predict(
         self, belief: NodeSet, dt_s: float, control: float | Impulse | None = None
     ) -> NodeSet:
         """Apply the impulse ``control`` (at the step's start; :meth:`_impulse`), then
         move every node over ``dt_s`` (exact shear, disturbance segment), drop the
-        nodes under eps, split wide pieces and re-grid thinned ones."""
-        if control is not None:
-            belief = self._impulse(belief, control)
+        nodes under eps, split wide pieces and re-grid thinned ones.
+
+        The kinematic margin and the splits are sized from the belief's own summary
+        (the impulse's effect on ``|w|`` bounded on top), so a step computes the
+        bounds between nodes once; impulse and prediction are one compiled call.
+        """
         if belief.is_empty:
             return belief
-        belief = self.refine(self._split(belief))
-        nu = np.full(len(belief.u_lo), self.model.nu_mps2)
+        per = belief._summary["per_piece"].copy()  # |w|, |alpha|, tau_lo, tau_hi
+        ops = OpLog.empty(len(belief.u_lo))
+        k, dk = impulse_parts(control) if control is not None else (0.0, 0.0)
+        if k != 0.0 or dk != 0.0:
+            ops = self._impulse(belief, control, per)
+        s, per, ops = self._split(belief, per, ops)
+        nu = np.full(len(s.u_lo), self.model.nu_mps2)
         if self.kinematic_margin:
-            nu = nu + self._margin(belief, dt_s)
-            w_lo, w_hi = belief.w_bounds_m()
-            x_hi = belief.x_range_m()[1]
-            if not max(abs(w_lo), abs(w_hi)) <= DIVERGED_W_PER_X * x_hi:
-                empty = belief.polygons.clip_slab(0, np.full(belief.polygons.n, np.inf), 0.0)
-                return replace(belief, polygons=empty, status=Status.DIVERGED)
-        out = self._record(belief, OpLog.one(_nk.PREDICT, len(nu), dt_s, q_hi=nu * belief.u_hi))
-        out = self.refine(out, before=belief)
+            nu = nu + self._margin(s, per, dt_s)
+            x_max = np.maximum(per[:, 3], 0.0) / s.u_lo
+            if not np.all(per[:, 0] <= DIVERGED_W_PER_X * x_max):
+                empty = s.polygons.clip_slab(0, np.full(s.polygons.n, np.inf), 0.0)
+                return replace(s, polygons=empty, status=Status.DIVERGED)
+        ops = (ops if len(ops) else OpLog.empty(len(s.u_lo))) + OpLog.one(
+            _nk.PREDICT, len(nu), dt_s, q_hi=nu * s.u_hi
+        )
+        out = self.refine(self._record(s, ops), before=s)
         if out.is_empty and out.status == Status.OK:
             return replace(out, status=Status.TERMINAL)
         return out
@@ -277,33 +287,41 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
 
     # -- refinement --------------------------------------------------------------------
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
-        """Re-grid every piece with fewer than ``min_live_nodes`` live nodes.
+        """Add nodes to every piece with fewer than ``min_live_nodes`` live ones.
 
         The piece's feasible labels form an interval (the body is convex) inside the
         bracket of its live run: from the dead node below it (or the hard limit) to the
-        dead node above. ``n_nodes`` new labels spread over the bracket get the prior
-        and every recorded operation (exact slices again), repeated a few times while
-        the piece stays thin. A piece emptied by a bearing is searched
-        (:meth:`_search`) in the bracket it had ``before``.
+        dead node above. New nodes (exact slices: the prior, then every recorded
+        operation) bisect the longest cells of the bracket -- the end cells, where
+        the feasible interval ends, among them -- until the piece has ``min_live_nodes``
+        plus two; a piece down to one live node is re-gridded with ``n_nodes``. A piece
+        emptied by a bearing is searched (:meth:`_search`) in the bracket it had
+        ``before``. Dead nodes outside the brackets are dropped.
         """
         for p in range(len(s.u_lo)):
-            live = s.live & (s.piece == p)
-            if live.sum() >= self.min_live_nodes:
-                continue
-            if not live.any():
-                had = before is not None and bool((before.live & (before.piece == p)).any())
-                if had and int(s.log.kinds[-1]) == _nk.BEARING:
-                    s = self._search(s, p, *self._bracket(before, p))
-                continue
             for _ in range(4):
+                n_live = int((s.live & (s.piece == p)).sum())
+                if n_live >= self.min_live_nodes:
+                    break
+                if n_live == 0:
+                    had = before is not None and bool((before.live & (before.piece == p)).any())
+                    if had and int(s.log.kinds[-1]) == _nk.BEARING:
+                        s = self._search(s, p, *self._bracket(before, p))
+                    break
                 lo, hi = self._bracket(s, p)
                 lo, hi = max(lo, s.hard_lo_s[p]), min(hi, s.hard_hi_s[p])
                 if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
                     break
-                s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
-                if (s.live & (s.piece == p)).sum() >= self.min_live_nodes:
-                    break
-        return s
+                if n_live == 1:
+                    s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
+                    continue
+                mine = (s.piece == p) & (s.label_s >= lo) & (s.label_s <= hi)
+                knots = np.unique(np.r_[lo, s.label_s[mine], hi])
+                labels = _bisect_longest(knots, self.min_live_nodes + 2 - n_live)
+                piece = np.full(len(labels), p)
+                polys = self._exact_slices(s, piece, labels)
+                s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
+        return _compact(s)
 
     def _search(self, s: NodeSet, p: int, lo: float, hi: float) -> NodeSet:
         """Find the states of piece ``p`` that the last bearing left between its nodes.
@@ -380,7 +398,6 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
             if len(w) == 0:
                 break
             width = float(w[:, 1].max() - w[:, 0].min())
-            zs_hi, zs_lo = _node_extent(s)
             new_piece, new_label = [], []
             for c, side in ((int(np.argmax(w[:, 1])), 1), (int(np.argmin(w[:, 0])), 0)):
                 i, j = sm["table"][c, 1], sm["table"][c, 2]
@@ -388,11 +405,11 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
                 big = (1.0 / (s.u_lo[p] * s.e_nom)) ** 2
                 small = (1.0 / (s.u_hi[p] * s.e_nom)) ** 2
                 if side == 1:
-                    node = max(zs_hi[i], zs_hi[j])
+                    node = max(_zs_extent(s, i)[1], _zs_extent(s, j)[1])
                     node = node * (big if node > 0 else small)
                     slack = w[c, 1] - node
                 else:
-                    node = min(zs_lo[i], zs_lo[j])
+                    node = min(_zs_extent(s, i)[0], _zs_extent(s, j)[0])
                     node = node * (big if node < 0 else small)
                     slack = node - w[c, 0]
                 lo, hi = sm["span"][c]
@@ -410,10 +427,11 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
             s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
         return s
 
-    def _split(self, s: NodeSet) -> NodeSet:
+    def _split(self, s: NodeSet, per: FloatArray, ops: OpLog) -> tuple[NodeSet, FloatArray, OpLog]:
         """Split wide pieces in two at a live node near their geometric middle (the
-        node is kept in both halves: each half's slices there are exact)."""
-        per = s._summary["per_piece"]
+        node is kept in both halves: each half's slices there are exact). ``per`` (the
+        per-piece summary) and the pending ``ops`` get a copy of the split piece's row
+        and column."""
         for p in range(len(per)):
             if len(s.u_lo) >= self.max_pieces:
                 break
@@ -429,16 +447,14 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
             mid = np.sqrt(lo * hi) + s.t_s
             j = idx[1 + int(np.argmin(np.abs(s.label_s[idx[1:-1]] - mid)))]
             s = _split_at(s, p, j)
-        return s
+            per = np.vstack([per, per[p]])
+            ops = ops.with_copied_column(p)
+        return s, per, ops
 
     # -- piece-wide quantities ----------------------------------------------------------
-    @staticmethod
-    def _alpha_abs(s: NodeSet) -> FloatArray:
-        return s._summary["per_piece"][:, 1]
-
-    def _margin(self, s: NodeSet, dt_s: float) -> FloatArray:
-        """The kinematic margin of each piece over the next step (m/s^2)."""
-        per = s._summary["per_piece"]
+    def _margin(self, s: NodeSet, per: FloatArray, dt_s: float) -> FloatArray:
+        """The kinematic margin of each piece over the next step (m/s^2), from the
+        per-piece summary ``per`` (largest ``|w|``, largest ``|alpha|``, ``tau`` range)."""
         x_max = np.maximum(per[:, 3], 0.0) / s.u_lo
         x_min = np.maximum(np.minimum((per[:, 2] - dt_s) / s.u_hi, x_max), self.model.eps_m)
         return _k.kinematic_margin(
@@ -447,19 +463,47 @@ class NodeSetEstimator(Estimator[NodeSet, ChannelPrior]):
         )  # fmt: skip
 
 
-def _node_extent(s: NodeSet) -> tuple[FloatArray, FloatArray]:
-    """Largest and smallest ``zs`` of every node polygon (-inf, inf when empty)."""
-    b = s.polygons.bounds()
-    return np.where(np.isnan(b[:, 3]), -np.inf, b[:, 3]), np.where(
-        np.isnan(b[:, 1]), np.inf, b[:, 1]
+def _bisect_longest(knots: FloatArray, k: int) -> FloatArray:
+    """``k`` new points, each the middle of the longest gap left between ``knots``."""
+    gaps = [(float(b - a), float(a), float(b)) for a, b in zip(knots[:-1], knots[1:], strict=True)]
+    out = []
+    for _ in range(k):
+        i = max(range(len(gaps)), key=lambda j: gaps[j][0])
+        _, a, b = gaps.pop(i)
+        mid = 0.5 * (a + b)
+        out.append(mid)
+        gaps += [(mid - a, a, mid), (b - mid, mid, b)]
+    return np.array(sorted(out))
+
+
+def _compact(s: NodeSet) -> NodeSet:
+    """Drop the dead nodes that bracket no live run (each piece's feasible labels are
+    an interval: only the dead nodes next to it bound it)."""
+    live = s.live
+    if live.all():
+        return s
+    same = s.piece[1:] == s.piece[:-1]
+    near = live.copy()
+    near[1:] |= live[:-1] & same  # the dead node just above a live one
+    near[:-1] |= live[1:] & same  # and just below
+    if near.all():
+        return s
+    return replace(
+        s, piece=s.piece[near], label_s=s.label_s[near], polygons=s.polygons.select(near)
     )
+
+
+def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
+    """Smallest and largest ``zs`` of node ``i``'s polygon (inf, -inf when empty)."""
+    zs = s.polygons.xy[s.polygons.offsets[i] : s.polygons.offsets[i + 1], 1]
+    return (float(zs.min()), float(zs.max())) if len(zs) else (np.inf, -np.inf)
 
 
 def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
     by piece, then label."""
-    all_piece = np.r_[s.piece[keep], piece]
-    all_label = np.r_[s.label_s[keep], labels]
+    all_piece = np.concatenate([s.piece[keep], piece])
+    all_label = np.concatenate([s.label_s[keep], labels])
     order = np.lexsort((all_label, all_piece))
     merged = _concat(s.polygons.select(keep), polys).select(order)
     return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
