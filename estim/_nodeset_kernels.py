@@ -162,10 +162,10 @@ def apply_ops(
     vmax = 4
     for i in range(n):
         vmax = max(vmax, off[i + 1] - off[i])
-    cap = vmax + 2 * n_ops + 8
+    cap = 2 * vmax + 16  # grown as needed below
     a_buf = np.empty((cap, 2))
     b_buf = np.empty((cap, 2))
-    out = np.empty((off[n] + n * (2 * n_ops + 8), 2))
+    out = np.empty((off[n] + 4 * n + 16, 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
     k_out = 0
     for i in range(n):
@@ -176,6 +176,11 @@ def apply_ops(
         for o in range(n_ops):
             if m == 0:
                 break
+            if 2 * m + 8 > a_buf.shape[0]:  # a segment sum at most doubles the vertices
+                a_new = np.empty((4 * m + 16, 2))
+                a_new[:m] = a_buf[:m]
+                a_buf = a_new
+                b_buf = np.empty((4 * m + 16, 2))
             kind = kinds[o]
             tau = label[i] - times[o]
             if kind == BEARING:
@@ -210,6 +215,11 @@ def apply_ops(
                 ga = nu_s * dt * dt / (2.0 * t1) / scale
                 gz = nu_s * dt * (tau + t1) / 2.0 * e_nom
                 m = _segment1(a_buf, m, ga, gz, b_buf)
+                # a disturbance that varies within the step (the kinematic term does)
+                # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)
+                m = _segment1(b_buf, m, 0.5 * ga, nu_s * dt * dt / 4.0 * e_nom, a_buf)
+                for j in range(m):
+                    b_buf[j, 0], b_buf[j, 1] = a_buf[j, 0], a_buf[j, 1]
                 sc = 0.0
                 for j in range(m):
                     sc = max(sc, abs(b_buf[j, 0]), abs(b_buf[j, 1]))
@@ -217,6 +227,10 @@ def apply_ops(
                 m = _convex_pass(b_buf, 0, m, 0.0)
                 for j in range(m):
                     a_buf[j, 0], a_buf[j, 1] = b_buf[j, 0], b_buf[j, 1]
+        if k_out + m > out.shape[0]:
+            grown = np.empty((2 * (k_out + m), 2))
+            grown[:k_out] = out[:k_out]
+            out = grown
         for j in range(m):
             out[k_out, 0], out[k_out, 1] = a_buf[j, 0], a_buf[j, 1]
             k_out += 1

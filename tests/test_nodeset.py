@@ -135,7 +135,9 @@ def test_regridded_nodes_equal_nodes_followed_from_the_start():
 def test_node_slice_is_the_exact_polygon_of_the_seed_operations():
     """One node (known range and closing speed): its slice equals the polygon built
     with shapely from the same operations -- strip intersections, the shear of
-    seed 003's exact step and the Minkowski sum with the disturbance segment."""
+    seed 003's exact step and the Minkowski sum with the disturbance set (the seed's
+    segment of constant disturbances plus +-nu dt^2/4 in Y for one varying within
+    the step, :func:`test_disturbance_set_holds_every_varying_disturbance`)."""
     est = NodeSetEstimator(MODEL, n_nodes=4, min_live_nodes=4, kinematic_margin=False)
     x0 = 5801.3e3
     prior = ChannelPrior((-10e3, 10e3), (-100.0, 100.0), (x0, x0))
@@ -158,13 +160,33 @@ def test_node_slice_is_the_exact_polygon_of_the_seed_operations():
             poly, [1.0, float(c["a_w"]) / scale, 0.0, 1.0, 0.0, 0.0]
         )
         g = np.array([float(c["g_alpha"]) / scale, float(c["g_w"])]) * MODEL.nu_mps2
-        poly = shapely.convex_hull(
-            shapely.MultiPoint(np.vstack([np.array(sheared.exterior.coords) + s for s in (-g, g)]))
-        )
+        lens = np.array([0.5 * g[0], MODEL.nu_mps2 * DT**2 / 4])  # Y += +-nu dt^2/4
+        shifts = [sg * g + sl * lens for sg in (-1, 1) for sl in (-1, 1)]
+        pts = np.vstack([np.array(sheared.exterior.coords) + d for d in shifts])
+        poly = shapely.convex_hull(shapely.MultiPoint(pts))
         x = x1
     node = b.polygons.polygon(int(np.flatnonzero(b.live)[0]))
     ours = shapely.Polygon(node)
     assert ours.symmetric_difference(poly).area <= 1e-7 * poly.area
+
+
+@settings(max_examples=30, deadline=None)
+@given(v=st.lists(st.floats(-1.0, 1.0), min_size=1, max_size=40))
+def test_disturbance_set_holds_every_varying_disturbance(v):
+    """Y'' = v(t), |v| <= nu, piecewise constant over any number of sub-steps: the
+    change (dY, dV) over the step lies in the segment of constant disturbances
+    {(c dt^2/2, c dt) : |c| <= nu} plus [-nu dt^2/4, nu dt^2/4] in Y (the largest
+    departure, at dV = 0, is the bang-bang pair +nu then -nu)."""
+    nu = MODEL.nu_mps2
+    h = DT / len(v)
+    acc = np.asarray(v) * nu
+    dv = float(np.sum(acc) * h)
+    # exact integral of a piecewise-constant acceleration
+    t_left = DT - h * (np.arange(len(v)) + 0.5)
+    dy = float(np.sum(acc * h * t_left))
+    c = dv / DT  # the constant disturbance with the same dV
+    assert abs(c) <= nu * (1 + 1e-12)
+    assert abs(dy - c * DT**2 / 2) <= nu * DT**2 / 4 * (1 + 1e-12)
 
 
 def test_contradicting_bearing_is_rejected_and_reported():
