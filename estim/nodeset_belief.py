@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim import _nodeset_kernels as _nk
+from estim import _nodeset_geometry as _ng
 from estim import nodeset_bounds as nb
 from estim.base import Belief, Extremes, StateFunction, Status
 from estim.costs import MissForecast, ZeroEffortMiss
@@ -125,9 +125,9 @@ class NodeSet(Belief):
     # -- bounds between nodes --------------------------------------------------------
     @cached_property
     def _summary(self) -> dict[str, Any]:
-        """Cells and their bounds (compiled: :func:`estim._nodeset_kernels.summarise`)."""
+        """Cells and their bounds (compiled: :func:`estim._nodeset_geometry.summarise`)."""
         names = ("table", "tau4", "span", "piece", "zs", "w", "alpha", "per_piece")
-        out = _nk.summarise(
+        out = _ng.summarise(
             self.polygons.xy, self.polygons.offsets, self.label_s,
             np.ascontiguousarray(self.piece), float(self.t_s), self.u_lo, self.u_hi,
             self.hard_lo_s, self.hard_hi_s, self.alpha_scale_rad, self.e_nom, nb.BOUND_RTOL,
@@ -251,7 +251,7 @@ class NodeSet(Belief):
         d = self._cell_normals(table)
         if len(d) == 0:
             return False
-        hi4 = _nk.support_table(
+        hi4 = _ng.support_table(
             self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s), table,
             np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
             self.alpha_scale_rad, self.e_nom,

@@ -1,0 +1,348 @@
+"""Compiled (numba) geometry of the node set: bounds between nodes.
+
+The derivation is in :mod:`estim.nodeset_bounds`: for a fixed direction the support
+function of the body's slices is concave along the body, so the secants of its
+values at the nodes around a cell bound it there. :func:`summarise` answers, in one
+pass over the cells, everything the node set is asked (the zero-effort miss, the
+bearing, the range, per-piece extents); :func:`support_table` serves the
+containment test.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _support(xy, off, j, tau, p, q, scale, e_nom):
+    """Max and min of ``p Y~ + q V~`` over node ``j``'s polygon (-inf/inf if empty)."""
+    hi, lo = -np.inf, np.inf
+    if j < 0:
+        return hi, lo
+    ca = scale * (p * tau - q)
+    cz = q / (e_nom * tau)
+    for v in range(off[j], off[j + 1]):
+        val = xy[v, 0] * ca + xy[v, 1] * cz
+        hi = max(hi, val)
+        lo = min(lo, val)
+    return hi, lo
+
+
+@njit(cache=True)
+def _secant(t4, f4, lo_s, hi_s, rtol):
+    """Max over ``[lo_s, hi_s]`` of the concave bound from four samples (see
+    :func:`estim.nodeset_bounds.secant_bound`); returns the bound and its argument."""
+    f0, f1, f2, f3 = f4[0], f4[1], f4[2], f4[3]
+    t0, t1, t2, t3 = t4[0], t4[1], t4[2], t4[3]
+    if not np.isfinite(f1) and not np.isfinite(f2):
+        return -np.inf, lo_s
+    has_l = np.isfinite(f0) and np.isfinite(f1) and t1 > t0
+    has_r = np.isfinite(f2) and np.isfinite(f3) and t3 > t2
+    s_l = (f1 - f0) / (t1 - t0) if has_l else 0.0
+    s_r = (f3 - f2) / (t3 - t2) if has_r else 0.0
+    best, arg = -np.inf, lo_s
+    cands = np.empty(3)
+    cands[0], cands[1], cands[2] = lo_s, hi_s, lo_s
+    if has_l and has_r and s_l != s_r:
+        tx = (f2 - f1 + s_l * t1 - s_r * t2) / (s_l - s_r)
+        cands[2] = min(max(tx, lo_s), hi_s)
+    for c in range(3):
+        tt = cands[c]
+        v = np.inf
+        if has_l:
+            v = min(v, f1 + s_l * (tt - t1))
+        if has_r:
+            v = min(v, f2 + s_r * (tt - t2))
+        if v > best:
+            best, arg = v, tt
+    # the node values bound their own slice exactly
+    if np.isfinite(f1) and lo_s <= t1 <= hi_s and not best >= f1:
+        best, arg = f1, t1
+    if np.isfinite(f2) and lo_s <= t2 <= hi_s and not best >= f2:
+        best, arg = f2, t2
+    if np.isfinite(best):
+        best += rtol * abs(best)
+    return best, arg
+
+
+@njit(cache=True)
+def support_table(xy, off, tau, nodes4, p, q, scale, e_nom):
+    """Max of ``p[d] Y~ + q[d] V~`` over each of the four nodes ``nodes4`` (m, 4)
+    for every direction ``d`` (-inf for an empty or missing node)."""
+    m = p.shape[0]
+    out = np.empty((m, 4))
+    for d in range(m):
+        for k in range(4):
+            j = nodes4[k]
+            tj = tau[j] if j >= 0 else 1.0
+            out[d, k] = _support(xy, off, j, tj, p[d], q[d], scale, e_nom)[0]
+    return out
+
+
+@njit(cache=True)
+def _lines(xy, off, j, tau_j, scale, e_nom, sign, a_out, b_out):
+    """The vertices of node ``j`` as lines ``sign e_nom (Y~ + V~ tau) = A + B tau``;
+    returns their number (0 for an empty or missing node)."""
+    if j < 0:
+        return 0
+    m = off[j + 1] - off[j]
+    for v in range(m):
+        a = xy[off[j] + v, 0] * scale
+        zs = xy[off[j] + v, 1]
+        a_out[v] = sign * e_nom * a * tau_j
+        b_out[v] = sign * (zs / tau_j - e_nom * a)
+    return m
+
+
+@njit(cache=True)
+def _envelope_at(a, b, m, t):
+    """Index of the line of ``a + b t`` that is largest at ``t`` (upper envelope)."""
+    best, arg = -np.inf, -1
+    for v in range(m):
+        val = a[v] + b[v] * t
+        if val > best:
+            best, arg = val, v
+    return arg
+
+
+@njit(cache=True)
+def _quad(l0, l1, d0, d1, s0, s1):
+    """Coefficients of ``(l0 + l1 t) + (d0 + d1 t)(s0 + s1 t)`` in powers of ``t``."""
+    return l0 + d0 * s0, l1 + d0 * s1 + d1 * s0, d1 * s1
+
+
+@njit(cache=True)
+def _zem_bound_cell(xy, off, tau, nodes, t4, lo_s, hi_s, scale, e_nom, sign, buf_a, buf_b, rtol):
+    """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``sign zs`` (see
+    :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained."""
+    counts = np.zeros(4, dtype=np.int64)
+    for k in range(4):
+        j = nodes[k]
+        tj = tau[j] if j >= 0 else 1.0
+        counts[k] = _lines(xy, off, j, tj, scale, e_nom, sign, buf_a[k], buf_b[k])
+    if counts[1] == 0 and counts[2] == 0:
+        return -np.inf, lo_s
+    has_l = counts[0] > 0 and counts[1] > 0 and t4[1] > t4[0]
+    has_r = counts[2] > 0 and counts[3] > 0 and t4[3] > t4[2]
+    if not has_l and not has_r:
+        if counts[1] > 0 and lo_s == hi_s == t4[1]:  # a lone node: its own slice
+            v = _envelope_at(buf_a[1], buf_b[1], counts[1], t4[1])
+            return buf_a[1, v] + buf_b[1, v] * t4[1], lo_s
+        return np.inf, lo_s
+    # breakpoints: where the largest line of a node changes (consecutive vertices tie)
+    nbk = 0
+    for k in range(4):
+        nbk += counts[k]
+    pts = np.empty(nbk + 2)
+    pts[0], pts[1] = lo_s, hi_s
+    npts = 2
+    for k in range(4):
+        m = counts[k]
+        for v in range(m):
+            w = (v + 1) % m
+            db = buf_b[k, v] - buf_b[k, w]
+            if db != 0.0:
+                tx = (buf_a[k, w] - buf_a[k, v]) / db
+                if lo_s < tx < hi_s:
+                    pts[npts] = tx
+                    npts += 1
+    pts = np.sort(pts[:npts])
+    h_l = t4[1] - t4[0]
+    h_r = t4[3] - t4[2]
+    best, arg = -np.inf, lo_s
+    cand = np.empty(8)
+    for s in range(npts - 1):
+        p, q = pts[s], pts[s + 1]
+        if q < p:
+            continue
+        mid = 0.5 * (p + q)
+        coef = np.zeros((2, 3))
+        for side in range(2):
+            k_in, k_out = (1, 0) if side == 0 else (2, 3)
+            if (side == 0 and not has_l) or (side == 1 and not has_r):
+                coef[side, 0] = np.inf
+                continue
+            vi = _envelope_at(buf_a[k_in], buf_b[k_in], counts[k_in], mid)
+            vo = _envelope_at(buf_a[k_out], buf_b[k_out], counts[k_out], mid)
+            l0, l1 = buf_a[k_in, vi], buf_b[k_in, vi]
+            d0, d1 = l0 - buf_a[k_out, vo], l1 - buf_b[k_out, vo]
+            if side == 0:  # secant through nodes i-1, i, extended to the right
+                s0, s1 = -t4[1] / h_l, 1.0 / h_l
+            else:  # secant through nodes i+2, i+1, extended to the left
+                s0, s1 = t4[2] / h_r, -1.0 / h_r
+            c0, c1, c2 = _quad(l0, l1, d0, d1, s0, s1)
+            coef[side, 0], coef[side, 1], coef[side, 2] = c0, c1, c2
+        nc = 0
+        cand[nc] = p
+        cand[nc + 1] = q
+        nc += 2
+        for side in range(2):
+            if np.isfinite(coef[side, 0]) and coef[side, 2] != 0.0:
+                tv = -coef[side, 1] / (2.0 * coef[side, 2])
+                if p < tv < q:
+                    cand[nc] = tv
+                    nc += 1
+        if np.isfinite(coef[0, 0]) and np.isfinite(coef[1, 0]):
+            ea = coef[0, 2] - coef[1, 2]
+            eb = coef[0, 1] - coef[1, 1]
+            ec = coef[0, 0] - coef[1, 0]
+            if ea != 0.0:
+                disc = eb * eb - 4.0 * ea * ec
+                if disc >= 0.0:
+                    r = np.sqrt(disc)
+                    for root in ((-eb + r) / (2.0 * ea), (-eb - r) / (2.0 * ea)):
+                        if p < root < q:
+                            cand[nc] = root
+                            nc += 1
+            elif eb != 0.0:
+                root = -ec / eb
+                if p < root < q:
+                    cand[nc] = root
+                    nc += 1
+        for c in range(nc):
+            t = cand[c]
+            val = np.inf
+            for side in range(2):
+                if np.isfinite(coef[side, 0]):
+                    val = min(val, coef[side, 0] + coef[side, 1] * t + coef[side, 2] * t * t)
+            if val > best:
+                best, arg = val, t
+    # the node values bound their own slice exactly
+    for k in (1, 2):
+        if counts[k] > 0 and lo_s <= t4[k] <= hi_s:
+            v = _envelope_at(buf_a[k], buf_b[k], counts[k], t4[k])
+            f = buf_a[k, v] + buf_b[k, v] * t4[k]
+            if not best >= f:
+                best, arg = f, t4[k]
+    if np.isfinite(best):
+        best += rtol * (abs(best) + 1e-300)
+    return best, arg
+
+
+@njit(cache=True)
+def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
+    """Bounds of ``zs = e_nom (Y~ + V~ tau)`` over every cell, in the direction of
+    each ``tau``.
+
+    At a fixed ``tau`` the zero-effort miss is the support of the slice in the
+    direction ``(1, tau)``; for that fixed direction the support is concave along the
+    body, so the secants of its values at the four nodes around the cell bound it
+    at ``tau``. Node ``k``'s value in direction ``(1, tau)`` is the upper envelope of
+    its vertices' lines ``A_v + B_v tau`` (linear between breakpoints), so the bound
+    is a minimum of two quadratics of ``tau`` between breakpoints, maximised exactly
+    (ends, vertices, crossings). Returns ``(m, 4)``: ``zs_hi, arg_hi, zs_lo, arg_lo``.
+    """
+    m = table.shape[0]
+    vmax = 1
+    for j in range(off.shape[0] - 1):
+        vmax = max(vmax, off[j + 1] - off[j])
+    buf_a = np.empty((4, vmax))
+    buf_b = np.empty((4, vmax))
+    out = np.empty((m, 4))
+    for c in range(m):
+        up, a_up = _zem_bound_cell(
+            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, 1.0,
+            buf_a, buf_b, rtol,
+        )  # fmt: skip
+        dn, a_dn = _zem_bound_cell(
+            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, -1.0,
+            buf_a, buf_b, rtol,
+        )  # fmt: skip
+        out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
+    return out
+
+
+@njit(cache=True)
+def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_nom, rtol):
+    """Everything the node set is asked, in one pass over its cells.
+
+    A cell is a pair of consecutive nodes of one piece with at least one live end,
+    its part of ``tau`` clipped to the piece's hard limits. Returns
+
+    * ``table`` (m, 4): nodes ``i-1, i, i+1, i+2`` around each cell (-1: none);
+    * ``tau4`` (m, 4): their times to go (dummies for missing neighbours);
+    * ``span`` (m, 2): the cell's part of ``tau``; ``cpiece`` (m,): its piece;
+    * ``zs`` (m, 4): bounds of ``zs`` with their taus (:func:`zem_bounds`);
+    * ``w`` (m, 2): bounds of ``w = (e/e_nom)^2 zs`` over the piece's ``e``;
+    * ``alpha`` (m, 2): bounds of the bearing ``Y~ / tau``;
+    * ``per_piece`` (pieces, 4): largest ``|w|``, largest ``|alpha|``, smallest and
+      largest ``tau`` of each piece's cells (0, 0, inf, -inf when it has none).
+    """
+    n = off.shape[0] - 1
+    m_max = 2 * n
+    table = np.full((m_max, 4), -1, dtype=np.int64)
+    tau4 = np.empty((m_max, 4))
+    span = np.empty((m_max, 2))
+    cpiece = np.empty(m_max, dtype=np.int64)
+    m = 0
+    for i in range(n - 1):
+        p = piece[i]
+        if piece[i + 1] != p:
+            continue
+        if off[i + 1] == off[i] and off[i + 2] == off[i + 1]:
+            continue  # both ends empty: nothing in between
+        lo = max(label[i] - t, hard_lo[p] - t)
+        hi = min(label[i + 1] - t, hard_hi[p] - t)
+        if lo > hi:
+            continue
+        table[m, 1], table[m, 2] = i, i + 1
+        tau4[m, 1], tau4[m, 2] = label[i] - t, label[i + 1] - t
+        if i >= 1 and piece[i - 1] == p:
+            table[m, 0] = i - 1
+            tau4[m, 0] = label[i - 1] - t
+        else:
+            tau4[m, 0] = tau4[m, 1] - 1.0
+        if i + 2 < n and piece[i + 2] == p:
+            table[m, 3] = i + 2
+            tau4[m, 3] = label[i + 2] - t
+        else:
+            tau4[m, 3] = tau4[m, 2] + 1.0
+        span[m, 0], span[m, 1] = lo, hi
+        cpiece[m] = p
+        m += 1
+    for i in range(n):  # a live node alone in its piece is a cell of its own
+        p = piece[i]
+        if off[i + 1] == off[i]:
+            continue
+        alone = (i == 0 or piece[i - 1] != p) and (i == n - 1 or piece[i + 1] != p)
+        if alone:
+            table[m, 1] = i
+            tau4[m, 0], tau4[m, 1] = label[i] - t - 1.0, label[i] - t
+            tau4[m, 2], tau4[m, 3] = label[i] - t + 1.0, label[i] - t + 2.0
+            span[m, 0] = span[m, 1] = label[i] - t
+            cpiece[m] = p
+            m += 1
+    table, tau4, span, cpiece = table[:m], tau4[:m], span[:m], cpiece[:m]
+    tau = label - t
+    zs = zem_bounds(xy, off, tau, table, tau4, span[:, 0], span[:, 1], scale, e_nom, rtol)
+    w = np.empty((m, 2))
+    alpha = np.empty((m, 2))
+    n_p = u_lo.shape[0]
+    per_piece = np.zeros((n_p, 4))
+    for p in range(n_p):
+        per_piece[p, 2] = np.inf
+        per_piece[p, 3] = -np.inf
+    f_hi = np.empty(4)
+    f_lo = np.empty(4)
+    for c in range(m):
+        p = cpiece[c]
+        big = (1.0 / (u_lo[p] * e_nom)) ** 2
+        small = (1.0 / (u_hi[p] * e_nom)) ** 2
+        w[c, 1] = zs[c, 0] * (big if zs[c, 0] > 0 else small)
+        w[c, 0] = zs[c, 2] * (big if zs[c, 2] < 0 else small)
+        for k in range(4):
+            j = table[c, k]
+            h, lo_v = _support(xy, off, j, tau4[c, k], 1.0, 0.0, scale, e_nom)
+            f_hi[k] = h
+            f_lo[k] = -lo_v
+        y_up = _secant(tau4[c], f_hi, span[c, 0], span[c, 1], rtol)[0]
+        y_dn = -_secant(tau4[c], f_lo, span[c, 0], span[c, 1], rtol)[0]
+        # Y~ / tau is monotone in tau on each secant: both ends of the part suffice
+        alpha[c, 1] = max(y_up / span[c, 0], y_up / span[c, 1])
+        alpha[c, 0] = min(y_dn / span[c, 0], y_dn / span[c, 1])
+        per_piece[p, 0] = max(per_piece[p, 0], abs(w[c, 0]), abs(w[c, 1]))
+        per_piece[p, 1] = max(per_piece[p, 1], abs(alpha[c, 0]), abs(alpha[c, 1]))
+        per_piece[p, 2] = min(per_piece[p, 2], span[c, 0])
+        per_piece[p, 3] = max(per_piece[p, 3], span[c, 1])
+    return table, tau4, span, cpiece, zs, w, alpha, per_piece

@@ -1,0 +1,272 @@
+"""Refinement of the node set: where nodes are added, and how (:mod:`estim.nodeset`).
+
+New nodes get exact slices by replaying the recorded operations on the prior
+(:meth:`NodeRefinement._exact_slices`). Nodes are added
+
+* when a piece is down to a few live nodes (:meth:`NodeRefinement.refine`): its
+  feasible labels form an interval inside the bracket of the live run, whose
+  longest cells are bisected (a piece emptied by a bearing is searched for the
+  states the bearing left between its nodes: :meth:`NodeRefinement._search`);
+* where the bounds of the zero-effort miss are loosest (:meth:`NodeRefinement.tighten`);
+* and pieces are split where their ranges span too much (:meth:`NodeRefinement._split`),
+  so that each sizes its own kinematic margin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from estim import _nodeset_kernels as _nk
+from estim.infoset import STRIP_MARGIN
+from estim.nodeset_belief import NodeSet
+from estim.nodeset_bounds import OpLog
+from estim.polygons import ConvexPolygons
+
+FloatArray = NDArray[np.float64]
+
+#: refinement stops when the new nodes are closer than this (relative to tau)
+MIN_SPACING_REL = 1e-12
+
+
+class NodeRefinement:
+    """The refinement half of :class:`estim.nodeset.NodeSetEstimator` (a mixin: it uses
+    the estimator's options and its ``_apply`` and ``_prior``)."""
+
+    def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
+        """Add nodes to every piece with fewer than ``min_live_nodes`` live ones.
+
+        The piece's feasible labels form an interval (the body is convex) inside the
+        bracket of its live run: from the dead node below it (or the hard limit) to the
+        dead node above. New nodes (exact slices: the prior, then every recorded
+        operation) bisect the longest cells of the bracket -- the end cells, where
+        the feasible interval ends, among them -- until the piece has ``min_live_nodes``
+        plus two; a piece down to one live node is re-gridded with ``n_nodes``. A piece
+        emptied by a bearing is searched (:meth:`_search`) in the bracket it had
+        ``before``. Dead nodes outside the brackets are dropped.
+        """
+        for p in range(len(s.u_lo)):
+            for _ in range(4):
+                n_live = int((s.live & (s.piece == p)).sum())
+                if n_live >= self.min_live_nodes:
+                    break
+                if n_live == 0:
+                    had = before is not None and bool((before.live & (before.piece == p)).any())
+                    if had and int(s.log.kinds[-1]) == _nk.BEARING:
+                        s = self._search(s, p, *self._bracket(before, p))
+                    break
+                lo, hi = self._bracket(s, p)
+                lo, hi = max(lo, s.hard_lo_s[p]), min(hi, s.hard_hi_s[p])
+                if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
+                    break
+                if n_live == 1:
+                    s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
+                    continue
+                mine = (s.piece == p) & (s.label_s >= lo) & (s.label_s <= hi)
+                knots = np.unique(np.r_[lo, s.label_s[mine], hi])
+                labels = _bisect_longest(knots, self.min_live_nodes + 2 - n_live)
+                piece = np.full(len(labels), p)
+                polys = self._exact_slices(s, piece, labels)
+                s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
+        return _compact(s)
+
+    def _search(self, s: NodeSet, p: int, lo: float, hi: float) -> NodeSet:
+        """Find the states of piece ``p`` that the last bearing left between its nodes.
+
+        Before the last bearing the piece had states in ``[lo, hi]``. How far a slice
+        misses the bearing's strip (in ``Y~``: ``min Y~ - (alpha_m + a) tau`` or
+        ``(alpha_m - a) tau - max Y~``) is convex in ``tau`` (the body is convex and
+        ``a(x) x`` concave), so if no node of a fine grid meets the strip, any states
+        left lie next to the node that misses it least: the search narrows to that
+        node's neighbours, down to a spacing of ``MIN_SPACING_REL``. The piece is
+        empty when nothing is found.
+        """
+        head = OpLog(*(a[:-1] for a in s.log.parts()))
+        alpha_m = float(s.log.pa[-1])
+        piece = np.full(self.n_nodes, p)
+        for _ in range(40):
+            labels = np.linspace(lo, hi, self.n_nodes)
+            if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
+                break
+            polys, t, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), head, 0.0)
+            out = self._regrid(s, p, labels, polys_before_last=(polys, t))
+            if (out.live & (out.piece == p)).any():
+                return self.refine(out)
+            tau = labels - t
+            bb = self.model.bearing_bound
+            half = bb(tau / s.u_hi[p]) * (1.0 + STRIP_MARGIN) + STRIP_MARGIN * self.alpha_scale_rad
+            bounds = polys.bounds() * self.alpha_scale_rad  # a_min, zs_min, a_max, zs_max
+            miss = np.maximum(bounds[:, 0] - (alpha_m + half), (alpha_m - half) - bounds[:, 2])
+            miss = np.where(np.isnan(miss), np.inf, miss * tau)
+            k = int(np.argmin(miss))
+            if not np.isfinite(miss[k]):
+                break
+            lo, hi = labels[max(k - 1, 0)], labels[min(k + 1, self.n_nodes - 1)]
+        return s
+
+    @staticmethod
+    def _bracket(s: NodeSet, b: int) -> tuple[float, float]:
+        idx = np.flatnonzero(s.piece == b)
+        live = np.flatnonzero(s.live[idx])
+        first, last = idx[live[0]], idx[live[-1]]
+        lo = s.label_s[first - 1] if first - 1 >= idx[0] else s.hard_lo_s[b]
+        hi = s.label_s[last + 1] if last + 1 <= idx[-1] else s.hard_hi_s[b]
+        return float(lo), float(hi)
+
+    def _regrid(self, s: NodeSet, b: int, labels: FloatArray, polys_before_last=None) -> NodeSet:
+        """Piece ``b`` with new nodes at ``labels``: the prior, then the whole log (or
+        only its last operation on ``polys_before_last = (polygons, t)``)."""
+        piece = np.full(len(labels), b)
+        if polys_before_last is None:
+            polys = self._exact_slices(s, piece, labels)
+        else:
+            last = OpLog(*(a[-1:] for a in s.log.parts()))
+            polys, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
+                                         polys_before_last[1])  # fmt: skip
+        return _merge(s, s.piece != b, piece, labels, polys)
+
+    def _exact_slices(self, s: NodeSet, piece: NDArray[np.int64], labels: FloatArray):
+        """The slices at new nodes: the prior, then every recorded operation."""
+        polys, _, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), s.log, 0.0)
+        return polys
+
+    def tighten(self, s: NodeSet) -> NodeSet:
+        """Add nodes where the bounds of the zero-effort miss are loosest.
+
+        The extremes of ``w`` over the set sit in one cell each; where such a bound
+        exceeds the exact values at the cell's two nodes by more than
+        ``tighten_rtol`` of the set's width (typically a cell at the end of the
+        surviving range, bounded from one side only), a node is added at the cell's
+        middle (exact, by replay), up to ``max_inserts`` per call.
+        """
+        for _ in range(self.max_inserts):
+            sm = s._summary
+            w = sm["w"]
+            if len(w) == 0:
+                break
+            width = float(w[:, 1].max() - w[:, 0].min())
+            new_piece, new_label = [], []
+            for c, side in ((int(np.argmax(w[:, 1])), 1), (int(np.argmin(w[:, 0])), 0)):
+                i, j = sm["table"][c, 1], sm["table"][c, 2]
+                p = int(sm["piece"][c])
+                big = (1.0 / (s.u_lo[p] * s.e_nom)) ** 2
+                small = (1.0 / (s.u_hi[p] * s.e_nom)) ** 2
+                if side == 1:
+                    node = max(_zs_extent(s, i)[1], _zs_extent(s, j)[1])
+                    node = node * (big if node > 0 else small)
+                    slack = w[c, 1] - node
+                else:
+                    node = min(_zs_extent(s, i)[0], _zs_extent(s, j)[0])
+                    node = node * (big if node < 0 else small)
+                    slack = node - w[c, 0]
+                lo, hi = sm["span"][c]
+                tiny = MIN_SPACING_REL * max(abs(hi), 1.0)
+                if slack > self.tighten_rtol * width and hi - lo > tiny:
+                    new_piece.append(p)
+                    new_label.append(0.5 * (lo + hi) + s.t_s)
+            if not new_piece:
+                break
+            piece = np.array(new_piece, dtype=np.int64)
+            labels = np.array(new_label)
+            if len(labels) == 2 and piece[0] == piece[1] and labels[0] == labels[1]:
+                piece, labels = piece[:1], labels[:1]
+            polys = self._exact_slices(s, piece, labels)
+            s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
+        return s
+
+    def _split(self, s: NodeSet, per: FloatArray, ops: OpLog) -> tuple[NodeSet, FloatArray, OpLog]:
+        """Split wide pieces in two at a live node near their geometric middle (the
+        node is kept in both halves: each half's slices there are exact). ``per`` (the
+        per-piece summary) and the pending ``ops`` get a copy of the split piece's row
+        and column."""
+        for p in range(len(per)):
+            if len(s.u_lo) >= self.max_pieces:
+                break
+            if not np.isfinite(per[p, 2]):
+                continue
+            lo = max(float(per[p, 2]), self.model.eps_m * float(s.u_lo[p]))
+            hi = float(per[p, 3])
+            if not hi > self.split_ratio * lo:
+                continue
+            idx = np.flatnonzero((s.piece == p) & s.live)
+            if len(idx) < 3:
+                continue
+            mid = np.sqrt(lo * hi) + s.t_s
+            j = idx[1 + int(np.argmin(np.abs(s.label_s[idx[1:-1]] - mid)))]
+            s = _split_at(s, p, j)
+            per = np.vstack([per, per[p]])
+            ops = ops.with_copied_column(p)
+        return s, per, ops
+
+
+def _bisect_longest(knots: FloatArray, k: int) -> FloatArray:
+    """``k`` new points, each the middle of the longest gap left between ``knots``."""
+    gaps = [(float(b - a), float(a), float(b)) for a, b in zip(knots[:-1], knots[1:], strict=True)]
+    out = []
+    for _ in range(k):
+        i = max(range(len(gaps)), key=lambda j: gaps[j][0])
+        _, a, b = gaps.pop(i)
+        mid = 0.5 * (a + b)
+        out.append(mid)
+        gaps += [(mid - a, a, mid), (b - mid, mid, b)]
+    return np.array(sorted(out))
+
+
+def _compact(s: NodeSet) -> NodeSet:
+    """Drop the dead nodes that bracket no live run (each piece's feasible labels are
+    an interval: only the dead nodes next to it bound it)."""
+    live = s.live
+    if live.all():
+        return s
+    same = s.piece[1:] == s.piece[:-1]
+    near = live.copy()
+    near[1:] |= live[:-1] & same  # the dead node just above a live one
+    near[:-1] |= live[1:] & same  # and just below
+    if near.all():
+        return s
+    return replace(
+        s, piece=s.piece[near], label_s=s.label_s[near], polygons=s.polygons.select(near)
+    )
+
+
+def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
+    """Smallest and largest ``zs`` of node ``i``'s polygon (inf, -inf when empty)."""
+    zs = s.polygons.xy[s.polygons.offsets[i] : s.polygons.offsets[i + 1], 1]
+    return (float(zs.min()), float(zs.max())) if len(zs) else (np.inf, -np.inf)
+
+
+def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
+    """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
+    by piece, then label."""
+    all_piece = np.concatenate([s.piece[keep], piece])
+    all_label = np.concatenate([s.label_s[keep], labels])
+    order = np.lexsort((all_label, all_piece))
+    merged = _concat(s.polygons.select(keep), polys).select(order)
+    return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
+
+
+def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:
+    """Piece ``p`` split at node ``j``: labels above go to a new piece (a copy of
+    ``p``'s band, log columns and upper hard limit), node ``j`` to both."""
+    new = len(s.u_lo)
+    cut = float(s.label_s[j])
+    upper = (s.piece == p) & (s.label_s > cut)
+    piece = np.where(upper, new, s.piece)
+    piece = np.r_[piece, new]
+    label = np.r_[s.label_s, cut]
+    polys = _concat(s.polygons, s.polygons.select([j]))
+    order = np.lexsort((label, piece))
+    log = s.log.with_copied_column(p)
+    hard_hi = np.where(np.arange(new) == p, cut, s.hard_hi_s)
+    return replace(
+        s, piece=piece[order], label_s=label[order], polygons=polys.select(order),
+        u_lo=np.r_[s.u_lo, s.u_lo[p]], u_hi=np.r_[s.u_hi, s.u_hi[p]],
+        hard_lo_s=np.r_[s.hard_lo_s, cut], hard_hi_s=np.r_[hard_hi, s.hard_hi_s[p]], log=log,
+    )  # fmt: skip
+
+
+def _concat(a: ConvexPolygons, b: ConvexPolygons) -> ConvexPolygons:
+    off = np.concatenate([a.offsets, a.offsets[-1] + b.offsets[1:]]).astype(np.int64)
+    return ConvexPolygons._make(np.vstack([a.xy, b.xy]), off)
