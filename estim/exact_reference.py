@@ -1,0 +1,432 @@
+"""The exact information set of one channel of the auxiliary model, by linear programming.
+
+A slow diagnostic, not an estimator: the reference a set estimator's intervals are
+measured against (issue 12). It never forms the set; it answers "min and max of a
+function of the state over *all* states consistent with the data" with a certified
+pair of intervals, ``inner`` (attained by consistent trajectories) inside the exact
+one inside ``outer``.
+
+Model (seed 003 section 4, SPEC 1.3, in physical coordinates of one channel).
+With ``Y = alpha x`` and ``V = dY/dt`` the auxiliary model is exactly linear::
+
+    x(t) = x0 - e (t - t0),   Y'' = v,   |v| <= nu,   impulse k:  V += k,
+
+``v`` constant between consecutive history times (the seed's discrete-time
+opponent; :meth:`estim.model.ChannelModel.step` is the same map in ``(alpha, omega,
+x)``), ``e`` the true closing speed (constant, unknown within an interval). The
+zero-effort miss is ``w = omega x^2 / e_nom = (V x + e Y) / e_nom``. The data are
+
+* the a-priori box at ``t0``: ``Y in [y_lo, y_hi]``, ``V in [v_lo, v_hi]``,
+  ``x0 in [x_lo, x_hi]``, ``e in [e_lo, e_hi]``;
+* bearings ``|alpha_m,i - Y_i / x_i| <= a(x_i)``, i.e. ``|Y_i - alpha_m,i x_i| <=
+  g(x_i) = a(x_i) x_i``, the bound ``a`` linear in range (``estim.model.BearingBound``);
+* ranges ``d_m,i / (1 + b) <= x_i <= d_m,i / (1 - b)``: one channel, so the range
+  is ``x`` itself (the estimators' ``Range`` also allows an off-axis angle, which
+  only widens their interval);
+* the threshold ``x_k >= eps`` at the last time (the sets drop states under eps);
+* the known impulses ``k_j``, applied after the measurement at ``t_j``. The state
+  reported is the one at the last time, after its measurement and before its
+  impulse (the point where guidance reads the set).
+
+With ``z = (Y0, V0, v_0 .. v_{n-2})``::
+
+    Y_i = Y0 + V0 t_i + sum_{j<i} v_j dt_j (t_i - t_j - dt_j/2) + sum_{j<i} k_j (t_i - t_j)
+
+is linear in ``z`` and independent of ``(x0, e)``; ``x_i = x0 - e t_i`` is linear in
+``(x0, e)``. Since ``a`` is linear, ``g(x) = a(x) x`` is concave, so ``|affine| <=
+g(affine)`` is convex: the feasible set is convex in ``(z, x0, e)`` jointly, and its
+projection on ``x0`` (for one ``e``, or over all) is an interval.
+
+Extremes. ``f = A Y_k + B V_k + C`` with ``A, B, C`` affine in ``(x_k, e)``
+(:class:`Objective`; ``w`` has ``A = e / e_nom``, ``B = x_k / e_nom``) is bilinear, so
+the extremes are found by branch and bound over cells of ``(x0, e)``:
+
+* inner: at a fixed ``(x0, e)`` the problem is an LP in ``z`` with a constant matrix;
+  its optimum is attained by a consistent trajectory, so every such value lies in the
+  exact interval (the union over any grid of points is an honest lower bound of the
+  exact width);
+* outer: on a cell, ``g`` is replaced by a tangent (``g`` concave: above it, so the
+  constraints only loosen), ``(x0, e)`` range over the cell as LP variables, and the
+  objective is taken at each corner of the cell; for a fixed ``z``, ``f`` is affine in
+  ``(x0, e)``, so its maximum over the cell is at a corner, and the largest corner LP
+  bounds every consistent state of the cell from above.
+
+Cells whose outer bound cannot beat the best inner value are dropped; the others are
+halved along ``x0`` or ``e`` (whichever moves ``f`` more) until the two bounds meet
+within ``max(abs_tol, rel_tol * width)``. The gap ``outer - inner`` is reported, not
+assumed: it holds up to the LP solver's feasibility tolerance (HiGHS, 1e-7).
+
+The feasible range interval (issue 12 quotes "feasible initial range") is found by
+Kelley's cutting planes: minimise / maximise ``x0`` with tangents of ``g``, adding the
+tangents at the solution until it violates no bearing (outer end), then checked by
+the fixed-``(x0, e)`` LP (inner end).
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linprog
+
+from estim._exact_lp import X_UNIT_M, ChannelLP
+from estim.model import ChannelModel
+
+FloatArray = NDArray[np.float64]
+
+#: a bearing constraint violated by less than this (m) counts as satisfied (Kelley)
+VIOLATION_TOL_M = 1e-6
+
+
+class InconsistentHistory(ValueError):
+    """No state of the auxiliary model is consistent with the data."""
+
+
+def _frozen(a: ArrayLike) -> FloatArray:
+    arr = np.array(a, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class PriorBox:
+    """A-priori box of one channel at the first history time (SI units)."""
+
+    y_m: tuple[float, float]
+    v_mps: tuple[float, float]
+    x_m: tuple[float, float]
+    e_mps: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        for name in ("y_m", "v_mps", "x_m", "e_mps"):
+            lo, hi = getattr(self, name)
+            if not lo <= hi:
+                raise ValueError(f"{name} must be an interval lo <= hi")
+        if not (self.x_m[0] > 0 and self.e_mps[0] > 0):
+            raise ValueError("range and closing speed must be positive")
+
+
+@dataclass(frozen=True)
+class History:
+    """Measurement and control history of one channel (module docstring).
+
+    ``impulses_mps[i]`` is applied after the measurement at ``times_s[i]`` (the last
+    one is not part of the reported state); ``ranges_m[i]`` is NaN where there is no
+    range measurement. ``None`` means zeros / no ranges.
+    """
+
+    times_s: FloatArray
+    bearings_rad: FloatArray
+    impulses_mps: FloatArray | None = None
+    ranges_m: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        t = _frozen(self.times_s)
+        n = len(t)
+        if t.ndim != 1 or n < 1 or np.any(np.diff(t) <= 0):
+            raise ValueError("times_s must be a non-empty increasing 1-d array")
+        k = np.zeros(n) if self.impulses_mps is None else self.impulses_mps
+        r = np.full(n, np.nan) if self.ranges_m is None else self.ranges_m
+        for name, arr in (("bearings_rad", self.bearings_rad), ("impulses_mps", k)):
+            if np.shape(arr) != (n,) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name} must be {n} finite numbers")
+        if np.shape(r) != (n,):
+            raise ValueError(f"ranges_m must have {n} entries (NaN: none)")
+        for name, arr in (("times_s", t), ("bearings_rad", self.bearings_rad)):
+            object.__setattr__(self, name, _frozen(arr))
+        object.__setattr__(self, "impulses_mps", _frozen(k))
+        object.__setattr__(self, "ranges_m", _frozen(r))
+
+
+@dataclass(frozen=True)
+class Objective:
+    """``f = (a0 + a_x x + a_e e) Y + (b0 + b_x x + b_e e) V + (c0 + c_x x + c_e e)``
+    at the last time (``a = (a0, a_x, a_e)`` etc.)."""
+
+    a: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    b: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    c: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @classmethod
+    def zero_effort_miss(cls, model: ChannelModel) -> Objective:
+        """``w = (e Y + x V) / e_nom`` (m), ``e_nom`` the model's closing speed."""
+        return cls(a=(0.0, 0.0, 1.0 / model.e), b=(0.0, 1.0 / model.e, 0.0))
+
+    def coefficients(self, x_m: float, e_mps: float) -> tuple[float, float, float]:
+        return tuple(p[0] + p[1] * x_m + p[2] * e_mps for p in (self.a, self.b, self.c))
+
+    def value(self, y_m, v_mps, x_m, e_mps):
+        a, b, c = self.coefficients(x_m, e_mps)
+        return a * y_m + b * v_mps + c
+
+    def negated(self) -> Objective:
+        return Objective(*(tuple(-v for v in p) for p in (self.a, self.b, self.c)))
+
+
+@dataclass(frozen=True)
+class ExactInterval:
+    """Certified bounds of the exact interval of a function (module docstring):
+    ``[inner_lo, inner_hi]`` is inside it, ``[outer_lo, outer_hi]`` contains it."""
+
+    inner_lo: float
+    inner_hi: float
+    outer_lo: float
+    outer_hi: float
+    #: ``(x0, e)`` where ``inner_lo`` and ``inner_hi`` are attained
+    argmin: tuple[float, float]
+    argmax: tuple[float, float]
+    #: outer bounds of the feasible initial range and closing speed (all ``e``)
+    x0_interval_m: tuple[float, float]
+    e_interval_mps: tuple[float, float]
+    n_lp: int
+    wall_s: float
+
+    @property
+    def width_gap(self) -> float:
+        """``outer width / inner width - 1``: how far the inner width can be from exact."""
+        inner = self.inner_hi - self.inner_lo
+        return (self.outer_hi - self.outer_lo) / inner - 1.0 if inner > 0 else np.inf
+
+
+@dataclass(frozen=True)
+class _Cell:
+    x0: tuple[float, float]
+    e: tuple[float, float]
+
+    def corners(self) -> list[tuple[float, float]]:
+        es = sorted(set(self.e))
+        return [(x, e) for x in self.x0 for e in es]
+
+    def centre(self) -> tuple[float, float]:
+        return 0.5 * (self.x0[0] + self.x0[1]), 0.5 * (self.e[0] + self.e[1])
+
+
+@dataclass(frozen=True)
+class ExactChannelSet:
+    """The exact information set of one channel, held implicitly by its LP data.
+
+    Parameters
+    ----------
+    model : ChannelModel
+        ``nu``, the bearing bound ``a(x)`` (linear: the box's ranges must lie below
+        ``bearing_bound.max_range_m``), the range bound ``b``, ``eps``, ``e_nom``.
+    box : PriorBox
+    history : History
+    """
+
+    model: ChannelModel
+    box: PriorBox
+    history: History
+    n_lp: list[int] = field(init=False, repr=False, compare=False)  # LPs solved
+    _lp: ChannelLP = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.box.x_m[1] >= self.model.bearing_bound.max_range_m:
+            raise ValueError("the bearing bound must be linear over the box's ranges")
+        h = self.history
+        lp = ChannelLP(
+            self.model, self.box.y_m, self.box.v_mps, h.times_s, h.bearings_rad,
+            h.impulses_mps, h.ranges_m,
+        )  # fmt: skip
+        object.__setattr__(self, "_lp", lp)
+        object.__setattr__(self, "n_lp", [0])
+
+    def _solve(self, c, a_ub, b_ub, bounds):
+        self.n_lp[0] += 1
+        res = linprog(c, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+        return res if res.status == 0 else None
+
+    def _objective_row(self, obj: Objective, x_k: float, e: float) -> tuple[FloatArray, float]:
+        """``f = row . z + const`` at fixed ``(x_k, e)``."""
+        a, b, c = obj.coefficients(x_k, e)
+        lp = self._lp
+        return a * lp.p_last + b * lp.q, a * lp.k[-1] + b * lp.l + c
+
+    def trajectory(self, z: FloatArray, x0_m: float, e_mps: float) -> dict[str, FloatArray]:
+        """Trajectory of ``z`` (from :meth:`fixed`): ``Y_i`` (m), ``x_i`` (m), ``v_j``
+        (m/s^2) and the last ``V`` (m/s, before the last impulse)."""
+        return {
+            "y_m": self._lp.p @ z + self._lp.k,
+            "x_m": x0_m - e_mps * self._lp.t,
+            "v_mps2": self.model.nu_mps2 * np.asarray(z[2:]),
+            "v_last_mps": self._lp.last_state(z)[1],
+        }
+
+    def fixed(self, x0_m: float, e_mps: float, obj: Objective | None = None):
+        """Max of ``obj`` (default 0: a feasibility check) at fixed ``(x0, e)``: the
+        value and ``z``, or ``None`` when no consistent state has this ``(x0, e)``."""
+        lp = self._lp
+        x = x0_m - e_mps * lp.t
+        if not lp.ranges_hold(x):
+            return None
+        row, const = self._objective_row(obj or Objective(), x[-1], e_mps)
+        res = self._solve(-row, lp.a_fixed, lp.fixed_rhs(x), lp.z_bounds)
+        return None if res is None else (float(row @ res.x + const), res.x)
+
+    def _solve_relaxed(self, system, c_z: FloatArray, c_xe: ArrayLike):
+        """Minimise ``c_z . z + c_xe . (X, E)`` over ``ChannelLP.relaxed``'s system:
+        ``(z, x0, e)`` or ``None``."""
+        a_ub, b_ub, bounds, (xc, ec) = system
+        res = self._solve(np.concatenate([c_z, c_xe]), a_ub, b_ub, bounds)
+        if res is None:
+            return None
+        nz = len(c_z)
+        return res.x[:nz], xc + X_UNIT_M * res.x[nz], ec + res.x[nz + 1]
+
+    def _mid_tangents(self, cell: _Cell) -> list[tuple[NDArray, FloatArray]]:
+        """Tangents of ``g`` at the middle of each ``x_i``'s range over the cell."""
+        t = self._lp.t
+        mid = 0.5 * (cell.x0[0] - cell.e[1] * t + cell.x0[1] - cell.e[0] * t)
+        return [(np.arange(len(t)), mid)]
+
+    # -- feasible (x0, e) ------------------------------------------------------------
+    def _kelley(self, cell: _Cell, c_xe: tuple[float, float], max_iter: int = 40):
+        """Minimise ``c_xe . (X, E)`` over the exact set (cutting planes, module
+        docstring): ``(x0, e)`` of the outer optimum, or ``None`` if infeasible."""
+        t, tangents = self._lp.t, self._mid_tangents(cell)
+        c_z = np.zeros(self._lp.n_z)
+        for _ in range(max_iter):
+            sol = self._solve_relaxed(self._lp.relaxed(cell.x0, cell.e, tangents), c_z, c_xe)
+            if sol is None:
+                return None
+            z, x0, e = sol
+            x = x0 - e * t
+            bad = np.flatnonzero(self._lp.violation(z, x) > VIOLATION_TOL_M)
+            if bad.size == 0:
+                break
+            tangents.append((bad, x[bad]))
+        return x0, e
+
+    def x0_interval(self, e_mps: float | None = None) -> dict[str, tuple[float, float] | None]:
+        """Feasible initial range for one closing speed (``None``: over all of them).
+
+        Returns ``{"outer": (lo, hi), "inner": (lo, hi)}``: the outer ends are Kelley's
+        optima (at most the exact ends), the inner ones are checked by the exact LP at
+        that range (moved inwards by doubling steps from 1 mm when needed; ``None`` if
+        that fails). Raises :class:`InconsistentHistory` when nothing is consistent.
+        """
+        e_iv = self.box.e_mps if e_mps is None else (e_mps, e_mps)
+        cell = _Cell(self.box.x_m, e_iv)
+        ends = [self._kelley(cell, (s, 0.0)) for s in (1.0, -1.0)]
+        if ends[0] is None or ends[1] is None:
+            raise InconsistentHistory("no state of the auxiliary model fits the data")
+        outer = (float(ends[0][0]), float(ends[1][0]))
+        inner = []
+        for (x0, e), step in zip(ends, (1.0, -1.0), strict=True):
+            d = 0.0
+            while self.fixed(x0 + step * d, e) is None:
+                d = max(2 * d, 1e-3)
+                if d > outer[1] - outer[0]:
+                    return {"outer": outer, "inner": None}
+            inner.append(float(x0 + step * d))
+        return {"outer": outer, "inner": (inner[0], max(inner[1], inner[0]))}
+
+    def bounding_cell(self) -> tuple[_Cell, list[tuple[float, float]]]:
+        """Outer bounding box of the feasible ``(x0, e)`` (Kelley on each side) and
+        the ``(x0, e)`` of the Kelley optima (on the boundary of the feasible set)."""
+        box = _Cell(self.box.x_m, self.box.e_mps)
+        sides = [(1.0, 0.0), (-1.0, 0.0)]
+        if box.e[1] > box.e[0]:
+            sides += [(0.0, 1.0), (0.0, -1.0)]
+        sol = [self._kelley(box, s) for s in sides]
+        if any(s is None for s in sol):
+            raise InconsistentHistory("no state of the auxiliary model fits the data")
+        e = (sol[2][1], sol[3][1]) if len(sol) == 4 else box.e
+        return _Cell((sol[0][0], sol[1][0]), e), sol
+
+    # -- extremes --------------------------------------------------------------------
+    def _bound(self, cell: _Cell, obj: Objective):
+        """Outer bound of ``max obj`` over the cell (the best corner LP, module
+        docstring) with that LP's solution ``(z, x0, e)``; ``None``: empty cell."""
+        best, tk = None, self._lp.t[-1]
+        system = self._lp.relaxed(cell.x0, cell.e, self._mid_tangents(cell))  # every corner
+        for x0c, ec in cell.corners():
+            row, const = self._objective_row(obj, x0c - ec * tk, ec)
+            sol = self._solve_relaxed(system, -row, np.zeros(2))
+            if sol is not None and (best is None or row @ sol[0] + const > best[0]):
+                best = (float(row @ sol[0] + const), sol)
+        return best
+
+    def _split(self, cell: _Cell, obj: Objective, z: FloatArray) -> list[_Cell]:
+        """Halve the cell along ``x0`` or ``e``, whichever moves ``f`` more over it."""
+        y_k, v_k = self._lp.last_state(z)
+        dfdx = obj.a[1] * y_k + obj.b[1] * v_k + obj.c[1]
+        dfde = obj.a[2] * y_k + obj.b[2] * v_k + obj.c[2] - self._lp.t[-1] * dfdx
+        if abs(dfdx) * (cell.x0[1] - cell.x0[0]) >= abs(dfde) * (cell.e[1] - cell.e[0]):
+            m = 0.5 * (cell.x0[0] + cell.x0[1])
+            return [_Cell((cell.x0[0], m), cell.e), _Cell((m, cell.x0[1]), cell.e)]
+        m = 0.5 * (cell.e[0] + cell.e[1])
+        return [_Cell(cell.x0, (cell.e[0], m)), _Cell(cell.x0, (m, cell.e[1]))]
+
+    def _maximise(self, obj: Objective, root: _Cell, best: list, tol, max_lp: int):
+        """Branch and bound on ``max obj`` from the inner value ``best = [value,
+        (x0, e)]`` (updated in place): returns the outer bound."""
+        first = self._bound(root, obj)
+        if first is None:
+            raise InconsistentHistory("no state of the auxiliary model fits the data")
+        heap, count = [(-first[0], 0, root, first[1])], 0
+        while heap:
+            neg_ub, _, cell, (z, x0s, es) = heap[0]
+            if -neg_ub - best[0] <= tol() or self.n_lp[0] >= max_lp:
+                break
+            heapq.heappop(heap)
+            for pt in ((x0s, es), cell.centre()):  # an inner value from this cell
+                got = self.fixed(*pt, obj)
+                if got is not None:
+                    if got[0] > best[0]:
+                        best[0], best[1] = got[0], pt
+                    break
+            for kid in self._split(cell, obj, z):
+                got = self._bound(kid, obj)
+                if got is not None and got[0] > best[0]:
+                    count += 1
+                    heapq.heappush(heap, (-got[0], count, kid, got[1]))
+        return max(best[0], -heap[0][0]) if heap else best[0]
+
+    def extremes(
+        self,
+        obj: Objective | None = None,
+        rel_tol: float = 1e-3,
+        abs_tol: float = 0.01,
+        max_lp: int = 3000,
+    ) -> ExactInterval:
+        """Inner and outer bounds of ``[min obj, max obj]`` over the exact set
+        (default ``obj``: the zero-effort miss ``w``, m).
+
+        Each side stops when its outer and inner values are within ``max(abs_tol,
+        rel_tol * inner width)``, or once ``max_lp`` LPs are spent (half per side; the
+        bounds stay valid, the gap is then wider).
+        """
+        t0 = time.perf_counter()
+        self.n_lp[0] = 0
+        obj = obj or Objective.zero_effort_miss(self.model)
+        root, ends = self.bounding_cell()
+        # inner seeds: the feasible set's extreme (x0, e) and their mean (interior)
+        hi, neg_lo = [-np.inf, None], [-np.inf, None]  # best max of f and of -f
+        for pt in [*ends, tuple(np.mean(ends, axis=0))]:
+            for side, o in ((hi, obj), (neg_lo, obj.negated())):
+                got = self.fixed(*pt, o)
+                if got is not None and got[0] > side[0]:
+                    side[0], side[1] = got[0], pt
+
+        def tol() -> float:
+            width = hi[0] + neg_lo[0]
+            return max(abs_tol, rel_tol * width if np.isfinite(width) else 0.0)
+
+        outer_hi = self._maximise(obj, root, hi, tol, (self.n_lp[0] + max_lp) // 2)
+        outer_nlo = self._maximise(obj.negated(), root, neg_lo, tol, max_lp)
+        return ExactInterval(
+            inner_lo=-neg_lo[0],
+            inner_hi=hi[0],
+            outer_lo=-outer_nlo,
+            outer_hi=outer_hi,
+            argmin=tuple(map(float, neg_lo[1])),
+            argmax=tuple(map(float, hi[1])),
+            x0_interval_m=tuple(map(float, root.x0)),
+            e_interval_mps=tuple(map(float, root.e)),
+            n_lp=self.n_lp[0],
+            wall_s=time.perf_counter() - t0,
+        )
