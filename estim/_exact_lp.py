@@ -1,20 +1,21 @@
 """Assembly of the linear programs of :mod:`estim.exact_reference` (one channel).
 
-With ``z = (Y0, V0, u_0 .. u_{n-2})``, ``v_j = nu u_j`` (``|u_j| <= 1``)::
+Variables ``z = (Y_0 .. Y_{n-1}, V_0 .. V_{n-1}, u_0 .. u_{n-2})``: position and
+velocity at every history time (before its impulse) and the disturbance ``v_j = nu
+u_j``, ``|u_j| <= 1``, constant over ``[t_j, t_j+1]``. The dynamics are sparse
+equalities (the same matrix for every LP)::
 
-    Y_i = P_i z + K_i,   P_i z = Y0 + V0 t_i + sum_{j<i} nu u_j dt_j (t_i - t_j - dt_j/2),
-    K_i = sum_{j<i} k_j (t_i - t_j),   V_last = Q z + L,  L = sum_{j<last} k_j,
+    Y_{j+1} = Y_j + (V_j + k_j) dt_j + nu dt_j^2 / 2 u_j,   V_{j+1} = V_j + k_j + nu dt_j u_j
 
 and ``x_i = x0 - e t_i``. A bearing is ``|Y_i - alpha_m,i x_i| <= g(x_i) = a(x_i) x_i``,
 ``g(x) = end x + kappa x^2`` with ``kappa = (start - end) / ref <= 0``: concave, below
 each of its tangents ``beta + gamma x``.
 
-* At fixed ``(x0, e)``: ``[P; -P] z <= [alpha x + g - K; -alpha x + g + K]``; the
-  matrix is the same for every ``(x0, e)``, only the right-hand side moves.
-* On a cell of ``(x0, e)`` (outer): variables ``(z, X, E)`` with ``x0 = xc + X_UNIT_M
-  X``, ``e = ec + E``; ``s (Y_i - alpha_i x_i) <= beta + gamma x_i`` for ``s = +-1``
-  and each tangent, the threshold ``x_last >= eps`` and the ranges
-  ``d/(1+b) <= x_i <= d/(1-b)`` as rows in ``(X, E)``.
+* At fixed ``(x0, e)`` a bearing is a bound on ``Y_i``: the LP has no inequality rows.
+* On a cell of ``(x0, e)`` (outer): two more variables ``X, E`` with ``x0 = xc +
+  X_UNIT_M X``, ``e = ec + E``; ``s (Y_i - alpha_i x_i) <= beta + gamma x_i`` for ``s =
+  +-1`` and each tangent, the threshold ``x_last >= eps`` and the ranges
+  ``d/(1+b) <= x_i <= d/(1-b)`` are rows in ``(Y_i, X, E)``.
 """
 
 from __future__ import annotations
@@ -46,32 +47,33 @@ class ChannelLP:
 
     def __post_init__(self) -> None:
         t = self.times_s - self.times_s[0]
-        n, dt = len(t), np.diff(self.times_s)
-        p = np.zeros((n, n + 1))
-        p[:, 0], p[:, 1] = 1.0, t
-        lag = t[:, None] - t[None, :-1] - 0.5 * dt[None, :]
-        p[:, 2:] = np.where(lag > 0, self.model.nu_mps2 * dt[None, :] * lag, 0.0)
-        k = self.impulses_mps
-        kk = np.where(t[:, None] > t[None, :], (t[:, None] - t[None, :]) * k[None, :], 0.0)
-        q = np.zeros(n + 1)
-        q[1], q[2:] = 1.0, self.model.nu_mps2 * dt
+        n, dt, nu, k = len(t), np.diff(self.times_s), self.model.nu_mps2, self.impulses_mps
+        j = np.arange(n - 1)
+        iy, iv, iu = j, n + j, 2 * n + j
+        r_y, r_v = j, n - 1 + j  # one row per step and variable
+        rows = np.concatenate([r_y, r_y, r_y, r_y, r_v, r_v, r_v])
+        cols = np.concatenate([iy + 1, iy, iv, iu, iv + 1, iv, iu])
+        vals = np.concatenate(
+            [np.ones(n - 1), -np.ones(n - 1), -dt, -nu * dt**2 / 2, np.ones(n - 1),
+             -np.ones(n - 1), -nu * dt]
+        )  # fmt: skip
+        a_eq = sp.csr_matrix((vals, (rows, cols)), shape=(2 * (n - 1), 3 * n - 1))
         bb = self.model.bearing_bound
         for name, value in (
             ("t", t),
-            ("p", sp.csr_matrix(p)),
-            ("p_last", p[-1].copy()),
-            ("k", kk.sum(axis=1)),
-            ("q", q),
-            ("l", float(k[:-1].sum())),
-            ("a_fixed", sp.vstack([sp.csr_matrix(p), -sp.csr_matrix(p)]).tocsr()),
-            ("z_bounds", [self.y_m, self.v_mps] + [(-1.0, 1.0)] * (n - 1)),
+            ("a_eq", a_eq),
+            ("b_eq", np.concatenate([k[:-1] * dt, k[:-1]])),
             ("kappa", (bb.start_rad - bb.end_rad) / bb.ref_range_m),
         ):
             object.__setattr__(self, name, value)
 
     @property
+    def n(self) -> int:
+        return len(self.t)
+
+    @property
     def n_z(self) -> int:
-        return self.p.shape[1]
+        return 3 * self.n - 1
 
     def g(self, x: FloatArray) -> FloatArray:
         """``g(x) = a(x) x`` (m)."""
@@ -81,9 +83,20 @@ class ChannelLP:
         """``(beta, gamma)`` of the tangent ``beta + gamma x >= g(x)`` at ``xbar``."""
         return -self.kappa * xbar**2, self.model.bearing_bound.end_rad + 2 * self.kappa * xbar
 
+    def split(self, z: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(Y_i, V_i, v_j)`` of a solution (m, m/s, m/s^2)."""
+        n = self.n
+        return z[:n], z[n : 2 * n], self.model.nu_mps2 * z[2 * n : 3 * n - 1]
+
+    def objective_row(self, a: float, b: float) -> FloatArray:
+        """``row . z = a Y_last + b V_last``."""
+        row = np.zeros(self.n_z)
+        row[self.n - 1], row[2 * self.n - 1] = a, b
+        return row
+
     def violation(self, z: FloatArray, x: FloatArray) -> FloatArray:
         """``|Y_i - alpha_i x_i| - g(x_i)`` (m; positive: bearing ``i`` violated)."""
-        return np.abs(self.p @ z + self.k - self.bearings_rad * x) - self.g(x)
+        return np.abs(z[: self.n] - self.bearings_rad * x) - self.g(x)
 
     def ranges_hold(self, x: FloatArray) -> bool:
         """The threshold and the range measurements at ranges ``x_i``."""
@@ -95,40 +108,55 @@ class ChannelLP:
             and np.all(x[has] <= d[has] / (1 - b))
         )
 
-    def fixed_rhs(self, x: FloatArray) -> FloatArray:
-        """Right-hand side of ``a_fixed z <= b`` at ranges ``x_i``."""
-        g, alpha = self.g(x), self.bearings_rad
-        return np.concatenate([alpha * x + g - self.k, -alpha * x + g + self.k])
+    def bounds(self, y_lo: FloatArray, y_hi: FloatArray) -> list[tuple]:
+        """Variable bounds with ``Y_i`` in ``[y_lo_i, y_hi_i]`` and the box at ``t_0``."""
+        lo, hi = np.array(y_lo, float), np.array(y_hi, float)
+        lo[0], hi[0] = max(lo[0], self.y_m[0]), min(hi[0], self.y_m[1])
+        v = [self.v_mps] + [(None, None)] * (self.n - 1)
+        return list(zip(lo, hi, strict=True)) + v + [(-1.0, 1.0)] * (self.n - 1)
 
-    def last_state(self, z: FloatArray) -> tuple[float, float]:
-        """``(Y, V)`` at the last time."""
-        return float(self.p_last @ z + self.k[-1]), float(self.q @ z + self.l)
+    def fixed_bounds(self, x: FloatArray) -> list[tuple] | None:
+        """Bounds at fixed ranges ``x_i`` (bearings as bounds on ``Y_i``); ``None`` when
+        a bound is empty."""
+        g, centre = self.g(x), self.bearings_rad * x
+        out = self.bounds(centre - g, centre + g)
+        return None if out[0][0] > out[0][1] or np.any(g < 0) else out
 
     def relaxed(self, x0: tuple, e: tuple, tangents: list[tuple[NDArray, FloatArray]]):
         """Outer constraints on the cell ``x0 x e`` with ``g`` replaced by its tangents
-        at the ``(index, x_bar)`` pairs: ``(A_ub, b_ub, bounds, (xc, ec))``."""
-        t, alpha = self.t, self.bearings_rad
+        at the ``(index, x_bar)`` pairs: ``(A_ub, b_ub, A_eq, b_eq, bounds, (xc, ec))``."""
+        t, alpha, n, nz = self.t, self.bearings_rad, self.n, self.n_z
         xc, ec = 0.5 * (x0[0] + x0[1]), 0.5 * (e[0] + e[1])
         base = xc - ec * t  # x_i = base_i + X_UNIT_M X - t_i E
-        blocks, rhs = [], []
+        rows, cols, vals, rhs = [], [], [], []
+        r0 = 0
         for idx, xbar in tangents:
             beta, gam = self.tangent(xbar)
             for s, slope in ((1.0, alpha[idx] + gam), (-1.0, alpha[idx] - gam)):
-                xe = np.column_stack([-s * slope * X_UNIT_M, s * slope * t[idx]])
-                blocks.append(sp.hstack([s * self.p[idx], sp.csr_matrix(xe)]))
-                rhs.append(beta - s * self.k[idx] + s * slope * base[idx])
+                r = r0 + np.arange(len(idx))
+                rows += [r, r, r]
+                cols += [idx, np.full(len(idx), nz), np.full(len(idx), nz + 1)]
+                vals += [np.full(len(idx), s), -s * slope * X_UNIT_M, s * slope * t[idx]]
+                rhs.append(beta + s * slope * base[idx])
+                r0 += len(idx)
         # rows s x_i <= r: the threshold x_last >= eps, then d/(1+b) <= x_i <= d/(1-b)
         d, b = self.ranges_m, self.model.range_rel_bound
         has = np.flatnonzero(np.isfinite(d))
-        lin = [(len(t) - 1, -1.0, -self.model.eps_m)]
+        lin = [(n - 1, -1.0, -self.model.eps_m)]
         lin += [(i, 1.0, d[i] / (1 - b)) for i in has] + [(i, -1.0, -d[i] / (1 + b)) for i in has]
-        rows = np.zeros((len(lin), self.n_z + 2))
-        for r, (i, s, _) in enumerate(lin):
-            rows[r, self.n_z :] = s * X_UNIT_M, -s * t[i]
-        rhs.append(np.array([r - s * base[i] for i, s, r in lin]))
-        bounds = self.z_bounds + [
+        for i, s, r in lin:
+            rows += [[r0, r0]]
+            cols += [[nz, nz + 1]]
+            vals += [[s * X_UNIT_M, -s * t[i]]]
+            rhs.append([r - s * base[i]])
+            r0 += 1
+        a_ub = sp.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(r0, nz + 2),
+        )
+        a_eq = sp.hstack([self.a_eq, sp.csr_matrix((self.a_eq.shape[0], 2))]).tocsr()
+        bounds = self.bounds(np.full(n, -np.inf), np.full(n, np.inf)) + [
             ((x0[0] - xc) / X_UNIT_M, (x0[1] - xc) / X_UNIT_M),
             (e[0] - ec, e[1] - ec),
         ]
-        a_ub = sp.vstack([*blocks, sp.csr_matrix(rows)]).tocsr()
-        return a_ub, np.concatenate(rhs), bounds, (xc, ec)
+        return a_ub, np.concatenate(rhs), a_eq, self.b_eq, bounds, (xc, ec)

@@ -234,43 +234,41 @@ class ExactChannelSet:
         object.__setattr__(self, "_lp", lp)
         object.__setattr__(self, "n_lp", [0])
 
-    def _solve(self, c, a_ub, b_ub, bounds):
+    def _solve(self, c, bounds, a_ub=None, b_ub=None, a_eq=None, b_eq=None):
         self.n_lp[0] += 1
-        res = linprog(c, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+        a_eq = self._lp.a_eq if a_eq is None else a_eq
+        b_eq = self._lp.b_eq if b_eq is None else b_eq
+        res = linprog(c, a_ub, b_ub, a_eq, b_eq, bounds=bounds, method="highs")
         return res if res.status == 0 else None
 
     def _objective_row(self, obj: Objective, x_k: float, e: float) -> tuple[FloatArray, float]:
         """``f = row . z + const`` at fixed ``(x_k, e)``."""
         a, b, c = obj.coefficients(x_k, e)
-        lp = self._lp
-        return a * lp.p_last + b * lp.q, a * lp.k[-1] + b * lp.l + c
+        return self._lp.objective_row(a, b), c
 
     def trajectory(self, z: FloatArray, x0_m: float, e_mps: float) -> dict[str, FloatArray]:
-        """Trajectory of ``z`` (from :meth:`fixed`): ``Y_i`` (m), ``x_i`` (m), ``v_j``
-        (m/s^2) and the last ``V`` (m/s, before the last impulse)."""
-        return {
-            "y_m": self._lp.p @ z + self._lp.k,
-            "x_m": x0_m - e_mps * self._lp.t,
-            "v_mps2": self.model.nu_mps2 * np.asarray(z[2:]),
-            "v_last_mps": self._lp.last_state(z)[1],
-        }
+        """Trajectory of a solution ``z`` (from :meth:`fixed`): ``Y_i`` (m), ``V_i``
+        (m/s, before the impulse at ``t_i``), ``x_i`` (m) and ``v_j`` (m/s^2)."""
+        y, v, acc = self._lp.split(np.asarray(z))
+        return {"y_m": y, "v_mps": v, "x_m": x0_m - e_mps * self._lp.t, "v_mps2": acc}
 
     def fixed(self, x0_m: float, e_mps: float, obj: Objective | None = None):
         """Max of ``obj`` (default 0: a feasibility check) at fixed ``(x0, e)``: the
         value and ``z``, or ``None`` when no consistent state has this ``(x0, e)``."""
         lp = self._lp
         x = x0_m - e_mps * lp.t
-        if not lp.ranges_hold(x):
+        bounds = lp.fixed_bounds(x) if lp.ranges_hold(x) else None
+        if bounds is None:
             return None
         row, const = self._objective_row(obj or Objective(), x[-1], e_mps)
-        res = self._solve(-row, lp.a_fixed, lp.fixed_rhs(x), lp.z_bounds)
+        res = self._solve(-row, bounds)
         return None if res is None else (float(row @ res.x + const), res.x)
 
     def _solve_relaxed(self, system, c_z: FloatArray, c_xe: ArrayLike):
         """Minimise ``c_z . z + c_xe . (X, E)`` over ``ChannelLP.relaxed``'s system:
         ``(z, x0, e)`` or ``None``."""
-        a_ub, b_ub, bounds, (xc, ec) = system
-        res = self._solve(np.concatenate([c_z, c_xe]), a_ub, b_ub, bounds)
+        a_ub, b_ub, a_eq, b_eq, bounds, (xc, ec) = system
+        res = self._solve(np.concatenate([c_z, c_xe]), bounds, a_ub, b_ub, a_eq, b_eq)
         if res is None:
             return None
         nz = len(c_z)
@@ -352,7 +350,8 @@ class ExactChannelSet:
 
     def _split(self, cell: _Cell, obj: Objective, z: FloatArray) -> list[_Cell]:
         """Halve the cell along ``x0`` or ``e``, whichever moves ``f`` more over it."""
-        y_k, v_k = self._lp.last_state(z)
+        y, v, _ = self._lp.split(z)
+        y_k, v_k = y[-1], v[-1]
         dfdx = obj.a[1] * y_k + obj.b[1] * v_k + obj.c[1]
         dfde = obj.a[2] * y_k + obj.b[2] * v_k + obj.c[2] - self._lp.t[-1] * dfdx
         if abs(dfdx) * (cell.x0[1] - cell.x0[0]) >= abs(dfde) * (cell.e[1] - cell.e[0]):
@@ -389,7 +388,7 @@ class ExactChannelSet:
     def extremes(
         self,
         obj: Objective | None = None,
-        rel_tol: float = 1e-3,
+        rel_tol: float = 1e-4,
         abs_tol: float = 0.01,
         max_lp: int = 3000,
     ) -> ExactInterval:

@@ -118,7 +118,8 @@ def test_extreme_trajectory_is_consistent_under_the_models_own_step(side):
     obj = Objective.zero_effort_miss(SMALL)
     value, z = ref.fixed(x0, e, obj if side == "argmax" else obj.negated())
     traj = ref.trajectory(z, x0, e)
-    state = np.array([z[0] / x0, (z[1] * x0 + e * z[0]) / x0**2, x0])
+    y0, v0 = traj["y_m"][0], traj["v_mps"][0]
+    state = np.array([y0 / x0, (v0 * x0 + e * y0) / x0**2, x0])
     for i, t in enumerate(hist.times_s):
         bound = float(SMALL.bearing_bound(state[2]))
         assert abs(hist.bearings_rad[i] - state[0]) <= bound * (1 + 1e-7)
@@ -129,7 +130,8 @@ def test_extreme_trajectory_is_consistent_under_the_models_own_step(side):
     assert w == pytest.approx(r.inner_hi if side == "argmax" else r.inner_lo, abs=1e-6)
     assert value == pytest.approx(w if side == "argmax" else -w, abs=1e-6)
     assert np.all(np.abs(traj["v_mps2"]) <= SMALL.nu_mps2 * (1 + 1e-9))
-    assert SMALL_BOX.y_m[0] - 1e-6 <= z[0] <= SMALL_BOX.y_m[1] + 1e-6
+    assert SMALL_BOX.y_m[0] - 1e-6 <= y0 <= SMALL_BOX.y_m[1] + 1e-6
+    assert SMALL_BOX.v_mps[0] - 1e-6 <= v0 <= SMALL_BOX.v_mps[1] + 1e-6
 
 
 def test_a_grid_of_fixed_range_and_speed_lies_inside_the_outer_interval():
