@@ -7,15 +7,16 @@ equalities (the same matrix for every LP)::
 
     Y_{j+1} = Y_j + (V_j + k_j) dt_j + nu dt_j^2 / 2 u_j,   V_{j+1} = V_j + k_j + nu dt_j u_j
 
-and ``x_i = x0 - e t_i``. A bearing is ``|Y_i - alpha_m,i x_i| <= g(x_i) = a(x_i) x_i``,
+and ``x_i = x0 - e t_i = s - e (t_i - t_last)`` with ``s`` the range at the last
+time. A bearing is ``|Y_i - alpha_m,i x_i| <= g(x_i) = a(x_i) x_i``,
 ``g(x) = end x + kappa x^2`` with ``kappa = (start - end) / ref <= 0``: concave, below
 each of its tangents ``beta + gamma x``.
 
 * At fixed ``(x0, e)`` a bearing is a bound on ``Y_i``: the LP has no inequality rows.
-* On a cell of ``(x0, e)`` (outer): two more variables ``X, E`` with ``x0 = xc +
-  X_UNIT_M X``, ``e = ec + E``; ``s (Y_i - alpha_i x_i) <= beta + gamma x_i`` for ``s =
-  +-1`` and each tangent, the threshold ``x_last >= eps`` and the ranges
-  ``d/(1+b) <= x_i <= d/(1-b)`` are rows in ``(Y_i, X, E)``.
+* On a cell of ``(s, e)`` (outer): two more variables ``X, E`` with ``s = sc +
+  X_UNIT_M X``, ``e = ec + E``; ``+-(Y_i - alpha_i x_i) <= beta + gamma x_i`` for each
+  tangent, and the a-priori range ``x_0 in [x_lo, x_hi]``, the threshold ``x_last >=
+  eps`` and the ranges ``d/(1+b) <= x_i <= d/(1-b)`` are rows in ``(Y_i, X, E)``.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ class ChannelLP:
     model: ChannelModel
     y_m: tuple[float, float]
     v_mps: tuple[float, float]
+    x_m: tuple[float, float]
     times_s: FloatArray
     bearings_rad: FloatArray
     impulses_mps: FloatArray
@@ -61,6 +63,7 @@ class ChannelLP:
         bb = self.model.bearing_bound
         for name, value in (
             ("t", t),
+            ("tau", t - t[-1]),
             ("a_eq", a_eq),
             ("b_eq", np.concatenate([k[:-1] * dt, k[:-1]])),
             ("kappa", (bb.start_rad - bb.end_rad) / bb.ref_range_m),
@@ -122,33 +125,33 @@ class ChannelLP:
         out = self.bounds(centre - g, centre + g)
         return None if out[0][0] > out[0][1] or np.any(g < 0) else out
 
-    def relaxed(self, x0: tuple, e: tuple, tangents: list[tuple[NDArray, FloatArray]]):
-        """Outer constraints on the cell ``x0 x e`` with ``g`` replaced by its tangents
-        at the ``(index, x_bar)`` pairs: ``(A_ub, b_ub, A_eq, b_eq, bounds, (xc, ec))``."""
-        t, alpha, n, nz = self.t, self.bearings_rad, self.n, self.n_z
-        xc, ec = 0.5 * (x0[0] + x0[1]), 0.5 * (e[0] + e[1])
-        base = xc - ec * t  # x_i = base_i + X_UNIT_M X - t_i E
+    def relaxed(self, s: tuple, e: tuple, tangents: list[tuple[NDArray, FloatArray]]):
+        """Outer constraints on the cell ``s x e`` with ``g`` replaced by its tangents
+        at the ``(index, x_bar)`` pairs: ``(A_ub, b_ub, A_eq, b_eq, bounds, (sc, ec))``."""
+        tau, alpha, n, nz = self.tau, self.bearings_rad, self.n, self.n_z
+        sc, ec = 0.5 * (s[0] + s[1]), 0.5 * (e[0] + e[1])
+        base = sc - ec * tau  # x_i = base_i + X_UNIT_M X - tau_i E
         rows, cols, vals, rhs = [], [], [], []
         r0 = 0
         for idx, xbar in tangents:
             beta, gam = self.tangent(xbar)
-            for s, slope in ((1.0, alpha[idx] + gam), (-1.0, alpha[idx] - gam)):
+            for sg, slope in ((1.0, alpha[idx] + gam), (-1.0, alpha[idx] - gam)):
                 r = r0 + np.arange(len(idx))
                 rows += [r, r, r]
                 cols += [idx, np.full(len(idx), nz), np.full(len(idx), nz + 1)]
-                vals += [np.full(len(idx), s), -s * slope * X_UNIT_M, s * slope * t[idx]]
-                rhs.append(beta + s * slope * base[idx])
+                vals += [np.full(len(idx), sg), -sg * slope * X_UNIT_M, sg * slope * tau[idx]]
+                rhs.append(beta + sg * slope * base[idx])
                 r0 += len(idx)
-        # rows s x_i <= r: the threshold x_last >= eps, then d/(1+b) <= x_i <= d/(1-b)
+        # rows sg x_i <= r: the a-priori x_0, the threshold x_last >= eps, the ranges
         d, b = self.ranges_m, self.model.range_rel_bound
         has = np.flatnonzero(np.isfinite(d))
-        lin = [(n - 1, -1.0, -self.model.eps_m)]
+        lin = [(0, 1.0, self.x_m[1]), (0, -1.0, -self.x_m[0]), (n - 1, -1.0, -self.model.eps_m)]
         lin += [(i, 1.0, d[i] / (1 - b)) for i in has] + [(i, -1.0, -d[i] / (1 + b)) for i in has]
-        for i, s, r in lin:
+        for i, sg, r in lin:
             rows += [[r0, r0]]
             cols += [[nz, nz + 1]]
-            vals += [[s * X_UNIT_M, -s * t[i]]]
-            rhs.append([r - s * base[i]])
+            vals += [[sg * X_UNIT_M, -sg * tau[i]]]
+            rhs.append([r - sg * base[i]])
             r0 += 1
         a_ub = sp.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
@@ -156,7 +159,7 @@ class ChannelLP:
         )
         a_eq = sp.hstack([self.a_eq, sp.csr_matrix((self.a_eq.shape[0], 2))]).tocsr()
         bounds = self.bounds(np.full(n, -np.inf), np.full(n, np.inf)) + [
-            ((x0[0] - xc) / X_UNIT_M, (x0[1] - xc) / X_UNIT_M),
+            ((s[0] - sc) / X_UNIT_M, (s[1] - sc) / X_UNIT_M),
             (e[0] - ec, e[1] - ec),
         ]
-        return a_ub, np.concatenate(rhs), a_eq, self.b_eq, bounds, (xc, ec)
+        return a_ub, np.concatenate(rhs), a_eq, self.b_eq, bounds, (sc, ec)

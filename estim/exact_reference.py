@@ -39,20 +39,23 @@ projection on ``x0`` (for one ``e``, or over all) is an interval.
 
 Extremes. ``f = A Y_k + B V_k + C`` with ``A, B, C`` affine in ``(x_k, e)``
 (:class:`Objective`; ``w`` has ``A = e / e_nom``, ``B = x_k / e_nom``) is bilinear, so
-the extremes are found by branch and bound over cells of ``(x0, e)``:
+the extremes are found by branch and bound over cells of ``(s, e)``, ``s = x_k = x0 - e
+t_k`` the range at the last time (a linear change of variables; the bearings pin the
+time to go ``s / e``, so the feasible set is a thin diagonal in ``(x0, e)`` but nearly
+a box in ``(s, e)``):
 
 * inner: at a fixed ``(x0, e)`` the problem is an LP in ``z`` with a constant matrix;
   its optimum is attained by a consistent trajectory, so every such value lies in the
   exact interval (the union over any grid of points is an honest lower bound of the
   exact width);
 * outer: on a cell, ``g`` is replaced by a tangent (``g`` concave: above it, so the
-  constraints only loosen), ``(x0, e)`` range over the cell as LP variables, and the
+  constraints only loosen), ``(s, e)`` range over the cell as LP variables, and the
   objective is taken at each corner of the cell; for a fixed ``z``, ``f`` is affine in
-  ``(x0, e)``, so its maximum over the cell is at a corner, and the largest corner LP
+  ``(s, e)``, so its maximum over the cell is at a corner, and the largest corner LP
   bounds every consistent state of the cell from above.
 
 Cells whose outer bound cannot beat the best inner value are dropped; the others are
-halved along ``x0`` or ``e`` (whichever moves ``f`` more) until the two bounds meet
+halved along ``s`` or ``e`` (whichever moves ``f`` more) until the two bounds meet
 within ``max(abs_tol, rel_tol * width)``. The gap ``outer - inner`` is reported, not
 assumed: it holds up to the LP solver's feasibility tolerance (HiGHS, 1e-7).
 
@@ -193,15 +196,17 @@ class ExactInterval:
 
 @dataclass(frozen=True)
 class _Cell:
-    x0: tuple[float, float]
+    """A box of ``(s, e)``: range at the last time (m) and closing speed (m/s)."""
+
+    s: tuple[float, float]
     e: tuple[float, float]
 
     def corners(self) -> list[tuple[float, float]]:
         es = sorted(set(self.e))
-        return [(x, e) for x in self.x0 for e in es]
+        return [(s, e) for s in sorted(set(self.s)) for e in es]
 
     def centre(self) -> tuple[float, float]:
-        return 0.5 * (self.x0[0] + self.x0[1]), 0.5 * (self.e[0] + self.e[1])
+        return 0.5 * (self.s[0] + self.s[1]), 0.5 * (self.e[0] + self.e[1])
 
 
 @dataclass(frozen=True)
@@ -228,8 +233,8 @@ class ExactChannelSet:
             raise ValueError("the bearing bound must be linear over the box's ranges")
         h = self.history
         lp = ChannelLP(
-            self.model, self.box.y_m, self.box.v_mps, h.times_s, h.bearings_rad,
-            h.impulses_mps, h.ranges_m,
+            self.model, self.box.y_m, self.box.v_mps, self.box.x_m, h.times_s,
+            h.bearings_rad, h.impulses_mps, h.ranges_m,
         )  # fmt: skip
         object.__setattr__(self, "_lp", lp)
         object.__setattr__(self, "n_lp", [0])
@@ -255,9 +260,10 @@ class ExactChannelSet:
     def fixed(self, x0_m: float, e_mps: float, obj: Objective | None = None):
         """Max of ``obj`` (default 0: a feasibility check) at fixed ``(x0, e)``: the
         value and ``z``, or ``None`` when no consistent state has this ``(x0, e)``."""
-        lp = self._lp
+        lp, (x_lo, x_hi), (e_lo, e_hi) = self._lp, self.box.x_m, self.box.e_mps
         x = x0_m - e_mps * lp.t
-        bounds = lp.fixed_bounds(x) if lp.ranges_hold(x) else None
+        inside = x_lo <= x0_m <= x_hi and e_lo <= e_mps <= e_hi and lp.ranges_hold(x)
+        bounds = lp.fixed_bounds(x) if inside else None
         if bounds is None:
             return None
         row, const = self._objective_row(obj or Objective(), x[-1], e_mps)
@@ -266,37 +272,57 @@ class ExactChannelSet:
 
     def _solve_relaxed(self, system, c_z: FloatArray, c_xe: ArrayLike):
         """Minimise ``c_z . z + c_xe . (X, E)`` over ``ChannelLP.relaxed``'s system:
-        ``(z, x0, e)`` or ``None``."""
-        a_ub, b_ub, a_eq, b_eq, bounds, (xc, ec) = system
+        ``(z, s, e)`` or ``None``."""
+        a_ub, b_ub, a_eq, b_eq, bounds, (sc, ec) = system
         res = self._solve(np.concatenate([c_z, c_xe]), bounds, a_ub, b_ub, a_eq, b_eq)
         if res is None:
             return None
         nz = len(c_z)
-        return res.x[:nz], xc + X_UNIT_M * res.x[nz], ec + res.x[nz + 1]
+        return res.x[:nz], sc + X_UNIT_M * res.x[nz], ec + res.x[nz + 1]
+
+    def _x0(self, s_m: float, e_mps: float) -> tuple[float, float]:
+        """``(x0, e)`` of a point ``(s, e)``: ``x0 = s + e t_last``."""
+        return float(s_m + e_mps * self._lp.t[-1]), float(e_mps)
 
     def _mid_tangents(self, cell: _Cell) -> list[tuple[NDArray, FloatArray]]:
         """Tangents of ``g`` at the middle of each ``x_i``'s range over the cell."""
-        t = self._lp.t
-        mid = 0.5 * (cell.x0[0] - cell.e[1] * t + cell.x0[1] - cell.e[0] * t)
-        return [(np.arange(len(t)), mid)]
+        sc, ec = cell.centre()  # x_i = s - e tau_i is affine: its mid is at the centre
+        return [(np.arange(self._lp.n), sc - ec * self._lp.tau)]
 
     # -- feasible (x0, e) ------------------------------------------------------------
+    def _box_cell(self, e: tuple[float, float] | None = None) -> _Cell:
+        """The a-priori box as a cell of ``(s, e)`` (its bounding box; ``s >= eps``)."""
+        (x_lo, x_hi), e = self.box.x_m, e or self.box.e_mps
+        tk = self._lp.t[-1]
+        s = (max(x_lo - e[1] * tk, self.model.eps_m), x_hi - e[0] * tk)
+        if s[0] > s[1]:
+            raise InconsistentHistory("every state of the box has passed under eps")
+        return _Cell(s, e)
+
     def _kelley(self, cell: _Cell, c_xe: tuple[float, float], max_iter: int = 40):
         """Minimise ``c_xe . (X, E)`` over the exact set (cutting planes, module
-        docstring): ``(x0, e)`` of the outer optimum, or ``None`` if infeasible."""
-        t, tangents = self._lp.t, self._mid_tangents(cell)
+        docstring): ``(s, e)`` of the outer optimum, or ``None`` if infeasible."""
+        tau, tangents = self._lp.tau, self._mid_tangents(cell)
         c_z = np.zeros(self._lp.n_z)
         for _ in range(max_iter):
-            sol = self._solve_relaxed(self._lp.relaxed(cell.x0, cell.e, tangents), c_z, c_xe)
+            sol = self._solve_relaxed(self._lp.relaxed(cell.s, cell.e, tangents), c_z, c_xe)
             if sol is None:
                 return None
-            z, x0, e = sol
-            x = x0 - e * t
+            z, s, e = sol
+            x = s - e * tau
             bad = np.flatnonzero(self._lp.violation(z, x) > VIOLATION_TOL_M)
             if bad.size == 0:
                 break
             tangents.append((bad, x[bad]))
-        return x0, e
+        return s, e
+
+    def _x0_ends(self, cell: _Cell) -> list[tuple[float, float]]:
+        """``(x0, e)`` of Kelley's least and largest ``x0 = s + e t_last`` in the cell."""
+        grad = (X_UNIT_M, self._lp.t[-1])  # of x0 in the LP's (X, E)
+        ends = [self._kelley(cell, (sign * grad[0], sign * grad[1])) for sign in (1.0, -1.0)]
+        if ends[0] is None or ends[1] is None:
+            raise InconsistentHistory("no state of the auxiliary model fits the data")
+        return [self._x0(*p) for p in ends]
 
     def x0_interval(self, e_mps: float | None = None) -> dict[str, tuple[float, float] | None]:
         """Feasible initial range for one closing speed (``None``: over all of them).
@@ -306,12 +332,8 @@ class ExactChannelSet:
         that range (moved inwards by doubling steps from 1 mm when needed; ``None`` if
         that fails). Raises :class:`InconsistentHistory` when nothing is consistent.
         """
-        e_iv = self.box.e_mps if e_mps is None else (e_mps, e_mps)
-        cell = _Cell(self.box.x_m, e_iv)
-        ends = [self._kelley(cell, (s, 0.0)) for s in (1.0, -1.0)]
-        if ends[0] is None or ends[1] is None:
-            raise InconsistentHistory("no state of the auxiliary model fits the data")
-        outer = (float(ends[0][0]), float(ends[1][0]))
+        ends = self._x0_ends(self._box_cell(None if e_mps is None else (e_mps, e_mps)))
+        outer = (ends[0][0], ends[1][0])
         inner = []
         for (x0, e), step in zip(ends, (1.0, -1.0), strict=True):
             d = 0.0
@@ -323,9 +345,9 @@ class ExactChannelSet:
         return {"outer": outer, "inner": (inner[0], max(inner[1], inner[0]))}
 
     def bounding_cell(self) -> tuple[_Cell, list[tuple[float, float]]]:
-        """Outer bounding box of the feasible ``(x0, e)`` (Kelley on each side) and
-        the ``(x0, e)`` of the Kelley optima (on the boundary of the feasible set)."""
-        box = _Cell(self.box.x_m, self.box.e_mps)
+        """Outer bounding box of the feasible ``(s, e)`` (Kelley on each side) and
+        the ``(s, e)`` of the Kelley optima (on the boundary of the feasible set)."""
+        box = self._box_cell()
         sides = [(1.0, 0.0), (-1.0, 0.0)]
         if box.e[1] > box.e[0]:
             sides += [(0.0, 1.0), (0.0, -1.0)]
@@ -338,27 +360,26 @@ class ExactChannelSet:
     # -- extremes --------------------------------------------------------------------
     def _bound(self, cell: _Cell, obj: Objective):
         """Outer bound of ``max obj`` over the cell (the best corner LP, module
-        docstring) with that LP's solution ``(z, x0, e)``; ``None``: empty cell."""
-        best, tk = None, self._lp.t[-1]
-        system = self._lp.relaxed(cell.x0, cell.e, self._mid_tangents(cell))  # every corner
-        for x0c, ec in cell.corners():
-            row, const = self._objective_row(obj, x0c - ec * tk, ec)
+        docstring) with that LP's solution ``(z, s, e)``; ``None``: empty cell."""
+        best = None
+        system = self._lp.relaxed(cell.s, cell.e, self._mid_tangents(cell))  # every corner
+        for sc, ec in cell.corners():
+            row, const = self._objective_row(obj, sc, ec)
             sol = self._solve_relaxed(system, -row, np.zeros(2))
             if sol is not None and (best is None or row @ sol[0] + const > best[0]):
                 best = (float(row @ sol[0] + const), sol)
         return best
 
     def _split(self, cell: _Cell, obj: Objective, z: FloatArray) -> list[_Cell]:
-        """Halve the cell along ``x0`` or ``e``, whichever moves ``f`` more over it."""
+        """Halve the cell along ``s`` or ``e``, whichever moves ``f`` more over it."""
         y, v, _ = self._lp.split(z)
-        y_k, v_k = y[-1], v[-1]
-        dfdx = obj.a[1] * y_k + obj.b[1] * v_k + obj.c[1]
-        dfde = obj.a[2] * y_k + obj.b[2] * v_k + obj.c[2] - self._lp.t[-1] * dfdx
-        if abs(dfdx) * (cell.x0[1] - cell.x0[0]) >= abs(dfde) * (cell.e[1] - cell.e[0]):
-            m = 0.5 * (cell.x0[0] + cell.x0[1])
-            return [_Cell((cell.x0[0], m), cell.e), _Cell((m, cell.x0[1]), cell.e)]
+        dfds = obj.a[1] * y[-1] + obj.b[1] * v[-1] + obj.c[1]
+        dfde = obj.a[2] * y[-1] + obj.b[2] * v[-1] + obj.c[2]
+        if abs(dfds) * (cell.s[1] - cell.s[0]) >= abs(dfde) * (cell.e[1] - cell.e[0]):
+            m = 0.5 * (cell.s[0] + cell.s[1])
+            return [_Cell((cell.s[0], m), cell.e), _Cell((m, cell.s[1]), cell.e)]
         m = 0.5 * (cell.e[0] + cell.e[1])
-        return [_Cell(cell.x0, (cell.e[0], m)), _Cell(cell.x0, (m, cell.e[1]))]
+        return [_Cell(cell.s, (cell.e[0], m)), _Cell(cell.s, (m, cell.e[1]))]
 
     def _maximise(self, obj: Objective, root: _Cell, best: list, tol, max_lp: int):
         """Branch and bound on ``max obj`` from the inner value ``best = [value,
@@ -368,11 +389,11 @@ class ExactChannelSet:
             raise InconsistentHistory("no state of the auxiliary model fits the data")
         heap, count = [(-first[0], 0, root, first[1])], 0
         while heap:
-            neg_ub, _, cell, (z, x0s, es) = heap[0]
+            neg_ub, _, cell, (z, s_opt, e_opt) = heap[0]
             if -neg_ub - best[0] <= tol() or self.n_lp[0] >= max_lp:
                 break
             heapq.heappop(heap)
-            for pt in ((x0s, es), cell.centre()):  # an inner value from this cell
+            for pt in (self._x0(s_opt, e_opt), self._x0(*cell.centre())):  # an inner value
                 got = self.fixed(*pt, obj)
                 if got is not None:
                     if got[0] > best[0]:
@@ -403,9 +424,11 @@ class ExactChannelSet:
         self.n_lp[0] = 0
         obj = obj or Objective.zero_effort_miss(self.model)
         root, ends = self.bounding_cell()
-        # inner seeds: the feasible set's extreme (x0, e) and their mean (interior)
+        x0_ends = self._x0_ends(root)
+        # inner seeds: the feasible set's extreme points and their mean (interior)
+        seeds = [self._x0(*p) for p in ends] + x0_ends
         hi, neg_lo = [-np.inf, None], [-np.inf, None]  # best max of f and of -f
-        for pt in [*ends, tuple(np.mean(ends, axis=0))]:
+        for pt in [*seeds, tuple(np.mean(seeds, axis=0))]:
             for side, o in ((hi, obj), (neg_lo, obj.negated())):
                 got = self.fixed(*pt, o)
                 if got is not None and got[0] > side[0]:
@@ -424,7 +447,7 @@ class ExactChannelSet:
             outer_hi=outer_hi,
             argmin=tuple(map(float, neg_lo[1])),
             argmax=tuple(map(float, hi[1])),
-            x0_interval_m=tuple(map(float, root.x0)),
+            x0_interval_m=(x0_ends[0][0], x0_ends[1][0]),
             e_interval_mps=tuple(map(float, root.e)),
             n_lp=self.n_lp[0],
             wall_s=time.perf_counter() - t0,
