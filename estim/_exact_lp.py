@@ -7,8 +7,8 @@ equalities (the same matrix for every LP)::
 
     Y_{j+1} = Y_j + (V_j + k_j) dt_j + nu dt_j^2 / 2 u_j,   V_{j+1} = V_j + k_j + nu dt_j u_j
 
-and ``x_i = x0 - e t_i = s - e (t_i - t_last)`` with ``s`` the range at the last
-time. A bearing is ``|Y_i - alpha_m,i x_i| <= g(x_i) = a(x_i) x_i``,
+and ``x_i = x0 - e t_i = s - e (t_i - t_last)`` with ``s`` the range at the last time.
+A bearing is ``|Y_i - alpha_m,i x_i| <= g(x_i) = a(x_i) x_i``,
 ``g(x) = end x + kappa x^2`` with ``kappa = (start - end) / ref <= 0``: concave, below
 each of its tangents ``beta + gamma x``.
 
@@ -17,6 +17,10 @@ each of its tangents ``beta + gamma x``.
   X_UNIT_M X``, ``e = ec + E``; ``+-(Y_i - alpha_i x_i) <= beta + gamma x_i`` for each
   tangent, and the a-priori range ``x_0 in [x_lo, x_hi]``, the threshold ``x_last >=
   eps`` and the ranges ``d/(1+b) <= x_i <= d/(1-b)`` are rows in ``(Y_i, X, E)``.
+* Kelley's cutting planes (:meth:`ChannelLP.kelley`): a linear function of ``(s, e)``
+  is minimised with tangents at the middle of each ``x_i`` range, then with tangents
+  added at the solution's ``x_i`` where it violates a bearing, until it violates none
+  (to ``VIOLATION_TOL_M``): an outer optimum of the exact set, to that tolerance.
 """
 
 from __future__ import annotations
@@ -26,11 +30,28 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
+from scipy.optimize import linprog
 
 from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
-X_UNIT_M = 1e3  # x0 is an LP variable in km (column scaling)
+X_UNIT_M = 1e3  # s is an LP variable in km (column scaling)
+#: a bearing constraint violated by less than this (m) counts as satisfied (Kelley)
+VIOLATION_TOL_M = 1e-6
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A box of ``(s, e)``: range at the last time (m) and closing speed (m/s)."""
+
+    s: tuple[float, float]
+    e: tuple[float, float]
+
+    def corners(self) -> list[tuple[float, float]]:
+        return [(s, e) for s in sorted(set(self.s)) for e in sorted(set(self.e))]
+
+    def centre(self) -> tuple[float, float]:
+        return 0.5 * (self.s[0] + self.s[1]), 0.5 * (self.e[0] + self.e[1])
 
 
 @dataclass(frozen=True)
@@ -41,11 +62,13 @@ class ChannelLP:
     y_m: tuple[float, float]
     v_mps: tuple[float, float]
     x_m: tuple[float, float]
+    e_mps: tuple[float, float]
     times_s: FloatArray
     bearings_rad: FloatArray
     impulses_mps: FloatArray
     ranges_m: FloatArray
     t: FloatArray = field(init=False, repr=False)
+    n_lp: list[int] = field(init=False, repr=False)  # LPs solved (a counter)
 
     def __post_init__(self) -> None:
         t = self.times_s - self.times_s[0]
@@ -64,6 +87,7 @@ class ChannelLP:
         for name, value in (
             ("t", t),
             ("tau", t - t[-1]),
+            ("n_lp", [0]),
             ("a_eq", a_eq),
             ("b_eq", np.concatenate([k[:-1] * dt, k[:-1]])),
             ("kappa", (bb.start_rad - bb.end_rad) / bb.ref_range_m),
@@ -101,12 +125,14 @@ class ChannelLP:
         """``|Y_i - alpha_i x_i| - g(x_i)`` (m; positive: bearing ``i`` violated)."""
         return np.abs(z[: self.n] - self.bearings_rad * x) - self.g(x)
 
-    def ranges_hold(self, x: FloatArray) -> bool:
-        """The threshold and the range measurements at ranges ``x_i``."""
+    def admissible(self, x0: float, e: float, x: FloatArray) -> bool:
+        """The box's ``x0`` and ``e``, the threshold and the range measurements."""
         d, b = self.ranges_m, self.model.range_rel_bound
         has = np.isfinite(d)
         return bool(
-            x[-1] >= self.model.eps_m
+            self.x_m[0] <= x0 <= self.x_m[1]
+            and self.e_mps[0] <= e <= self.e_mps[1]
+            and x[-1] >= self.model.eps_m
             and np.all(x[has] >= d[has] / (1 + b))
             and np.all(x[has] <= d[has] / (1 - b))
         )
@@ -163,3 +189,57 @@ class ChannelLP:
             (e[0] - ec, e[1] - ec),
         ]
         return a_ub, np.concatenate(rhs), a_eq, self.b_eq, bounds, (sc, ec)
+
+    # -- solving -----------------------------------------------------------------------
+    def solve(self, c, bounds, a_ub=None, b_ub=None, a_eq=None, b_eq=None):
+        """HiGHS; the dynamics by default. The result, or ``None`` unless optimal."""
+        self.n_lp[0] += 1
+        a_eq = self.a_eq if a_eq is None else a_eq
+        b_eq = self.b_eq if b_eq is None else b_eq
+        res = linprog(c, a_ub, b_ub, a_eq, b_eq, bounds=bounds, method="highs")
+        return res if res.status == 0 else None
+
+    def x0(self, s_m: float, e_mps: float) -> tuple[float, float]:
+        """``(x0, e)`` of a point ``(s, e)``: ``x0 = s + e t_last``."""
+        return float(s_m + e_mps * self.t[-1]), float(e_mps)
+
+    def box_cell(self, e: tuple[float, float] | None = None) -> Cell:
+        """The a-priori box (``e`` in ``e``, default the box's) as a cell of ``(s, e)``."""
+        (x_lo, x_hi), e, tk = self.x_m, e or self.e_mps, float(self.t[-1])
+        return Cell((x_lo - e[1] * tk, x_hi - e[0] * tk), e)
+
+    def mid_tangents(self, cell: Cell) -> list[tuple[NDArray, FloatArray]]:
+        """Tangents of ``g`` at the middle of each ``x_i``'s range over the cell."""
+        sc, ec = cell.centre()  # x_i = s - e tau_i is affine: its middle at the centre
+        return [(np.arange(self.n), sc - ec * self.tau)]
+
+    def solve_relaxed(self, cell: Cell, tangents, c_z: FloatArray, c_xe) -> tuple | None:
+        """Minimise ``c_z . z + c_xe . (X, E)`` over the cell's outer system:
+        ``(z, s, e, |row multipliers|)`` or ``None`` (empty)."""
+        a_ub, b_ub, a_eq, b_eq, bounds, (sc, ec) = self.relaxed(cell.s, cell.e, tangents)
+        res = self.solve(np.concatenate([c_z, c_xe]), bounds, a_ub, b_ub, a_eq, b_eq)
+        if res is None:
+            return None
+        nz = len(c_z)
+        return (
+            res.x[:nz],
+            sc + X_UNIT_M * res.x[nz],
+            ec + res.x[nz + 1],
+            np.abs(res.ineqlin.marginals),
+        )
+
+    def kelley(self, cell: Cell, c_xe: tuple[float, float], max_iter: int = 40):
+        """Minimise ``c_xe . (X, E)`` over the exact set in the cell (module docstring):
+        ``(s, e)`` of the outer optimum, or ``None`` when the cell holds no state."""
+        tangents, c_z = self.mid_tangents(cell), np.zeros(self.n_z)
+        for _ in range(max_iter):
+            sol = self.solve_relaxed(cell, tangents, c_z, c_xe)
+            if sol is None:
+                return None
+            z, s, e, _ = sol
+            x = s - e * self.tau
+            bad = np.flatnonzero(self.violation(z, x) > VIOLATION_TOL_M)
+            if bad.size == 0:
+                break
+            tangents.append((bad, x[bad]))
+        return s, e

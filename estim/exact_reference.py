@@ -46,23 +46,30 @@ a box in ``(s, e)``):
 
 * inner: at a fixed ``(x0, e)`` the problem is an LP in ``z`` with a constant matrix;
   its optimum is attained by a consistent trajectory, so every such value lies in the
-  exact interval (the union over any grid of points is an honest lower bound of the
-  exact width);
+  exact interval (the union over any set of points, a grid say, is an honest lower
+  bound of the exact width);
 * outer: on a cell, ``g`` is replaced by a tangent (``g`` concave: above it, so the
-  constraints only loosen), ``(s, e)`` range over the cell as LP variables, and the
-  objective is taken at each corner of the cell; for a fixed ``z``, ``f`` is affine in
-  ``(s, e)``, so its maximum over the cell is at a corner, and the largest corner LP
-  bounds every consistent state of the cell from above.
+  constraints only loosen) and ``(s, e)`` range over the cell as LP variables. With a
+  reference ``(Y_r, V_r)`` (the parent cell's solution), ``f = L + R``: ``L = A Y_r +
+  B V_r + C`` is affine in ``(s, e)`` and enters the LP exactly; ``R = A (Y_k - Y_r) +
+  B (V_k - V_r)`` is, for a fixed ``z``, affine in ``(s, e)``, so its maximum over the
+  cell is at a corner: the largest of the corner LPs (``L`` plus ``R`` at that corner)
+  bounds every consistent state of the cell from above. Its excess is of the order of
+  ``|Y_k - Y_r| de + |V_k - V_r| ds`` plus the tangents' ``|kappa| (dx/2)^2``: second
+  order in the cell's size near the optimum.
 
 Cells whose outer bound cannot beat the best inner value are dropped; the others are
-halved along ``s`` or ``e`` (whichever moves ``f`` more) until the two bounds meet
-within ``max(abs_tol, rel_tol * width)``. The gap ``outer - inner`` is reported, not
-assumed: it holds up to the LP solver's feasibility tolerance (HiGHS, 1e-7).
+halved along ``s`` or ``e`` (whichever halving shrinks that excess more, the tangents'
+part weighted by the LP's multipliers) until the bounds meet within ``max(abs_tol,
+rel_tol * width)`` on each side, or the LP budget is spent. The gap ``outer - inner``
+(:attr:`ExactInterval.width_gap`) is reported, not assumed: it holds up to the LP
+solver's feasibility tolerance (HiGHS, 1e-7). On seed 003's channel it stays under
+2e-4 of the width at 0.1-2 s per time point.
 
 The feasible range interval (issue 12 quotes "feasible initial range") is found by
-Kelley's cutting planes: minimise / maximise ``x0`` with tangents of ``g``, adding the
-tangents at the solution until it violates no bearing (outer end), then checked by
-the fixed-``(x0, e)`` LP (inner end).
+Kelley's cutting planes (:meth:`estim._exact_lp.ChannelLP.kelley`): minimise /
+maximise ``x0`` with tangents of ``g``, adding the tangents at the solution until it
+violates no bearing (outer end), then checked by the fixed-``(x0, e)`` LP (inner end).
 """
 
 from __future__ import annotations
@@ -73,15 +80,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
 
-from estim._exact_lp import X_UNIT_M, ChannelLP
+from estim._exact_lp import X_UNIT_M, Cell, ChannelLP
 from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
-
-#: a bearing constraint violated by less than this (m) counts as satisfied (Kelley)
-VIOLATION_TOL_M = 1e-6
 
 
 class InconsistentHistory(ValueError):
@@ -195,21 +198,6 @@ class ExactInterval:
 
 
 @dataclass(frozen=True)
-class _Cell:
-    """A box of ``(s, e)``: range at the last time (m) and closing speed (m/s)."""
-
-    s: tuple[float, float]
-    e: tuple[float, float]
-
-    def corners(self) -> list[tuple[float, float]]:
-        es = sorted(set(self.e))
-        return [(s, e) for s in sorted(set(self.s)) for e in es]
-
-    def centre(self) -> tuple[float, float]:
-        return 0.5 * (self.s[0] + self.s[1]), 0.5 * (self.e[0] + self.e[1])
-
-
-@dataclass(frozen=True)
 class ExactChannelSet:
     """The exact information set of one channel, held implicitly by its LP data.
 
@@ -225,31 +213,22 @@ class ExactChannelSet:
     model: ChannelModel
     box: PriorBox
     history: History
-    n_lp: list[int] = field(init=False, repr=False, compare=False)  # LPs solved
     _lp: ChannelLP = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.box.x_m[1] >= self.model.bearing_bound.max_range_m:
             raise ValueError("the bearing bound must be linear over the box's ranges")
-        h = self.history
+        h, b = self.history, self.box
         lp = ChannelLP(
-            self.model, self.box.y_m, self.box.v_mps, self.box.x_m, h.times_s,
-            h.bearings_rad, h.impulses_mps, h.ranges_m,
+            self.model, b.y_m, b.v_mps, b.x_m, b.e_mps, h.times_s, h.bearings_rad,
+            h.impulses_mps, h.ranges_m,
         )  # fmt: skip
         object.__setattr__(self, "_lp", lp)
-        object.__setattr__(self, "n_lp", [0])
 
-    def _solve(self, c, bounds, a_ub=None, b_ub=None, a_eq=None, b_eq=None):
-        self.n_lp[0] += 1
-        a_eq = self._lp.a_eq if a_eq is None else a_eq
-        b_eq = self._lp.b_eq if b_eq is None else b_eq
-        res = linprog(c, a_ub, b_ub, a_eq, b_eq, bounds=bounds, method="highs")
-        return res if res.status == 0 else None
-
-    def _objective_row(self, obj: Objective, x_k: float, e: float) -> tuple[FloatArray, float]:
-        """``f = row . z + const`` at fixed ``(x_k, e)``."""
-        a, b, c = obj.coefficients(x_k, e)
-        return self._lp.objective_row(a, b), c
+    @property
+    def n_lp(self) -> int:
+        """LPs solved so far."""
+        return self._lp.n_lp[0]
 
     def trajectory(self, z: FloatArray, x0_m: float, e_mps: float) -> dict[str, FloatArray]:
         """Trajectory of a solution ``z`` (from :meth:`fixed`): ``Y_i`` (m), ``V_i``
@@ -260,69 +239,23 @@ class ExactChannelSet:
     def fixed(self, x0_m: float, e_mps: float, obj: Objective | None = None):
         """Max of ``obj`` (default 0: a feasibility check) at fixed ``(x0, e)``: the
         value and ``z``, or ``None`` when no consistent state has this ``(x0, e)``."""
-        lp, (x_lo, x_hi), (e_lo, e_hi) = self._lp, self.box.x_m, self.box.e_mps
+        lp = self._lp
         x = x0_m - e_mps * lp.t
-        inside = x_lo <= x0_m <= x_hi and e_lo <= e_mps <= e_hi and lp.ranges_hold(x)
-        bounds = lp.fixed_bounds(x) if inside else None
+        bounds = lp.fixed_bounds(x) if lp.admissible(x0_m, e_mps, x) else None
         if bounds is None:
             return None
-        row, const = self._objective_row(obj or Objective(), x[-1], e_mps)
-        res = self._solve(-row, bounds)
-        return None if res is None else (float(row @ res.x + const), res.x)
+        a, b, c = (obj or Objective()).coefficients(x[-1], e_mps)
+        row = lp.objective_row(a, b)
+        res = lp.solve(-row, bounds)
+        return None if res is None else (float(row @ res.x + c), res.x)
 
-    def _solve_relaxed(self, system, c_z: FloatArray, c_xe: ArrayLike):
-        """Minimise ``c_z . z + c_xe . (X, E)`` over ``ChannelLP.relaxed``'s system:
-        ``(z, s, e)`` or ``None``."""
-        a_ub, b_ub, a_eq, b_eq, bounds, (sc, ec) = system
-        res = self._solve(np.concatenate([c_z, c_xe]), bounds, a_ub, b_ub, a_eq, b_eq)
-        if res is None:
-            return None
-        nz = len(c_z)
-        return res.x[:nz], sc + X_UNIT_M * res.x[nz], ec + res.x[nz + 1]
-
-    def _x0(self, s_m: float, e_mps: float) -> tuple[float, float]:
-        """``(x0, e)`` of a point ``(s, e)``: ``x0 = s + e t_last``."""
-        return float(s_m + e_mps * self._lp.t[-1]), float(e_mps)
-
-    def _mid_tangents(self, cell: _Cell) -> list[tuple[NDArray, FloatArray]]:
-        """Tangents of ``g`` at the middle of each ``x_i``'s range over the cell."""
-        sc, ec = cell.centre()  # x_i = s - e tau_i is affine: its mid is at the centre
-        return [(np.arange(self._lp.n), sc - ec * self._lp.tau)]
-
-    # -- feasible (x0, e) ------------------------------------------------------------
-    def _box_cell(self, e: tuple[float, float] | None = None) -> _Cell:
-        """The a-priori box as a cell of ``(s, e)`` (its bounding box; ``s >= eps``)."""
-        (x_lo, x_hi), e = self.box.x_m, e or self.box.e_mps
-        tk = self._lp.t[-1]
-        s = (max(x_lo - e[1] * tk, self.model.eps_m), x_hi - e[0] * tk)
-        if s[0] > s[1]:
-            raise InconsistentHistory("every state of the box has passed under eps")
-        return _Cell(s, e)
-
-    def _kelley(self, cell: _Cell, c_xe: tuple[float, float], max_iter: int = 40):
-        """Minimise ``c_xe . (X, E)`` over the exact set (cutting planes, module
-        docstring): ``(s, e)`` of the outer optimum, or ``None`` if infeasible."""
-        tau, tangents = self._lp.tau, self._mid_tangents(cell)
-        c_z = np.zeros(self._lp.n_z)
-        for _ in range(max_iter):
-            sol = self._solve_relaxed(self._lp.relaxed(cell.s, cell.e, tangents), c_z, c_xe)
-            if sol is None:
-                return None
-            z, s, e = sol
-            x = s - e * tau
-            bad = np.flatnonzero(self._lp.violation(z, x) > VIOLATION_TOL_M)
-            if bad.size == 0:
-                break
-            tangents.append((bad, x[bad]))
-        return s, e
-
-    def _x0_ends(self, cell: _Cell) -> list[tuple[float, float]]:
+    def _x0_ends(self, cell: Cell) -> list[tuple[float, float]]:
         """``(x0, e)`` of Kelley's least and largest ``x0 = s + e t_last`` in the cell."""
         grad = (X_UNIT_M, self._lp.t[-1])  # of x0 in the LP's (X, E)
-        ends = [self._kelley(cell, (sign * grad[0], sign * grad[1])) for sign in (1.0, -1.0)]
+        ends = [self._lp.kelley(cell, (sg * grad[0], sg * grad[1])) for sg in (1.0, -1.0)]
         if ends[0] is None or ends[1] is None:
             raise InconsistentHistory("no state of the auxiliary model fits the data")
-        return [self._x0(*p) for p in ends]
+        return [self._lp.x0(*p) for p in ends]
 
     def x0_interval(self, e_mps: float | None = None) -> dict[str, tuple[float, float] | None]:
         """Feasible initial range for one closing speed (``None``: over all of them).
@@ -332,7 +265,7 @@ class ExactChannelSet:
         that range (moved inwards by doubling steps from 1 mm when needed; ``None`` if
         that fails). Raises :class:`InconsistentHistory` when nothing is consistent.
         """
-        ends = self._x0_ends(self._box_cell(None if e_mps is None else (e_mps, e_mps)))
+        ends = self._x0_ends(self._lp.box_cell(None if e_mps is None else (e_mps, e_mps)))
         outer = (ends[0][0], ends[1][0])
         inner = []
         for (x0, e), step in zip(ends, (1.0, -1.0), strict=True):
@@ -344,66 +277,106 @@ class ExactChannelSet:
             inner.append(float(x0 + step * d))
         return {"outer": outer, "inner": (inner[0], max(inner[1], inner[0]))}
 
-    def bounding_cell(self) -> tuple[_Cell, list[tuple[float, float]]]:
-        """Outer bounding box of the feasible ``(s, e)`` (Kelley on each side) and
-        the ``(s, e)`` of the Kelley optima (on the boundary of the feasible set)."""
-        box = self._box_cell()
+    def _root(self) -> tuple[Cell, list[tuple[float, float]]]:
+        """Outer bounding box of the feasible ``(s, e)`` (Kelley on each side) and the
+        ``(x0, e)`` of the optima (on the boundary of the feasible set)."""
+        box = self._lp.box_cell()
         sides = [(1.0, 0.0), (-1.0, 0.0)]
         if box.e[1] > box.e[0]:
             sides += [(0.0, 1.0), (0.0, -1.0)]
-        sol = [self._kelley(box, s) for s in sides]
+        sol = [self._lp.kelley(box, s) for s in sides]
         if any(s is None for s in sol):
             raise InconsistentHistory("no state of the auxiliary model fits the data")
         e = (sol[2][1], sol[3][1]) if len(sol) == 4 else box.e
-        return _Cell((sol[0][0], sol[1][0]), e), sol
+        return Cell((sol[0][0], sol[1][0]), e), [self._lp.x0(*p) for p in sol]
 
     # -- extremes --------------------------------------------------------------------
-    def _bound(self, cell: _Cell, obj: Objective):
-        """Outer bound of ``max obj`` over the cell (the best corner LP, module
-        docstring) with that LP's solution ``(z, s, e)``; ``None``: empty cell."""
-        best = None
-        system = self._lp.relaxed(cell.s, cell.e, self._mid_tangents(cell))  # every corner
-        for sc, ec in cell.corners():
-            row, const = self._objective_row(obj, sc, ec)
-            sol = self._solve_relaxed(system, -row, np.zeros(2))
-            if sol is not None and (best is None or row @ sol[0] + const > best[0]):
-                best = (float(row @ sol[0] + const), sol)
+    def _bound(self, cell: Cell, obj: Objective, ref: tuple[float, float]):
+        """Outer bound of ``max obj`` over the cell and the best LP's solution ``(z, s,
+        e)``; ``None``: empty cell.
+
+        With a reference ``(Y_r, V_r)`` (the parent's solution), ``f = L(s, e) + R`` with
+        ``L = A Y_r + B V_r + C`` affine in ``(s, e)`` (kept exactly, as LP objective of
+        the cell's ``(s, e)`` variables) and ``R = A (Y - Y_r) + B (V - V_r)``, affine in
+        ``(s, e)`` for a fixed ``z``: bounded by its value at the cell's corners (module
+        docstring). The gap is of the order of ``|Y - Y_r| de + |V - V_r| ds``.
+        """
+        best, (y_r, v_r), tangents = None, ref, self._lp.mid_tangents(cell)
+        # L's gradient in the LP's (X, E): x_last = s = sc + X_UNIT_M X, e = ec + E
+        l_x = obj.a[1] * y_r + obj.b[1] * v_r + obj.c[1]
+        l_e = obj.a[2] * y_r + obj.b[2] * v_r + obj.c[2]
+        c_xe = -np.array([X_UNIT_M * l_x, l_e])
+        for s_c, e_c in cell.corners():  # the same constraints for every corner
+            a, b, _ = obj.coefficients(s_c, e_c)
+            row = self._lp.objective_row(a, b)
+            sol = self._lp.solve_relaxed(cell, tangents, -row, c_xe)
+            if sol is None:
+                continue
+            z, s_opt, e_opt, duals = sol
+            al, bl, cl = obj.coefficients(s_opt, e_opt)
+            value = float(row @ z + (al - a) * y_r + (bl - b) * v_r + cl)
+            if best is None or value > best[0]:
+                n = self._lp.n  # the strip rows' multipliers, both sides
+                best = (value, (z, s_opt, e_opt, duals[:n] + duals[n : 2 * n]))
         return best
 
-    def _split(self, cell: _Cell, obj: Objective, z: FloatArray) -> list[_Cell]:
-        """Halve the cell along ``s`` or ``e``, whichever moves ``f`` more over it."""
+    def _split(self, cell: Cell, obj: Objective, sol, ref) -> list[Cell]:
+        """Halve the cell along ``s`` or ``e``, whichever halving shrinks more the
+        estimated gap of :meth:`_bound`: the remainder's corner spread ``|dR/ds| ds +
+        |dR/de| de`` plus the tangents' excess ``|kappa| (dx_i / 2)^2`` (``dx_i = ds +
+        |t_i - t_last| de``) weighted by the strip rows' multipliers."""
+        z, _, _, duals = sol
         y, v, _ = self._lp.split(z)
-        dfds = obj.a[1] * y[-1] + obj.b[1] * v[-1] + obj.c[1]
-        dfde = obj.a[2] * y[-1] + obj.b[2] * v[-1] + obj.c[2]
-        if abs(dfds) * (cell.s[1] - cell.s[0]) >= abs(dfde) * (cell.e[1] - cell.e[0]):
-            m = 0.5 * (cell.s[0] + cell.s[1])
-            return [_Cell((cell.s[0], m), cell.e), _Cell((m, cell.s[1]), cell.e)]
-        m = 0.5 * (cell.e[0] + cell.e[1])
-        return [_Cell(cell.s, (cell.e[0], m)), _Cell(cell.s, (m, cell.e[1]))]
+        dy, dv = y[-1] - ref[0], v[-1] - ref[1]
+        dfds = obj.a[1] * dy + obj.b[1] * dv  # x_last = s
+        dfde = obj.a[2] * dy + obj.b[2] * dv
+        s, e = cell.s, cell.e
+        lag, kappa = np.abs(self._lp.tau), abs(self._lp.kappa)
 
-    def _maximise(self, obj: Objective, root: _Cell, best: list, tol, max_lp: int):
+        def gap(ds: float, de: float) -> float:
+            excess = kappa * (ds + lag * de) ** 2 / 4
+            return abs(dfds) * ds + abs(dfde) * de + float(duals @ excess)
+
+        ds, de = s[1] - s[0], e[1] - e[0]
+        if gap(ds / 2, de) <= gap(ds, de / 2):
+            m = 0.5 * (s[0] + s[1])
+            return [Cell((s[0], m), e), Cell((m, s[1]), e)]
+        m = 0.5 * (e[0] + e[1])
+        return [Cell(s, (e[0], m)), Cell(s, (m, e[1]))]
+
+    def _last_state(self, z: FloatArray) -> tuple[float, float]:
+        y, v, _ = self._lp.split(z)
+        return float(y[-1]), float(v[-1])
+
+    def _maximise(self, obj: Objective, root: Cell, best: list, tol, max_lp: int):
         """Branch and bound on ``max obj`` from the inner value ``best = [value,
         (x0, e)]`` (updated in place): returns the outer bound."""
-        first = self._bound(root, obj)
+        ref = (0.0, 0.0)
+        if best[1] is not None:  # the incumbent's state as the root's reference
+            ref = self._last_state(self.fixed(*best[1], obj)[1])
+        first = self._bound(root, obj, ref)
         if first is None:
             raise InconsistentHistory("no state of the auxiliary model fits the data")
-        heap, count = [(-first[0], 0, root, first[1])], 0
+        heap, count = [(-first[0], 0, root, first[1], ref)], 0
         while heap:
-            neg_ub, _, cell, (z, s_opt, e_opt) = heap[0]
-            if -neg_ub - best[0] <= tol() or self.n_lp[0] >= max_lp:
+            neg_ub, _, cell, sol, ref = heap[0]
+            z, s_opt, e_opt, _ = sol
+            if -neg_ub - best[0] <= tol() or self.n_lp >= max_lp:
                 break
             heapq.heappop(heap)
-            for pt in (self._x0(s_opt, e_opt), self._x0(*cell.centre())):  # an inner value
+            for pt in (self._lp.x0(s_opt, e_opt), self._lp.x0(*cell.centre())):
                 got = self.fixed(*pt, obj)
                 if got is not None:
                     if got[0] > best[0]:
                         best[0], best[1] = got[0], pt
                     break
-            for kid in self._split(cell, obj, z):
-                got = self._bound(kid, obj)
+            kids = self._split(cell, obj, sol, ref)
+            ref = self._last_state(z)  # the parent's solution: the children's reference
+            for kid in kids:
+                got = self._bound(kid, obj, ref)
                 if got is not None and got[0] > best[0]:
                     count += 1
-                    heapq.heappush(heap, (-got[0], count, kid, got[1]))
+                    heapq.heappush(heap, (-got[0], count, kid, got[1], ref))
         return max(best[0], -heap[0][0]) if heap else best[0]
 
     def extremes(
@@ -420,13 +393,12 @@ class ExactChannelSet:
         rel_tol * inner width)``, or once ``max_lp`` LPs are spent (half per side; the
         bounds stay valid, the gap is then wider).
         """
-        t0 = time.perf_counter()
-        self.n_lp[0] = 0
+        t0, n0 = time.perf_counter(), self.n_lp
         obj = obj or Objective.zero_effort_miss(self.model)
-        root, ends = self.bounding_cell()
+        root, ends = self._root()
         x0_ends = self._x0_ends(root)
         # inner seeds: the feasible set's extreme points and their mean (interior)
-        seeds = [self._x0(*p) for p in ends] + x0_ends
+        seeds = ends + x0_ends
         hi, neg_lo = [-np.inf, None], [-np.inf, None]  # best max of f and of -f
         for pt in [*seeds, tuple(np.mean(seeds, axis=0))]:
             for side, o in ((hi, obj), (neg_lo, obj.negated())):
@@ -438,8 +410,8 @@ class ExactChannelSet:
             width = hi[0] + neg_lo[0]
             return max(abs_tol, rel_tol * width if np.isfinite(width) else 0.0)
 
-        outer_hi = self._maximise(obj, root, hi, tol, (self.n_lp[0] + max_lp) // 2)
-        outer_nlo = self._maximise(obj.negated(), root, neg_lo, tol, max_lp)
+        outer_hi = self._maximise(obj, root, hi, tol, (self.n_lp + n0 + max_lp) // 2)
+        outer_nlo = self._maximise(obj.negated(), root, neg_lo, tol, n0 + max_lp)
         return ExactInterval(
             inner_lo=-neg_lo[0],
             inner_hi=hi[0],
@@ -449,6 +421,6 @@ class ExactChannelSet:
             argmax=tuple(map(float, hi[1])),
             x0_interval_m=(x0_ends[0][0], x0_ends[1][0]),
             e_interval_mps=tuple(map(float, root.e)),
-            n_lp=self.n_lp[0],
+            n_lp=self.n_lp - n0,
             wall_s=time.perf_counter() - t0,
         )

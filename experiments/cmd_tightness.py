@@ -212,6 +212,8 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     except InconsistentHistory:
         rec["reason"] = "exact set empty (the data contradict the model)"
         return rec
+    except ValueError as exc:  # a scenario outside the reference's model
+        raise InputError(f"exact reference: {exc}") from None
     set_w, inner, outer = (
         ext.max_value - ext.min_value,
         ref.inner_hi - ref.inner_lo,
