@@ -192,3 +192,21 @@ def test_contradicting_history_and_bad_input_are_reported():
         History(np.array([0.0, 1.0]), np.zeros(3))
     with pytest.raises(ValueError, match="linear"):
         ExactChannelSet(SMALL, PriorBox((0, 1), (0, 1), (150e3, 250e3), (1e4, 1e4)), hist)
+
+
+def test_a_range_measurement_bounds_the_range_at_its_time():
+    """d_m at t_2 restricts x_2 = x0 - e t_2 to [d_m/(1+b), d_m/(1-b)] (one channel:
+    the range is x): the feasible initial range for the true e is that interval moved
+    by e t_2 (the bearings cut it further), and it still holds the truth."""
+    hist, _ = _small_history(seed=4)
+    e, b = TRUTH["e"], SMALL.range_rel_bound
+    x2 = TRUTH["x0"] - e * hist.times_s[2]
+    d_m = x2 * (1 + 0.6 * b)
+    ranges = np.full(len(hist.times_s), np.nan)
+    ranges[2] = d_m
+    with_range = History(hist.times_s, hist.bearings_rad, hist.impulses_mps, ranges)
+    lo, hi = ExactChannelSet(SMALL, SMALL_BOX, with_range).x0_interval(e)["outer"]
+    assert d_m / (1 + b) + e * hist.times_s[2] - 1e-6 <= lo <= TRUTH["x0"]
+    assert TRUTH["x0"] <= hi <= d_m / (1 - b) + e * hist.times_s[2] + 1e-6
+    lo0, hi0 = ExactChannelSet(SMALL, SMALL_BOX, hist).x0_interval(e)["outer"]
+    assert hi - lo < 0.8 * (hi0 - lo0)
