@@ -91,6 +91,12 @@ class InconsistentHistory(ValueError):
     """No state of the auxiliary model is consistent with the data."""
 
 
+def _point(p) -> tuple[float, float]:
+    """``(x0, e)`` as floats; NaN when no inner point was found (a set too thin for
+    the solver's tolerance)."""
+    return (np.nan, np.nan) if p is None else (float(p[0]), float(p[1]))
+
+
 def _frozen(a: ArrayLike) -> FloatArray:
     arr = np.array(a, dtype=float)
     arr.setflags(write=False)
@@ -417,8 +423,8 @@ class ExactChannelSet:
             inner_hi=hi[0],
             outer_lo=-outer_nlo,
             outer_hi=outer_hi,
-            argmin=tuple(map(float, neg_lo[1])),
-            argmax=tuple(map(float, hi[1])),
+            argmin=_point(neg_lo[1]),
+            argmax=_point(hi[1]),
             x0_interval_m=(x0_ends[0][0], x0_ends[1][0]),
             e_interval_mps=tuple(map(float, root.e)),
             n_lp=self.n_lp - n0,
