@@ -243,11 +243,15 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     ) -> InformationSet:
         """The initial set from the boxes ``B`` (position) and ``D`` (velocity).
 
-        At fixed ``x`` the small-angle map ``(y, Vy) -> (alpha, w) = (y/x, y + Vy x/e)``
-        is linear with determinant ``1/e > 0``: the box maps to a parallelogram.
-        A slab takes the parallelogram at its middle range plus a box covering the
-        change over the interval: ``|y| |1/x - 1/x_mid|`` in ``alpha`` and
-        ``|Vy| |x - x_mid| / e`` in ``w``.
+        With the true closing speed ``c`` the zero-effort miss of ``(y, Vy, x)`` is
+        ``w = omega x^2 / e = (c y + Vy x) / e`` (``omega x^2 = Vy x + c y``, ``e`` the
+        nominal speed). At fixed ``x`` and ``c`` the small-angle map ``(y, Vy) ->
+        (alpha, w) = (y/x, (c y + Vy x)/e)`` is linear with determinant ``1/e > 0``;
+        over ``c`` in the speed interval the image is the convex hull of the eight
+        corners ``(y, Vy, c)`` (``w`` is bilinear in ``(y, c)``; taken at ``c = e``
+        alone it misses the box's corners, issue 12). A slab takes the hull at its
+        middle range plus a box covering the change over the interval:
+        ``|y| |1/x - 1/x_mid|`` in ``alpha`` and ``|Vy| |x - x_mid| / e`` in ``w``.
         """
         (y0, y1), (v0, v1), (xa, xb) = lateral_m, lateral_vel_mps, x_m
         if not (y0 <= y1 and v0 <= v1 and 0 < xa <= xb):
@@ -259,14 +263,14 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             edges = np.linspace(xa, xb, n + 1)
             x_lo, x_hi = edges[:-1], edges[1:]
         xm = 0.5 * (x_lo + x_hi)
-        corners = np.array([[y0, v0], [y1, v0], [y1, v1], [y0, v1]])
-        y = np.tile(corners[:, 0], len(xm))
-        vy = np.tile(corners[:, 1], len(xm))
-        xx = np.repeat(xm, 4)
+        c_lo, c_hi = self.speed_interval
+        corners = np.array(np.meshgrid([y0, y1], [v0, v1], [c_lo, c_hi])).reshape(3, -1)
+        y, vy, c = (np.tile(row, len(xm)) for row in corners)
+        xx = np.repeat(xm, 8)
         xy = np.column_stack(
-            [y / xx / self.alpha_scale_rad, (y + vy * xx / self.model.e) / self.w_scale_m]
+            [y / xx / self.alpha_scale_rad, (c * y + vy * xx) / self.model.e / self.w_scale_m]
         )
-        polys = ConvexPolygons(xy, np.arange(0, 4 * len(xm) + 1, 4))._dedupe()
+        polys = ConvexPolygons._make(*_k.convex_hulls(xy, np.arange(0, 8 * len(xm) + 1, 8)))
         if np.any(x_hi > x_lo):
             y_abs, v_abs = max(abs(y0), abs(y1)), max(abs(v0), abs(v1))
             d_inv = np.maximum(1 / x_lo - 1 / xm, 1 / xm - 1 / x_hi)

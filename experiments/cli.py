@@ -29,6 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "attitude": ("experiments.cmd_attitude", "attitude-loop scenarios"),
     "pd-gains": ("experiments.cmd_pd_gains", "quaternion-PD gain study, f0(phi0) fit"),
     "bench": ("experiments.cmd_bench", "per-step costs of the estimators, side by side"),
+    "tightness": ("experiments.cmd_tightness", "a set's interval of the miss vs the exact one"),
 }
 
 

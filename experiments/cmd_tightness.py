@@ -1,0 +1,321 @@
+"""``python -m experiments tightness SCENARIO.toml``: a set's interval of the miss
+against the exact one (issue 12).
+
+One lateral channel of the scenario, in the auxiliary model of seed 003 (the model
+the exact reference solves, :mod:`estim.exact_reference`): the truth is drawn from
+the scenario's truth boxes (``y``, ``Vy``, ``x``, closing speed ``-Vx``) and moves by
+``x -= e dt``, ``Y'' = v`` with ``v`` uniform in ``+-nu``, constant over each decision
+step, ``V += k`` per impulse; one channel, so the range is ``x``. Bearing errors by
+``--noise``: ``random`` uniform in the bound; ``bias`` held at ``+a`` (a hair inside);
+``switch`` held at ``+a``, then at ``-a`` from ``--switch-s`` on; ``game`` the seed's
+adversary with its own set (:class:`experiments.noise.GameNoise`). Range
+measurements when the scenario's range finder is on (errors by the same kind).
+
+The estimator under test (:func:`set_under_test`) gets the same measurements; with
+``--guided`` the seed's law issues impulses from it, which the truth and the
+reference receive too. At each requested time (after the bearing, before the
+impulse): the estimator's interval of ``w = omega x^2 / e_nom``, the exact one
+(inner values attained by consistent trajectories; the outer certificate beside
+them), ``ratio`` = estimator width / exact inner width (an upper bound of the true
+ratio; ``ratio_outer`` uses the outer width, a lower bound), ``exact_inside`` (the
+exact inner interval within the estimator's, to 1e-6 of its width: false means the
+estimator misses a consistent state) and the truth's ``w``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from estim.costs import ZeroEffortMiss
+from estim.exact_reference import ExactChannelSet, History, InconsistentHistory, PriorBox
+from estim.model import Bearing, Range
+from experiments.cmd_intercept import seed_int
+from experiments.engagement import ESTIMATORS, build_estimator, build_noise, channel_model
+from experiments.errors import InputError
+from experiments.files import atomic_write
+from experiments.intercept_scenario import load_scenario
+from experiments.noise import RandomNoise
+from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+
+NOISE_KINDS = ("random", "bias", "game", "switch")
+INSIDE_REL_TOL = 1e-6
+FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
+          "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
+          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "reason")  # fmt: skip
+
+
+def _times(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated non-negative times in s, got {text!r}"
+        )
+    return sorted(set(values))
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a non-negative time in s, got {text!r}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    add = p.add_argument
+    add("--noise", choices=NOISE_KINDS, default="random", help="bearing errors")
+    add("--seed", type=seed_int, help="seed (default: the scenario's)")
+    add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
+        help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
+    add("--guided", action="store_true", help="the seed's law issues impulses")
+    add("--estimator", choices=ESTIMATORS, default="infoset",
+        help="estimator under test (default: infoset)")  # fmt: skip
+    add("--switch-s", type=_positive, default=50.0,
+        help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
+    add("--out", help="output directory (default: results/tightness)")
+    add("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", dest="overrides",
+        help="override a scenario field (as for intercept)")  # fmt: skip
+
+
+def set_under_test(name: str, sc, model):
+    """The estimator under test and its initial belief of the lateral channel."""
+    return build_estimator(name, sc, model, "lateral")
+
+
+def _prior(sc) -> PriorBox:
+    e = sc.estimator
+    return PriorBox(
+        *(tuple(v * 1e3 for v in e[k]) for k in ("y_km", "vy_kmps", "x_km", "closing_speed_kmps"))
+    )
+
+
+def _draw_truth(sc, rng: np.random.Generator) -> tuple[float, float, float, float]:
+    """``(Y, V, x, e)`` uniform in the truth boxes (m, m/s, m, m/s)."""
+    t = sc.truth
+    y, v, x = (rng.uniform(*t[k]) * 1e3 for k in ("y_km", "vy_kmps", "x_km"))
+    return y, v, x, -rng.uniform(*t["vx_kmps"]) * 1e3
+
+
+class _Errors:
+    """Bearing and range measurements of one channel by noise kind (module docstring)."""
+
+    def __init__(self, kind, sc, model, rng, switch_s):
+        self.kind, self.model, self.switch_s = kind, model, switch_s
+        self.random = RandomNoise(model, rng)
+        self.game = build_noise("game", sc, model, ["lateral"], rng) if kind == "game" else None
+
+    def _sign(self, t: float) -> float:
+        return -1.0 if self.kind == "switch" and t >= self.switch_s else 1.0
+
+    def bearing(self, t: float, truth: np.ndarray) -> float:
+        if self.kind == "random":
+            return self.random.bearings([truth], truth[2])[0]
+        if self.kind == "game":
+            return self.game.bearings([truth], truth[2])[0]
+        bound = float(self.model.bearing_bound(truth[2])) * (1 - 1e-9)
+        return float(truth[0] + self._sign(t) * bound)
+
+    def range(self, t: float, x: float) -> float:
+        if self.kind == "random":
+            return self.random.range(x)
+        if self.kind == "game":
+            return self.game.range(x)
+        return x * (1 + self._sign(t) * self.model.range_rel_bound * (1 - 1e-9))
+
+    def report(self, what: str, *args) -> None:
+        if self.game is not None:
+            getattr(self.game, what)(*args)
+
+
+def _range_due(rf: dict, t: float) -> bool:
+    if not rf["enabled"] or t < rf["first_s"] - 1e-9:
+        return False
+    phase = (t - rf["first_s"]) / rf["period_s"]
+    return abs(phase - round(phase)) < 1e-9
+
+
+def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
+    """Run the channel to the last requested time: one record per requested time, and
+    the fuel spent (m/s)."""
+    model, dt = channel_model(sc), sc.model["dt_s"]
+    steps = [round(t / dt) for t in args.times]
+    off = [t for t, k in zip(args.times, steps, strict=True) if abs(k * dt - t) > 1e-9]
+    if off:
+        raise InputError(f"--times: {off[0]:g} s is not a multiple of the step {dt:g} s")
+    children = np.random.SeedSequence(seed).spawn(3)
+    truth_rng, noise_rng, v_rng = (np.random.default_rng(c) for c in children)
+    y, v, x, e = _draw_truth(sc, truth_rng)
+    est, belief = set_under_test(args.estimator, sc, model)
+    errors = _Errors(args.noise, sc, model, noise_rng, args.switch_s)
+    g = sc.guidance
+    law = ForecastCentringLaw(
+        model, ImpulseLimits(g["min_impulse_mps"], g["max_impulse_mps"], g["reserve_mps"])
+    )
+    prior, fuel = _prior(sc), 0.0
+    hist: dict[str, list[float]] = {"t": [], "a": [], "k": [], "d": []}
+    records: dict[int, dict[str, Any]] = {}
+    for step in range(max(steps) + 1):
+        t = step * dt
+        if x < model.eps_m:
+            break
+        obs = np.array([y / x, (v * x + e * y) / x**2, x])
+        alpha = errors.bearing(t, obs)
+        belief = est.update(belief, Bearing(alpha))
+        d_m = np.nan
+        if _range_due(sc.range_finder, t):
+            d_m = errors.range(t, x)
+            meas = Range(d_m, off_axis_rad=0.0)  # one channel: the range is x
+            belief = est.update(belief, meas)
+            errors.report("observe_range", meas)
+        hist["t"].append(t), hist["a"].append(alpha), hist["d"].append(d_m)
+        if step in steps:
+            records[step] = _evaluate(model, prior, est, belief, hist, (v * x + e * y) / model.e)
+        k = law.impulse_mps(belief, fuel) if args.guided else 0.0
+        fuel += abs(k)
+        hist["k"].append(k)
+        belief, v = est.shift(belief, k), v + k
+        errors.report("observe", [k])
+        acc = float(v_rng.uniform(-1.0, 1.0)) * model.nu_mps2
+        belief = est.predict(belief, dt)
+        errors.report("predict", dt)
+        y, v, x = y + v * dt + 0.5 * acc * dt**2, v + acc * dt, x - e * dt
+    return [
+        records.get(k, {"truth_w_m": None, "reason": "truth under eps"}) | {"time_s": t}
+        for t, k in zip(args.times, steps, strict=True)
+    ], fuel
+
+
+def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
+    rec: dict[str, Any] = {"truth_w_m": truth_w, "reason": ""}
+    if belief.is_empty:
+        rec["reason"] = f"estimator's set {getattr(belief, 'status', 'empty')}"
+        return rec
+    ext = belief.extremes(ZeroEffortMiss(model))
+    history = History(
+        np.array(hist["t"]), np.array(hist["a"]), np.array([*hist["k"], 0.0]), np.array(hist["d"])
+    )
+    try:
+        ref = ExactChannelSet(model, prior, history).extremes()
+    except InconsistentHistory:
+        rec["reason"] = "exact set empty (the data contradict the model)"
+        return rec
+    except ValueError as exc:  # a scenario outside the reference's model
+        raise InputError(f"exact reference: {exc}") from None
+    set_w, inner, outer = (
+        ext.max_value - ext.min_value,
+        ref.inner_hi - ref.inner_lo,
+        ref.outer_hi - ref.outer_lo,
+    )
+    tol = INSIDE_REL_TOL * set_w
+    inside = ref.inner_lo >= ext.min_value - tol and ref.inner_hi <= ext.max_value + tol
+    rec.update(
+        set_lo_m=ext.min_value, set_hi_m=ext.max_value, exact_lo_m=ref.inner_lo,
+        exact_hi_m=ref.inner_hi, exact_outer_lo_m=ref.outer_lo, exact_outer_hi_m=ref.outer_hi,
+        ratio=set_w / inner if inner > 0 else None,
+        ratio_outer=set_w / outer if outer > 0 else None,
+        exact_inside=bool(inside),
+        exact_x0_lo_m=ref.x0_interval_m[0], exact_x0_hi_m=ref.x0_interval_m[1],
+        lp_s=ref.wall_s, n_lp=ref.n_lp,
+    )  # fmt: skip
+    return rec
+
+
+def run(args) -> dict[str, Any]:
+    sc = load_scenario(args.scenario, args.overrides)
+    seed = sc.experiment["seed"] if args.seed is None else args.seed
+    out = Path(args.out) if args.out else Path("results") / "tightness"
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: not a directory")
+    t0 = time.perf_counter()
+    recs, fuel = simulate(sc, args, seed)
+    ratios = [r["ratio"] for r in recs if r.get("ratio") is not None]
+    result: dict[str, Any] = {
+        "scenario": sc.name,
+        "noise": args.noise,
+        "seed": seed,
+        "estimator": args.estimator,
+        "guided": bool(args.guided),
+        "times_s": [r["time_s"] for r in recs],
+        **{f: [r.get(f) for r in recs] for f in FIELDS},
+        "max_ratio": max(ratios) if ratios else None,
+        "fuel_mps": fuel,
+    }
+    stem = out / (
+        f"{sc.name}-tightness-{args.estimator}-{args.noise}-seed{seed}"
+        + ("-guided" if args.guided else "")
+    )
+    result["files"] = [str(p) for p in _write(result, stem)]
+    result["wall_s"] = time.perf_counter() - t0
+    return result
+
+
+def _write(result: dict[str, Any], stem: Path) -> list[Path]:
+    from experiments.plots import plt  # Agg backend
+
+    fig, (ax, ax_r) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    cols = ("times_s", "set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "truth_w_m", "ratio")
+    rows = [r for r in zip(*(result[c] for c in cols), strict=True) if r[-1] is not None]
+    if rows:
+        t, slo, shi, elo, ehi, w, ratio = (np.array(c, float) for c in zip(*rows, strict=True))
+        dx = 0.012 * (np.ptp(t) + 10.0)  # the two bars side by side
+        ax.vlines(t - dx, slo - w, shi - w, lw=6, color="C0", alpha=0.6, label="estimator's set")
+        ax.vlines(t + dx, elo - w, ehi - w, lw=6, color="C3", alpha=0.8, label="exact set")
+        ax.plot(t, 0 * t, "k_", ms=14, label="truth")
+        ax.set_yscale("symlog", linthresh=10.0)
+        ax_r.plot(t, ratio, "o-", color="C0", label="estimator / exact width")
+        ax_r.axhline(1.0, color="k", lw=0.8)
+        ax_r.axhline(1.1, color="C2", ls="--", lw=0.8, label="1.10 (issue 12 target)")
+    ax.set_xlabel("time, s")
+    ax.set_ylabel("zero-effort miss w minus the truth's, m")
+    ax_r.set_xlabel("time, s")
+    ax_r.set_ylabel("width ratio (estimator / exact)")
+    for a in (ax, ax_r):
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=8, loc="best")
+    fig.suptitle(
+        f"{result['scenario']}: {result['estimator']} vs exact set, {result['noise']} "
+        f"noise, seed {result['seed']}" + (", guided" if result["guided"] else ""),
+        fontsize=10,
+    )
+    paths = [stem.parent / f"{stem.name}.{ext}" for ext in ("png", "svg", "json")]
+    for p, ext in zip(paths[:2], ("png", "svg"), strict=True):
+        atomic_write(p, lambda tmp, ext=ext: fig.savefig(tmp, format=ext, dpi=130))
+    plt.close(fig)
+    body = json.dumps({k: v for k, v in result.items() if k != "files"}, default=float)
+    atomic_write(paths[2], lambda tmp: Path(tmp).write_text(body + "\n"))
+    return paths
+
+
+def render(result: dict[str, Any]) -> str:
+    head = (
+        f"{result['scenario']}: {result['estimator']} vs exact set, {result['noise']} noise, "
+        f"seed {result['seed']}{', guided' if result['guided'] else ''}"
+    )
+    lines = [head, "  t, s | estimator w, m        | exact w, m            | truth w, m "
+             "| ratio | inside | LP, s"]  # fmt: skip
+    for i, t in enumerate(result["times_s"]):
+        if result["set_lo_m"][i] is None:
+            lines.append(f"{t:6.1f} | {result['reason'][i]}")
+            continue
+        lines.append(
+            f"{t:6.1f} | {result['set_lo_m'][i]:10.2f} {result['set_hi_m'][i]:10.2f} | "
+            f"{result['exact_lo_m'][i]:10.2f} {result['exact_hi_m'][i]:10.2f} | "
+            f"{result['truth_w_m'][i]:10.2f} | {result['ratio'][i]:5.3f} | "
+            f"{str(result['exact_inside'][i]):6s} | {result['lp_s'][i]:5.1f}"
+        )
+    lines.append(f"  max ratio {result['max_ratio']}; files: " + ", ".join(result["files"]))
+    lines.append(f"  ({result['wall_s']:.1f} s)")
+    return "\n".join(lines)
