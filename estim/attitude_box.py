@@ -66,14 +66,9 @@ from estim.attitude_model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
-    cross,
-    qexp,
-    qinv,
-    qlog,
-    qmatrix,
-    qmul,
 )
 from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.rotations import cross, qexp, qinv, qlog, qmatrix, qmul
 
 FloatArray = NDArray[np.float64]
 BCH_K = 0.25

@@ -55,13 +55,10 @@ from estim.attitude_model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
-    qexp,
-    qinv,
-    qlog,
-    qmul,
     rk4_attitude,
 )
 from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.rotations import qexp, qinv, qlog, qmul
 
 FloatArray = NDArray[np.float64]
 DIM = 9  # (a, w, d): attitude error, rate, disturbance torque

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from estim.attitude_model import cross
+from estim.rotations import cross, quaternion_rate
 
 
 def _frozen(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
@@ -90,17 +90,9 @@ class AttitudeState:
         return cls(x[0:4], x[4:7], x[7:10])
 
 
-def quaternion_rate(q: NDArray[np.float64], w_radps: NDArray[np.float64]) -> NDArray[np.float64]:
-    """dq/dt for a scalar-last quaternion and body rates (2 dq_v = q4 w + q_v x w)."""
-    qv, q4 = q[:3], q[3]
-    dqv = 0.5 * (q4 * w_radps + cross(qv, w_radps))
-    dq4 = -0.5 * float(qv @ w_radps)
-    return np.concatenate([dqv, [dq4]])
-
-
 def attitude_rhs(
-    body: RigidBody,
     x: NDArray[np.float64],
+    body: RigidBody,
     torque_Nm: NDArray[np.float64],
     ext_torque_Nm: NDArray[np.float64],
 ) -> NDArray[np.float64]:
@@ -129,7 +121,7 @@ def propagate(
     m_u = np.asarray(torque_Nm, dtype=float)
     m_ext = np.asarray(ext_torque_Nm, dtype=float)
     sol = solve_ivp(
-        lambda _t, x: attitude_rhs(body, x, m_u, m_ext),
+        lambda _t, x: attitude_rhs(x, body, m_u, m_ext),
         (0.0, dt_s),
         state.as_vector(),
         method="DOP853",
