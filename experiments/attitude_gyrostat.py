@@ -26,12 +26,12 @@ from estim.rotations import error_quaternion, qmul
 from experiments.attitude_est import run_here
 from experiments.errors import InputError
 from experiments.schema import Choice, Num, Str, Vec, validate_table
+from experiments.sim.estimator_loop import NOISES
 from experiments.sim.gyrostat import LoopConfig, simulate_turn
 from experiments.stats import summary_stats
 from guidance.attitude.game import GameLaw, design_a_star
 from guidance.attitude.gyrostat import Gyrostat
 
-NOISES = ("none", "random", "game")
 AUTO_DISTURBANCE = {"none": "none", "random": "random", "game": "adversarial"}
 
 TOP_RULES = {"name": Str(), "description": Str(), "controller": Str()}
@@ -121,7 +121,7 @@ def initial_quaternion(man: Mapping[str, Any]) -> np.ndarray:
 
 
 #: runs per task: the loop is vectorised over the runs of a chunk
-CHUNK = 32
+CHUNK = 8
 #: most control steps a run may take
 MAX_STEPS = 100_000
 

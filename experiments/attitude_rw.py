@@ -17,12 +17,12 @@ from experiments.attitude_est import run_here
 from experiments.errors import InputError
 from experiments.schema import Bool, Choice, Num, Str, Vec, validate_table
 from experiments.sim.attitude_rw import make_controller, simulate_runs
+from experiments.sim.estimator_loop import NOISES
 from experiments.stats import summary_stats
 from guidance.attitude.lqr import LQRController
 from guidance.attitude.pd import regime_boundaries
 
 CONTROLLERS = ("pd", "lqr")
-NOISES = ("none", "random", "game")
 POS = Num(0.0, open_lo=True)
 ANY = Num(-1e9, 1e9)
 RULES: dict[str, dict[str, Any]] = {
@@ -116,7 +116,7 @@ def parse_scenario(source: str, scenario: Mapping[str, Any], controller: str) ->
 
 
 #: runs per task: the loop is vectorised over the runs of a chunk
-CHUNK = 32
+CHUNK = 8
 #: most control steps (and RK4 steps) a run may take: the loop keeps the trajectory
 MAX_STEPS = 100_000
 

@@ -33,6 +33,7 @@ from experiments.cmd_intercept import positive_int, seed_int
 from experiments.errors import InputError
 from experiments.runner import Job, batched_task, check_seed, job_path, run_job
 from experiments.scenario import read
+from experiments.sim.estimator_loop import NOISES
 from experiments.sim.intercept_config import check_name
 
 #: controller name -> module exposing prepare, task, CHUNK and summarise
@@ -43,7 +44,6 @@ DISPATCH = {
     "euler": "experiments.attitude_cmg",
     "game": "experiments.attitude_gyrostat",
 }
-NOISES = ("none", "random", "game")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

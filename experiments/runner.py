@@ -23,19 +23,15 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import sys
-import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from concurrent.futures import (
     BrokenExecutor,
     CancelledError,
     Executor,
-    ProcessPoolExecutor,
     as_completed,
 )
-from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -45,9 +41,8 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from estim import _kernels as _k
-from experiments import provenance
 from experiments.errors import InputError
+from experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
 from experiments.files import atomic_write
 from experiments.provenance import code_identity
 from experiments.sim.intercept import run_engagement
@@ -55,84 +50,11 @@ from experiments.sim.intercept_config import InterceptScenario
 from experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
-#: how often a pool worker checks that its parent is alive (s)
-WATCHDOG_S = 1.0
 
 
 def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
     """The seed of run ``j``: ``SeedSequence(seed).spawn(runs)[j]`` (independent of ``runs``)."""
     return np.random.SeedSequence(seed, spawn_key=(j,))
-
-
-@contextmanager
-def make_executor(workers: int | None = None, scheduler: str | None = None) -> Iterator[Executor]:
-    """Local processes by default, a Dask cluster when ``scheduler`` is given."""
-    if scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise InputError(
-                "--scheduler needs dask.distributed (pip install '.[cluster]')"
-            ) from None
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError, ValueError, TypeError) as exc:
-            why = (str(exc).splitlines() or [type(exc).__name__])[0]
-            raise InputError(f"cannot reach the Dask scheduler at {scheduler!r}: {why}") from None
-        try:
-            _check_workers_code(client, scheduler)
-            yield client.get_executor()
-        finally:
-            client.close()
-        return
-    n = workers or os.cpu_count() or 1
-    _k.warm_up()  # forked workers inherit the loaded kernels
-    pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))
-    try:
-        yield pool
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
-
-
-def _worker_init(parent_pid: int) -> None:
-    """A pool worker exits when its parent dies (a SIGKILLed command left its workers
-    running for good): the kernel's parent-death signal on Linux, and a watchdog thread
-    that sees the worker re-parented anywhere."""
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent_pid:  # the parent died before the signal was armed
-        os._exit(1)
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(WATCHDOG_S)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
-
-
-def _check_workers_code(client, scheduler: str) -> None:
-    """Refuse a cluster whose workers run other sources than this process: their rows
-    would be recorded under this process's code identity."""
-    here = code_identity()["sources_sha256"]
-    try:
-        theirs = client.run(provenance.sources_sha256)  # imported on each worker
-    except Exception as exc:  # e.g. the package is not installed on a worker
-        raise InputError(
-            f"Dask workers at {scheduler} cannot run this package ({type(exc).__name__}: {exc})"
-        ) from None
-    for worker, h in sorted(theirs.items()):
-        if h != here:
-            raise InputError(
-                f"Dask worker {worker} runs other code (sources {h[:12]}, here {here[:12]}); "
-                "install the same version on every worker"
-            )
 
 
 #: largest root seed (Parquet's int64 column; --seed is validated before any run)
@@ -389,15 +311,6 @@ def _results(job: Job, todo: list[int], executor, workers, scheduler):
             yield from pairs
         if lost:
             raise WorkerLost(f"{lost} runs lost to a dead worker; rerun the same command")
-
-
-@contextmanager
-def executor_or(executor: Executor | None, workers, scheduler) -> Iterator[Executor]:
-    if executor is not None:
-        yield executor
-    else:
-        with make_executor(workers, scheduler) as ex:
-            yield ex
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:

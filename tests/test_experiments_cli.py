@@ -175,7 +175,9 @@ def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch):
     # workers running other sources are refused before any run (one line, exit 2)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True) as cluster:
         fake = {**runner.code_identity(), "sources_sha256": "f" * 64}
-        monkeypatch.setattr(runner, "code_identity", lambda: fake)  # this process only
+        from experiments import executors
+
+        monkeypatch.setattr(executors, "code_identity", lambda: fake)  # this process only
         with pytest.raises(runner.InputError, match="runs other code"):
             run_experiment(
                 sc, "infoset", "game", 3, 11, tmp_path / "c", scheduler=cluster.scheduler_address,

@@ -24,6 +24,9 @@ from estim.attitude_model import (
 )
 from estim.base import Estimator
 
+#: noise of the attitude loops: none (exact measurements, no disturbance), random, game
+NOISES = ("none", "random", "game")
+
 
 @dataclass(frozen=True)
 class EstimatorLoop:

@@ -22,15 +22,23 @@ import math
 import re
 from typing import Any, Literal
 
-from pydantic import BaseModel, model_validator
+from pydantic import BaseModel, ValidationError, model_validator
 
 from estim import registry
 from estim.model import BearingBound, ChannelModel, ChannelPrior, ChannelSetting
-from experiments.sim.fields import NONNEGATIVE, Table, field, integer, interval, number
+from experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
+from experiments.sim.fields import (
+    NONNEGATIVE,
+    Table,
+    field,
+    first_error,
+    integer,
+    interval,
+    number,
+)
 from experiments.sim.pointing import PointingConfig
 
 CHANNELS = ("lateral", "vertical")
-NOISES = ("random", "game", "bias")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
 #: longest run an engagement may take, in decision steps (defect f: a scenario could
 #: ask for 1e8 steps and run without limit)
@@ -168,7 +176,7 @@ class GuidanceTable(Table):
 class ExperimentTable(Table):
     runs: integer(1, 10**7) = field(1, "runs of the Monte Carlo")
     seed: integer(0, 2**63 - 1) = field(1, "root seed")
-    noise: Literal["random", "game", "bias"] = field("random", "measurement noise")
+    noise: Literal[NOISES] = field("random", "measurement noise")
     estimator: str = field("infoset", "estimator name (registered)")
 
 
@@ -283,10 +291,6 @@ class InterceptScenario(Table):
 
 def _check_options(name: str, table: dict[str, Any]) -> None:
     """An ``[estimator.<name>]`` table, validated by its estimator's options model."""
-    from pydantic import ValidationError
-
-    from experiments.sim.fields import first_error
-
     try:
         reg = registry.get("intercept", name)
     except KeyError as exc:

@@ -21,17 +21,17 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from estim.base import frozen_array
 from estim.rotations import cross, quaternion_rate
 
 
-def _frozen(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
+def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
     arr = np.array(a, dtype=float)
     if arr.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite")
-    arr.setflags(write=False)
-    return arr
+    return frozen_array(arr)
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class RigidBody:
     inertia_inv: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        inertia = _frozen(self.inertia_kgm2, (3, 3), "inertia_kgm2")
+        inertia = _checked(self.inertia_kgm2, (3, 3), "inertia_kgm2")
         if not np.allclose(inertia, inertia.T):
             raise ValueError("inertia_kgm2 must be symmetric")
         if np.any(np.linalg.eigvalsh(inertia) <= 0):
@@ -73,8 +73,8 @@ class AttitudeState:
         q = q / norm
         q.setflags(write=False)
         object.__setattr__(self, "q", q)
-        object.__setattr__(self, "w_radps", _frozen(self.w_radps, (3,), "w_radps"))
-        object.__setattr__(self, "h_Nms", _frozen(self.h_Nms, (3,), "h_Nms"))
+        object.__setattr__(self, "w_radps", _checked(self.w_radps, (3,), "w_radps"))
+        object.__setattr__(self, "h_Nms", _checked(self.h_Nms, (3,), "h_Nms"))
 
     @property
     def rotation(self) -> Rotation:
