@@ -66,14 +66,11 @@ from estim.attitude_model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
-    cross,
-    qexp,
-    qinv,
-    qlog,
-    qmatrix,
-    qmul,
 )
 from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.base import frozen_array as _frozen
+from estim.base import frozen_view as _frozen_view
+from estim.rotations import cross, qexp, qinv, qlog, qmatrix, qmul
 
 FloatArray = NDArray[np.float64]
 BCH_K = 0.25
@@ -84,12 +81,6 @@ _J, _K = [1, 2, 0], [2, 0, 1]
 
 class _NoEnclosure(Exception):
     """The Picard inclusion did not close within the iterations (step too long)."""
-
-
-def _frozen(a: ArrayLike) -> FloatArray:
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
 
 
 # --- midpoint-radius interval arithmetic (arrays of centres c and radii r) -------------
@@ -154,11 +145,6 @@ def _with(belief: BoxAttitudeBelief, **changes: Any) -> BoxAttitudeBelief:
             value = _frozen_view(value)
         object.__setattr__(new, name, value)
     return new
-
-
-def _frozen_view(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,7 +21,7 @@ body-frame error rotation ``|n_i| <= b_a`` per axis, and a rate ``w_m = w + m`` 
 ``|m_i| <= b_w``. Everything is batched over a leading axis of ``R`` runs.
 
 Quaternions are scalar last (scipy's ``Rotation``); ``exp``/``log`` are
-``Rotation.from_rotvec``/``as_rotvec``.
+``Rotation.from_rotvec``/``as_rotvec`` (:mod:`estim.rotations`).
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from estim.base import Belief
+from estim.integrate import renormalised, rk4_step
+from estim.rotations import cross, qexp, qmul, quaternion_rate
 
 FloatArray = NDArray[np.float64]
 
@@ -200,72 +202,6 @@ def draw_measurement(
     return AttitudeMeasurement(qmul(x[:, 0:4], qexp(n)), x[:, 4:7] + m)
 
 
-def cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a x b`` over the last axis (cheaper than ``np.cross`` on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def qmul(p: FloatArray, q: FloatArray) -> FloatArray:
-    """Hamilton product ``p (x) q`` (scalar last), i.e. ``Rotation(p) * Rotation(q)``."""
-    pv, p4 = p[..., :3], p[..., 3:4]
-    qv, q4 = q[..., :3], q[..., 3:4]
-    vec = p4 * qv + q4 * pv + cross(pv, qv)
-    sca = p4 * q4 - np.add.reduce(pv * qv, axis=-1, keepdims=True)
-    return np.concatenate([vec, sca], axis=-1)
-
-
-def qexp(rotvec: ArrayLike) -> FloatArray:
-    """Quaternion of a rotation vector, batched; equals ``Rotation.from_rotvec(v).as_quat()``.
-
-    ``(sin(t/2) v/t, cos(t/2))``, ``t = |v|``, with the series ``sin(t/2)/t = 1/2 - t^2/48 +
-    t^4/3840`` for ``t < 1e-3`` (numpy; scipy's object overhead dominates these small batches).
-    """
-    v = np.asarray(rotvec, dtype=float)
-    t2 = np.add.reduce(v * v, axis=-1, keepdims=True)
-    t = np.sqrt(t2)
-    small = t < 1e-3
-    safe = np.where(small, 1.0, t)
-    s = np.where(small, 0.5 - t2 / 48.0 + t2 * t2 / 3840.0, np.sin(0.5 * safe) / safe)
-    return np.concatenate([s * v, np.cos(0.5 * t)], axis=-1)
-
-
-def qlog(q: ArrayLike) -> FloatArray:
-    """Rotation vector (angle in [0, pi]) of a unit quaternion, batched; as ``as_rotvec()``."""
-    q = np.asarray(q, dtype=float)
-    q = np.where(q[..., 3:4] < 0, -q, q)
-    qv, q4 = q[..., :3], q[..., 3:4]
-    n2 = np.add.reduce(qv * qv, axis=-1, keepdims=True)
-    n = np.sqrt(n2)
-    small = n < 1e-6
-    # t/n with t = 2 atan2(n, q4); for small n: 2/q4 (1 - n^2 / (3 q4^2))
-    scale = np.where(
-        small,
-        2.0 / q4 * (1.0 - n2 / (3.0 * q4 * q4)),
-        2.0 * np.arctan2(n, q4) / np.where(small, 1.0, n),
-    )
-    return scale * qv
-
-
-def qmatrix(q: ArrayLike) -> FloatArray:
-    """Rotation matrices of unit quaternions (body -> reference), batched."""
-    q = np.asarray(q, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
-
-
-def qinv(q: FloatArray) -> FloatArray:
-    return q * np.array([-1.0, -1.0, -1.0, 1.0])
-
-
 def rate_rhs(
     model: AttitudeModel, w: FloatArray, torque_Nm: FloatArray, h_Nms: FloatArray
 ) -> FloatArray:
@@ -283,23 +219,16 @@ def rk4_attitude(
     dt_s: float,
     substeps: int = 1,
 ) -> tuple[FloatArray, FloatArray]:
-    """Nominal model (``d = 0``, ``h`` held) integrated by classical RK4; ``q`` renormalised."""
-    h = dt_s / substeps
+    """Nominal model (``d = 0``, ``h`` held) by the shared RK4 (:mod:`estim.integrate`);
+    ``q`` renormalised after every substep."""
 
-    def f(qq, ww):
-        qv, q4 = qq[..., :3], qq[..., 3:4]
-        dq = np.concatenate(
-            [0.5 * (q4 * ww + cross(qv, ww)), -0.5 * np.sum(qv * ww, axis=-1, keepdims=True)],
-            axis=-1,
+    def rhs(x: FloatArray) -> FloatArray:
+        w_ = x[..., 4:7]
+        return np.concatenate(
+            [quaternion_rate(x[..., 0:4], w_), rate_rhs(model, w_, torque_Nm, h_Nms)], axis=-1
         )
-        return dq, rate_rhs(model, ww, torque_Nm, h_Nms)
 
+    x = np.concatenate([q, w], axis=-1)
     for _ in range(substeps):
-        k1q, k1w = f(q, w)
-        k2q, k2w = f(q + 0.5 * h * k1q, w + 0.5 * h * k1w)
-        k3q, k3w = f(q + 0.5 * h * k2q, w + 0.5 * h * k2w)
-        k4q, k4w = f(q + h * k3q, w + h * k3w)
-        q = q + h / 6.0 * (k1q + 2 * k2q + 2 * k3q + k4q)
-        w = w + h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w)
-        q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return q, w
+        x = renormalised(rk4_step(rhs, x, dt_s / substeps))
+    return x[..., 0:4], x[..., 4:7]

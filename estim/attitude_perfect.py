@@ -14,15 +14,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.attitude_model import (
-    AttitudeBelief,
-    AttitudeMeasurement,
-    AttitudePrior,
-    qinv,
-    qlog,
-    qmul,
-)
+from estim.attitude_model import AttitudeBelief, AttitudeMeasurement, AttitudePrior
 from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.rotations import qinv, qlog, qmul
 
 FloatArray = NDArray[np.float64]
 #: per-component tolerance of :meth:`AttitudePointBelief.inside` (rad, rad/s)

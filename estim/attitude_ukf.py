@@ -55,24 +55,16 @@ from estim.attitude_model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
-    qexp,
-    qinv,
-    qlog,
-    qmul,
     rk4_attitude,
 )
 from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.base import frozen_array as _frozen
+from estim.rotations import qexp, qinv, qlog, qmul
 
 FloatArray = NDArray[np.float64]
 DIM = 9  # (a, w, d): attitude error, rate, disturbance torque
 DIM_Z = 6
 TAU_D_S = 60.0
-
-
-def _frozen(a: ArrayLike) -> FloatArray:
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
 
 
 def residual_x(x1: FloatArray, x2: FloatArray) -> FloatArray:

@@ -35,6 +35,22 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+
+def frozen_array(a: ArrayLike) -> NDArray[np.float64]:
+    """A read-only float copy of ``a`` (beliefs are values: their arrays never change)."""
+    arr = np.array(a, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
+def frozen_view(a: np.ndarray) -> np.ndarray:
+    """``a`` read-only without a copy: for arrays the caller has just created."""
+    if a.flags.writeable:
+        a = a.view()
+        a.setflags(write=False)
+    return a
+
+
 #: A vectorised scalar function of the state: ``fn(points)`` with ``points`` of
 #: shape ``(n, dim)`` returns ``n`` values.
 StateFunction = Callable[[NDArray[np.float64]], NDArray[np.float64]]

@@ -14,24 +14,12 @@ import shapely
 from numpy.typing import ArrayLike, NDArray
 
 from estim.base import Belief, Extremes, StateFunction, Status
+from estim.base import frozen_array as _frozen
+from estim.base import frozen_view as _frozen_view
 from estim.model import ChannelModel
 from estim.polygons import ConvexPolygons
 
 FloatArray = NDArray[np.float64]
-
-
-def _frozen(a: ArrayLike) -> FloatArray:
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
-
-
-def _frozen_view(a: FloatArray) -> FloatArray:
-    """Read-only without a copy: for arrays the caller has just created."""
-    if a.flags.writeable:
-        a = a.view()
-        a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)

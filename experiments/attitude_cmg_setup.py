@@ -1,22 +1,18 @@
-"""Resurs-P scenario (seed 000, SPEC 2.1): validation of the TOML tables into a :class:`TurnSetup`.
-
-Split from :mod:`experiments.attitude_cmg` (which re-exports these names).
-"""
+"""Resurs-P scenario (seed 000, SPEC 2.1): validation of the TOML tables into a
+:class:`~experiments.sim.turn_setup.TurnSetup`."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from experiments.errors import InputError
 from experiments.schema import Choice, Num, Str, Vec, validate_table
+from experiments.sim.turn_setup import SQRT3, TurnSetup  # noqa: F401 - re-exported
 from guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster
 from guidance.attitude.energy import EnergySavingConfig, resurs_p_inertia
-from guidance.attitude.plant import RigidBody
 
 CONTROLLERS = ("energy", "euler")
 
@@ -102,42 +98,6 @@ _NOISE_DEFAULTS = {
     "disturbance_std_Nm": 0.0,
     "game_disturbance_Nm": 0.0,
 }
-SQRT3 = float(np.sqrt(3.0))
-
-
-@dataclass(frozen=True)
-class TurnSetup:
-    """Everything one turn needs (built from a validated scenario)."""
-
-    inertia_kgm2: NDArray[np.float64]
-    initial_error_rad: NDArray[np.float64]
-    dt_s: float
-    duration_s: float
-    horizon_s: float
-    energy: EnergySavingConfig
-    euler: dict[str, float]
-    cluster: CmgCluster
-    beta0_rad: NDArray[np.float64]
-    angle_std_rad: float
-    rate_std_radps: float
-    disturbance_std_Nm: float
-    angle_tol_deg: float = 0.2
-    rate_tol_degps: float = 0.02
-    game_disturbance_Nm: float = 0.0
-    body: RigidBody = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        if not (0 < self.dt_s and self.duration_s <= self.horizon_s):
-            raise ValueError("need dt_s > 0 and duration_s <= horizon_s")
-        object.__setattr__(self, "body", RigidBody(self.inertia_kgm2))
-
-    @property
-    def n_turn_steps(self) -> int:
-        return int(round(self.duration_s / self.dt_s))
-
-    @property
-    def n_steps(self) -> int:
-        return int(round(self.horizon_s / self.dt_s))
 
 
 def _table(source: str, scenario: Mapping[str, Any], key: str, rules, defaults) -> dict:
@@ -196,4 +156,5 @@ def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
         angle_tol_deg=top["angle_tol_deg"],
         rate_tol_degps=top["rate_tol_degps"],
         game_disturbance_Nm=no["game_disturbance_Nm"],
+        name=str(scenario.get("name") or top["name"] or "resurs_p"),
     )

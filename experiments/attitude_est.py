@@ -1,25 +1,15 @@
-"""Attitude loops as consumers of estimators (SPEC 2.5): shared plumbing for the loops.
+"""Attitude loops as consumers of estimators (SPEC 2.5): the names and the outputs.
 
-Every attitude loop (:mod:`experiments.attitude_rw`, :mod:`experiments.attitude_cmg`,
-:mod:`experiments.attitude_gyrostat`) runs the estimator registered under a name
-(:mod:`estim.registry`, problem ``"attitude"``: ``perfect``, ``ukf``, ``box`` and any
-other registered one) through :class:`EstimatorLoop`:
-
-per control step ``predict`` over the period with the known inputs held over it
-(delivered torque, momentum interval), then ``update`` with the new measurement; the
-controller reads ``centre()`` = ``(q, w)`` per run; ``truth_outside`` counts the
-(run, step) pairs where the truth is not in the belief (for ``perfect`` that is every
-noisy step: a point is not a set). Measurement errors are uniform within the model's
-bounds (:func:`estim.attitude_model.draw_measurement`).
-
-Also: Monte Carlo outputs (per-run Parquet table, CDF figures PNG+SVG of settle time,
-energy index and final error, one curve per controller x estimator x noise).
+The loops themselves run a registered estimator through
+:class:`experiments.sim.estimator_loop.EstimatorLoop`; this module resolves the
+``--estimator`` names and draws the CDF figures (settle time, energy index and final
+error, one curve per controller x estimator x noise) of the per-run tables.
 """
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
+import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -27,17 +17,7 @@ import numpy as np
 import pandas as pd
 
 from estim import registry
-from estim.attitude_model import (
-    AttitudeBelief,
-    AttitudeControl,
-    AttitudeMeasurement,
-    AttitudeModel,
-    AttitudePrior,
-)
-from estim.base import Estimator
 from experiments.errors import InputError
-from experiments.files import atomic_write
-from experiments.provenance import code_identity
 
 
 def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str) -> list[str]:
@@ -49,49 +29,10 @@ def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str
     bad = [n for n in names if n not in allowed]
     if not names or bad:
         raise InputError(f"--estimator must be one or more of {', '.join(allowed)}, got '{arg}'")
-    return list(dict.fromkeys(names))
-
-
-@dataclass(frozen=True)
-class EstimatorLoop:
-    """One registered attitude estimator run over a batch of runs."""
-
-    name: str
-    model: AttitudeModel
-    estimator: Estimator = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        try:
-            reg = registry.get("attitude", self.name)
-        except KeyError as exc:
-            raise ValueError(exc.args[0]) from None
-        object.__setattr__(self, "estimator", reg.build(None, self.model))
-
-    def start(self, meas: AttitudeMeasurement) -> AttitudeBelief:
-        return self.estimator.initial(AttitudePrior(meas))
-
-    def step(self, belief, control: AttitudeControl, dt_s: float, meas: AttitudeMeasurement):
-        """``predict`` over ``dt_s`` with the inputs held over it, ``update`` with ``meas``."""
-        est = self.estimator
-        return est.update(est.predict(belief, dt_s, control), meas)
-
-    @staticmethod
-    def centre(belief: AttitudeBelief) -> np.ndarray:
-        """``(q, w)`` per run, ``(R, 7)``."""
-        return np.atleast_2d(belief.centre())
-
-    @staticmethod
-    def inside(belief: AttitudeBelief, truth: np.ndarray) -> np.ndarray:
-        """Per run: truth ``(q, w, ...)`` in the belief."""
-        return belief.inside(np.atleast_2d(truth)[:, 0:7])
-
-    @staticmethod
-    def empty_steps(belief: AttitudeBelief) -> np.ndarray:
-        return belief.empty_counts
-
-    @staticmethod
-    def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:
-        return belief.attitude_bound_rad()
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # each would be run and tabled twice
+        raise InputError(f"--estimator {arg!r}: {', '.join(twice)} given twice")
+    return names
 
 
 PANELS = (
@@ -101,16 +42,11 @@ PANELS = (
 )
 
 
-def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: dict) -> list[str]:
-    """Per-run Parquet table (+ resolved scenario JSON) and CDF figures (PNG, SVG)."""
+def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
+    """CDF figures (PNG, SVG) of the runs' rows, one curve per controller x estimator x
+    noise (the tables themselves are the runner's)."""
     from experiments import plots  # matplotlib only when writing files
 
-    out_dir.mkdir(parents=True, exist_ok=True)
-    df = pd.DataFrame(rows)
-    table = out_dir / f"{stem}-runs.parquet"
-    atomic_write(table, lambda tmp: df.to_parquet(tmp, index=False))
-    text = json.dumps({**meta, "code": code_identity()}, indent=1, default=str)
-    atomic_write(out_dir / f"{stem}-scenario.json", lambda tmp: Path(tmp).write_text(text))
     fig, axes = plots.plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
     styles = ["-", "--", "-.", ":"]
     groups = list(df.groupby(["controller", "estimator", "noise"], sort=True))
@@ -134,8 +70,7 @@ def write_outputs(out_dir: Path, stem: str, rows: list[dict[str, Any]], meta: di
     if axes[0].get_legend_handles_labels()[0]:
         axes[0].legend(fontsize=8, loc="lower right")
     fig.suptitle(f"{stem}: controller / estimator / noise", fontsize=10)
-    files = plots.save(fig, out_dir / f"{stem}-cdf")
-    return [str(table), *(str(f) for f in files)]
+    return [str(f) for f in plots.save(fig, out_dir / f"{stem}-cdf")]
 
 
 def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Path]:
@@ -170,3 +105,22 @@ def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Pat
         if row[0].get_legend_handles_labels()[0]:
             row[0].legend(fontsize=7, loc="lower right")
     return plots.save(fig, out_stem)
+
+
+def run_here(module, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
+    """A module's attitude runs in this process, without files (tests, notebooks): the
+    same chunks, retries and summary as the command (:mod:`experiments.runner`)."""
+    from experiments.runner import batched_task
+
+    t0 = time.perf_counter()
+    setup = module.prepare(source, dict(scenario), controller, noise)
+    simulate = partial(module.task, setup, controller, noise, estimator)
+    pairs = []
+    for start in range(0, runs, module.CHUNK):
+        pairs += batched_task(simulate, seed, list(range(start, min(start + module.CHUNK, runs))))
+    df = pd.DataFrame([{"run": j, **row} for j, row in pairs])
+    ok = df[df["status"] == "ok"]
+    failures = int((df["status"] != "ok").sum())
+    result = module.summarise(setup, controller, noise, estimator, runs, seed, ok, failures)
+    result["wall_s"] = time.perf_counter() - t0
+    return result

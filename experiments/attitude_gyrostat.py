@@ -1,12 +1,12 @@
 """``attitude`` command, controller ``game``: the three-rotor gyrostat of seed 004 (SPEC 2.4).
 
-``run(source, scenario, controller, noise, runs, seed)`` validates the scenario table,
-designs a* by the iteration of seed section 3 (:func:`guidance.attitude.game.design_a_star`),
-simulates ``runs`` turns batched (:func:`guidance.attitude.gyrostat_loop.simulate_turn`)
-and returns the JSON of SPEC 3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
+:func:`prepare` validates the scenario table and designs a* by the iteration of seed
+section 3 (:func:`guidance.attitude.game.design_a_star`); :func:`task` simulates a chunk
+of turns batched (:func:`experiments.sim.gyrostat.simulate_turn`); :func:`summarise`
+gives the JSON of SPEC 3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
 
 The law reads ``(q, x)`` from an estimator (``perfect``, ``ukf``, ``box``;
-:mod:`experiments.gyrostat_est_loop`). Noise mapping: ``none`` = perfect measurements,
+:mod:`experiments.sim.gyrostat`). Noise mapping: ``none`` = perfect measurements,
 no disturbance; ``random`` = uniform random disturbance torques and bounded uniform
 measurement errors; ``game`` = the adversarial disturbance and the same bounded
 measurement errors. ``[simulation] disturbance`` overrides the
@@ -15,21 +15,23 @@ disturbance kind (``"constant"`` = a vertex of the box held all run).
 
 from __future__ import annotations
 
-import time
+import sys
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from estim.rotations import error_quaternion, qmul
+from experiments.attitude_est import run_here
 from experiments.errors import InputError
-from experiments.gyrostat_est_loop import simulate_turn_est
 from experiments.schema import Choice, Num, Str, Vec, validate_table
+from experiments.sim.estimator_loop import NOISES
+from experiments.sim.gyrostat import LoopConfig, simulate_turn
 from experiments.stats import summary_stats
 from guidance.attitude.game import GameLaw, design_a_star
-from guidance.attitude.gyrostat import Gyrostat, error_quaternion, quat_mul
-from guidance.attitude.gyrostat_loop import LoopConfig, LoopResult
+from guidance.attitude.gyrostat import Gyrostat
 
-NOISES = ("none", "random", "game")
 AUTO_DISTURBANCE = {"none": "none", "random": "random", "game": "adversarial"}
 
 TOP_RULES = {"name": Str(), "description": Str(), "controller": Str()}
@@ -115,50 +117,42 @@ def initial_quaternion(man: Mapping[str, Any]) -> np.ndarray:
     axis = np.asarray(man["initial_axis"], float)
     half = 0.5 * np.radians(man["initial_angle_deg"])
     rel = np.concatenate([np.sin(half) * axis / np.linalg.norm(axis), [np.cos(half)]])
-    return quat_mul(np.asarray(man["target_quaternion"], float), rel)
+    return qmul(np.asarray(man["target_quaternion"], float), rel)
 
 
-def _simulate_all(
-    gyro: Gyrostat, law: GameLaw, q0, q_t, beta, kind, children, cfg, estimator="perfect"
-) -> tuple[list[tuple[LoopResult, dict]], int]:
-    """Batched simulation; if the batch raises, rerun one by one and count failures."""
-    rngs = [np.random.default_rng(c) for c in children]
-    try:
-        return [simulate_turn_est(gyro, law, q0, q_t, beta, kind, rngs, cfg, estimator)], 0
-    except Exception:  # SPEC 3.1: a run that raises is a failure
-        pass
-    results, failures = [], 0
-    for child in children:
-        try:
-            rng = [np.random.default_rng(child)]
-            results.append(simulate_turn_est(gyro, law, q0, q_t, beta, kind, rng, cfg, estimator))
-        except Exception:
-            failures += 1
-    return results, failures
+#: runs per task: the loop is vectorised over the runs of a chunk
+CHUNK = 8
+#: most control steps a run may take
+MAX_STEPS = 100_000
 
 
-def run(
-    source: str,
-    scenario: Mapping[str, Any],
-    controller: str,
-    noise: str,
-    runs: int,
-    seed: int,
-    estimator: str = "perfect",
-) -> dict[str, Any]:
-    """Monte Carlo of the gyrostat game turn; the JSON object of SPEC 3.1."""
-    t_wall = time.perf_counter()
+@dataclass(frozen=True)
+class GyrostatSetup:
+    """Everything a batch of turns needs (from a validated scenario)."""
+
+    name: str
+    gyro: Gyrostat
+    law: GameLaw
+    q0: np.ndarray
+    q_target: np.ndarray
+    alpha_Nm: np.ndarray
+    beta_Nm: np.ndarray
+    design: Any
+    disturbance: str
+    cfg: LoopConfig
+    switching: str
+
+
+def prepare(source: str, scenario: Mapping[str, Any], controller: str, noise: str) -> GyrostatSetup:
+    """The validated turn (InputError naming the file and the field)."""
     if controller != "game":
         raise InputError(f"{source}: controller '{controller}' is not handled here (use 'game')")
     if noise not in NOISES:
         raise InputError(f"--noise must be one of {', '.join(NOISES)}, got '{noise}'")
-    if not isinstance(runs, int) or runs < 1:
-        raise InputError(f"--runs must be an integer >= 1, got {runs}")
     tables = parse_scenario(source, scenario)
     g, man, sim = tables["gyrostat"], tables["manoeuvre"], tables["simulation"]
     gyro = Gyrostat(g["A_kgm2"], g["rotor_J_kgm2"])
     alpha, beta, rho = (np.asarray(g[k], float) for k in ("alpha_Nm", "beta_Nm", "rho"))
-
     q_t = np.asarray(man["target_quaternion"], float)
     q0 = initial_quaternion(man)
     eta0 = error_quaternion(q0, q_t)[:3]
@@ -169,10 +163,17 @@ def run(
     kind = AUTO_DISTURBANCE[noise] if sim["disturbance"] == "auto" else sim["disturbance"]
     noisy = noise in ("random", "game")
     h = sim["control_period_s"]
+    horizon = max(sim["horizon_factor"] * design.tau_s, 10 * h)
+    if horizon / h * sim["substeps"] > MAX_STEPS:
+        raise InputError(
+            f"{source}: field 'simulation.control_period_s' {h} s makes the "
+            f"{horizon:.0f}-s horizon {int(horizon / h * sim['substeps'])} steps a run; "
+            f"the limit is {MAX_STEPS}"
+        )
     cfg = LoopConfig(
         period_s=h,
         substeps=sim["substeps"],
-        horizon_s=max(sim["horizon_factor"] * design.tau_s, 10 * h),
+        horizon_s=horizon,
         settle_angle_rad=np.radians(sim["settle_angle_deg"]),
         settle_rate_radps=np.radians(sim["settle_rate_degps"]),
         meas_angle_rad=np.radians(sim["meas_angle_deg"]) if noisy else 0.0,
@@ -180,63 +181,79 @@ def run(
         meas_rotor_radps=sim["meas_rotor_radps"] if noisy else 0.0,
     )
     law = GameLaw(design.a_star, rho, h, mode=sim["switching"])
-    children = np.random.SeedSequence(seed).spawn(runs)
-    pairs, failures = _simulate_all(gyro, law, q0, q_t, beta, kind, children, cfg, estimator)
-    results = [r for r, _ in pairs]
+    name = str(scenario.get("name", source))
+    return GyrostatSetup(name, gyro, law, q0, q_t, alpha, beta, design, kind, cfg, sim["switching"])
 
-    def cat(attr: str) -> np.ndarray:
-        parts = [getattr(r, attr) for r in results]
-        return np.concatenate(parts) if parts else np.empty((0,))
 
-    def count(key: str) -> np.ndarray:
-        parts = [c[key] for _, c in pairs]
-        return np.concatenate(parts) if parts else np.empty((0,))
-
-    settle = cat("settle_time_s")
-    max_u = np.concatenate([r.max_abs_torque_Nm for r in results]) if results else np.zeros((0, 3))
-    rows = [
+def task(setup: GyrostatSetup, controller: str, noise: str, estimator: str, seeds) -> list[dict]:
+    """The rows of a batch of turns (one per seed), simulated as one loop."""
+    rngs = [np.random.default_rng(c) for c in seeds]
+    s = setup
+    r = simulate_turn(
+        s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, rngs, s.cfg, estimator
+    )
+    return [
         {
-            "run": i,
-            "settle_time_s": float(settle[i]),
-            "energy_N2m2s": float(cat("energy_N2m2s")[i]),
-            "final_angle_deg": float(np.degrees(cat("final_angle_rad")[i])),
-            "final_rate_degps": float(np.degrees(cat("final_rate_radps")[i])),
-            "max_torque_Nm": float(max_u[i].max()),
-            "truth_outside": int(count("truth_outside")[i]),
-            "empty_steps": int(count("empty_steps")[i]),
-            "mean_knowledge_bound_deg": float(count("mean_knowledge_bound_deg")[i]),
+            "settle_time_s": float(r.settle_time_s[i]),
+            "energy_N2m2s": float(r.energy_N2m2s[i]),
+            "final_angle_deg": float(np.degrees(r.final_angle_rad[i])),
+            "final_rate_degps": float(np.degrees(r.final_rate_radps[i])),
+            "max_torque_Nm": float(r.max_abs_torque_Nm[i].max()),
+            "max_torque_ratio": float((r.max_abs_torque_Nm[i] / s.alpha_Nm).max()),
+            "max_rotor_rate_radps": float(r.max_rotor_rate_radps[i]),
+            "truth_outside": int(r.truth_outside[i]),
+            "empty_steps": int(r.empty_steps[i]),
+            "mean_knowledge_bound_deg": float(r.mean_knowledge_bound_deg[i]),
         }
-        for i in range(len(settle))
+        for i in range(len(seeds))
     ]
+
+
+def summarise(
+    setup: GyrostatSetup, controller: str, noise: str, estimator: str, runs: int, seed: int, ok,
+    failures: int,
+) -> dict[str, Any]:  # fmt: skip
+    """Monte Carlo of the gyrostat game turn: the JSON object of SPEC 3.1."""
+
+    def col(key: str) -> np.ndarray:
+        return ok[key].to_numpy(dtype=float) if key in ok else np.empty((0,))
+
+    settle = col("settle_time_s")
+    design, alpha = setup.design, setup.alpha_Nm
     tau = design.tau_s
     return {
-        "scenario": str(scenario.get("name", source)),
+        "scenario": setup.name,
         "controller": controller,
         "noise": noise,
         "runs": runs,
         "seed": seed,
-        "disturbance": kind,
+        "disturbance": setup.disturbance,
         "settle_time_s": summary_stats(settle, finite_only=False),
-        "energy_N2m2s": summary_stats(cat("energy_N2m2s"), finite_only=False),
-        "final_angle_deg": summary_stats(np.degrees(cat("final_angle_rad")), finite_only=False),
-        "final_rate_degps": summary_stats(np.degrees(cat("final_rate_radps")), finite_only=False),
-        "max_torque_Nm": float(max_u.max()) if max_u.size else float("nan"),
+        "energy_N2m2s": summary_stats(col("energy_N2m2s"), finite_only=False),
+        "final_angle_deg": summary_stats(col("final_angle_deg"), finite_only=False),
+        "final_rate_degps": summary_stats(col("final_rate_degps"), finite_only=False),
+        "max_torque_Nm": float(col("max_torque_Nm").max()) if len(ok) else float("nan"),
         "failures": failures,
         "estimator": estimator,
-        "truth_outside": int(count("truth_outside").sum()),
-        "empty_steps": int(count("empty_steps").sum()),
-        "_rows": rows,
-        "wall_s": time.perf_counter() - t_wall,
+        "truth_outside": int(col("truth_outside").sum()),
+        "empty_steps": int(col("empty_steps").sum()),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
         "unsettled_runs": int(np.sum(~np.isfinite(settle))),
-        "max_torque_ratio": float((max_u / alpha).max()) if max_u.size else float("nan"),
+        "max_torque_ratio": float(col("max_torque_ratio").max()) if len(ok) else float("nan"),
         "alpha_Nm": alpha.tolist(),
         "a_star": design.a_star.tolist(),
         "beta_star": design.beta_star,
         "torque_bound_Nm": design.torque_bound_Nm.tolist(),
         "a_star_iterations": len(design.iterations),
-        "max_rotor_rate_radps": float(cat("max_rotor_rate_radps").max()) if results else 0.0,
-        "switching": sim["switching"],
-        "control_period_s": h,
+        "max_rotor_rate_radps": float(col("max_rotor_rate_radps").max()) if len(ok) else 0.0,
+        "switching": setup.switching,
+        "control_period_s": setup.cfg.period_s,
     }
+
+
+def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
+    """The attitude JSON of these controllers, computed in this process without files."""
+    return run_here(
+        sys.modules[__name__], source, scenario, controller, noise, runs, seed, estimator
+    )

@@ -1,29 +1,42 @@
 """``python -m experiments attitude SCENARIO.toml [--controller NAME] [--noise ...]`` (SPEC 3.1).
 
-Loads the scenario, takes the controller from ``--controller`` or the file's
-top-level ``controller`` key and dispatches by name to the module that runs it:
+Loads the scenario (``--set`` overrides as for the intercept), takes the controller from
+``--controller`` or the file's top-level ``controller`` key and dispatches by name to the
+module that validates it and runs it:
 
 * ``pd``, ``lqr``        -> :mod:`experiments.attitude_rw`
 * ``energy``, ``euler``  -> :mod:`experiments.attitude_cmg`
 * ``game``               -> :mod:`experiments.attitude_gyrostat`
 
-Modules are imported lazily; one that is not importable yet gives the one-line
-error "controller X is not available" (exit status 2).
+Each module offers ``prepare`` (validation), ``task`` (the rows of a chunk of runs),
+``CHUNK`` and ``summarise`` (the JSON from the rows); the runs go through the same
+runner as the intercept (:mod:`experiments.runner`: workers, Dask, resume, failures
+with their run ids, results named by scenario, controller, estimator, noise and seed).
+Modules are imported lazily; one that is not importable gives the one-line error
+"controller X is not available" (exit status 2).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import inspect
+import json
+import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
-from experiments.attitude_est import resolve_estimators, write_outputs
-from experiments.errors import InputError
-from experiments.schema import load_toml
+import pandas as pd
 
-#: controller name -> module exposing run(source, scenario, controller, noise, runs, seed)
+from experiments.attitude_est import resolve_estimators, write_figure
+from experiments.cmd_intercept import positive_int, seed_int
+from experiments.errors import InputError
+from experiments.runner import Job, batched_task, check_seed, job_path, run_job
+from experiments.scenario import read
+from experiments.sim.estimator_loop import NOISES
+from experiments.sim.intercept_config import check_name
+
+#: controller name -> module exposing prepare, task, CHUNK and summarise
 DISPATCH = {
     "pd": "experiments.attitude_rw",
     "lqr": "experiments.attitude_rw",
@@ -31,23 +44,35 @@ DISPATCH = {
     "euler": "experiments.attitude_cmg",
     "game": "experiments.attitude_gyrostat",
 }
-NOISES = ("none", "random", "game")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
     parser.add_argument("--controller", default=None, help="one of " + ", ".join(DISPATCH))
     parser.add_argument("--noise", default="none", help="none | random | game (default none)")
-    parser.add_argument("--runs", type=int, default=1, help="number of runs (default 1)")
-    parser.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
+    parser.add_argument("--runs", type=positive_int, default=1, help="number of runs (default 1)")
+    parser.add_argument("--seed", type=seed_int, default=0, help="root seed (default 0)")
     parser.add_argument(
         "--estimator",
         default=None,
-        help="perfect | ukf | box, or a comma list run on the same realisations "
-        "(default: the scenario's 'estimator', else perfect for --noise none, box otherwise)",
+        help="perfect | ukf | box (or another registered name), or a comma list run on the "
+        "same realisations (default: the scenario's 'estimator', else perfect for --noise "
+        "none, box otherwise)",
     )
     parser.add_argument(
         "--out", default=None, help="output directory (default: results/attitude/<scenario>)"
+    )
+    parser.add_argument("--workers", type=positive_int, help="local worker processes")
+    parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        dest="overrides",
+        help="override a scenario field with a TOML value, e.g. simulation.duration_s=60 "
+        "(repeatable; validated like the file; the scenario's name gets a +key=value suffix)",
     )
 
 
@@ -65,47 +90,58 @@ def resolve_module(controller: str) -> Any:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    scenario = load_toml(args.scenario)
-    controller = args.controller if args.controller is not None else scenario.get("controller")
+    data, source = read(args.scenario, args.overrides)
+    controller = args.controller if args.controller is not None else data.get("controller")
     if controller is None:
         raise InputError(f"{args.scenario}: no --controller and no top-level 'controller' key")
     if not isinstance(controller, str):
         raise InputError(f"{args.scenario}: field 'controller' must be a string")
     if args.noise not in NOISES:
         raise InputError(f"--noise must be one of {', '.join(NOISES)}, got '{args.noise}'")
-    if args.runs < 1:
-        raise InputError(f"--runs must be an integer >= 1, got {args.runs}")
-    if args.seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
+    seed = check_seed(args.seed)
     module = resolve_module(controller)
-    default_est = scenario.pop("estimator", None)
+    default_est = data.pop("estimator", None)
     if default_est is not None and not isinstance(default_est, str):
         raise InputError(f"{args.scenario}: field 'estimator' must be a string")
-    estimators = resolve_estimators(getattr(args, "estimator", None), default_est, args.noise)
-    takes_estimator = "estimator" in inspect.signature(module.run).parameters
-    results, rows = [], []
+    estimators = resolve_estimators(args.estimator, default_est, args.noise)
+    try:
+        name = check_name(data["name"])
+    except ValueError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    setup = module.prepare(source, data, controller, args.noise)
+    out_dir = Path(args.out) if args.out else Path("results") / "attitude" / name
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"--out {out_dir}: not a directory")
+    scenario = json.loads(json.dumps(data, default=str))
+    results, frames, files = [], [], []
     for est in estimators:
-        if takes_estimator:
-            res = module.run(
-                args.scenario, scenario, controller, args.noise, args.runs, args.seed, est
-            )
-        elif est == "perfect":
-            res = module.run(args.scenario, scenario, controller, args.noise, args.runs, args.seed)
-        else:
-            raise InputError(f"controller {controller} does not take --estimator {est}")
-        for row in res.pop("_rows", []):
-            rows.append({"controller": controller, "estimator": est, "noise": args.noise, **row})
+        t0 = time.perf_counter()
+        choice = {"controller": controller, "estimator": est, "noise": args.noise}
+        simulate = partial(module.task, setup, controller, args.noise, est)
+        job = Job(
+            name=name,
+            label=f"{controller}-{est}-{args.noise}",
+            seed=seed,
+            meta={"scenario": scenario, **choice, "seed": seed},
+            base={"scenario": name, **choice, "seed": seed},
+            task=partial(batched_task, simulate, seed),
+            chunk=module.CHUNK,
+        )
+        df = run_job(job, args.runs, out_dir, args.workers, args.scheduler, not args.no_progress)
+        ok = df[df["status"] == "ok"] if len(df) else df
+        failures = int((df["status"] != "ok").sum()) if len(df) else 0
+        res = module.summarise(setup, controller, args.noise, est, args.runs, seed, ok, failures)
+        res["wall_s"] = time.perf_counter() - t0
         results.append(res)
+        frames.append(df)
+        files.append(str(job_path(out_dir, job)))
     result = dict(results[0])
     if len(results) > 1:
         result["rows"] = results
-    out = getattr(args, "out", None)
-    out_dir = Path(out) if out else Path("results") / "attitude" / Path(args.scenario).stem
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError(f"--out {out_dir}: not a directory")
-    if rows:
-        stem = f"{Path(args.scenario).stem}-{controller}-{args.noise}-{'_'.join(estimators)}"
-        meta = {"scenario": scenario, "controller": controller, "noise": args.noise,
-                "estimators": estimators, "runs": args.runs, "seed": args.seed}  # fmt: skip
-        result["files"] = write_outputs(out_dir, stem, rows, meta)
+    table = pd.concat(frames, ignore_index=True)
+    ok = table[table["status"] == "ok"] if len(table) else table
+    if len(ok):
+        stem = f"{name}-{controller}-{args.noise}-s{seed}"
+        files += write_figure(out_dir, stem, ok)
+    result["files"] = files
     return result

@@ -19,7 +19,6 @@ library versions are reported beside.
 
 from __future__ import annotations
 
-import dataclasses
 import datetime
 import os
 import platform
@@ -33,9 +32,9 @@ import numpy as np
 from estim.costs import MissForecast
 from estim.model import Bearing
 from experiments.cmd_intercept import positive_int
-from experiments.engagement import build_estimator, channel_model, run_engagement
-from experiments.intercept_scenario import load_scenario
 from experiments.runner import run_experiment
+from experiments.scenario import load_scenario
+from experiments.sim.intercept import build_estimator, run_engagement
 
 
 def add_arguments(p) -> None:
@@ -58,8 +57,8 @@ def _bearings(model, steps: int, dt: float, rng) -> list[float]:
 
 def step_cost_us(name: str, sc, steps: int, repeat: int) -> float:
     """Median cost (us) of update + predict (with an impulse) + extremes for one channel."""
-    model = channel_model(sc)
-    dt = sc.model["dt_s"]
+    model = sc.channel_model()
+    dt = sc.model.dt_s
     est, b0 = build_estimator(name, sc, model, "lateral")
     alphas = _bearings(model, steps, dt, np.random.default_rng(7))
     times = []
@@ -75,7 +74,8 @@ def step_cost_us(name: str, sc, steps: int, repeat: int) -> float:
 
 
 def engagement_ms(sc, noise: str, repeat: int) -> float:
-    both = dataclasses.replace(sc, guidance={**sc.guidance, "lateral": True, "vertical": True})
+    guidance = sc.guidance.model_copy(update={"lateral": True, "vertical": True})
+    both = sc.model_copy(update={"guidance": guidance})
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()

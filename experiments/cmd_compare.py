@@ -18,9 +18,9 @@ from estim import registry
 from experiments import plots
 from experiments.cmd_fig5 import miss_floor_m
 from experiments.cmd_intercept import add_common, resolve
-from experiments.noise import NOISES
 from experiments.report import summary_markdown, write_tables, write_text
 from experiments.runner import run_experiment, summarise
+from experiments.sim.intercept_config import NOISES
 
 
 def _list_of(allowed):

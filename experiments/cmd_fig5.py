@@ -17,9 +17,9 @@ import pandas as pd
 from estim import registry
 from experiments import plots
 from experiments.cmd_intercept import positive_int, seed_int
-from experiments.intercept_scenario import load_scenario
 from experiments.report import summary_markdown, write_tables, write_text
 from experiments.runner import run_experiment, summarise
+from experiments.scenario import load_scenario
 
 VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + range"))
 
@@ -38,7 +38,7 @@ def add_arguments(p) -> None:
 def miss_floor_m(sc) -> float:
     """Miss floor set by the last bearings: bound at eps times eps (SPEC 1.8)."""
     m = sc.model
-    return m["bearing_bound_end_rad"] * m["eps_km"] * 1e3
+    return m.bearing_bound_end_rad * m.eps_km * 1e3
 
 
 def run(args) -> dict[str, Any]:
@@ -48,7 +48,7 @@ def run(args) -> dict[str, Any]:
     sc = None
     for fname, variant in VARIANTS:
         sc = load_scenario(Path(args.scenarios) / fname)
-        seed = sc.experiment["seed"] if args.seed is None else args.seed
+        seed = sc.experiment.seed if args.seed is None else args.seed
         for noise in ("random", "game"):
             t1 = time.perf_counter()
             df = run_experiment(
@@ -65,13 +65,13 @@ def run(args) -> dict[str, Any]:
     floor = float(table["fuel_perfect_info_mps"].mean())
     marks = {
         "miss_m": [
-            (ref.get("miss_random_m"), "seed Fig. 3 random"),
-            (ref.get("miss_game_m"), "seed Fig. 3 game"),
+            (ref.miss_random_m, "seed Fig. 3 random"),
+            (ref.miss_game_m, "seed Fig. 3 game"),
             (miss_floor_m(sc), "bearing floor"),
         ],
         "fuel_mps": [
-            (ref.get("fuel_random_mps"), "seed Fig. 3 random"),
-            (ref.get("fuel_game_mps"), "seed Fig. 3 game"),
+            (ref.fuel_random_mps, "seed Fig. 3 random"),
+            (ref.fuel_game_mps, "seed Fig. 3 game"),
             (floor, "perfect info (mean)"),
         ],
     }

@@ -9,9 +9,9 @@ from typing import Any
 
 from estim import registry
 from experiments.errors import InputError
-from experiments.intercept_scenario import load_scenario
-from experiments.noise import NOISES
 from experiments.runner import run_experiment, summarise
+from experiments.scenario import load_scenario
+from experiments.sim.intercept_config import NOISES
 
 
 def _int_at_least(lo: int, what: str):
@@ -28,7 +28,14 @@ def _int_at_least(lo: int, what: str):
 
 
 positive_int = _int_at_least(1, "positive")
-seed_int = _int_at_least(0, "non-negative")
+
+
+def seed_int(text: str) -> int:
+    """A root seed: an integer in [0, 2^63 - 1] (the results tables hold it as int64)."""
+    value = _int_at_least(0, "non-negative")(text)
+    if value > 2**63 - 1:
+        raise argparse.ArgumentTypeError(f"expected an integer in [0, 2^63 - 1], got {text!r}")
+    return value
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
@@ -60,8 +67,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def resolve(args) -> tuple[Any, int, int, Path]:
     sc = load_scenario(args.scenario, args.overrides)
-    runs = args.runs or sc.experiment["runs"]
-    seed = sc.experiment["seed"] if args.seed is None else args.seed
+    runs = args.runs or sc.experiment.runs
+    seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / sc.name
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: not a directory")
@@ -70,8 +77,8 @@ def resolve(args) -> tuple[Any, int, int, Path]:
 
 def run(args) -> dict[str, Any]:
     sc, runs, seed, out = resolve(args)
-    estimator = args.estimator or sc.experiment["estimator"]
-    noise = args.noise or sc.experiment["noise"]
+    estimator = args.estimator or sc.experiment.estimator
+    noise = args.noise or sc.experiment.noise
     t0 = time.perf_counter()
     df = run_experiment(
         sc, estimator, noise, runs, seed, out, args.workers, args.scheduler, not args.no_progress

@@ -28,8 +28,8 @@ from experiments.cmd_compare import run_grid
 from experiments.cmd_intercept import resolve
 from experiments.errors import InputError
 from experiments.files import atomic_write
-from experiments.intercept_scenario import load_scenario
 from experiments.report import summary_markdown, write_text
+from experiments.scenario import load_scenario
 
 
 def _toml_values(text: str) -> list[Any]:

@@ -1,17 +1,22 @@
 """Monte Carlo runner: tasks on an Executor, paired seeding, atomic resumable Parquet.
 
+One runner for every problem (:class:`Job`: the intercept and the attitude loops):
+
+* Tasks: chunks of run indices (one run per task for the intercept, larger chunks for
+  the vectorised attitude loops), fixed by the indices, not by the worker count.
 * Seeding: run ``j`` uses ``SeedSequence(seed).spawn(runs)[j]``; the realisation
   depends only on (scenario, seed, j), never on the worker count or the order,
   and is the same for every estimator (paired comparison).
 * Executor: runs in this process for one worker, a ``ProcessPoolExecutor`` for
-  several, or a Dask cluster's ``Client.get_executor()`` with ``scheduler`` (same
-  results either way).
-* Results: one Parquet file per (scenario, estimator, noise, seed) with one row per
-  run, the resolved scenario as JSON beside it; both written atomically
-  (temporary file + ``os.replace``). Rerunning the same command completes only the
-  missing runs; a failing run is recorded with its error and does not stop the others.
-  The JSON also records which code wrote the runs (:mod:`experiments.provenance`);
-  a file written by another scenario or other sources is refused, not extended.
+  several (its workers exit when the command dies), or a Dask cluster's
+  ``Client.get_executor()`` with ``scheduler`` (same results either way).
+* Results: one Parquet file per (scenario, choices, seed) with one row per run, the
+  resolved scenario as JSON beside it; both written atomically (temporary file +
+  ``os.replace``). Rerunning the same command completes only the missing runs, and
+  finished runs are never deleted; a failing run is recorded with its run id and error,
+  reported on stderr, and does not stop the others. The JSON also records which code
+  wrote the runs (:mod:`experiments.provenance`); a file written by another scenario or
+  other sources is refused, not extended, and so is a file that is not a results table.
 """
 
 from __future__ import annotations
@@ -20,15 +25,15 @@ import json
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable
 from concurrent.futures import (
     BrokenExecutor,
     CancelledError,
     Executor,
-    ProcessPoolExecutor,
     as_completed,
 )
-from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -36,13 +41,12 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from estim import _kernels as _k
-from experiments import provenance
-from experiments.engagement import timed_engagement
 from experiments.errors import InputError
+from experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
 from experiments.files import atomic_write
-from experiments.intercept_scenario import InterceptScenario
 from experiments.provenance import code_identity
+from experiments.sim.intercept import run_engagement
+from experiments.sim.intercept_config import InterceptScenario
 from experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
@@ -53,60 +57,104 @@ def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(seed, spawn_key=(j,))
 
 
-@contextmanager
-def make_executor(workers: int | None = None, scheduler: str | None = None) -> Iterator[Executor]:
-    """Local processes by default, a Dask cluster when ``scheduler`` is given."""
-    if scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise InputError(
-                "--scheduler needs dask.distributed (pip install '.[cluster]')"
-            ) from None
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
-        try:
-            _check_workers_code(client, scheduler)
-            yield client.get_executor()
-        finally:
-            client.close()
-        return
-    n = workers or os.cpu_count() or 1
-    _k.warm_up()  # forked workers inherit the loaded kernels
-    pool = ProcessPoolExecutor(max_workers=n)
-    try:
-        yield pool
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+#: largest root seed (Parquet's int64 column; --seed is validated before any run)
+MAX_SEED = 2**63 - 1
 
 
-def _check_workers_code(client, scheduler: str) -> None:
-    """Refuse a cluster whose workers run other sources than this process: their rows
-    would be recorded under this process's code identity."""
-    here = code_identity()["sources_sha256"]
-    try:
-        theirs = client.run(provenance.sources_sha256)  # imported on each worker
-    except Exception as exc:  # e.g. the package is not installed on a worker
-        raise InputError(
-            f"Dask workers at {scheduler} cannot run this package ({type(exc).__name__}: {exc})"
-        ) from None
-    for worker, h in sorted(theirs.items()):
-        if h != here:
-            raise InputError(
-                f"Dask worker {worker} runs other code (sources {h[:12]}, here {here[:12]}); "
-                "install the same version on every worker"
-            )
+@dataclass(frozen=True)
+class Job:
+    """One results file: a scenario's runs with one estimator and one noise.
+
+    ``task(runs)`` (picklable: it runs on worker processes) simulates a chunk of run
+    indices and returns ``(run, row)`` pairs, one per index, a failed run as a row with
+    ``status = "failed"`` and its ``error``. Chunks are ``chunk`` consecutive indices
+    (``j // chunk`` groups), whatever the worker count, so the results do not depend on
+    it. ``meta`` (the resolved scenario and choices) is written beside the table and
+    compared on resume; ``base`` holds the columns of every row.
+    """
+
+    name: str
+    label: str
+    seed: int
+    meta: dict[str, Any]
+    base: dict[str, Any]
+    task: Callable[[list[int]], list[tuple[int, dict[str, Any]]]]
+    chunk: int = 1
+
+    @property
+    def desc(self) -> str:
+        return f"{self.name} {self.label}"
+
+
+def job_path(out_dir: Path, job: Job) -> Path:
+    return Path(out_dir) / f"{job.name}-{job.label}-s{job.seed}.parquet"
 
 
 def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
     return Path(out_dir) / f"{sc.name}-{estimator}-{noise}-s{seed}.parquet"
 
 
+def check_seed(seed: int) -> int:
+    if not 0 <= int(seed) <= MAX_SEED:
+        raise InputError(f"--seed {seed}: must be an integer in [0, {MAX_SEED}]")
+    return int(seed)
+
+
 def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
     atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+
+
+def _read_rows(path: Path) -> list[dict[str, Any]]:
+    """The rows of a results table, or one line naming the file and the remedy."""
+    try:
+        df = pd.read_parquet(path)
+    except Exception as exc:  # truncated, or not Parquet at all
+        raise InputError(
+            f"{path}: cannot read previous results ({type(exc).__name__}); delete {path} "
+            "to compute its runs again"
+        ) from None
+    if not {"run", "status"} <= set(df.columns):
+        raise InputError(
+            f"{path}: not a results table (no 'run' and 'status' columns); use another "
+            f"--out or delete {path}"
+        )
+    return df.to_dict("records")
+
+
+def intercept_job(sc: InterceptScenario, estimator: str, noise: str, seed: int) -> Job:
+    """The runs of an intercept scenario with one estimator and one noise (1 run a task)."""
+    choice = {"estimator": estimator, "noise": noise}
+    return Job(
+        name=sc.name,
+        label=f"{estimator}-{noise}",
+        seed=seed,
+        meta={"scenario": sc.model_dump(mode="json"), **choice, "seed": seed},
+        base={"scenario": sc.name, **choice, "seed": seed},
+        task=partial(_intercept_chunk, sc, estimator, noise, seed),
+    )
+
+
+def batched_task(simulate, seed: int, runs: list[int]) -> list[tuple[int, dict[str, Any]]]:
+    """A chunk of a vectorised loop: ``simulate(seeds)`` returns one row per seed; when
+    the batch raises, each run is retried alone, so a failing run is recorded with its
+    own run id and error and the others keep theirs."""
+    t0 = time.perf_counter()
+    try:
+        rows = simulate([run_seed(seed, 0, j) for j in runs])
+    except Exception as exc:
+        if len(runs) > 1:
+            return [pair for j in runs for pair in batched_task(simulate, seed, [j])]
+        failed = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+        return [(runs[0], {**failed, "wall_s": time.perf_counter() - t0})]
+    wall = (time.perf_counter() - t0) / len(runs)
+    ok = {"status": "ok", "error": "", "wall_s": wall}
+    return [(j, {**r, **ok}) for j, r in zip(runs, rows, strict=True)]
+
+
+def _intercept_chunk(sc, estimator: str, noise: str, seed: int, runs: list[int]):
+    # looked up at call time: tests replace it
+    return [(j, timed_engagement(sc, estimator, noise, run_seed(seed, 0, j))) for j in runs]
 
 
 def run_experiment(
@@ -121,47 +169,53 @@ def run_experiment(
     progress: bool = True,
     executor: Executor | None = None,
 ) -> pd.DataFrame:
-    """Run (or complete) an experiment and return its per-run table."""
-    path = results_path(out_dir, sc, estimator, noise, seed)
+    """Run (or complete) an intercept experiment and return its per-run table."""
+    job = intercept_job(sc, estimator, noise, check_seed(seed))
+    return run_job(job, runs, out_dir, workers, scheduler, progress, executor)
+
+
+def run_job(
+    job: Job,
+    runs: int,
+    out_dir: Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    executor: Executor | None = None,
+) -> pd.DataFrame:
+    """Run (or complete) runs ``0..runs-1`` of ``job``; return their rows, by run.
+
+    Finished runs are kept on disk whatever ``runs`` is (a smaller ``runs`` only
+    reports fewer); a file of another scenario or other sources is refused (one line).
+    """
+    check_seed(job.seed)
+    path = job_path(out_dir, job)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
-    meta = {
-        "scenario": sc.to_dict(),
-        "estimator": estimator,
-        "noise": noise,
-        "seed": seed,
-        "code": code_identity(),
-    }
+    meta = {**job.meta, "code": code_identity()}
     meta_path = path.with_suffix(".json")
     rows: list[dict[str, Any]] = []
     if path.exists():
         _check_resumable(path, meta_path, meta)
-        try:
-            rows = pd.read_parquet(path).to_dict("records")
-        except Exception as exc:  # a corrupt file is never produced by atomic writes
-            raise InputError(f"{path}: cannot read previous results ({exc})") from None
-        rows = [r for r in rows if r["run"] < runs]
+        rows = _read_rows(path)
     atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
     done = {int(r["run"]) for r in rows}
     todo = [j for j in range(runs) if j not in done]
-    base = {"scenario": sc.name, "estimator": estimator, "noise": noise, "seed": seed}
     if todo:
         bar = tqdm(
             total=runs,
-            initial=len(done),
-            desc=f"{sc.name} {estimator}/{noise}",
+            initial=runs - len(todo),
+            desc=job.desc,
             file=sys.stderr,
             disable=not progress or None,
             leave=False,
         )
         last_save = time.monotonic()
         try:
-            for j, row in _results(
-                sc, estimator, noise, seed, runs, todo, executor, workers, scheduler
-            ):
-                rows.append({**base, "run": j, **row})
+            for j, row in _results(job, todo, executor, workers, scheduler):
+                rows.append({**job.base, "run": j, **row})
                 bar.update(1)
                 if time.monotonic() - last_save > SAVE_EVERY_S:
                     _write_rows(path, rows)
@@ -170,12 +224,16 @@ def run_experiment(
             bar.close()
             if rows:
                 _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
-    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    df = pd.DataFrame(rows)
+    if len(df):
+        df = df[df["run"] < runs].sort_values("run").reset_index(drop=True)
+    _report_failures(job, df)
     return df
 
 
 def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
-    """Refuse (one line) to add runs to results of another scenario or other code."""
+    """Refuse (one line) to add runs to results of another scenario or other code. The
+    resolved scenarios are compared, not the paths that named them."""
     fix = "use another --out or delete the file"
     try:
         old = json.loads(meta_path.read_text())
@@ -183,7 +241,10 @@ def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
         raise InputError(
             f"{path}: no readable {meta_path.name} to check it against; {fix}"
         ) from None
-    if old.get("scenario") != json.loads(json.dumps(meta["scenario"])):
+    if not isinstance(old, dict):
+        raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
+    here = json.loads(json.dumps({k: v for k, v in meta.items() if k != "code"}))
+    if {k: v for k, v in old.items() if k != "code"} != here:
         raise InputError(f"{path}: results of a different scenario; {fix}")
     before = (old.get("code") or {}).get("sources_sha256")
     if before != meta["code"]["sources_sha256"]:
@@ -194,45 +255,62 @@ def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
         )
 
 
+def _report_failures(job: Job, df: pd.DataFrame, shown: int = 3) -> None:
+    """A failed run always says why (stderr, one line each; the rows keep the error)."""
+    if not len(df) or "status" not in df:
+        return
+    failed = df[df["status"] != "ok"]
+    for _, r in failed.head(shown).iterrows():
+        print(f"{job.desc}: run {int(r['run'])} failed: {r.get('error', '')}", file=sys.stderr)
+    if len(failed) > shown:
+        print(f"{job.desc}: {len(failed) - shown} more runs failed", file=sys.stderr)
+
+
+def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]:
+    """Run one engagement from a ``SeedSequence``; returns a result row (never raises)."""
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed_seq)
+    try:
+        res = run_engagement(sc, estimator_name, noise_name, rng).as_row()
+        res.update(status="ok", error="")
+    except Exception as exc:  # a failing run is recorded, not fatal
+        res = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+    res["wall_s"] = time.perf_counter() - t0
+    return res
+
+
 class WorkerLost(RuntimeError):
     """A worker process died; finished runs are saved, the lost ones are missing."""
 
 
-def _results(sc, estimator, noise, seed, runs, todo, executor, workers, scheduler):
-    """Yield ``(run, row)`` as runs finish: in order in this process for one local
-    worker (so Ctrl-C stops between runs), else as completed on the executor."""
-    if executor is None and scheduler is None and (workers or os.cpu_count() or 1) == 1:
-        for j in todo:
-            yield j, timed_engagement(sc, estimator, noise, run_seed(seed, runs, j))
+def _results(job: Job, todo: list[int], executor, workers, scheduler):
+    """Yield ``(run, row)`` as chunks finish: in order in this process for one local
+    worker (so Ctrl-C stops between chunks), else as completed on the executor."""
+    chunks: dict[int, list[int]] = {}
+    for j in todo:
+        chunks.setdefault(j // job.chunk, []).append(j)
+    alone = (workers or os.cpu_count() or 1) == 1 or len(chunks) == 1
+    if executor is None and scheduler is None and alone:
+        for chunk in chunks.values():
+            yield from job.task(chunk)
         return
     with executor_or(executor, workers, scheduler) as ex:
-        futs = {
-            ex.submit(timed_engagement, sc, estimator, noise, run_seed(seed, runs, j)): j
-            for j in todo
-        }
+        futs = {ex.submit(job.task, chunk): chunk for chunk in chunks.values()}
         lost = 0
         for fut in as_completed(futs):
             try:
-                row = fut.result()
+                pairs = fut.result()
             except InputError:
                 raise
             except (BrokenExecutor, CancelledError):
-                lost += 1  # a worker died: the run is missing, not failed (resumable)
+                lost += len(futs[fut])  # a worker died: missing, not failed (resumable)
                 continue
-            except Exception as exc:  # the run itself raised outside the engagement
+            except Exception as exc:  # the task itself raised outside the runs
                 row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
-            yield futs[fut], row
+                pairs = [(j, dict(row)) for j in futs[fut]]
+            yield from pairs
         if lost:
             raise WorkerLost(f"{lost} runs lost to a dead worker; rerun the same command")
-
-
-@contextmanager
-def executor_or(executor: Executor | None, workers, scheduler) -> Iterator[Executor]:
-    if executor is not None:
-        yield executor
-    else:
-        with make_executor(workers, scheduler) as ex:
-            yield ex
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:

@@ -1,73 +1,21 @@
-"""Reading and validating scenario TOML files (stdlib ``tomllib``).
+"""Validation rules of the attitude scenarios' tables (the intercept's are typed
+pydantic tables, :mod:`experiments.sim.intercept_config`).
 
 Every field is checked: unknown keys, wrong types and out-of-range values raise
 :class:`~experiments.errors.InputError` with one line naming the file, the field
-and the allowed range.
+and the allowed range. Files are read by :mod:`experiments.scenario` (re-exported).
 """
 
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from experiments.errors import InputError
-
-
-def load_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing file or bad TOML becomes an InputError."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: no such scenario file")
-    try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{p}: invalid TOML: {exc}") from None
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read: {exc.strerror}") from None
-
-
-def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
-    """A copy of a parsed scenario with ``TABLE.KEY=VALUE`` overrides applied.
-
-    ``VALUE`` is a TOML value (``10``, ``true``, ``[57.0, 59.0]``, ``"game"``), so the
-    override is typed exactly as the file would be; the result is validated like
-    the file itself. A top-level key has no dot (``name=...`` is refused: the
-    name is derived, see :func:`override_suffix`).
-    """
-    out = {k: dict(v) if isinstance(v, dict) else v for k, v in data.items()}
-    for item in overrides:
-        key, sep, text = item.partition("=")
-        parts = key.strip().split(".")
-        if not sep or not all(parts) or len(parts) > 2 or parts == ["name"]:
-            raise InputError(f"--set {item!r}: expected TABLE.KEY=VALUE (e.g. model.nu_mps2=0.01)")
-        try:
-            value = tomllib.loads(f"v = {text.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
-            raise InputError(
-                f"--set {item!r}: {text.strip()!r} is not a TOML value "
-                '(numbers, true/false, [lists], "strings")'
-            ) from None
-        if len(parts) == 1:
-            out[parts[0]] = value
-            continue
-        table = out.setdefault(parts[0], {})
-        if not isinstance(table, dict):
-            raise InputError(f"--set {item!r}: {parts[0]!r} is not a table")
-        table[parts[1]] = value
-    return out
-
-
-def override_suffix(overrides: Sequence[str]) -> str:
-    """``+key=value`` per override, file-name safe: appended to the scenario's name so
-    that results of an overridden scenario never land in the original's files."""
-    squeezed = (o.replace(" ", "") for o in overrides)
-    safe = ("".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed)
-    return "".join(f"+{o}" for o in safe)
+from experiments.scenario import apply_overrides, load_toml, override_suffix  # noqa: F401
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.linalg import pinv
 from scipy.spatial.transform import Rotation
 
-from estim.attitude_model import cross
+from estim.rotations import cross
 from experiments.attitude_cmg import run, setup_from_scenario
 from experiments.errors import InputError
 from experiments.schema import load_toml

@@ -11,7 +11,8 @@ import pytest
 from numpy.typing import NDArray
 from scipy.linalg import expm, null_space
 
-from experiments.attitude_cmg import lower_bound_energy_N2m2s, setup_from_scenario, simulate_turn
+from experiments.attitude_cmg_setup import setup_from_scenario
+from experiments.sim.attitude_cmg import lower_bound_energy_N2m2s, simulate_turn
 from guidance.attitude.energy import (
     EnergySavingConfig,
     EnergySavingController,

@@ -22,12 +22,9 @@ from estim.attitude_model import (
     AttitudeModel,
     AttitudePrior,
     draw_measurement,
-    qexp,
-    qlog,
-    qmatrix,
-    qmul,
 )
 from estim.attitude_ukf import UkfAttitudeBelief, UkfAttitudeEstimator, residual_x, state_add
+from estim.rotations import qexp, qlog, qmatrix, qmul
 from guidance.attitude.plant import AttitudeState, RigidBody, propagate
 
 
@@ -241,7 +238,9 @@ def test_attitude_command_estimators_paired_and_counted(tmp_path):
         assert (tmp_path / f).exists() or __import__("pathlib").Path(f).exists()
     import pandas as pd
 
-    df = pd.read_parquet(next(p for p in res["files"] if p.endswith(".parquet")))
+    tables = [p for p in res["files"] if p.endswith(".parquet")]
+    df = pd.concat([pd.read_parquet(p) for p in tables])  # one per estimator, seed-named
+    assert len(tables) == 3 and all(p.endswith("-s4.parquet") for p in tables)
     assert len(df) == 9 and set(df["estimator"]) == {"perfect", "ukf", "box"}
     again = _run_cli(main, args)
     assert again["rows"][2]["energy_N2m2s"] == rows["box"]["energy_N2m2s"]

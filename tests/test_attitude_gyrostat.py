@@ -13,9 +13,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from estim.rotations import error_quaternion, quaternion_rate
 from experiments.attitude_gyrostat import initial_quaternion, parse_scenario, run
 from experiments.errors import InputError
 from experiments.schema import load_toml
+from experiments.sim.gyrostat import LoopConfig, simulate_turn
 from guidance.attitude import plant
 from guidance.attitude.game import (
     GameLaw,
@@ -28,17 +30,14 @@ from guidance.attitude.game import (
 from guidance.attitude.gyrostat import (
     Gyrostat,
     aux_disturbance,
-    error_quaternion,
     eta_v_accel,
     eta_v_rate,
     g_inverse,
     g_matrix,
     linearising_torque,
-    quaternion_rate,
     rhs,
     rk4_step,
 )
-from guidance.attitude.gyrostat_loop import LoopConfig, simulate_turn
 
 SCENARIO = Path(__file__).resolve().parents[1] / "data" / "scenarios" / "gyrostat_game.toml"
 GYRO = Gyrostat([120.0, 100.0, 80.0], [0.12, 0.10, 0.08])
@@ -59,7 +58,7 @@ def test_plant_1_1_is_the_momentum_balance_dK_plus_x_cross_K_equals_v():
     rng = np.random.default_rng(1)
     s = _random_states(rng)
     u, v = rng.normal(scale=0.1, size=(2, len(s), 3))
-    d = rhs(GYRO, s, u, v)
+    d = rhs(s, GYRO, u, v)
     x, phidot, dx, dphi = s[:, 4:7], s[:, 7:10], d[:, 4:7], d[:, 7:10]
     k = GYRO.A_kgm2 * x + GYRO.rotor_J_kgm2 * phidot
     dk = GYRO.A_kgm2 * dx + GYRO.rotor_J_kgm2 * dphi
@@ -81,7 +80,7 @@ def test_fixed_step_rk4_matches_scipy_dop853_over_a_turn_segment():
     for _ in range(200):  # 10 s
         s = rk4_step(GYRO, s, u[None], v[None], 0.05)
     ref = solve_ivp(
-        lambda _t, y: rhs(GYRO, y, u, v), (0, 10), s0, method="DOP853", rtol=1e-11, atol=1e-13
+        lambda _t, y: rhs(y, GYRO, u, v), (0, 10), s0, method="DOP853", rtol=1e-11, atol=1e-13
     )
     np.testing.assert_allclose(s[0], ref.y[:, -1], rtol=1e-7, atol=1e-9)
 
@@ -141,7 +140,7 @@ def test_linearisation_identity_along_a_trajectory_is_a_parabola():
         eta = s[:4] / np.linalg.norm(s[:4])
         v = 2.0 * GYRO.body_moments_kgm2 * (g_inverse(eta) @ vs)  # v* = G D v / 2 = vs
         u = linearising_torque(GYRO, eta, s[4:7], s[7:10], us)
-        return rhs(GYRO, s, u, v)
+        return rhs(s, GYRO, u, v)
 
     t = np.linspace(0.0, 20.0, 41)
     sol = solve_ivp(closed_loop, (0, 20), s0, method="DOP853", t_eval=t, rtol=1e-12, atol=1e-14)

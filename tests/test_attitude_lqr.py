@@ -102,7 +102,7 @@ def test_constrained_lqr_converges_globally_and_V_decreases(j, q_w, q_l, seed):
 
     def rhs(_t, x):
         belief = est.update(PointBelief(x0), x)  # the law reads a belief, not the truth
-        return attitude_rhs(body, x, law.from_belief(belief), np.zeros(3))
+        return attitude_rhs(x, body, law.from_belief(belief), np.zeros(3))
 
     horizon = 25.0 / law.closed_loop_decay_rate()
     sol = solve_ivp(

@@ -1,4 +1,4 @@
-"""PointingLoop (experiments.pointing_loop): the end-to-end attitude loop's contract."""
+"""PointingLoop (experiments.sim.pointing): the end-to-end attitude loop's contract."""
 
 from __future__ import annotations
 
@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from experiments.errors import InputError
-from experiments.pointing_loop import PointingLoop
+from experiments.sim.pointing import PointingConfig, PointingLoop
 
 
 @pytest.mark.parametrize("disturbance", ["random", "game"])
 def test_box_pointing_loop_holds_the_axis_and_bounds_its_knowledge(disturbance):
     rng = np.random.default_rng(0)
-    loop = PointingLoop.from_table("t.toml", {"disturbance": disturbance}, rng)
+    loop = PointingLoop.from_config(PointingConfig(disturbance=disturbance), rng)
     initial = loop.true_error.magnitude()
     for _ in range(60):  # 30 s in steps of the engagement's 0.5 s
         loop.step(0.5)
@@ -27,8 +27,8 @@ def test_box_pointing_loop_holds_the_axis_and_bounds_its_knowledge(disturbance):
 
 
 def test_ukf_and_lqr_variant_runs_and_reports():
-    loop = PointingLoop.from_table(
-        "t.toml", {"estimator": "ukf", "controller": "lqr"}, np.random.default_rng(1)
+    loop = PointingLoop.from_config(
+        PointingConfig(**{"estimator": "ukf", "controller": "lqr"}), np.random.default_rng(1)
     )
     for _ in range(20):
         loop.step(0.5)
@@ -38,15 +38,25 @@ def test_ukf_and_lqr_variant_runs_and_reports():
 
 
 def test_step_carries_the_remainder_of_a_period():
-    loop = PointingLoop.from_table("t.toml", {"control_period_s": 0.05}, np.random.default_rng(2))
+    loop = PointingLoop.from_config(
+        PointingConfig(**{"control_period_s": 0.05}), np.random.default_rng(2)
+    )
     for _ in range(5):
         loop.step(0.02)
     assert loop.steps == 2 and loop.carry_s == pytest.approx(0.0)
 
 
-def test_bad_attitude_table_is_one_line_input_error():
-    with pytest.raises(InputError, match=r"attitude\.bogus") as exc:
-        PointingLoop.from_table("t.toml", {"bogus": 1}, np.random.default_rng(0))
-    assert "\n" not in str(exc.value)
-    with pytest.raises(InputError, match=r"attitude\.estimator"):
-        PointingLoop.from_table("t.toml", {"estimator": "ekf"}, np.random.default_rng(0))
+def test_bad_attitude_table_is_one_line_input_error(tmp_path):
+    from experiments.scenario import load_scenario
+
+    for table, field in (
+        ("bogus = 1", r"attitude\.bogus"),
+        ('estimator = "ekf"', "attitude.estimator"),
+    ):
+        p = tmp_path / "s.toml"
+        p.write_text(f"[attitude]\n{table}\n")
+        with pytest.raises(InputError, match=field) as exc:
+            load_scenario(p)
+        assert "\n" not in str(exc.value)
+    with pytest.raises(ValueError, match=r"attitude\.estimator"):
+        PointingConfig(**{"estimator": "ekf"})

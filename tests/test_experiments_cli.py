@@ -11,8 +11,8 @@ import pytest
 
 from experiments import runner
 from experiments.cli import main
-from experiments.intercept_scenario import load_scenario
 from experiments.runner import run_experiment
+from experiments.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = ROOT / "data" / "scenarios" / "kp_fig3.toml"
@@ -94,12 +94,19 @@ BAD = {
     "bad interval": ("[estimator]\ny_km = [5.0, -5.0]\n", "field 'estimator.y_km'"),
     "truth outside box": ("[truth]\ny_km = [-20.0, 0.0]\n", "must lie inside"),
     "bad toml": ("[model\n", "invalid TOML"),
-    "no split": ("[estimator]\nsplit_ratio = 1.0\n", "field 'estimator.split_ratio' must be"),
+    "no split": (
+        "[estimator]\nsplit_ratio = 1.0\n",
+        "field 'estimator.infoset.split_ratio' must be",
+    ),
     "bound shrinks as range closes": (
         "[model]\nbearing_bound_start_rad = 3e-4\nbearing_bound_end_rad = 2e-4\n",
         "'model.bearing_bound_start_rad' must be <=",
     ),
-    "margin not bool": ("[estimator]\nkinematic_margin = 1\n", "'estimator.kinematic_margin'"),
+    "margin not bool": (
+        "[estimator]\nkinematic_margin = 1\n",
+        "'estimator.infoset.kinematic_margin'",
+    ),
+    "option table": ("[estimator.ekf]\nn_sigma = 0.1\n", "field 'estimator.ekf.n_sigma' must be"),
 }
 
 
@@ -168,7 +175,9 @@ def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch):
     # workers running other sources are refused before any run (one line, exit 2)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True) as cluster:
         fake = {**runner.code_identity(), "sources_sha256": "f" * 64}
-        monkeypatch.setattr(runner, "code_identity", lambda: fake)  # this process only
+        from experiments import executors
+
+        monkeypatch.setattr(executors, "code_identity", lambda: fake)  # this process only
         with pytest.raises(runner.InputError, match="runs other code"):
             run_experiment(
                 sc, "infoset", "game", 3, 11, tmp_path / "c", scheduler=cluster.scheduler_address,
@@ -206,15 +215,16 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
     pd.testing.assert_frame_equal(_table(done), _table(fresh))
 
 
+_REAL_ENGAGEMENT = runner.timed_engagement
+
+
 def _dies_on_run_3(sc_, est, noise, ss):
     """Module level so that worker processes can unpickle it."""
     import os
 
     if ss.spawn_key == (3,):
         os._exit(1)  # the worker process dies
-    from experiments.engagement import timed_engagement
-
-    return timed_engagement(sc_, est, noise, ss)
+    return _REAL_ENGAGEMENT(sc_, est, noise, ss)
 
 
 def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_path, monkeypatch):
@@ -258,10 +268,8 @@ def test_a_failing_run_is_recorded_and_does_not_stop_the_others(short, tmp_path,
 
 def test_engagement_errors_are_caught_per_run(short):
     """timed_engagement records an exception inside a run as a failed row."""
-    import dataclasses
-
     sc = load_scenario(short)
-    broken = dataclasses.replace(sc, model={**sc.model, "dt_s": float("nan")})
+    broken = sc.model_copy(update={"model": sc.model.model_copy(update={"dt_s": float("nan")})})
     row = runner.timed_engagement(broken, "infoset", "random", runner.run_seed(1, 1, 0))
     assert row["status"] == "failed" and row["error"]
 
@@ -390,9 +398,8 @@ def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tm
     edited.write_text(SHORT.replace("enabled = true", "enabled = false"))
     over = load_scenario(short, ["range_finder.enabled=false"])
     assert over.name == "short+range_finder.enabled=false"
-    a, b = over.to_dict(), load_scenario(edited).to_dict()
-    for k in ("name", "source"):
-        del a[k], b[k]
+    a, b = over.model_dump(), load_scenario(edited).model_dump()
+    del a["name"], b["name"]
     assert a == b
     out = tmp_path / "out"
     for extra in ([], ["--set", "range_finder.enabled=false"]):

@@ -167,8 +167,8 @@ vertical = {vertical}
 def _assert_set_keeps_the_truth(tmp_path_factory, scenario_text, noise, seed):
     """Run one infoset engagement of the scenario text: the truth is inside the set at
     every checked step (more than 20) and no measurement contradicts it."""
-    from experiments.engagement import run_engagement
-    from experiments.intercept_scenario import load_scenario
+    from experiments.scenario import load_scenario
+    from experiments.sim.intercept import run_engagement
 
     p = tmp_path_factory.mktemp("sc") / "engagement.toml"
     p.write_text(scenario_text)
@@ -228,8 +228,8 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     engagement (random, game and bias noise) must not need a new compiled version of
     any kernel (read-only polygon arrays are a type of their own for numba)."""
     from estim import _kernels as k
-    from experiments.engagement import run_engagement
-    from experiments.intercept_scenario import load_scenario
+    from experiments.scenario import load_scenario
+    from experiments.sim.intercept import run_engagement
 
     k.warm_up()
     kernels = {n: getattr(k, n) for n in dir(k) if hasattr(getattr(k, n), "signatures")}

@@ -317,14 +317,14 @@ def test_filters_on_the_auxiliary_model_pass_the_nees_test_early_on(kind):
 
 def test_one_engagement_on_fig3_runs_with_the_ekf():
     """The guidance law runs unchanged on the Kalman belief (seed 003 Fig. 3 setup)."""
-    from experiments.engagement import run_engagement
-    from experiments.intercept_scenario import load_scenario
+    from experiments.scenario import load_scenario
+    from experiments.sim.intercept import run_engagement
 
     sc = load_scenario("data/scenarios/kp_fig3.toml")
     res = run_engagement(sc, "ekf", "random", np.random.default_rng(3))
     assert res.contradictions == 0
     assert 0 <= res.truth_outside <= res.checked_steps
-    assert 0 < res.fuel_mps <= sc.guidance["reserve_mps"]
+    assert 0 < res.fuel_mps <= sc.guidance.reserve_mps
     assert res.miss_m < 8000.0 / 10  # far below the 8 km zero-effort miss
 
 
@@ -416,12 +416,12 @@ def test_constrained_range_stays_in_the_moving_interval_that_holds_the_truth(kin
     filters' range collapses to tens of km): every belief handed out has its mean's x
     in [x_lo - e_hi t, x_hi - e_lo t] (checked against that formula), the projection
     acts, and the interval holds the truth's x at every measurement."""
-    import experiments.engagement as eng
-    from experiments.intercept_scenario import load_scenario
+    import experiments.sim.intercept as eng
+    from experiments.scenario import load_scenario
 
     sc = load_scenario("data/scenarios/kp_fig5_kalman_constrained.toml")
-    e_lo, e_hi = (v * 1e3 for v in sc.estimator["closing_speed_kmps"])
-    x_lo, x_hi = (v * 1e3 for v in sc.estimator["x_km"])
+    e_lo, e_hi = (v * 1e3 for v in sc.closing_speed_kmps)
+    x_lo, x_hi = (v * 1e3 for v in sc.estimator.x_km)
     truth_x = []
     built = eng.build_estimator
 
@@ -454,7 +454,7 @@ def test_constrained_range_stays_in_the_moving_interval_that_holds_the_truth(kin
     n_pred = n_upd = 0
     for tag, b in beliefs:
         n_pred += tag == "predict"
-        t = n_pred * sc.model["dt_s"]
+        t = n_pred * sc.model.dt_s
         lo, hi = b.x_bounds_m
         assert lo == pytest.approx(x_lo - e_hi * t, rel=1e-12)
         assert hi == pytest.approx(x_hi - e_lo * t, rel=1e-12)
@@ -504,12 +504,12 @@ def test_range_constraint_off_reproduces_the_unconstrained_filter(kind):
 
 def test_scenario_key_kalman_range_constraint_is_validated():
     from experiments.errors import InputError
-    from experiments.intercept_scenario import parse_scenario
+    from experiments.scenario import parse_scenario
 
-    assert parse_scenario({}).estimator["kalman_range_constraint"] is False
+    assert parse_scenario({}).estimator.options_for("ekf").range_constraint is False
     on = {"estimator": {"kalman_range_constraint": True, "closing_speed_kmps": [57.0, 59.0]}}
-    assert parse_scenario(on).estimator["kalman_range_constraint"] is True
-    with pytest.raises(InputError, match="estimator.kalman_range_constraint' must be true or"):
+    assert parse_scenario(on).estimator.options_for("ukf").range_constraint is True
+    with pytest.raises(InputError, match="estimator.ekf.range_constraint' must be true or"):
         parse_scenario({"estimator": {"kalman_range_constraint": 1}})
     with pytest.raises(InputError, match="unknown key 'truth.kalman_range_constraint'"):
         parse_scenario({"truth": {"kalman_range_constraint": True}})
@@ -530,13 +530,13 @@ def test_noise_inflation_scales_the_process_noise(kind, coords):
 
 def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
     from experiments.errors import InputError
-    from experiments.intercept_scenario import parse_scenario
+    from experiments.scenario import parse_scenario
 
     for bad in (0.5, float("inf"), float("nan")):
         with pytest.raises(ValueError, match="noise_inflation"):
             KalmanChannelEstimator(MODEL, noise_inflation=bad)
-    assert parse_scenario({}).estimator["kalman_noise_inflation"] == 1.0
-    with pytest.raises(InputError, match="estimator.kalman_noise_inflation"):
+    assert parse_scenario({}).estimator.options_for("ekf").noise_inflation == 1.0
+    with pytest.raises(InputError, match="estimator.ekf.noise_inflation"):
         parse_scenario({"estimator": {"kalman_noise_inflation": 0.5}})
 
 
@@ -550,13 +550,21 @@ def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
 def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, key, value):
     """The variants' files say "everything else identical to kp_fig5.toml": the same
     truths, boxes, guidance and seed, so their Kalman rows pair with kp_fig5's."""
-    from experiments.intercept_scenario import load_scenario
+    from estim import registry
+    from experiments.scenario import load_scenario
+    from experiments.sim.intercept_config import LEGACY_OPTIONS
 
-    base = load_scenario("data/scenarios/kp_fig5.toml").to_dict()
-    var = load_scenario(f"data/scenarios/{variant}.toml").to_dict()
-    assert var["name"] == variant and var["estimator"][key] == value
-    assert base["estimator"][key] != value
-    var["estimator"][key] = base["estimator"][key]
-    for k in ("name", "description", "source"):
-        del base[k], var[k]
+    def resolved(sc):
+        out = sc.model_dump(exclude={"name": True, "description": True})
+        out["estimator"]["options"] = {
+            n: sc.estimator.options_for(n).model_dump() for n in registry.names("intercept")
+        }
+        return out
+
+    base = resolved(load_scenario("data/scenarios/kp_fig5.toml"))
+    var = resolved(load_scenario(f"data/scenarios/{variant}.toml"))
+    for name, option in LEGACY_OPTIONS[key]:
+        assert var["estimator"]["options"][name][option] == value
+        assert base["estimator"]["options"][name][option] != value
+        var["estimator"]["options"][name][option] = base["estimator"]["options"][name][option]
     assert var == base

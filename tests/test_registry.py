@@ -23,9 +23,6 @@ from estim.attitude_model import (
     AttitudeModel,
     AttitudePrior,
     draw_measurement,
-    qinv,
-    qlog,
-    qmul,
 )
 from estim.base import Belief, Estimator, Extremes, Status
 from estim.costs import MissForecast
@@ -38,6 +35,7 @@ from estim.model import (
     Range,
     impulse_parts,
 )
+from estim.rotations import qinv, qlog, qmul
 from experiments.cli import main
 
 SHORT = """

@@ -42,6 +42,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from estim.integrate import renormalised
+from estim.integrate import rk4_step as rk4
 from guidance.attitude.plant import RigidBody, attitude_rhs
 
 #: Seed 000, section 4: initial precession angles of the six gyrodines, degrees.
@@ -173,16 +175,11 @@ def rk4_step(
     dt_s: float,
     ext_torque_Nm: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """One fixed-step RK4 step of the common plant (field of ``plant.attitude_rhs``), torque held.
+    """One step of the shared RK4 (:mod:`estim.integrate`) of the common plant (field of
+    ``plant.attitude_rhs``), torque held.
 
     ``x = (q[4], w[3], h[3])``; the quaternion is renormalised. A cheap stand-in for
     ``plant.propagate`` (DOP853) for the 3000-step turns; tests compare the two.
     """
     ext = np.zeros(3) if ext_torque_Nm is None else ext_torque_Nm
-    k1 = attitude_rhs(body, x, torque_Nm, ext)
-    k2 = attitude_rhs(body, x + 0.5 * dt_s * k1, torque_Nm, ext)
-    k3 = attitude_rhs(body, x + 0.5 * dt_s * k2, torque_Nm, ext)
-    k4 = attitude_rhs(body, x + dt_s * k3, torque_Nm, ext)
-    out = x + dt_s / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    out[0:4] /= np.linalg.norm(out[0:4])
-    return out
+    return renormalised(rk4(attitude_rhs, x, dt_s, body, torque_Nm, ext))

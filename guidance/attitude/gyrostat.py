@@ -12,7 +12,7 @@ line reads ``(A - J) dx/dt = K x x - u + v`` (the OCR of (1.1) is garbled; this 
 reading that makes ``dK/dt + x x K = v``, checked in the tests).
 
 Kinematics (seed eq. 1.2), scalar-last quaternion ``eta = (eta_v, eta4)`` as in
-:func:`guidance.attitude.plant.quaternion_rate`::
+:func:`estim.rotations.quaternion_rate`::
 
     2 deta_v/dt = eta4 x + eta_v x x,     2 deta4/dt = -eta_v . x
 
@@ -30,7 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.attitude_model import cross  # noqa: F401 - re-exported
+from estim import integrate
+from estim.integrate import renormalised
+from estim.rotations import cross, quaternion_rate
 
 Array = NDArray[np.float64]
 
@@ -73,25 +75,6 @@ class Gyrostat:
         return self.A_kgm2 - self.rotor_J_kgm2
 
 
-def quat_mul(p: Array, q: Array) -> Array:
-    """Hamilton product ``p (x) q`` of scalar-last quaternions (scipy's ``Rotation`` order)."""
-    p1, p2, p3, p4 = (p[..., i] for i in range(4))
-    q1, q2, q3, q4 = (q[..., i] for i in range(4))
-    out = np.empty(np.broadcast_shapes(p.shape, q.shape))
-    out[..., 0] = p4 * q1 + q4 * p1 + p2 * q3 - p3 * q2
-    out[..., 1] = p4 * q2 + q4 * p2 + p3 * q1 - p1 * q3
-    out[..., 2] = p4 * q3 + q4 * p3 + p1 * q2 - p2 * q1
-    out[..., 3] = p4 * q4 - p1 * q1 - p2 * q2 - p3 * q3
-    return out
-
-
-def quaternion_rate(eta: Array, x_radps: Array) -> Array:
-    """Seed eq. (1.2): ``2 eta_v' = eta4 x + eta_v x x``, ``2 eta4' = -eta_v . x`` (batched)."""
-    w = np.zeros(np.broadcast_shapes(eta.shape[:-1], x_radps.shape[:-1]) + (4,))
-    w[..., :3] = x_radps
-    return 0.5 * quat_mul(eta, w)
-
-
 def g_matrix(eta: Array) -> Array:
     """``G = eta4 I + [eta_v x]`` so that ``eta_v' = G x / 2``; shape (..., 3, 3)."""
     e1, e2, e3, e4 = (eta[..., i] for i in range(4))
@@ -121,7 +104,7 @@ def total_momentum_Nms(gyro: Gyrostat, x_radps: Array, phidot_radps: Array) -> A
     return gyro.A_kgm2 * x_radps + gyro.rotor_J_kgm2 * phidot_radps
 
 
-def rhs(gyro: Gyrostat, state: Array, u_Nm: Array, v_Nm: Array) -> Array:
+def rhs(state: Array, gyro: Gyrostat, u_Nm: Array, v_Nm: Array) -> Array:
     """Right-hand side of (1.1)-(1.2) for the state ``(eta[4], x[3], phidot[3])`` (batched).
 
     Written column by column (no temporaries of shape (..., 3) stacked) because it is the
@@ -148,14 +131,9 @@ def rhs(gyro: Gyrostat, state: Array, u_Nm: Array, v_Nm: Array) -> Array:
 
 
 def rk4_step(gyro: Gyrostat, state: Array, u_Nm: Array, v_Nm: Array, dt_s: float) -> Array:
-    """One classical Runge-Kutta step with ``u`` and ``v`` held (zero-order hold)."""
-    k1 = rhs(gyro, state, u_Nm, v_Nm)
-    k2 = rhs(gyro, state + 0.5 * dt_s * k1, u_Nm, v_Nm)
-    k3 = rhs(gyro, state + 0.5 * dt_s * k2, u_Nm, v_Nm)
-    k4 = rhs(gyro, state + dt_s * k3, u_Nm, v_Nm)
-    new = state + dt_s / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    new[..., Q] /= np.linalg.norm(new[..., Q], axis=-1, keepdims=True)
-    return new
+    """One step of the shared RK4 (:mod:`estim.integrate`) with ``u`` and ``v`` held
+    (zero-order hold); renormalises the quaternion."""
+    return renormalised(integrate.rk4_step(rhs, state, dt_s, gyro, u_Nm, v_Nm), Q)
 
 
 def eta_v_rate(eta: Array, x_radps: Array) -> Array:
@@ -193,21 +171,6 @@ def eta_v_accel(gyro: Gyrostat, state: Array, u_Nm: ArrayLike, v_Nm: ArrayLike) 
     """``eta_v''`` of the plant under torques ``u``, ``v``: ``G x'/2 - eta_v |x|^2/4`` (exact)."""
     state = np.asarray(state, dtype=float)
     eta, x = state[..., Q], state[..., X]
-    dx = rhs(gyro, state, np.asarray(u_Nm, float), np.asarray(v_Nm, float))[..., X]
+    dx = rhs(state, gyro, np.asarray(u_Nm, float), np.asarray(v_Nm, float))[..., X]
     w2 = np.sum(x * x, axis=-1, keepdims=True)
     return 0.5 * np.einsum("...ij,...j->...i", g_matrix(eta), dx) - 0.25 * eta[..., :3] * w2
-
-
-def error_quaternion(q: Array, q_target: Array) -> Array:
-    """``eta = q_target^-1 (x) q`` (Hamilton, scalar last), sign chosen with ``eta4 >= 0``.
-
-    The target is inertially fixed, so ``eta`` obeys the same kinematics (1.2) as ``q``.
-    """
-    conj = np.asarray(q_target, dtype=float) * np.array([-1.0, -1.0, -1.0, 1.0])
-    eta = quat_mul(conj, q)
-    return np.where(eta[..., 3:4] < 0, -eta, eta)
-
-
-def error_angle_rad(eta: Array) -> Array:
-    """Principal angle of the error quaternion, ``2 atan2(|eta_v|, |eta4|)``."""
-    return 2.0 * np.arctan2(np.linalg.norm(eta[..., :3], axis=-1), np.abs(eta[..., 3]))

@@ -21,17 +21,17 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from estim.attitude_model import cross
+from estim.base import frozen_array
+from estim.rotations import cross, quaternion_rate
 
 
-def _frozen(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
+def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
     arr = np.array(a, dtype=float)
     if arr.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite")
-    arr.setflags(write=False)
-    return arr
+    return frozen_array(arr)
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class RigidBody:
     inertia_inv: NDArray[np.float64] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        inertia = _frozen(self.inertia_kgm2, (3, 3), "inertia_kgm2")
+        inertia = _checked(self.inertia_kgm2, (3, 3), "inertia_kgm2")
         if not np.allclose(inertia, inertia.T):
             raise ValueError("inertia_kgm2 must be symmetric")
         if np.any(np.linalg.eigvalsh(inertia) <= 0):
@@ -73,8 +73,8 @@ class AttitudeState:
         q = q / norm
         q.setflags(write=False)
         object.__setattr__(self, "q", q)
-        object.__setattr__(self, "w_radps", _frozen(self.w_radps, (3,), "w_radps"))
-        object.__setattr__(self, "h_Nms", _frozen(self.h_Nms, (3,), "h_Nms"))
+        object.__setattr__(self, "w_radps", _checked(self.w_radps, (3,), "w_radps"))
+        object.__setattr__(self, "h_Nms", _checked(self.h_Nms, (3,), "h_Nms"))
 
     @property
     def rotation(self) -> Rotation:
@@ -90,17 +90,9 @@ class AttitudeState:
         return cls(x[0:4], x[4:7], x[7:10])
 
 
-def quaternion_rate(q: NDArray[np.float64], w_radps: NDArray[np.float64]) -> NDArray[np.float64]:
-    """dq/dt for a scalar-last quaternion and body rates (2 dq_v = q4 w + q_v x w)."""
-    qv, q4 = q[:3], q[3]
-    dqv = 0.5 * (q4 * w_radps + cross(qv, w_radps))
-    dq4 = -0.5 * float(qv @ w_radps)
-    return np.concatenate([dqv, [dq4]])
-
-
 def attitude_rhs(
-    body: RigidBody,
     x: NDArray[np.float64],
+    body: RigidBody,
     torque_Nm: NDArray[np.float64],
     ext_torque_Nm: NDArray[np.float64],
 ) -> NDArray[np.float64]:
@@ -129,7 +121,7 @@ def propagate(
     m_u = np.asarray(torque_Nm, dtype=float)
     m_ext = np.asarray(ext_torque_Nm, dtype=float)
     sol = solve_ivp(
-        lambda _t, x: attitude_rhs(body, x, m_u, m_ext),
+        lambda _t, x: attitude_rhs(x, body, m_u, m_ext),
         (0.0, dt_s),
         state.as_vector(),
         method="DOP853",

@@ -9,9 +9,9 @@ adds what the controllers of SPEC 2.2/2.3 need for speed:
 
 * :class:`ReactionWheels`: three wheels along the body axes with a per-axis torque
   limit ``|M_u,i| <= M_max`` and momentum limit ``|h_i| <= L_max``;
-* :func:`rk4_step`: one classical Runge-Kutta step of the plant for a whole batch
-  of states ``(..., 10)`` with the torque held constant over the step (zero-order
-  hold: the controller is sampled once per step);
+* :func:`rk4_step`: one step of the shared RK4 (:mod:`estim.integrate`) of the plant
+  for a whole batch of states ``(..., 10)`` with the torque held constant over the
+  step (zero-order hold: the controller is sampled once per step);
 * :func:`simulate_closed_loop`: a sampled-data loop (controller every
   ``control_period_s``, ``substeps`` RK4 steps in between).
 
@@ -28,7 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.attitude_model import cross  # noqa: F401 - re-exported
+from estim import integrate
+from estim.integrate import renormalised
+from estim.rotations import cross, quaternion_rate
 from guidance.attitude.plant import RigidBody
 
 FloatArray = NDArray[np.float64]
@@ -75,16 +77,11 @@ class ReactionWheels:
         return np.clip(m, lo, hi)
 
 
-def quaternion_rate_batch(q: FloatArray, w: FloatArray) -> FloatArray:
-    """dq/dt = 1/2 q (x) (w, 0) for batches (scalar last): 2 dq_v = q4 w + q_v x w."""
-    qv, q4 = q[..., :3], q[..., 3:4]
-    dqv = 0.5 * (q4 * w + cross(qv, w))
-    dq4 = -0.5 * np.sum(qv * w, axis=-1, keepdims=True)
-    return np.concatenate([dqv, dq4], axis=-1)
-
-
 def plant_rhs_batch(
-    body: RigidBody, x: FloatArray, torque_Nm: FloatArray, ext_torque_Nm: FloatArray | float = 0.0
+    x: FloatArray,
+    body: RigidBody,
+    torque_Nm: FloatArray,
+    ext_torque_Nm: FloatArray | float = 0.0,
 ) -> FloatArray:
     """Right-hand side of the plant for a batch of states ``(..., 10) = (q, w, h)``."""
     q, w, h = x[..., 0:4], x[..., 4:7], x[..., 7:10]
@@ -92,7 +89,7 @@ def plant_rhs_batch(
     rhs = ext_torque_Nm + torque_Nm - cross(w, jw + h)
     dw = rhs @ body.inertia_inv.T
     return np.concatenate(
-        [quaternion_rate_batch(q, w), dw, -np.broadcast_to(torque_Nm, w.shape)], axis=-1
+        [quaternion_rate(q, w), dw, -np.broadcast_to(torque_Nm, w.shape)], axis=-1
     )
 
 
@@ -103,14 +100,11 @@ def rk4_step(
     dt_s: float,
     ext_torque_Nm: FloatArray | float = 0.0,
 ) -> FloatArray:
-    """One RK4 step of the plant with the torques held constant; renormalises ``q``."""
-    k1 = plant_rhs_batch(body, x, torque_Nm, ext_torque_Nm)
-    k2 = plant_rhs_batch(body, x + 0.5 * dt_s * k1, torque_Nm, ext_torque_Nm)
-    k3 = plant_rhs_batch(body, x + 0.5 * dt_s * k2, torque_Nm, ext_torque_Nm)
-    k4 = plant_rhs_batch(body, x + dt_s * k3, torque_Nm, ext_torque_Nm)
-    out = x + (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    out[..., 0:4] /= np.linalg.norm(out[..., 0:4], axis=-1, keepdims=True)
-    return out
+    """One step of the shared RK4 (:mod:`estim.integrate`) of the plant with the torques
+    held constant; renormalises ``q``."""
+    return renormalised(
+        integrate.rk4_step(plant_rhs_batch, x, dt_s, body, torque_Nm, ext_torque_Nm)
+    )
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,12 @@
-"""Closed loop of the gyrostat game law (seed 004, SPEC 2.4): sampled controller, fixed-step RK4.
+"""Gyrostat game law (seed 004, SPEC 2.4) closed through an attitude estimator (SPEC 2.5).
 
-Each control period ``h``: the estimator (a :class:`estim.PerfectEstimator` fed the
-measurement, noisy or not) gives the belief, the controller reads ``belief.centre()``,
+The sampled loop of the seed: every control period ``h`` the law reads ``(q, x)`` from
+an estimator's belief (any registered attitude estimator, :mod:`estim.registry`:
+``perfect``, ``ukf``, ``box``, ...) and the rotor rates from their tachometers,
 computes the auxiliary controls ``u*`` (:class:`guidance.attitude.game.GameLaw`, exact
 discrete switching) and the rotor torques ``u`` of seed eq. (2.1); ``u`` and the
 disturbance ``v`` are held over the period while the plant (1.1)-(1.2) is integrated by
-``substeps`` classical RK4 steps. Runs are batched over a leading axis.
+``substeps`` steps of the shared RK4. Runs are batched over a leading axis.
 
 Disturbance kinds (``|v_i| <= beta_i`` always):
 
@@ -14,6 +15,17 @@ Disturbance kinds (``|v_i| <= beta_i`` always):
 * ``"constant"``: a vertex of the box (random signs per run), body-fixed, whole run;
 * ``"adversarial"``: each period the vertex that most delays arrival
   (:func:`guidance.attitude.game.adversarial_disturbance_Nm`, chosen from the true state).
+
+For the estimators the gyrostat is the rigid body of :mod:`estim.attitude_model` with
+``J_g = diag(A)``, ``J_b = diag(A - J)``, body torque ``M_u = -u``, disturbance ``v``
+(``|v_i| <= beta_i``) and relative rotor momentum ``h = J phi'``: from ``J (phi'' + x')
+= u``, ``(A - J) x' = K x x - u + v`` with ``K = A x + J phi'`` is
+``J_b x' = M_u + v - x x (J_g x + h)``. ``h`` over a period is enclosed by
+``J phi'_meas +- (J b_rotor + h max|u - J x'|)`` with ``|J x'|`` bounded by
+``2 J (|K| |x| + |u| + beta)/(A - J)`` (estimates, factor 2 margin).
+
+Measurements (``noisy``): a body-frame error rotation, a rate error and rotor-rate
+errors, uniform within ``meas_angle``, ``meas_rate``, ``meas_rotor`` per axis.
 """
 
 from __future__ import annotations
@@ -23,9 +35,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
-from estim import PerfectEstimator, PointBelief
+from estim.attitude_model import (
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    draw_measurement,
+)
+from estim.rotations import error_angle_rad, error_quaternion
+from experiments.sim.estimator_loop import EstimatorLoop
 from guidance.attitude.game import GameLaw, adversarial_disturbance_Nm
 from guidance.attitude.gyrostat import (
     PHI,
@@ -33,11 +51,8 @@ from guidance.attitude.gyrostat import (
     Gyrostat,
     Q,
     X,
-    error_angle_rad,
-    error_quaternion,
     eta_v_rate,
     linearising_torque,
-    quat_mul,
     rk4_step,
 )
 
@@ -79,17 +94,14 @@ class LoopResult:
     final_rate_radps: Array
     max_abs_torque_Nm: Array  # (R, 3)
     max_rotor_rate_radps: Array
+    truth_outside: Array  # steps with the truth outside the estimator's belief
+    empty_steps: Array  # updates that contradicted the model
+    mean_knowledge_bound_deg: Array
     time_s: Array | None = None
     states: Array | None = None  # (R, n+1, 10) true states
     torques_Nm: Array | None = None  # (R, n, 3)
     u_star: Array | None = None  # (R, n, 3)
     disturbance_Nm: Array | None = None  # (R, n, 3)
-
-
-def _measurement_noise(rng: np.random.Generator, n: int, cfg: LoopConfig) -> Array:
-    """Bounded uniform measurement errors: rotation vector, body rate, rotor rate; (n, 9)."""
-    bounds = np.repeat([cfg.meas_angle_rad, cfg.meas_rate_radps, cfg.meas_rotor_radps], 3)
-    return rng.uniform(-1.0, 1.0, size=(n, 9)) * bounds
 
 
 def disturbance_draws(disturbance: str, rngs, n: int, beta: NDArray) -> dict[str, NDArray]:
@@ -136,6 +148,17 @@ def settle_update(
     return np.where(inside, last_out, t_s)
 
 
+def gyrostat_model(gyro: Gyrostat, beta_Nm: ArrayLike, cfg: LoopConfig) -> AttitudeModel:
+    """The estimators' model of the gyrostat (see the module docstring)."""
+    return AttitudeModel(
+        np.diag(gyro.A_kgm2),
+        beta_Nm,
+        max(cfg.meas_angle_rad, 1e-12),
+        max(cfg.meas_rate_radps, 1e-12),
+        effective_inertia_kgm2=np.diag(gyro.body_moments_kgm2),
+    )
+
+
 def simulate_turn(
     gyro: Gyrostat,
     law: GameLaw,
@@ -145,12 +168,14 @@ def simulate_turn(
     disturbance: str,
     rngs: Sequence[np.random.Generator],
     cfg: LoopConfig,
+    estimator: str = "perfect",
     record: bool = False,
 ) -> LoopResult:
-    """Simulate ``len(rngs)`` rest-to-rest turns from ``q0`` (4,) or (R, 4) to ``q_target``.
+    """``len(rngs)`` rest-to-rest turns from ``q0`` (4,) or (R, 4) to ``q_target``, batched.
 
     Rotors start at rest relative to the body (seed: ``phi'(t0) = 0``). Run ``r`` draws
-    all its randomness (disturbance, measurement noise) from ``rngs[r]``.
+    all its randomness (disturbance, measurement noise) from ``rngs[r]``. With
+    ``record`` the result holds the trajectories.
     """
     if disturbance not in DISTURBANCES:
         raise ValueError(f"disturbance must be one of {DISTURBANCES}")
@@ -161,44 +186,53 @@ def simulate_turn(
     q_t = np.asarray(q_target, dtype=float) / np.linalg.norm(q_target)
     n = int(np.ceil(cfg.horizon_s / cfg.period_s))
     h, dt = cfg.period_s, cfg.period_s / cfg.substeps
+    model = gyrostat_model(gyro, beta, cfg)
+    loop = EstimatorLoop(estimator, model)
+    noisy = max(cfg.meas_angle_rad, cfg.meas_rate_radps, cfg.meas_rotor_radps) > 0
+    a_mom, j_rot, b_mom = gyro.A_kgm2, gyro.rotor_J_kgm2, gyro.body_moments_kgm2
 
     state = np.zeros((runs, STATE_DIM))
     state[:, Q] = np.broadcast_to(np.asarray(q0, dtype=float), (runs, 4))
     state[:, Q] /= np.linalg.norm(state[:, Q], axis=-1, keepdims=True)
-
-    noisy = max(cfg.meas_angle_rad, cfg.meas_rate_radps, cfg.meas_rotor_radps) > 0
-    noise = np.stack([_measurement_noise(g, n, cfg) for g in rngs]) if noisy else None
-    if noise is not None:  # attitude error as a small body-frame rotation, precomputed
-        noise_q = Rotation.from_rotvec(noise[..., 0:3].reshape(-1, 3)).as_quat()
-        noise_q = noise_q.reshape(runs, n, 4)
     draws = disturbance_draws(disturbance, rngs, n, beta)
 
-    estimator = PerfectEstimator()
-    belief = PointBelief(state)
-    last_out = np.zeros(runs)
-    energy = np.zeros(runs)
-    max_u = np.zeros((runs, 3))
-    max_rotor = np.zeros(runs)
+    def measure(s: Array) -> tuple[AttitudeMeasurement, Array]:
+        if not noisy:
+            return AttitudeMeasurement(s[:, Q], s[:, X]), s[:, PHI].copy()
+        meas = draw_measurement(s[:, 0:7], model, list(rngs))
+        rot = np.stack([g.uniform(-1.0, 1.0, 3) for g in rngs]) * cfg.meas_rotor_radps
+        return meas, s[:, PHI] + rot
+
+    meas, phid = measure(state)
+    belief = loop.start(meas)
+    outside = (~loop.inside(belief, state)).astype(int)
+    bound_sum = np.zeros(runs)
+    last_out, energy = np.zeros(runs), np.zeros(runs)
+    max_u, max_rotor = np.zeros((runs, 3)), np.zeros(runs)
     if record:
         states = np.empty((runs, n + 1, STATE_DIM))
         states[:, 0] = state
         rec_u, rec_us, rec_v = (np.empty((runs, n, 3)) for _ in range(3))
 
     for k in range(n):
-        meas = state.copy()
-        if noise is not None:
-            meas[:, Q] = quat_mul(state[:, Q], noise_q[:, k])
-            meas[:, X] += noise[:, k, 3:6]
-            meas[:, PHI] += noise[:, k, 6:9]
-        belief = estimator.update(belief, meas)
-        est = belief.centre()
-        u_star, u = game_torques(gyro, law, est[:, Q], est[:, X], est[:, PHI], q_t)
+        est = loop.centre(belief)
+        u_star, u = game_torques(gyro, law, est[:, 0:4], est[:, 4:7], phid, q_t)
         v = disturbance_at(disturbance, k, draws, gyro, state, q_t, u_star, law, beta)
-
+        # known inputs for the estimator: M_u = -u, h = J phi' enclosed over the period
+        k_est = a_mom * est[:, 4:7] + j_rot * phid
+        wn = np.linalg.norm(est[:, 4:7], axis=-1, keepdims=True)
+        jxd = 2.0 * j_rot * (np.linalg.norm(k_est, axis=-1, keepdims=True) * wn + np.abs(u) + beta)
+        h_err = j_rot * cfg.meas_rotor_radps + h * (np.abs(u) + jxd / b_mom + 1e-12)
+        h_mid = j_rot * phid
+        known = AttitudeControl(-u, h_mid - h_err, h_mid + h_err)
         for _ in range(cfg.substeps):
             state = rk4_step(gyro, state, u, v, dt)
         if not np.all(np.isfinite(state)):
             raise FloatingPointError("gyrostat state became non-finite")
+        meas, phid = measure(state)
+        belief = loop.step(belief, known, h, meas)
+        outside += ~loop.inside(belief, state)
+        bound_sum += loop.attitude_bound_rad(belief)
         energy += np.sum(u * u, axis=-1) * h
         np.maximum(max_u, np.abs(u), out=max_u)
         np.maximum(max_rotor, np.max(np.abs(state[:, PHI]), axis=-1), out=max_rotor)
@@ -225,5 +259,8 @@ def simulate_turn(
         final_rate_radps=np.linalg.norm(state[:, X], axis=-1),
         max_abs_torque_Nm=max_u,
         max_rotor_rate_radps=max_rotor,
+        truth_outside=outside,
+        empty_steps=loop.empty_steps(belief),
+        mean_knowledge_bound_deg=np.degrees(bound_sum / n),
         **extra,
     )

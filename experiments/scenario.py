@@ -1,0 +1,130 @@
+"""Reading scenario files: TOML, ``--set`` overrides, typed validation, one-line errors.
+
+Above the simulations (:mod:`experiments.sim`): a file is read (UTF-8 TOML, stdlib
+``tomllib``), overridden, and validated by the simulation's typed tables (pydantic);
+every problem becomes an :class:`~experiments.errors.InputError` of one line naming the
+file and the field, which the command line prints with exit status 2.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
+
+from experiments.errors import InputError
+from experiments.sim.fields import first_error
+from experiments.sim.intercept_config import SAFE_NAME, InterceptScenario
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML file; a missing, unreadable, non-UTF-8, empty or bad file is an
+    InputError of one line."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: no such scenario file")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"{p}: not UTF-8 text (byte {exc.start}); scenario files are UTF-8 TOML"
+        ) from None
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read: {exc.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{p}: invalid TOML: {exc}") from None
+    if not data:  # an empty file would silently run the built-in defaults
+        raise InputError(f"{p}: the scenario is empty (no key, no table)")
+    return data
+
+
+def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
+    """A copy of a parsed scenario with ``TABLE.KEY=VALUE`` overrides applied.
+
+    ``VALUE`` is a TOML value (``10``, ``true``, ``[57.0, 59.0]``, ``"game"``), so the
+    override is typed exactly as the file would be; the result is validated like the
+    file itself. Keys may be nested (``estimator.infoset.n_sections=60``); a top-level
+    key has no dot, and ``name`` is refused (it is derived: :func:`override_suffix`).
+    """
+
+    def copy(v: Any) -> Any:
+        return {k: copy(x) for k, x in v.items()} if isinstance(v, dict) else v
+
+    out = copy(data)
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        parts = key.strip().split(".")
+        if not sep or not all(parts) or len(parts) > 3 or parts == ["name"]:
+            raise InputError(f"--set {item!r}: expected TABLE.KEY=VALUE (e.g. model.nu_mps2=0.01)")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            raise InputError(
+                f"--set {item!r}: {text.strip()!r} is not a TOML value "
+                '(numbers, true/false, [lists], "strings")'
+            ) from None
+        table = out
+        for part in parts[:-1]:
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                raise InputError(f"--set {item!r}: {part!r} is not a table")
+        table[parts[-1]] = value
+    return out
+
+
+def override_suffix(overrides: Sequence[str]) -> str:
+    """``+key=value`` per override, file-name safe: appended to the scenario's name so
+    that results of an overridden scenario never land in the original's files."""
+    squeezed = (o.replace(" ", "") for o in overrides)
+    safe = ("".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed)
+    return "".join(f"+{o}" for o in safe)
+
+
+def default_name(path: str | Path) -> str:
+    """The file's stem made result-file safe (an explicit ``name`` is checked instead)."""
+    stem = "".join(c if c.isalnum() or c in "._=+,-" else "_" for c in Path(path).stem)
+    stem = stem.replace("..", "_").lstrip(".") or "scenario"
+    return stem if SAFE_NAME.match(stem) else "scenario"
+
+
+def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = "") -> M:
+    """``model`` validated from ``data``; the first problem as one line naming the file."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        raise InputError(f"{source}: {first_error(exc, prefix, model)}") from None
+    except ValueError as exc:  # a check outside pydantic's own
+        raise InputError(f"{source}: {exc}") from None
+
+
+def read(path: str | Path, overrides: Sequence[str] = ()) -> tuple[dict[str, Any], str]:
+    """The file's tables with the overrides applied, the scenario's name set (the file's
+    stem unless given; ``+key=value`` per override) and the source for messages."""
+    data = load_toml(path)
+    data.setdefault("name", default_name(path))
+    if not isinstance(data["name"], str):
+        raise InputError(f"{path}: field 'name' must be a string")
+    if not overrides:
+        return data, str(path)
+    data = apply_overrides(data, overrides)
+    data["name"] = data["name"] + override_suffix(overrides)
+    return data, f"{path} (with --set)"
+
+
+def load_scenario(path: str | Path, overrides: Sequence[str] = ()) -> InterceptScenario:
+    """Read and validate an intercept scenario file, with optional ``TABLE.KEY=VALUE``
+    overrides (:func:`apply_overrides`; the name gets a ``+key=value`` suffix each)."""
+    data, source = read(path, overrides)
+    return validate(InterceptScenario, data, source)
+
+
+def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> InterceptScenario:
+    """An intercept scenario from tables already read (name "scenario" unless given)."""
+    return validate(InterceptScenario, {"name": "scenario", **data}, source)

@@ -1,0 +1,185 @@
+"""Reaction-wheel attitude loops, controllers ``pd`` (SPEC 2.2) and ``lqr`` (SPEC 2.3).
+
+:func:`simulate_runs` simulates a batch of runs as one closed loop (the plant of
+:mod:`guidance.attitude.wheels`: the shared RK4, controller sampled every
+``control_period_s`` with the torque held). The controller sees only an estimator's
+belief (any registered attitude estimator, :mod:`estim.registry`; one belief carries
+the batch), updated every sample with the measurement; the law is evaluated at
+``(q, w)`` of ``belief.centre()`` and the wheel momentum (known on board).
+
+Noise: ``none`` = exact measurements, no disturbance; ``random`` = attitude (small
+body-frame rotation, per axis) and rate errors uniform within ``+-sqrt(3) sigma`` (the
+scenario's 1-sigma values, same variance), plus a constant disturbance torque per run
+uniform in ``[-d, d]`` per axis; ``game`` = the same measurement errors and a bounded
+disturbance ``-d sign(M_u)`` that opposes the control every sample. Random initial
+attitudes (``maneuver.random_attitude``) are drawn for every noise setting, from the
+run's own generator. ``tables`` are the validated tables of the scenario
+(:func:`experiments.attitude_rw.parse_scenario`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from estim.attitude_model import (
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    draw_measurement,
+)
+from estim.base import PointBelief
+from experiments.sim.estimator_loop import EstimatorLoop
+from guidance.attitude.lqr import LQRController
+from guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
+from guidance.attitude.plant import RigidBody
+from guidance.attitude.wheels import ReactionWheels, simulate_closed_loop
+
+
+def body_of(tables: Mapping[str, Any]) -> tuple[RigidBody, np.ndarray, np.ndarray]:
+    """``J = W diag(J_diag) W^T`` with ``W`` from ``axes_rotvec_deg``; returns (body, J_diag, W)."""
+    jd = np.asarray(tables["body"]["inertia_kgm2"], dtype=float)
+    w = Rotation.from_rotvec(np.radians(tables["body"]["axes_rotvec_deg"])).as_matrix()
+    return RigidBody(w @ np.diag(jd) @ w.T), jd, w
+
+
+def make_controller(controller: str, tables: Mapping[str, Any]) -> QuaternionPD | LQRController:
+    body, jd, w = body_of(tables)
+    q_t = tuple(np.asarray(tables["maneuver"]["target_quaternion"]) / 1.0)
+    if controller == "pd":
+        p = tables["pd"]
+        return QuaternionPD(body, p["k_q"], p["k_w"], p["quaternion_term"], q_target=q_t)
+    p = tables["lqr"]
+    return LQRController(
+        body.inertia_kgm2,
+        p["q"],
+        p["r"],
+        enforce_constraint=p["enforce_constraint"],
+        q_target=q_t,
+        shortest=p["shortest"],
+        axes=w,
+    )
+
+
+def initial_states(tables: Mapping[str, Any], rngs: list[np.random.Generator]) -> np.ndarray:
+    """Initial plant states ``(runs, 10)``: the maneuver's turn, or random attitudes/rates."""
+    man = tables["maneuver"]
+    q_t = Rotation.from_quat(man["target_quaternion"])
+    axis = np.asarray(man["axis"]) / np.linalg.norm(man["axis"])
+    x = np.zeros((len(rngs), 10))
+    for k, rng in enumerate(rngs):
+        if man["random_attitude"]:
+            rot = Rotation.random(rng=rng)
+        else:
+            rot = q_t * Rotation.from_rotvec(np.radians(man["angle_deg"]) * axis)
+        x[k, 0:4] = rot.as_quat()
+        x[k, 4:7] = np.radians(man["initial_rate_degps"]) + np.radians(
+            man["random_rate_degps"]
+        ) * rng.uniform(-1.0, 1.0, 3)
+    return x
+
+
+def estimator_model(tables: Mapping[str, Any]) -> AttitudeModel:
+    """What the estimators know: J, the disturbance bound and the measurement bounds.
+
+    The scenario's ``meas_*`` values are 1-sigma; the errors are drawn uniform within
+    ``+-sqrt(3) sigma`` (same variance, bounded: admissible for the box estimator).
+    """
+    body, _, _ = body_of(tables)
+    nz = tables["noise"]
+    return AttitudeModel(
+        body.inertia_kgm2,
+        nz["disturbance_Nm"],
+        max(np.sqrt(3.0) * np.radians(nz["meas_angle_deg"]), 1e-12),
+        max(np.sqrt(3.0) * np.radians(nz["meas_rate_degps"]), 1e-12),
+    )
+
+
+def simulate_runs(
+    tables: Mapping[str, Any],
+    controller: str,
+    noise: str,
+    rngs: list[np.random.Generator],
+    estimator: str = "perfect",
+) -> dict[str, np.ndarray]:
+    """Simulate the runs as one batch; per-run metrics.
+
+    The controller reads ``(q, w)`` from the estimator's belief (plus the wheel
+    momentum, known on board). Noise ``random``: constant disturbance per run uniform
+    in ``[-d, d]``; ``game``: ``-d sign(M_u)`` (opposes the control); both with
+    measurement errors uniform within the bounds; ``none``: exact measurements.
+    """
+    body, _, _ = body_of(tables)
+    law = make_controller(controller, tables)
+    wh = tables["wheels"]
+    wheels = ReactionWheels(wh["torque_max_Nm"], wh["momentum_max_Nms"])
+    sim, nz = tables["simulation"], tables["noise"]
+    period = sim["control_period_s"]
+    x0 = initial_states(tables, rngs)
+    n = len(rngs)
+    model = estimator_model(tables)
+    loop = EstimatorLoop(estimator, model)
+    d = nz["disturbance_Nm"]
+    const_dist = (
+        np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))
+    )
+    state: dict[str, Any] = {"belief": None, "ctrl": None, "outside": np.zeros(n, dtype=int)}
+    bounds = []
+
+    def measure(x: np.ndarray) -> AttitudeMeasurement:
+        if noise == "none":
+            return AttitudeMeasurement(x[:, 0:4], x[:, 4:7])
+        return draw_measurement(x, model, rngs)
+
+    def control(_t: float, x: np.ndarray) -> np.ndarray:
+        meas = measure(x)
+        if state["belief"] is None:
+            belief = loop.start(meas)
+        else:
+            belief = loop.step(state["belief"], state["ctrl"], period, meas)
+        state["outside"] += ~loop.inside(belief, x)
+        bounds.append(loop.attitude_bound_rad(belief))
+        x_est = np.concatenate([loop.centre(belief), x[:, 7:10]], axis=-1)
+        u = wheels.limit(law.from_belief(PointBelief(x_est)), x[:, 7:10], period)
+        state["belief"], state["ctrl"] = belief, AttitudeControl.held(u, x[:, 7:10], period)
+        return u
+
+    def disturbance(_t: float, _x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        if noise == "game":
+            return -d * np.sign(u)
+        return const_dist
+
+    traj = simulate_closed_loop(
+        body, wheels, control, x0, sim["duration_s"], period, sim["substeps"], disturbance
+    )
+    angle, rate = angle_and_rate_deg(traj.x, law.q_target)
+    settle = np.array(
+        [
+            settle_time(
+                traj.time_s,
+                angle[:, k],
+                rate[:, k],
+                sim["settle_angle_deg"],
+                sim["settle_rate_degps"],
+            )
+            for k in range(n)
+        ]
+    )
+    u = traj.torque_Nm[:-1]
+    out = {
+        "settle_time_s": settle,
+        "energy_N2m2s": np.sum(u**2, axis=(0, 2)) * period,
+        "final_angle_deg": angle[-1],
+        "final_rate_degps": rate[-1],
+        "max_torque_Nm": np.max(np.abs(u), axis=(0, 2)),
+        "truth_outside": state["outside"],
+        "empty_steps": loop.empty_steps(state["belief"]),
+        "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
+    }
+    if isinstance(law, LQRController):
+        v = law.lyapunov(traj.x)
+        out["lyapunov_max_increase"] = np.max(np.diff(v, axis=0), axis=0)
+    return out

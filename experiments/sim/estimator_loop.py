@@ -1,0 +1,70 @@
+"""An attitude estimator run over a batch of runs, as every attitude loop uses it (SPEC 2.5).
+
+Per control step: ``predict`` over the period with the known inputs held over it
+(delivered torque, momentum interval), then ``update`` with the new measurement; the
+controller reads ``centre()`` = ``(q, w)`` per run; the loops count the (run, step)
+pairs where the truth is not in the belief (for ``perfect`` that is every noisy step: a
+point is not a set). Any estimator registered for the problem ``"attitude"``
+(:mod:`estim.registry`) runs here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from estim import registry
+from estim.attitude_model import (
+    AttitudeBelief,
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    AttitudePrior,
+)
+from estim.base import Estimator
+
+#: noise of the attitude loops: none (exact measurements, no disturbance), random, game
+NOISES = ("none", "random", "game")
+
+
+@dataclass(frozen=True)
+class EstimatorLoop:
+    """One registered attitude estimator run over a batch of runs."""
+
+    name: str
+    model: AttitudeModel
+    estimator: Estimator = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        try:
+            reg = registry.get("attitude", self.name)
+        except KeyError as exc:
+            raise ValueError(exc.args[0]) from None
+        object.__setattr__(self, "estimator", reg.build(None, self.model))
+
+    def start(self, meas: AttitudeMeasurement) -> AttitudeBelief:
+        return self.estimator.initial(AttitudePrior(meas))
+
+    def step(self, belief, control: AttitudeControl, dt_s: float, meas: AttitudeMeasurement):
+        """``predict`` over ``dt_s`` with the inputs held over it, ``update`` with ``meas``."""
+        est = self.estimator
+        return est.update(est.predict(belief, dt_s, control), meas)
+
+    @staticmethod
+    def centre(belief: AttitudeBelief) -> np.ndarray:
+        """``(q, w)`` per run, ``(R, 7)``."""
+        return np.atleast_2d(belief.centre())
+
+    @staticmethod
+    def inside(belief: AttitudeBelief, truth: np.ndarray) -> np.ndarray:
+        """Per run: truth ``(q, w, ...)`` in the belief."""
+        return belief.inside(np.atleast_2d(truth)[:, 0:7])
+
+    @staticmethod
+    def empty_steps(belief: AttitudeBelief) -> np.ndarray:
+        return belief.empty_counts
+
+    @staticmethod
+    def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:
+        return belief.attitude_bound_rad()

@@ -1,0 +1,180 @@
+"""Typed configuration tables of the simulations (pydantic v2, ``extra="forbid"``).
+
+Every field is declared once: type, bounds, default, unit (in its name) and a one-line
+doc. Invalid values raise ``pydantic.ValidationError`` (a ``ValueError``); the command
+line turns the first error into one line naming the file and the field
+(:mod:`experiments.scenario`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    TypeAdapter,
+    ValidationError,
+)
+
+#: no silent conversion (a string is not a number, true is not 1); lists become tuples
+STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
+
+
+class Table(BaseModel):
+    """A scenario table: strict, unknown keys refused, immutable."""
+
+    model_config = STRICT
+
+
+def _as_tuple(value: Any) -> Any:
+    return tuple(value) if isinstance(value, list) else value
+
+
+def _ordered(value: tuple[float, float]) -> tuple[float, float]:
+    if value[0] > value[1]:
+        raise ValueError("lo must be <= hi")
+    return value
+
+
+def field(default: Any = ..., doc: str = "", **bounds: Any) -> Any:
+    """A declared field: ``default`` (``...``: required), a one-line ``doc`` and bounds
+    (``ge``, ``gt``, ``le``, ``lt``) applied to the value or to each item of a list."""
+    return Field(default, description=doc, **bounds)
+
+
+def number(lo: float | None = None, hi: float | None = None, open_lo=False, open_hi=False):
+    """A float in ``[lo, hi]`` (open ends on request; ints accepted)."""
+    bounds = {}
+    if lo is not None:
+        bounds["gt" if open_lo else "ge"] = lo
+    if hi is not None:
+        bounds["lt" if open_hi else "le"] = hi
+    return Annotated[float, Field(allow_inf_nan=False, **bounds)]
+
+
+def integer(lo: int | None = None, hi: int | None = None):
+    return Annotated[int, Field(ge=lo, le=hi)]
+
+
+def vector(item: Any, length: int):
+    """A list of ``length`` items (TOML array), stored as a tuple."""
+    return Annotated[
+        tuple[(item,) * length], BeforeValidator(_as_tuple), Field(json_schema_extra={"n": length})
+    ]
+
+
+def interval(item: Any):
+    """A list ``[lo, hi]`` with ``lo <= hi``, stored as a tuple."""
+    return Annotated[
+        tuple[item, item],
+        BeforeValidator(_as_tuple),
+        AfterValidator(_ordered),
+        Field(json_schema_extra={"interval": True}),
+    ]
+
+
+POSITIVE = number(0.0, open_lo=True)
+NONNEGATIVE = number(0.0)
+
+
+# -- one line per error -------------------------------------------------------------------
+def _field_info(model: type[BaseModel] | None, loc: tuple) -> Any:
+    """The FieldInfo at ``loc`` inside ``model`` (through nested tables), or None."""
+    info = None
+    for part in loc:
+        if model is None or not isinstance(part, str) or part not in model.model_fields:
+            return info if isinstance(part, int) else None
+        info = model.model_fields[part]
+        nested = [
+            t
+            for t in (info.annotation, *getattr(info.annotation, "__args__", ()))
+            if isinstance(t, type) and issubclass(t, BaseModel)
+        ]
+        model = nested[0] if nested else None
+    return info
+
+
+def _describe_schema(s: dict[str, Any]) -> str:
+    if "anyOf" in s:
+        parts = [_describe_schema(x) for x in s["anyOf"] if x.get("type") != "null"]
+        return " or ".join(parts)
+    if "enum" in s or "const" in s:
+        return "one of " + ", ".join(repr(v) for v in s.get("enum", [s.get("const")]))
+    kind = s.get("type")
+    if kind in ("number", "integer"):
+        lo = s.get("minimum", s.get("exclusiveMinimum", -math.inf))
+        hi = s.get("maximum", s.get("exclusiveMaximum", math.inf))
+        lb = "(" if "exclusiveMinimum" in s else "["
+        rb = ")" if "exclusiveMaximum" in s else "]"
+        what = "an integer" if kind == "integer" else "a number"
+        return f"{what} in {lb}{lo:g}, {hi:g}{rb}"
+    if kind == "boolean":
+        return "true or false"
+    if kind == "string":
+        return "a string"
+    if kind == "array" and "prefixItems" in s:
+        items = s["prefixItems"]
+        if s.get("interval"):
+            return f"a list [lo, hi] with lo <= hi, each {_describe_schema(items[0])}"
+        return f"a list of {len(items)} values, each {_describe_schema(items[0])}"
+    if kind == "object":
+        return "a table"
+    return "valid"
+
+
+def describe(model: type[BaseModel] | None, loc: tuple) -> str | None:
+    """What the field at ``loc`` allows, in words (None when unknown)."""
+    info = _field_info(model, loc)
+    if info is None:
+        return None
+    try:
+        hint = Annotated[(info.annotation, *info.metadata)] if info.metadata else info.annotation
+        schema = TypeAdapter(hint).json_schema()
+    except Exception:  # noqa: BLE001 - a description is a courtesy
+        return None
+    if "anyOf" in schema:  # optional: what it must be when given
+        schema = next((x for x in schema["anyOf"] if x.get("type") != "null"), schema)
+    if isinstance(loc[-1], int) and "prefixItems" in schema:
+        schema = schema["prefixItems"][min(loc[-1], len(schema["prefixItems"]) - 1)]
+    return _describe_schema(schema)
+
+
+def first_error(
+    exc: ValidationError, prefix: str = "", model: type[BaseModel] | None = None
+) -> str:
+    """The first error of ``exc`` as one line naming the field and what it allows."""
+    err = exc.errors()[0]
+    loc = tuple(p for p in err["loc"] if p != "options")
+    names = [str(p) for p in loc if isinstance(p, str)]
+    dotted = prefix + ".".join(names)
+    kind, msg = err["type"], str(err["msg"])
+    if kind == "extra_forbidden":
+        parent = _field_info(model, loc[:-1])
+        fields = model.model_fields if len(loc) == 1 and model else None
+        if parent is not None:
+            sub = [t for t in (parent.annotation, *getattr(parent.annotation, "__args__", ()))
+                   if isinstance(t, type) and issubclass(t, BaseModel)]  # fmt: skip
+            fields = sub[0].model_fields if sub else None
+        names_ok = sorted(f for f in fields or () if f != "options")
+        allowed = f" (allowed: {', '.join(names_ok)})" if names_ok else ""
+        return f"unknown key '{dotted}'{allowed}"
+    if kind == "missing":
+        return f"missing field '{dotted}'"
+    msg = msg.removeprefix("Value error, ")
+    if kind == "value_error" and msg.startswith(("field ", "table ")):
+        return msg  # a table's own check: its message names the field
+    if kind == "value_error" and not names:
+        return f"table '{prefix.rstrip('.')}': {msg}" if prefix else msg
+    got = err.get("input")
+    shown = "" if isinstance(got, dict) else f" (got {got!r})"
+    what = describe(model, loc)
+    if what is None:
+        what = msg.removeprefix("Input should be ")
+    elif kind == "value_error":
+        what = f"{what}; {msg}"
+    return f"field '{dotted}' must be {what}{shown}"

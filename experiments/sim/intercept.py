@@ -1,0 +1,299 @@
+"""One intercept engagement: truth, noise, estimator and guidance law in a loop (SPEC 1).
+
+:class:`Engagement` is the loop in three parts: :meth:`Engagement.setup` draws the
+truth and builds the estimators (by registered name, :mod:`estim.registry`), the noise
+and the law; each :meth:`Engagement.step` is one decision step; :meth:`Engagement.finish`
+flies to the closest approach and returns the :class:`EngagementResult`.
+:func:`run_engagement` runs the three.
+
+Per decision step ``t_i = i Delta``: measure the bearings (and the range when the
+range finder is due, with the bound of its off-axis angle taken from the bearings of
+both axes: :func:`range_measurement`), update every channel's belief, count the steps
+where the truth lies outside it, compute the impulses and apply them to the truth,
+propagate the truth, then predict the beliefs (and the adversary's sets) to ``t_i+1``
+with the impulses acting at the start of that step. The engagement ends at the
+truth's closest approach (found by minimising the range over the last step; no
+prediction is needed then) or, once every belief has passed under ``eps`` or the
+target is within ``eps``, by free flight to the closest approach.
+
+Containment of the truth is checked at every step while its range exceeds ``eps``
+(with the seed's point sections: ``eps + e Delta + section spacing``, below which the
+threshold legitimately drops the sections that bracket it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from estim import registry
+from estim.base import Belief, Estimator, Status
+from estim.infoset import InformationSetEstimator
+from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from experiments.noise import BiasNoise, GameNoise, RandomNoise
+from experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
+from experiments.sim.pointing import PointingCoupling, PointingLoop
+from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from guidance.intercept.truth import TwoBodyTruth
+
+AXIS = {"lateral": 1, "vertical": 2}
+
+
+def make_estimator(name: str, sc: InterceptScenario, model: ChannelModel) -> Estimator:
+    """The estimator registered as ``name`` with the scenario's options (ValueError if
+    unknown)."""
+    try:
+        reg = registry.get("intercept", name)
+    except KeyError as exc:
+        raise ValueError(exc.args[0]) from None
+    return reg.build(sc.estimator.options_for(name), sc.setting(model))
+
+
+def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, channel: str):
+    """Estimator of one channel and its initial belief, by name."""
+    est = make_estimator(name, sc, model)
+    return est, est.initial(sc.estimator.prior(channel))
+
+
+def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None):
+    """Noise generator; ``sensor`` (default ``model``) bounds the sensor's own errors
+    while ``model`` is what the pursuer's estimators (and the adversary's set) use."""
+    sensor = sensor or model
+    if name == "random":
+        return RandomNoise(sensor, rng)
+    if name == "bias":
+        return BiasNoise(sensor, rng, len(channels))
+    if name == "game":  # the adversary keeps its own information sets
+        est = make_estimator("infoset", sc, model)
+        sets = [est.initial(sc.estimator.prior(ch)) for ch in channels]
+        return GameNoise(est, sets, sensor.bearing_bound)
+    raise ValueError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
+
+
+def draw_truth(sc: InterceptScenario, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Initial relative position (km) and velocity (km/s), uniform in the truth boxes."""
+    t = sc.truth
+    pos = np.array([rng.uniform(*t.x_km), rng.uniform(*t.y_km), rng.uniform(*t.z_km)])
+    vel = np.array([rng.uniform(*t.vx_kmps), rng.uniform(*t.vy_kmps), rng.uniform(*t.vz_kmps)])
+    return pos, vel
+
+
+@dataclass(frozen=True)
+class EngagementResult:
+    miss_m: float
+    fuel_mps: float
+    n_impulses: int
+    truth_outside: int
+    checked_steps: int
+    contradictions: int
+    steps: int
+    ca_time_s: float
+    final_status: str
+    diverged: bool
+    fuel_perfect_info_mps: float
+    max_impulse_mps: float
+    min_impulse_mps: float
+    truth0: tuple[float, ...]
+    extras: tuple[tuple[str, float], ...] = ()
+
+    def as_row(self) -> dict[str, Any]:
+        row = {k: v for k, v in self.__dict__.items() if k not in ("truth0", "extras")}
+        keys = ("x0_km", "y0_km", "z0_km", "vx0_kmps", "vy0_kmps", "vz0_kmps")
+        row.update(zip(keys, self.truth0, strict=True))
+        row.update(self.extras)
+        return row
+
+
+class Engagement:
+    """One engagement in progress (mutable simulator state; see the module docstring)."""
+
+    def __init__(self, sc: InterceptScenario, estimator: str, noise: str, rng):
+        self.sc, self.rng = sc, rng
+        self.setup(estimator, noise)
+
+    def setup(self, estimator_name: str, noise_name: str) -> None:
+        """Draw the truth (first draws of ``rng``), build estimators, noise and law."""
+        sc, rng = self.sc, self.rng
+        self.sensor = self.model = sensor = sc.channel_model()
+        self.dt = sc.model.dt_s
+        self.truth_model = TwoBodyTruth(sun_distance_km=sc.model.sun_distance_km)
+        pos_km, vel_kmps = draw_truth(sc, rng)
+        self.truth0 = (*pos_km, *vel_kmps)
+        self.pointing = None
+        if sc.attitude is not None:  # end-to-end: an attitude loop holds the axis
+            loop = PointingLoop.from_config(sc.attitude, rng.spawn(1)[0])
+            self.pointing = PointingCoupling(loop)
+            self.model = self.pointing.widen(sensor)
+        model = self.model
+        self.state = self.truth_model.initial(pos_km, vel_kmps)
+        self.channels = sc.channels
+        # lower bound: one impulse at the start cancelling the zero-effort miss
+        t_go0 = -pos_km[0] / vel_kmps[0]
+        zem_km = [abs(pos_km[AXIS[c]] + vel_kmps[AXIS[c]] * t_go0) for c in self.channels]
+        self.fuel_floor_mps = sum(zem_km) * 1e3 / t_go0
+        built = [build_estimator(estimator_name, sc, model, c) for c in self.channels]
+        self.estimators: list[Estimator] = [b[0] for b in built]
+        self.beliefs: list[Belief] = [b[1] for b in built]
+        self.noise = build_noise(noise_name, sc, model, self.channels, rng, sensor)
+        # bearings of unguided axes (they bound the range finder's off-axis angle only):
+        # an independent stream, so the runs' other draws do not depend on it
+        self.axis_rng = rng.spawn(1)[0]
+        g = sc.guidance
+        limits = ImpulseLimits(g.min_impulse_mps, g.max_impulse_mps, g.reserve_mps)
+        self.law = ForecastCentringLaw(model, limits)
+        self.check_floor_m = model.eps_m
+        points = [e for e in self.estimators if isinstance(e, InformationSetEstimator)]
+        if points and points[0].sections == "points":
+            # the seed's point sections bracket the truth only above eps + one step +
+            # one spacing; slabs (and other estimators) contain it down to eps
+            x_box = sc.estimator.x_km
+            spacing_m = (x_box[1] - x_box[0]) * 1e3 / max(points[0].n_sections - 1, 1)
+            self.check_floor_m += model.e * self.dt + spacing_m
+        self.fuel = 0.0
+        self.n_imp = self.outside = self.checked = self.step_index = 0
+        self.issued: list[float] = []
+        self.max_steps = int(math.ceil(pos_km[0] * 1e3 / model.e / self.dt * 2)) + 10
+        self.result: EngagementResult | None = None
+
+    def step(self) -> bool:
+        """One decision step; False once the engagement is over (then :meth:`finish`)."""
+        if self.result is not None or self.step_index >= self.max_steps:
+            return False
+        model, tm, dt = self.model, self.truth_model, self.dt
+        t = self.step_index * dt
+        r_km, v_kmps = tm.relative(self.state)
+        x_m, d_m = r_km[0] * 1e3, float(np.linalg.norm(r_km)) * 1e3
+        # guidance ends when every belief has passed under eps, or when the target
+        # itself is inside eps (the seed's blind zone: bearings at a few km carry
+        # no usable information for a state set that ends at eps)
+        if x_m < model.eps_m or all(b.is_empty for b in self.beliefs):
+            return False
+        truth_ch = [
+            model.from_cartesian(r_km[AXIS[c]] * 1e3, v_kmps[AXIS[c]] * 1e3, x_m, v_kmps[0] * 1e3)
+            for c in self.channels
+        ]
+        alphas = self.noise.bearings(truth_ch, d_m)
+        if self.pointing is not None:
+            errs = self.pointing.bearing_errors(r_km, self.channels)
+            alphas = [a + err for a, err in zip(alphas, errs, strict=True)]
+        est = self.estimators
+        beliefs = [
+            e.update(b, Bearing(a)) for e, b, a in zip(est, self.beliefs, alphas, strict=True)
+        ]
+        rf = self.sc.range_finder
+        if rf.enabled and t >= rf.first_s - 1e-9:
+            phase = (t - rf.first_s) / rf.period_s
+            if abs(phase - round(phase)) < 1e-9:
+                measured = dict(zip(self.channels, alphas, strict=True))
+                meas = range_measurement(
+                    self.noise.range(d_m), model, r_km, d_m, measured, self.axis_rng
+                )
+                beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
+                self.noise.observe_range(meas)
+        if x_m > self.check_floor_m:
+            self.checked += 1
+            self.outside += any(
+                not b.is_empty and not b.contains(tc)
+                for b, tc in zip(beliefs, truth_ch, strict=True)
+            )
+        ks = []
+        for b in beliefs:
+            k = self.law.impulse_mps(b, self.fuel)
+            self.fuel += abs(k)
+            self.n_imp += k != 0.0
+            if k != 0.0:
+                self.issued.append(abs(k))
+            ks.append(k)
+        dv = np.zeros(3)
+        for c, k in zip(self.channels, ks, strict=True):
+            dv[AXIS[c]] = k
+        controls: list[Any] = ks
+        if self.pointing is not None:
+            dv, controls = self.pointing.impulse(dv, self.channels)
+        state = tm.apply_impulse(self.state, dv)
+        new_state = tm.propagate(state, dt)
+        r1, v1 = tm.relative(new_state)
+        self.step_index += 1
+        if float(r1 @ v1) >= 0.0:  # closest approach inside this step: no prediction
+            miss_m, t_ca = tm.closest_approach(state, dt)
+            self.beliefs = beliefs
+            self.result = self._result(miss_m, self.step_index, t + t_ca)
+            return False
+        # the impulses act at the start of the step the beliefs are predicted over
+        self.beliefs = [e.predict(b, dt, u) for e, b, u in zip(est, beliefs, controls, strict=True)]
+        self.noise.predict(dt, controls)
+        if self.pointing is not None:
+            self.pointing.step(dt)
+        self.state = new_state
+        return True
+
+    def finish(self) -> EngagementResult:
+        """The result; after guidance, free flight to the closest approach."""
+        if self.result is None:
+            r_km, v_kmps = self.truth_model.relative(self.state)
+            t_go = max(-float(r_km @ v_kmps) / float(v_kmps @ v_kmps), 0.0)
+            miss_m, t_ca = self.truth_model.closest_approach(self.state, 1.5 * t_go + self.dt)
+            n = self.step_index
+            self.result = self._result(miss_m, n, n * self.dt + t_ca)
+        return self.result
+
+    def _result(self, miss_m: float, steps: int, t_ca: float) -> EngagementResult:
+        statuses = {b.status for b in self.beliefs}
+        extras = () if self.pointing is None else tuple(self.pointing.summary().items())
+        return EngagementResult(
+            miss_m=float(miss_m),
+            fuel_mps=float(self.fuel),
+            n_impulses=int(self.n_imp),
+            truth_outside=int(self.outside),
+            checked_steps=int(self.checked),
+            contradictions=int(sum(b.contradictions for b in self.beliefs)),
+            steps=int(steps),
+            ca_time_s=float(t_ca),
+            final_status=",".join(sorted(s.value for s in statuses)),
+            diverged=Status.DIVERGED in statuses,
+            fuel_perfect_info_mps=float(self.fuel_floor_mps),
+            max_impulse_mps=float(max(self.issued, default=0.0)),
+            min_impulse_mps=float(min(self.issued, default=0.0)),
+            truth0=tuple(float(v) for v in self.truth0),
+            extras=extras,
+        )
+
+
+def run_engagement(
+    sc: InterceptScenario, estimator_name: str, noise_name: str, rng: np.random.Generator
+) -> EngagementResult:
+    """Simulate one engagement; ``rng`` draws the truth first, then the noise."""
+    eng = Engagement(sc, estimator_name, noise_name, rng)
+    while eng.step():
+        pass
+    return eng.finish()
+
+
+def range_measurement(
+    d_meas_m: float,
+    model: ChannelModel,
+    r_km: np.ndarray,
+    d_true_m: float,
+    measured: dict[str, float],
+    axis_rng: np.random.Generator,
+) -> Range:
+    """The range measurement with the bound of its off-axis angle (``Range``).
+
+    The seeker measures the bearing of both axes; a guided channel's is the one its
+    estimator used, an unguided axis's is drawn here uniformly within the bound.
+    The bound is taken at the smallest range ``d_meas / (1 + b)`` the measurement
+    allows (it grows as the range closes), so it holds for the true range.
+    """
+    bound = float(model.bearing_bound(d_meas_m / (1.0 + model.range_rel_bound)))
+    b_true = float(model.bearing_bound(d_true_m))
+    bearings = []
+    for i, c in enumerate(CHANNELS, start=1):  # r_km rows: x, then the channels' axes
+        if c in measured:
+            bearings.append(measured[c])
+        else:
+            a_true = math.atan2(r_km[i] * 1e3, r_km[0] * 1e3)  # as x_m, in m
+            bearings.append(a_true + axis_rng.uniform(-b_true, b_true))
+    return Range(d_meas_m, off_axis_rad=off_axis_bound_rad(bearings, [bound, bound]))

@@ -1,0 +1,301 @@
+"""The intercept scenario as typed tables (SPEC 1.8 and 3): what an engagement is run with.
+
+A scenario has the tables ``[model]``, ``[estimator]`` (the a-priori boxes B and D
+every estimator is given, the closing-speed interval, and one ``[estimator.<name>]``
+table of options per estimator, validated by the options model that estimator
+registered: :mod:`estim.registry`), ``[truth]`` (the boxes the true initial state is
+drawn from, uniformly; a degenerate interval fixes a value; default: the estimator's
+boxes), ``[range_finder]``, ``[guidance]``, ``[experiment]``, an optional
+``[reference]`` of the paper's numbers and an optional ``[attitude]`` loop holding the
+spacecraft's axis (:class:`experiments.sim.pointing.PointingConfig`).
+
+The flat option keys of earlier releases are still read: ``estimator.n_sections``,
+``sections``, ``kinematic_margin``, ``split_ratio`` are ``[estimator.infoset]``'s,
+``kalman_sigma``, ``kalman_range_constraint``, ``kalman_noise_inflation`` are
+``n_sigma``, ``range_constraint``, ``noise_inflation`` of ``[estimator.ekf]`` and
+``[estimator.ukf]`` (a table's own key wins).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any, Literal
+
+from pydantic import BaseModel, ValidationError, model_validator
+
+from estim import registry
+from estim.model import BearingBound, ChannelModel, ChannelPrior, ChannelSetting
+from experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
+from experiments.sim.fields import (
+    NONNEGATIVE,
+    Table,
+    field,
+    first_error,
+    integer,
+    interval,
+    number,
+)
+from experiments.sim.pointing import PointingConfig
+
+CHANNELS = ("lateral", "vertical")
+BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
+#: longest run an engagement may take, in decision steps (defect f: a scenario could
+#: ask for 1e8 steps and run without limit)
+MAX_STEPS = 100_000
+#: a scenario's name names its result files: no path separators, no "..", no leading dot
+SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.,=+\-]*$")
+#: flat keys of earlier releases -> (estimator, option) of the [estimator.<name>] tables
+LEGACY_OPTIONS = {
+    "n_sections": (("infoset", "n_sections"),),
+    "sections": (("infoset", "sections"),),
+    "kinematic_margin": (("infoset", "kinematic_margin"),),
+    "split_ratio": (("infoset", "split_ratio"),),
+    "kalman_sigma": (("ekf", "n_sigma"), ("ukf", "n_sigma")),
+    "kalman_range_constraint": (("ekf", "range_constraint"), ("ukf", "range_constraint")),
+    "kalman_noise_inflation": (("ekf", "noise_inflation"), ("ukf", "noise_inflation")),
+}
+
+
+def check_name(name: str) -> str:
+    """A result-file-safe scenario name (letters, digits and ``_ . , = + -``; no ``..``)."""
+    if not SAFE_NAME.match(name) or ".." in name:
+        raise ValueError(
+            f"field 'name' {name!r} must use letters, digits and _ . , = + - only "
+            "(no path separators, no '..', no leading dot): it names the result files"
+        )
+    return name
+
+
+class ModelTable(Table):
+    """The auxiliary model of a channel and the simulation step."""
+
+    closing_speed_kmps: number(1.0, 100.0) = field(58.0, "nominal closing speed e, km/s")
+    nu_mps2: number(0.0, 1.0) = field(0.005, "disturbance bound nu, m/s^2")
+    bearing_bound_start_rad: number(1e-7, 0.1) = field(1.5e-4, "bearing bound at nominal range")
+    bearing_bound_end_rad: number(1e-7, 0.1) = field(2.3e-4, "bearing bound at zero range")
+    nominal_range_km: number(10.0, 1e6) = field(5801.3, "range of the start bound, km")
+    eps_km: number(0.1, 1000.0) = field(5.0, "blind range eps, km")
+    dt_s: number(0.01, 60.0) = field(0.5, "decision step, s")
+    sun_distance_km: number(1e6, 1e10) = field(1.496e8, "heliocentric distance, km")
+
+    def channel_model(self, range_rel_bound: float) -> ChannelModel:
+        return ChannelModel(
+            closing_speed_mps=self.closing_speed_kmps * 1e3,
+            nu_mps2=self.nu_mps2,
+            bearing_bound=BearingBound(
+                self.bearing_bound_start_rad,
+                self.bearing_bound_end_rad,
+                self.nominal_range_km * 1e3,
+            ),
+            range_rel_bound=range_rel_bound,
+            eps_m=self.eps_km * 1e3,
+        )
+
+
+_LATERAL = interval(number(-1e4, 1e4))
+_VEL = interval(number(-10.0, 10.0))
+_RANGE = interval(number(1.0, 1e6))
+_CLOSING = interval(number(-100.0, -0.1))
+
+
+class EstimatorTable(Table):
+    """What every estimator knows a priori, and each estimator's own options."""
+
+    y_km: _LATERAL = field((-10.0, 10.0), "a-priori lateral offset box, km")
+    z_km: _LATERAL = field((-10.0, 10.0), "a-priori vertical offset box, km")
+    x_km: _RANGE = field((5301.3, 6301.3), "a-priori range box, km")
+    vy_kmps: _VEL = field((-0.1, 0.1), "a-priori lateral velocity box, km/s")
+    vz_kmps: _VEL = field((-0.1, 0.1), "a-priori vertical velocity box, km/s")
+    vx_kmps: _CLOSING = field((-59.0, -57.0), "a-priori closing velocity box, km/s")
+    closing_speed_kmps: interval(number(0.1, 100.0)) | None = field(
+        None, "interval of the true closing speed the estimators assume, km/s (default [e, e])"
+    )
+    options: dict[str, dict[str, Any]] = field({}, "[estimator.<name>] tables, by estimator")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _gather_options(cls, data: Any) -> Any:
+        """Sub-tables and the flat keys of earlier releases go to ``options``."""
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        options = {k: dict(v) for k, v in data.pop("options", {}).items()}
+        for key in [k for k, v in data.items() if isinstance(v, dict)]:
+            options.setdefault(key, {}).update(data.pop(key))
+        for key, targets in LEGACY_OPTIONS.items():
+            if key in data:
+                value = data.pop(key)
+                for name, option in targets:
+                    options.setdefault(name, {}).setdefault(option, value)
+        data["options"] = options
+        return data
+
+    def prior(self, channel: str) -> ChannelPrior:
+        """The a-priori box of one channel in SI units."""
+        pos, vel = ("y_km", "vy_kmps") if channel == "lateral" else ("z_km", "vz_kmps")
+        vx = [v * 1e3 for v in self.vx_kmps]
+        return ChannelPrior(
+            tuple(v * 1e3 for v in getattr(self, pos)),
+            tuple(v * 1e3 for v in getattr(self, vel)),
+            tuple(v * 1e3 for v in self.x_km),
+            (-vx[1], -vx[0]),
+        )
+
+    def options_for(self, name: str) -> BaseModel:
+        """The validated options of estimator ``name`` (defaults where not given)."""
+        return registry.get("intercept", name).options.model_validate(self.options.get(name, {}))
+
+
+class TruthTable(Table):
+    """Boxes the true initial relative state is drawn from (uniformly)."""
+
+    y_km: _LATERAL = field(..., "lateral offset, km")
+    z_km: _LATERAL = field(..., "vertical offset, km")
+    x_km: _RANGE = field(..., "range, km")
+    vy_kmps: _VEL = field(..., "lateral velocity, km/s")
+    vz_kmps: _VEL = field(..., "vertical velocity, km/s")
+    vx_kmps: _CLOSING = field(..., "closing velocity, km/s")
+
+
+class RangeFinderTable(Table):
+    enabled: bool = field(False, "measure the range too")
+    rel_bound: number(0.0, 0.5, open_lo=True) = field(0.05, "relative range error bound")
+    first_s: number(0.0, 1e4) = field(1.0, "time of the first range measurement, s")
+    period_s: number(0.01, 1e4) = field(2.0, "period of the range measurements, s")
+
+
+class GuidanceTable(Table):
+    lateral: bool = field(True, "guide the lateral channel")
+    vertical: bool = field(True, "guide the vertical channel")
+    reserve_mps: number(0.0, 1e5) = field(2000.0, "fuel reserve mu, m/s")
+    min_impulse_mps: number(0.0, 1e3) = field(0.25, "smallest impulse issued mu1, m/s")
+    max_impulse_mps: number(0.0, 1e3, open_lo=True) = field(7.5, "largest impulse mu2, m/s")
+
+
+class ExperimentTable(Table):
+    runs: integer(1, 10**7) = field(1, "runs of the Monte Carlo")
+    seed: integer(0, 2**63 - 1) = field(1, "root seed")
+    noise: Literal[NOISES] = field("random", "measurement noise")
+    estimator: str = field("infoset", "estimator name (registered)")
+
+
+class ReferenceTable(Table):
+    miss_random_m: NONNEGATIVE | None = field(None, "paper's miss, random noise, m")
+    fuel_random_mps: NONNEGATIVE | None = field(None, "paper's fuel, random noise, m/s")
+    miss_game_m: NONNEGATIVE | None = field(None, "paper's miss, game noise, m")
+    fuel_game_mps: NONNEGATIVE | None = field(None, "paper's fuel, game noise, m/s")
+    source: str = field("", "where the numbers come from")
+
+
+class InterceptScenario(Table):
+    """A validated intercept scenario (every table with its defaults)."""
+
+    name: str = field(..., "scenario name; names the result files")
+    description: str = field("", "one line")
+    model: ModelTable = field(ModelTable(), "auxiliary model, step")
+    estimator: EstimatorTable = field(EstimatorTable(), "a-priori knowledge and options")
+    truth: TruthTable = field(..., "truth boxes (default: the estimator's)")
+    range_finder: RangeFinderTable = field(RangeFinderTable(), "range measurements")
+    guidance: GuidanceTable = field(GuidanceTable(), "guided channels, impulse limits")
+    experiment: ExperimentTable = field(ExperimentTable(), "runs, seed, defaults")
+    reference: ReferenceTable = field(ReferenceTable(), "the paper's numbers")
+    attitude: PointingConfig | None = field(None, "an attitude loop holding the axis")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _truth_defaults(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        est = data.get("estimator") if isinstance(data.get("estimator"), dict) else {}
+        truth = data.get("truth", {})
+        if isinstance(truth, dict):
+            defaults = EstimatorTable.model_fields
+            base = {k: est.get(k, defaults[k].default) for k in BOX_KEYS}
+            data = {**data, "truth": {**base, **truth}}
+        return data
+
+    @model_validator(mode="after")
+    def _consistent(self) -> InterceptScenario:
+        check_name(self.name)
+        m, e, g = self.model, self.estimator, self.guidance
+        for key in BOX_KEYS:
+            inner, outer = getattr(self.truth, key), getattr(e, key)
+            if inner[0] < outer[0] or inner[1] > outer[1]:
+                raise ValueError(
+                    f"field 'truth.{key}' {list(inner)} must lie inside 'estimator.{key}' "
+                    f"{list(outer)} (the a-priori box must contain the truth)"
+                )
+        for name, table in e.options.items():
+            _check_options(name, table)
+        if g.min_impulse_mps > g.max_impulse_mps:
+            raise ValueError("field 'guidance.min_impulse_mps' must be <= max_impulse_mps")
+        if not (g.lateral or g.vertical):
+            raise ValueError("field 'guidance.lateral' or 'guidance.vertical' must be true")
+        if m.bearing_bound_start_rad > m.bearing_bound_end_rad:
+            # the set's bearing strip and the range finder's off-axis bound take the bound
+            # at the smallest range: sound only if it grows as the range closes
+            raise ValueError(
+                "field 'model.bearing_bound_start_rad' must be <= "
+                "'model.bearing_bound_end_rad' (the bound grows as the range closes)"
+            )
+        if e.x_km[0] <= m.eps_km:
+            raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
+        closing = sorted(-v for v in self.truth.vx_kmps)
+        lo, hi = self.closing_speed_kmps
+        for kalman in ("ekf", "ukf"):
+            opt = e.options.get(kalman, {})
+            if opt.get("range_constraint") and (closing[0] < lo or closing[1] > hi):
+                # the constraint's interval moves at the closing-speed interval's speeds:
+                # it holds the truth only if every true closing speed lies in it
+                raise ValueError(
+                    f"field 'estimator.closing_speed_kmps' {[lo, hi]} must contain the "
+                    f"truth's closing speeds -truth.vx_kmps {closing} when "
+                    f"'estimator.{kalman}.range_constraint' is true (the interval must hold "
+                    "the truth)"
+                )
+        steps = self.max_steps
+        if steps > MAX_STEPS:
+            raise ValueError(
+                f"field 'model.dt_s' {m.dt_s} s makes a run up to {steps} steps long "
+                f"(truth.x_km up to {self.truth.x_km[1]} km at {m.closing_speed_kmps} km/s); "
+                f"the limit is {MAX_STEPS} steps"
+            )
+        return self
+
+    # -- derived ----------------------------------------------------------------------
+    @property
+    def closing_speed_kmps(self) -> tuple[float, float]:
+        """The estimators' closing-speed interval (``[e, e]`` when not given)."""
+        given = self.estimator.closing_speed_kmps
+        return given if given is not None else (self.model.closing_speed_kmps,) * 2
+
+    @property
+    def max_steps(self) -> int:
+        """Most decision steps of a run: twice the nominal time to the farthest truth."""
+        x_m, e_mps = self.truth.x_km[1] * 1e3, self.model.closing_speed_kmps * 1e3
+        return int(math.ceil(x_m / e_mps / self.model.dt_s * 2)) + 10
+
+    @property
+    def channels(self) -> list[str]:
+        return [c for c in CHANNELS if getattr(self.guidance, c)]
+
+    def channel_model(self) -> ChannelModel:
+        return self.model.channel_model(self.range_finder.rel_bound)
+
+    def setting(self, model: ChannelModel | None = None) -> ChannelSetting:
+        """What an estimator of a channel is built with (:mod:`estim.registry`)."""
+        speed = tuple(v * 1e3 for v in self.closing_speed_kmps)
+        return ChannelSetting(model or self.channel_model(), speed)
+
+
+def _check_options(name: str, table: dict[str, Any]) -> None:
+    """An ``[estimator.<name>]`` table, validated by its estimator's options model."""
+    try:
+        reg = registry.get("intercept", name)
+    except KeyError as exc:
+        raise ValueError(f"table 'estimator.{name}': {exc.args[0]}") from None
+    try:
+        reg.options.model_validate(table)
+    except ValidationError as exc:
+        raise ValueError(first_error(exc, f"estimator.{name}.", reg.options)) from None

@@ -1,0 +1,106 @@
+"""The attitude loops on the one runner (issue 15): results do not depend on the worker
+count or the scheduler, and an interrupted run resumes to identical results."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from experiments import attitude_rw
+from experiments.cli import main
+
+TINY_RW = """
+name = "tiny_rw"
+controller = "pd"
+[body]
+inertia_kgm2 = [1.5, 1.5, 1.5]
+[wheels]
+torque_max_Nm = 0.0275
+momentum_max_Nms = 0.2
+[maneuver]
+axis = [0.0, 0.0, 1.0]
+angle_deg = 10.0
+random_attitude = true
+[simulation]
+duration_s = 5.0
+control_period_s = 0.05
+[pd]
+k_q = 1.375
+k_w = 2.625
+[noise]
+disturbance_Nm = 1e-4
+"""
+RUNS = 2 * attitude_rw.CHUNK + 3  # three chunks
+
+
+@pytest.fixture
+def scenario(tmp_path):
+    p = tmp_path / "tiny_rw.toml"
+    p.write_text(TINY_RW)
+    return p
+
+
+def _attitude(capsys, scenario, out, *extra) -> tuple[int, dict | None]:
+    code = main(
+        ["attitude", str(scenario), "--noise", "random", "--estimator", "box", "--runs",
+         str(RUNS), "--seed", "3", "--out", str(out), "--json", "--no-progress", *extra]
+    )  # fmt: skip
+    text = capsys.readouterr().out.strip().splitlines()
+    return code, json.loads(text[-1]) if code == 0 else None
+
+
+def _table(out) -> pd.DataFrame:
+    (path,) = out.glob("*.parquet")
+    assert path.name == "tiny_rw-pd-box-random-s3.parquet"
+    df = pd.read_parquet(path).drop(columns=["wall_s"])
+    return df.sort_values("run").reset_index(drop=True)
+
+
+def _summary(result: dict) -> dict:
+    return {k: v for k, v in result.items() if k not in ("wall_s", "files")}
+
+
+def test_attitude_results_do_not_depend_on_the_worker_count(scenario, tmp_path, capsys):
+    c1, one = _attitude(capsys, scenario, tmp_path / "one", "--workers", "1")
+    c2, two = _attitude(capsys, scenario, tmp_path / "two", "--workers", "2")
+    assert c1 == c2 == 0 and one["failures"] == 0
+    pd.testing.assert_frame_equal(_table(tmp_path / "one"), _table(tmp_path / "two"))
+    assert _summary(one) == _summary(two)
+    assert sorted(_table(tmp_path / "one")["run"]) == list(range(RUNS))
+
+
+def test_interrupted_attitude_run_resumes_to_identical_results(
+    scenario, tmp_path, capsys, monkeypatch
+):
+    _, fresh = _attitude(capsys, scenario, tmp_path / "fresh", "--workers", "1")
+    real, calls = attitude_rw.task, []
+
+    def interrupted(*args, **kw):
+        calls.append(1)
+        if len(calls) == 2:  # Ctrl-C during the second chunk
+            raise KeyboardInterrupt
+        return real(*args, **kw)
+
+    monkeypatch.setattr(attitude_rw, "task", interrupted)
+    code, _ = _attitude(capsys, scenario, tmp_path / "resumed", "--workers", "1")
+    assert code == 130
+    assert len(_table(tmp_path / "resumed")) == attitude_rw.CHUNK  # the first chunk kept
+    monkeypatch.setattr(attitude_rw, "task", real)
+    code, resumed = _attitude(capsys, scenario, tmp_path / "resumed", "--workers", "1")
+    assert code == 0
+    pd.testing.assert_frame_equal(_table(tmp_path / "fresh"), _table(tmp_path / "resumed"))
+    assert _summary(fresh) == _summary(resumed)
+
+
+def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    _, local = _attitude(capsys, scenario, tmp_path / "local", "--workers", "1")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True) as cluster:
+        code, dask = _attitude(
+            capsys, scenario, tmp_path / "dask", "--scheduler", cluster.scheduler_address
+        )
+    assert code == 0
+    pd.testing.assert_frame_equal(_table(tmp_path / "local"), _table(tmp_path / "dask"))
+    assert _summary(local) == _summary(dask)
