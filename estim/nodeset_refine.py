@@ -224,11 +224,27 @@ def _compact(s: NodeSet) -> NodeSet:
     near = live.copy()
     near[1:] |= live[:-1] & same  # the dead node just above a live one
     near[:-1] |= live[1:] & same  # and just below
-    if near.all():
+    if not near.all():
+        s = replace(
+            s, piece=s.piece[near], label_s=s.label_s[near], polygons=s.polygons.select(near)
+        )
+    return _drop_empty_pieces(s)
+
+
+def _drop_empty_pieces(s: NodeSet) -> NodeSet:
+    """Remove the pieces left without nodes (their band and label interval hold no
+    state any more), renumbering the rest; the set keeps at least one piece."""
+    used = np.zeros(len(s.u_lo), dtype=bool)
+    used[s.piece] = True
+    if used.all() or not used.any():
         return s
+    new_index = np.cumsum(used) - 1
+    log = s.log
     return replace(
-        s, piece=s.piece[near], label_s=s.label_s[near], polygons=s.polygons.select(near)
-    )
+        s, piece=new_index[s.piece], u_lo=s.u_lo[used], u_hi=s.u_hi[used],
+        hard_lo_s=s.hard_lo_s[used], hard_hi_s=s.hard_hi_s[used],
+        log=OpLog(log.kinds, log.pa, log.pb, log.q_lo[:, used], log.q_hi[:, used]),
+    )  # fmt: skip
 
 
 def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:

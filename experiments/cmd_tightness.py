@@ -33,15 +33,16 @@ from typing import Any
 
 import numpy as np
 
+from estim import registry
 from estim.costs import ZeroEffortMiss
 from estim.exact_reference import ExactChannelSet, History, InconsistentHistory, PriorBox
 from estim.model import Bearing, Range
 from experiments.cmd_intercept import seed_int
-from experiments.engagement import ESTIMATORS, build_estimator, build_noise, channel_model
 from experiments.errors import InputError
 from experiments.files import atomic_write
-from experiments.intercept_scenario import load_scenario
 from experiments.noise import RandomNoise
+from experiments.scenario import load_scenario
+from experiments.sim.intercept import build_estimator, build_noise
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 
 NOISE_KINDS = ("random", "bias", "game", "switch")
@@ -81,7 +82,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
     add("--guided", action="store_true", help="the seed's law issues impulses")
-    add("--estimator", choices=ESTIMATORS, default="infoset",
+    add("--estimator", choices=registry.names("intercept"), default="infoset",
         help="estimator under test (default: infoset)")  # fmt: skip
     add("--switch-s", type=_positive, default=50.0,
         help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
@@ -98,15 +99,16 @@ def set_under_test(name: str, sc, model):
 def _prior(sc) -> PriorBox:
     e = sc.estimator
     return PriorBox(
-        *(tuple(v * 1e3 for v in e[k]) for k in ("y_km", "vy_kmps", "x_km", "closing_speed_kmps"))
+        *(tuple(v * 1e3 for v in getattr(e, k)) for k in ("y_km", "vy_kmps", "x_km")),
+        tuple(v * 1e3 for v in sc.closing_speed_kmps),
     )
 
 
 def _draw_truth(sc, rng: np.random.Generator) -> tuple[float, float, float, float]:
     """``(Y, V, x, e)`` uniform in the truth boxes (m, m/s, m, m/s)."""
     t = sc.truth
-    y, v, x = (rng.uniform(*t[k]) * 1e3 for k in ("y_km", "vy_kmps", "x_km"))
-    return y, v, x, -rng.uniform(*t["vx_kmps"]) * 1e3
+    y, v, x = (rng.uniform(*getattr(t, k)) * 1e3 for k in ("y_km", "vy_kmps", "x_km"))
+    return y, v, x, -rng.uniform(*t.vx_kmps) * 1e3
 
 
 class _Errors:
@@ -140,17 +142,10 @@ class _Errors:
             getattr(self.game, what)(*args)
 
 
-def _range_due(rf: dict, t: float) -> bool:
-    if not rf["enabled"] or t < rf["first_s"] - 1e-9:
-        return False
-    phase = (t - rf["first_s"]) / rf["period_s"]
-    return abs(phase - round(phase)) < 1e-9
-
-
 def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
     """Run the channel to the last requested time: one record per requested time, and
     the fuel spent (m/s)."""
-    model, dt = channel_model(sc), sc.model["dt_s"]
+    model, dt = sc.channel_model(), sc.model.dt_s
     steps = [round(t / dt) for t in args.times]
     off = [t for t, k in zip(args.times, steps, strict=True) if abs(k * dt - t) > 1e-9]
     if off:
@@ -162,7 +157,7 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
     errors = _Errors(args.noise, sc, model, noise_rng, args.switch_s)
     g = sc.guidance
     law = ForecastCentringLaw(
-        model, ImpulseLimits(g["min_impulse_mps"], g["max_impulse_mps"], g["reserve_mps"])
+        model, ImpulseLimits(g.min_impulse_mps, g.max_impulse_mps, g.reserve_mps)
     )
     prior, fuel = _prior(sc), 0.0
     hist: dict[str, list[float]] = {"t": [], "a": [], "k": [], "d": []}
@@ -175,7 +170,7 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
         alpha = errors.bearing(t, obs)
         belief = est.update(belief, Bearing(alpha))
         d_m = np.nan
-        if _range_due(sc.range_finder, t):
+        if sc.range_finder.due(t):
             d_m = errors.range(t, x)
             meas = Range(d_m, off_axis_rad=0.0)  # one channel: the range is x
             belief = est.update(belief, meas)
@@ -186,11 +181,10 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
         k = law.impulse_mps(belief, fuel) if args.guided else 0.0
         fuel += abs(k)
         hist["k"].append(k)
-        belief, v = est.shift(belief, k), v + k
-        errors.report("observe", [k])
+        v += k
         acc = float(v_rng.uniform(-1.0, 1.0)) * model.nu_mps2
-        belief = est.predict(belief, dt)
-        errors.report("predict", dt)
+        belief = est.predict(belief, dt, k)  # the impulse acts at the step's start
+        errors.report("predict", dt, [k])
         y, v, x = y + v * dt + 0.5 * acc * dt**2, v + acc * dt, x - e * dt
     return [
         records.get(k, {"truth_w_m": None, "reason": "truth under eps"}) | {"time_s": t}
@@ -235,7 +229,7 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 
 def run(args) -> dict[str, Any]:
     sc = load_scenario(args.scenario, args.overrides)
-    seed = sc.experiment["seed"] if args.seed is None else args.seed
+    seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / "tightness"
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: not a directory")

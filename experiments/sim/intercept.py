@@ -183,16 +183,13 @@ class Engagement:
         beliefs = [
             e.update(b, Bearing(a)) for e, b, a in zip(est, self.beliefs, alphas, strict=True)
         ]
-        rf = self.sc.range_finder
-        if rf.enabled and t >= rf.first_s - 1e-9:
-            phase = (t - rf.first_s) / rf.period_s
-            if abs(phase - round(phase)) < 1e-9:
-                measured = dict(zip(self.channels, alphas, strict=True))
-                meas = range_measurement(
-                    self.noise.range(d_m), model, r_km, d_m, measured, self.axis_rng
-                )
-                beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
-                self.noise.observe_range(meas)
+        if self.sc.range_finder.due(t):
+            measured = dict(zip(self.channels, alphas, strict=True))
+            meas = range_measurement(
+                self.noise.range(d_m), model, r_km, d_m, measured, self.axis_rng
+            )
+            beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
+            self.noise.observe_range(meas)
         if x_m > self.check_floor_m:
             self.checked += 1
             self.outside += any(

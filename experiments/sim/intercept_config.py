@@ -164,6 +164,13 @@ class RangeFinderTable(Table):
     first_s: number(0.0, 1e4) = field(1.0, "time of the first range measurement, s")
     period_s: number(0.01, 1e4) = field(2.0, "period of the range measurements, s")
 
+    def due(self, t_s: float) -> bool:
+        """Whether a range measurement is taken at time ``t_s`` (first, then every period)."""
+        if not self.enabled or t_s < self.first_s - 1e-9:
+            return False
+        phase = (t_s - self.first_s) / self.period_s
+        return abs(phase - round(phase)) < 1e-9
+
 
 class GuidanceTable(Table):
     lateral: bool = field(True, "guide the lateral channel")
