@@ -266,8 +266,8 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
     * ``zs`` (m, 4): bounds of ``zs`` with their taus (:func:`zem_bounds`);
     * ``w`` (m, 2): bounds of ``w = (e/e_nom)^2 zs`` over the piece's ``e``;
     * ``alpha`` (m, 2): bounds of the bearing ``Y~ / tau``;
-    * ``per_piece`` (pieces, 4): largest ``|w|``, largest ``|alpha|``, smallest and
-      largest ``tau`` of each piece's cells (0, 0, inf, -inf when it has none).
+    * ``per_piece`` (pieces, 6): bounds of ``w``, of ``alpha`` and of ``tau`` over each
+      piece's cells (inf, -inf pairs when it has none).
     """
     n = off.shape[0] - 1
     m_max = 2 * n
@@ -319,10 +319,11 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
     w = np.empty((m, 2))
     alpha = np.empty((m, 2))
     n_p = u_lo.shape[0]
-    per_piece = np.zeros((n_p, 4))
+    per_piece = np.empty((n_p, 6))
     for p in range(n_p):
-        per_piece[p, 2] = np.inf
-        per_piece[p, 3] = -np.inf
+        for k in range(3):
+            per_piece[p, 2 * k] = np.inf
+            per_piece[p, 2 * k + 1] = -np.inf
     f_hi = np.empty(4)
     f_lo = np.empty(4)
     for c in range(m):
@@ -341,8 +342,10 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
         # Y~ / tau is monotone in tau on each secant: both ends of the part suffice
         alpha[c, 1] = max(y_up / span[c, 0], y_up / span[c, 1])
         alpha[c, 0] = min(y_dn / span[c, 0], y_dn / span[c, 1])
-        per_piece[p, 0] = max(per_piece[p, 0], abs(w[c, 0]), abs(w[c, 1]))
-        per_piece[p, 1] = max(per_piece[p, 1], abs(alpha[c, 0]), abs(alpha[c, 1]))
-        per_piece[p, 2] = min(per_piece[p, 2], span[c, 0])
-        per_piece[p, 3] = max(per_piece[p, 3], span[c, 1])
+        per_piece[p, 0] = min(per_piece[p, 0], w[c, 0])
+        per_piece[p, 1] = max(per_piece[p, 1], w[c, 1])
+        per_piece[p, 2] = min(per_piece[p, 2], alpha[c, 0])
+        per_piece[p, 3] = max(per_piece[p, 3], alpha[c, 1])
+        per_piece[p, 4] = min(per_piece[p, 4], span[c, 0])
+        per_piece[p, 5] = max(per_piece[p, 5], span[c, 1])
     return table, tau4, span, cpiece, zs, w, alpha, per_piece

@@ -145,7 +145,7 @@ def apply_ops(
     Parameters (per operation ``o``): ``BEARING``: ``pa`` = measured bearing (rad);
     ``IMPULSE``: ``q_lo, q_hi`` = the interval of the ``V~`` increment per piece;
     ``RANGE``: ``pa, pb`` = the interval of ``x`` (m); ``PREDICT``: ``pa`` = step (s),
-    ``q_hi`` = the bound of ``v u`` per piece. Nodes have labels ``label`` (time to go
+    ``q_lo, q_hi`` = the interval of ``v u`` per piece. Nodes have labels ``label`` (time to go
     at ``t = 0``) and pieces ``piece``; ``hard_lo, hard_hi`` (per piece, labels) are
     narrowed by range intervals and the threshold. Each node runs through all the
     operations in two scratch buffers (no allocation per operation). Returns the
@@ -204,12 +204,15 @@ def apply_ops(
                 if t1 <= 0.0 or label[i] < h_lo[o + 1, b]:
                     m = 0
                     break
-                nu_s = q_hi[o, b]
+                # v u in [q_lo, q_hi]: its middle moves the node, its half-width spreads it
+                mid = 0.5 * (q_lo[o, b] + q_hi[o, b])
+                nu_s = 0.5 * (q_hi[o, b] - q_lo[o, b])
                 shear = dt / (tau * t1) / (e_nom * scale)
+                ca, cz = dt * dt / (2.0 * t1) / scale, dt * (tau + t1) / 2.0 * e_nom
                 for j in range(m):
-                    a_buf[j, 0] += shear * a_buf[j, 1]
-                ga = nu_s * dt * dt / (2.0 * t1) / scale
-                gz = nu_s * dt * (tau + t1) / 2.0 * e_nom
+                    a_buf[j, 0] += shear * a_buf[j, 1] + mid * ca
+                    a_buf[j, 1] += mid * cz
+                ga, gz = nu_s * ca, nu_s * cz
                 m = _segment1(a_buf, m, ga, gz, b_buf)
                 # a disturbance that varies within the step (the kinematic term does)
                 # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)

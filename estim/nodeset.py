@@ -53,7 +53,8 @@ from numpy.typing import NDArray
 from estim import _kernels as _k
 from estim import _nodeset_kernels as _nk
 from estim.base import Estimator, Status
-from estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
+from estim.infoset import DIVERGED_W_PER_X, STRIP_MARGIN
+from estim.kinematics import kinematic_interval_mps2
 from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 from estim.nodeset_belief import NodeSet
 from estim.nodeset_bounds import OpLog
@@ -216,17 +217,21 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     def _impulse(self, s: NodeSet, control: float | Impulse, per: FloatArray) -> OpLog:
         """The operation of an impulse ``k`` (m/s, relative velocity): ``V += k
         cos^2(alpha)``, i.e. ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece
-        and ``alpha`` up to the piece's largest bearing (``per[:, 1]``); an
+        and ``alpha`` up to the piece's largest bearing; an
         :class:`~estim.model.Impulse` known to ``+-dk`` adds ``dk u_hi`` either way.
-        ``per[:, 0]`` (largest ``|w|`` per piece) grows by what the impulse can add."""
+        The per-piece bounds of ``w`` in ``per`` move by what the impulse can do."""
         k, dk = impulse_parts(control)
-        sin2 = np.sin(np.minimum(per[:, 1], 0.5 * np.pi)) ** 2
+        a_abs = np.maximum(np.abs(per[:, 2]), np.abs(per[:, 3]))
+        sin2 = np.sin(np.minimum(a_abs, 0.5 * np.pi)) ** 2
         ends = np.stack([k * s.u_lo * (1.0 - sin2), k * s.u_hi])
         lo = ends.min(axis=0) - dk * s.u_hi
         hi = ends.max(axis=0) + dk * s.u_hi
-        # zs moves by e_nom tau dV~, w = (e/e_nom)^2 zs
-        dv = np.maximum(np.abs(lo), np.abs(hi))
-        per[:, 0] += dv * s.e_nom * np.maximum(per[:, 3], 0.0) / (s.u_lo * s.e_nom) ** 2
+        # zs moves by e_nom tau dV~ with tau in [tau_lo, tau_hi]; w = (e/e_nom)^2 zs
+        tau = np.maximum(per[:, 4:6], 0.0)
+        scale = np.stack([(1.0 / (s.u_hi * s.e_nom)) ** 2, (1.0 / (s.u_lo * s.e_nom)) ** 2])
+        prods = [s.e_nom * t * d * f for t in tau.T for d in (lo, hi) for f in scale]
+        per[:, 0] += np.minimum(np.min(prods, axis=0), 0.0)
+        per[:, 1] += np.maximum(np.max(prods, axis=0), 0.0)
         return OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi)
 
     def predict(
@@ -236,28 +241,35 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         move every node over ``dt_s`` (exact shear, disturbance segment), drop the
         nodes under eps, split wide pieces and re-grid thinned ones.
 
-        The kinematic margin and the splits are sized from the belief's own summary
-        (the impulse's effect on ``|w|`` bounded on top), so a step computes the
-        bounds between nodes once; impulse and prediction are one compiled call.
+        The disturbance of each piece is ``nu`` plus the interval of the kinematic
+        term over its states (:func:`estim.kinematics.kinematic_interval_mps2`),
+        sized from the belief's own summary (the impulse's effect on ``w`` added), so
+        a step computes the bounds between nodes once; impulse and prediction are
+        one compiled call.
         """
         if belief.is_empty:
             return belief
-        per = belief._summary["per_piece"].copy()  # |w|, |alpha|, tau_lo, tau_hi
+        # bounds of w, alpha and tau per piece
+        per = belief._summary["per_piece"].copy()
         ops = OpLog.empty(len(belief.u_lo))
         k, dk = impulse_parts(control) if control is not None else (0.0, 0.0)
         if k != 0.0 or dk != 0.0:
             ops = self._impulse(belief, control, per)
         s, per, ops = self._split(belief, per, ops)
-        nu = np.full(len(s.u_lo), self.model.nu_mps2)
+        v_lo = np.full(len(s.u_lo), -self.model.nu_mps2)
+        v_hi = -v_lo
         if self.kinematic_margin:
-            nu = nu + self._margin(s, per, dt_s)
-            x_max = np.maximum(per[:, 3], 0.0) / s.u_lo
-            if not np.all(per[:, 0] <= DIVERGED_W_PER_X * x_max):
+            k_lo, k_hi = self._kinematic(s, per, dt_s)
+            v_lo, v_hi = v_lo + k_lo, v_hi + k_hi
+            x_max = np.maximum(per[:, 5], 0.0) / s.u_lo
+            w_abs = np.maximum(np.abs(per[:, 0]), np.abs(per[:, 1]))
+            if not np.all((w_abs <= DIVERGED_W_PER_X * x_max) | ~np.isfinite(per[:, 4])):
                 empty = s.polygons.clip_slab(0, np.full(s.polygons.n, np.inf), 0.0)
                 return replace(s, polygons=empty, status=Status.DIVERGED)
-        ops = (ops if len(ops) else OpLog.empty(len(s.u_lo))) + OpLog.one(
-            _nk.PREDICT, len(nu), dt_s, q_hi=nu * s.u_hi
-        )
+        # v u for u in [u_lo, u_hi]
+        q_lo = np.minimum(v_lo * s.u_lo, v_lo * s.u_hi)
+        q_hi = np.maximum(v_hi * s.u_lo, v_hi * s.u_hi)
+        ops = ops + OpLog.one(_nk.PREDICT, len(q_lo), dt_s, q_lo=q_lo, q_hi=q_hi)
         out = self.refine(self._record(s, ops), before=s)
         if out.is_empty and out.status == Status.OK:
             return replace(out, status=Status.TERMINAL)
@@ -284,12 +296,17 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi
 
     # -- piece-wide quantities ----------------------------------------------------------
-    def _margin(self, s: NodeSet, per: FloatArray, dt_s: float) -> FloatArray:
-        """The kinematic margin of each piece over the next step (m/s^2), from the
-        per-piece summary ``per`` (largest ``|w|``, largest ``|alpha|``, ``tau`` range)."""
-        x_max = np.maximum(per[:, 3], 0.0) / s.u_lo
-        x_min = np.maximum(np.minimum((per[:, 2] - dt_s) / s.u_hi, x_max), self.model.eps_m)
-        return _k.kinematic_margin(
-            np.ascontiguousarray(per[:, 0]), np.ascontiguousarray(per[:, 1]), x_min, x_max,
-            float(dt_s), s.e_nom, self.model.nu_mps2, MAX_BEARING_RAD,
+    def _kinematic(self, s: NodeSet, per: FloatArray, dt_s: float) -> tuple[FloatArray, ...]:
+        """Interval of the kinematic term of each piece over the next step (m/s^2), from
+        the per-piece bounds ``per`` of ``w``, ``alpha`` and ``tau``; pieces without
+        cells get zero."""
+        has = np.isfinite(per[:, 4])
+        x_max = np.where(has, np.maximum(per[:, 5], 0.0) / s.u_lo, 1.0)
+        x_min = np.maximum(np.minimum((per[:, 4] - dt_s) / s.u_hi, x_max), self.model.eps_m)
+        w = np.where(has[:, None], per[:, 0:2], 0.0)
+        a = np.where(has[:, None], per[:, 2:4], 0.0)
+        lo, hi = kinematic_interval_mps2(
+            w[:, 0], w[:, 1], a[:, 0], a[:, 1], np.where(has, x_min, 1.0), x_max, dt_s,
+            s.e_nom, self.model.nu_mps2,
         )  # fmt: skip
+        return np.where(has, lo, 0.0), np.where(has, hi, 0.0)

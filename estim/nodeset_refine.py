@@ -184,10 +184,10 @@ class NodeRefinement:
         for p in range(len(per)):
             if len(s.u_lo) >= self.max_pieces:
                 break
-            if not np.isfinite(per[p, 2]):
+            if not np.isfinite(per[p, 4]):
                 continue
-            lo = max(float(per[p, 2]), self.model.eps_m * float(s.u_lo[p]))
-            hi = float(per[p, 3])
+            lo = max(float(per[p, 4]), self.model.eps_m * float(s.u_lo[p]))
+            hi = float(per[p, 5])
             if not hi > self.split_ratio * lo:
                 continue
             idx = np.flatnonzero((s.piece == p) & s.live)

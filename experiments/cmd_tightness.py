@@ -86,6 +86,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="estimator under test (default: infoset)")  # fmt: skip
     add("--switch-s", type=_positive, default=50.0,
         help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
+    add("--kinematic-margin", action="store_true",
+        help="keep the set's kinematic margin (off by default: the truth here is the "
+        "auxiliary model, which has no kinematic term; with it on, the set models the "
+        "nonlinear motion and may leave out auxiliary-model states)")  # fmt: skip
     add("--out", help="output directory (default: results/tightness)")
     add("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", dest="overrides",
         help="override a scenario field (as for intercept)")  # fmt: skip
@@ -94,6 +98,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def set_under_test(name: str, sc, model):
     """The estimator under test and its initial belief of the lateral channel."""
     return build_estimator(name, sc, model, "lateral")
+
+
+def auxiliary_model_options(sc, margin: bool):
+    """The scenario with the information set's kinematic margin as asked: the margin
+    bounds a term of the *nonlinear* motion that this command's truth (the auxiliary
+    model) does not have."""
+    options = dict(sc.estimator.options)
+    options["infoset"] = {**options.get("infoset", {}), "kinematic_margin": margin}
+    return sc.model_copy(update={"estimator": sc.estimator.model_copy(update={"options": options})})
 
 
 def _prior(sc) -> PriorBox:
@@ -228,7 +241,9 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 
 
 def run(args) -> dict[str, Any]:
-    sc = load_scenario(args.scenario, args.overrides)
+    sc = auxiliary_model_options(
+        load_scenario(args.scenario, args.overrides), args.kinematic_margin
+    )
     seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / "tightness"
     if out.exists() and not out.is_dir():
@@ -242,6 +257,7 @@ def run(args) -> dict[str, Any]:
         "seed": seed,
         "estimator": args.estimator,
         "guided": bool(args.guided),
+        "kinematic_margin": bool(args.kinematic_margin),
         "times_s": [r["time_s"] for r in recs],
         **{f: [r.get(f) for r in recs] for f in FIELDS},
         "max_ratio": max(ratios) if ratios else None,
