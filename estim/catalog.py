@@ -60,7 +60,9 @@ class InfosetOptions(BaseModel):
     ] = 5
     n_bands: Annotated[
         int | None,
-        Field(ge=1, le=16, description="nodes: closing-speed bands (None: 1 if known, else 2)"),
+        Field(
+            ge=1, le=16, description="nodes: closing-speed bands (None: of 0.1 % each, at most 8)"
+        ),
     ] = None
     max_pieces: Annotated[
         int, Field(ge=1, le=256, description="nodes: most pieces splitting may make")

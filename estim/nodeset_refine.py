@@ -45,18 +45,34 @@ class NodeRefinement:
         the feasible interval ends, among them -- until the piece has ``min_live_nodes``
         plus two; a piece down to one live node is re-gridded with ``n_nodes``. A piece
         emptied by a bearing is searched (:meth:`_search`) in the bracket it had
-        ``before``. Dead nodes outside the brackets are dropped.
+        ``before``; one emptied by a range interval or the threshold is re-gridded where
+        that bracket meets the new hard limits (the feasible interval, if any is left,
+        reaches one of their ends, which are nodes of the new grid). Dead nodes outside
+        the brackets are dropped.
         """
         for p in range(len(s.u_lo)):
+            searched = False
             for _ in range(4):
                 n_live = int((s.live & (s.piece == p)).sum())
                 if n_live >= self.min_live_nodes:
                     break
                 if n_live == 0:
                     had = before is not None and bool((before.live & (before.piece == p)).any())
-                    if had and int(s.log.kinds[-1]) == _nk.BEARING:
-                        s = self._search(s, p, *self._bracket(before, p))
-                    break
+                    if not had or searched:
+                        break
+                    lo, hi = self._bracket(before, p)
+                    if int(s.log.kinds[-1]) == _nk.BEARING:
+                        s = self._search(s, p, lo, hi)
+                        break
+                    # a range interval or the threshold cut every node off: what is
+                    # left lies where the feasible interval (inside the old bracket)
+                    # crosses the new hard limits, and reaches one of their ends
+                    lo, hi = max(lo, s.hard_lo_s[p]), min(hi, s.hard_hi_s[p])
+                    if not hi >= lo:
+                        break
+                    s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
+                    searched = True
+                    continue
                 lo, hi = self._bracket(s, p)
                 lo, hi = max(lo, s.hard_lo_s[p]), min(hi, s.hard_hi_s[p])
                 if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
