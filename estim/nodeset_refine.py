@@ -36,6 +36,11 @@ class NodeRefinement:
     the estimator's options and its ``_apply`` and ``_prior``)."""
 
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
+        """:meth:`_refine_pieces`, then drop the nodes and pieces that bound nothing
+        (pieces are renumbered only here, after every piece was visited)."""
+        return _compact(self._refine_pieces(s, before))
+
+    def _refine_pieces(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
         """Add nodes to every piece with fewer than ``min_live_nodes`` live ones.
 
         The piece's feasible labels form an interval (the body is convex) inside the
@@ -86,7 +91,7 @@ class NodeRefinement:
                 piece = np.full(len(labels), p)
                 polys = self._exact_slices(s, piece, labels)
                 s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
-        return _compact(s)
+        return s
 
     def _search(self, s: NodeSet, p: int, lo: float, hi: float) -> NodeSet:
         """Find the states of piece ``p`` that the last bearing left between its nodes.
@@ -109,7 +114,7 @@ class NodeRefinement:
             polys, t, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), head, 0.0)
             out = self._regrid(s, p, labels, polys_before_last=(polys, t))
             if (out.live & (out.piece == p)).any():
-                return self.refine(out)
+                return self._refine_pieces(out)
             tau = labels - t
             bb = self.model.bearing_bound
             half = bb(tau / s.u_hi[p]) * (1.0 + STRIP_MARGIN) + STRIP_MARGIN * self.alpha_scale_rad
