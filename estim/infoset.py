@@ -33,7 +33,7 @@ range does not.
 
 Operations on all sections at once (:class:`estim.sections.SectionBatch`: convex
 polygons, :class:`~estim.polygons.ConvexPolygons`, by default; the slab set may hold an
-ellipsoid, a zonotope or a box per section instead, :mod:`estim.sections_sets`, with
+ellipsoid, a zonotope or a box per section instead, :mod:`estim.catalog_sets`, with
 every operation below an outer bound of the same exact one):
 
 * bearing update: clip with ``|alpha - alpha_m| <= bound(x_lo_j)`` (the widest
@@ -193,7 +193,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     family : SectionFamily or None
         The set held per section (:mod:`estim.sections`): None for convex polygons
         (simplified with ``simplify_rel_area`` and ``max_vertices``), or an ellipsoid,
-        zonotope or box family of :mod:`estim.sections_sets` (``"slabs"`` only). The
+        zonotope or box family (:mod:`estim.catalog_sets`; ``"slabs"`` only). The
         initial polygons are converted by the family (an outer bound); every later
         operation is the family's.
     """

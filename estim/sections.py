@@ -29,9 +29,9 @@ margin, splitting, range intervals and threshold:
 Every operation returns a set containing the exact result (an outer bound), which is
 all the soundness argument of :mod:`estim.infoset` uses. Implementations:
 :class:`PolygonSections` (the exact convex polygons of the original set, compiled
-kernels), :class:`estim.sections_sets.EllipsoidSections`,
-:class:`estim.sections_sets.ZonotopeSections` and
-:class:`estim.sections_sets.BoxSections`. A *family* (:class:`SectionFamily`) is the
+kernels), :class:`estim.sections_ellipsoid.EllipsoidSections`,
+:class:`estim.sections_zonotope.ZonotopeSections` and
+:class:`estim.sections_box.BoxSections`. A *family* (:class:`SectionFamily`) is the
 configuration that builds a batch from the initial polygons; a batch carries its
 family, so the operations know how to reduce (vertex count, generators, criteria).
 """
