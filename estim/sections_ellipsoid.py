@@ -5,8 +5,9 @@ Section ``j`` is ``E(c_j, P_j) = {c_j + P_j^(1/2) u : |u| <= 1}`` of the scaled 
 shape matrices ``(n, 2, 2)``:
 
 * bearing strip ``lo <= p_0 <= hi``: the optimal bounding ellipsoid update of Fogel &
-  Huang (1982), minimum volume (default) or minimum trace, by
-  :meth:`estim.sets.Ellipsoid.intersect_strip` section by section;
+  Huang (1982), minimum volume (default; vectorised, :func:`fogel_huang_volume`,
+  checked against :meth:`estim.sets.Ellipsoid.intersect_strip`) or minimum trace (by
+  that method, section by section);
 * shear ``A = [[1, c], [0, 1]]``: ``E(A c, A P A^T)`` (exact);
 * disturbance box ``[+-h_a] x [+-h_w]``: the Minkowski sums with the segments
   ``+-(h_a, 0)`` and ``+-(0, h_w)`` in turn (a segment: ``h = d d^T``), each by
@@ -43,7 +44,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from estim.polygons import ConvexPolygons
-from estim.sections import BoolArray, FloatArray, IntArray, enclosing_parallelograms
+from estim.sections import (
+    BoolArray,
+    FloatArray,
+    IntArray,
+    clip_slabs,
+    enclosing_parallelograms,
+)
 from estim.sets import Ellipsoid, EmptyIntersectionError
 
 Criterion = Literal["volume", "trace"]
@@ -101,6 +108,68 @@ def segment_sum(shape: FloatArray, d: FloatArray, criterion: Criterion) -> Float
     return np.where((t2 <= 0.0)[:, None, None], shape, out)
 
 
+def fogel_huang_volume(
+    c: FloatArray, p: FloatArray, lo: FloatArray, hi: FloatArray, cut: BoolArray
+) -> tuple[FloatArray, FloatArray]:
+    """Fogel & Huang's minimum-volume update of ``E(c_j, P_j)`` by the slab ``lo_j <=
+    p_0 <= hi_j``, already clipped to the ellipsoid's range of ``p_0``, for the sections
+    ``cut`` (the others are returned unchanged): :meth:`estim.sets.Ellipsoid.
+    intersect_strip` with ``a = e_0``, vectorised over the sections (its special cases
+    included: a segment and a vanishing slab are cut exactly).
+
+    With ``g = P_00``, ``e = y - c_0`` and ``r`` the slab's centre offset and half-width,
+    ``G = g / r^2``, ``eps = e^2 / r^2`` and ``n = rank P``, the weight ``rho`` is the
+    positive root of ``(n-1) G^2 rho^2 + G (2n - 1 + eps - G) rho + n (1 - eps) - G``
+    (0 when ``n (1 - eps) >= G``), and ``c+ = c + rho e P a / (r^2 + rho g)``, ``P+ =
+    delta (P - rho P a a^T P / (r^2 + rho g))``, ``delta = 1 + rho - rho e^2 / (r^2 + rho g)``.
+    """
+    c, p = c.copy(), p.copy()
+    idx = np.flatnonzero(cut)
+    if idx.size == 0:
+        return c, p
+    cc, pp = c[idx], p[idx]
+    g = pp[:, 0, 0]
+    pa = pp[:, :, 0]
+    y, r = 0.5 * (lo[idx] + hi[idx]), 0.5 * (hi[idx] - lo[idx])
+    e = y - cc[:, 0]
+    tr = pp[:, 0, 0] + pp[:, 1, 1]
+    det = pp[:, 0, 0] * pp[:, 1, 1] - pp[:, 0, 1] * pp[:, 1, 0]
+    # eigenvalues of a symmetric 2 x 2; rank as estim.sets.ellipsoid (relative 1e-12)
+    disc = np.sqrt(np.clip(0.25 * tr * tr - det, 0.0, None))
+    lam_max, lam_min = 0.5 * tr + disc, np.clip(0.5 * tr - disc, 0.0, None)
+    flat = lam_min <= 1e-12 * np.maximum(lam_max, 1e-300)
+    n = np.where(flat, 1.0, 2.0)
+    papa = pa[:, :, None] * pa[:, None, :]
+    gs = np.where(g > 0, g, 1.0)
+    # a segment: its part in the slab (exact)
+    seg_c = cc + (e / gs)[:, None] * pa
+    seg_p = (r * r / gs)[:, None, None] * pp
+    # a vanishing slab: the section by a line (exact)
+    hyp_p = (1.0 - e * e / gs)[:, None, None] * (pp - papa / gs[:, None, None])
+    # the general case
+    rs = np.where(r > 0, r, 1.0)
+    big_g, eps = g / (rs * rs), e * e / (rs * rs)
+    a0 = n * (1.0 - eps) - big_g
+    a1 = big_g * (2 * n - 1 + eps - big_g)
+    a2 = (n - 1) * big_g * big_g
+    root = np.sqrt(np.clip(a1 * a1 - 4.0 * a2 * a0, 0.0, None))
+    a2s = np.where(a2 > 0, a2, 1.0)
+    rho = np.where(
+        a1 >= 0, -2.0 * a0 / np.where(a1 + root > 0, a1 + root, 1.0), (root - a1) / (2 * a2s)
+    )
+    rho = np.where(a0 >= 0.0, 0.0, rho)
+    den = r * r + rho * g
+    dens = np.where(den > 0, den, 1.0)
+    delta = 1.0 + rho - rho * e * e / dens
+    gen_c = cc + (rho * e / dens)[:, None] * pa
+    gen_p = delta[:, None, None] * (pp - (rho / dens)[:, None, None] * papa)
+    hyper = ~flat & (r <= 1e-12 * np.sqrt(g))
+    new_c = np.where(flat[:, None], seg_c, np.where(hyper[:, None], seg_c, gen_c))
+    new_p = np.where(flat[:, None, None], seg_p, np.where(hyper[:, None, None], hyp_p, gen_p))
+    c[idx], p[idx] = new_c, 0.5 * (new_p + new_p.transpose(0, 2, 1))
+    return c, p
+
+
 @dataclass(frozen=True, eq=False)
 class EllipsoidSections:
     """Ellipsoids ``E(centre_j, shape_j)``: ``(n, 2)`` and ``(n, 2, 2)`` (read-only)."""
@@ -125,19 +194,24 @@ class EllipsoidSections:
         return EllipsoidSections(self.family, self.centre[index], self.shape[index])
 
     def clip_alpha(self, lo: FloatArray, hi: FloatArray) -> tuple[EllipsoidSections, BoolArray]:
-        c, p = self.centre.copy(), self.shape.copy()
-        keep = np.ones(self.n, dtype=bool)
-        half = np.sqrt(np.clip(p[:, 0, 0], 0.0, None))
-        # only the sections the strip cuts need the update
-        for j in np.flatnonzero((lo > c[:, 0] - half) | (hi < c[:, 0] + half)):
-            b, r = 0.5 * (lo[j] + hi[j]), 0.5 * (hi[j] - lo[j])
+        c, p = self.centre, self.shape
+        g = np.clip(p[:, 0, 0], 0.0, None)
+        half = np.sqrt(g)
+        s_lo, s_hi, keep = clip_slabs(lo, hi, c[:, 0] - half, c[:, 0] + half)
+        cut = keep & ~((s_lo <= c[:, 0] - half) & (s_hi >= c[:, 0] + half))
+        if self.family.criterion == "volume":
+            new_c, new_p = fogel_huang_volume(c, p, s_lo, s_hi, cut)
+            return EllipsoidSections(self.family, new_c, new_p), keep
+        new_c, new_p = c.copy(), p.copy()
+        for j in np.flatnonzero(cut):  # the minimum-trace weight: a cubic per section
+            b, r = 0.5 * (s_lo[j] + s_hi[j]), 0.5 * (s_hi[j] - s_lo[j])
             try:
-                e = self.ellipsoid(j).intersect_strip(_E0, b, r, self.family.criterion)
-            except EmptyIntersectionError:
+                e = self.ellipsoid(j).intersect_strip(_E0, b, r, "trace")
+            except EmptyIntersectionError:  # pragma: no cover - clipped to the set above
                 keep[j] = False
                 continue
-            c[j], p[j] = e.centre, e.shape
-        return EllipsoidSections(self.family, c, p), keep
+            new_c[j], new_p[j] = e.centre, e.shape
+        return EllipsoidSections(self.family, new_c, new_p), keep
 
     def shear_add(self, shear, half_a, half_w, segment: bool = False) -> EllipsoidSections:
         c = self.centre.copy()
