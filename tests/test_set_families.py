@@ -265,3 +265,24 @@ def test_options_tables_are_validated_and_reach_the_family():
             registry.get("intercept", name).build(bad, SETTING)
     with pytest.raises(ValueError, match="slabs"):
         InformationSetEstimator(MODEL, sections="points", family=box.family)
+
+
+def test_tightness_command_measures_a_family_with_its_margin_off(capsys, tmp_path):
+    """``tightness --estimator zonotope``: the exact interval inside the family's, and the
+    family built with the kinematic margin off, as the information set is (its truth is
+    the auxiliary model)."""
+    import json
+
+    from experiments.cli import main
+    from experiments.cmd_tightness import auxiliary_model_options
+    from experiments.scenario import load_scenario
+
+    fig5 = "data/scenarios/kp_fig5.toml"
+    sc = auxiliary_model_options(load_scenario(fig5), False, names=("infoset", "zonotope"))
+    assert sc.estimator.options_for("zonotope").kinematic_margin is False
+    assert sc.estimator.options_for("infoset").kinematic_margin is False
+    code = main(["tightness", fig5, "--estimator", "zonotope", "--times", "2", "--json",
+                 "--out", str(tmp_path)])  # fmt: skip
+    res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert code == 0 and res["estimator"] == "zonotope"
+    assert res["exact_inside"] == [True] and res["ratio"][0] >= 1.0
