@@ -233,8 +233,7 @@ def short_scenario(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name", FAMILIES)
-@pytest.mark.parametrize("noise", ["random", "game", "bias"])
-@pytest.mark.parametrize("seed", [1, 7])
+@pytest.mark.parametrize(("noise", "seed"), [("random", 1), ("game", 7), ("bias", 3)])
 def test_whole_engagement_never_loses_the_truth(short_scenario, name, noise, seed):
     """As tests/test_intercept.py for the information set: two-body truth with offsets
     up to 9.5 km at 800 km (saturated impulses, a swinging line of sight: the kinematic
