@@ -2,7 +2,8 @@
 
 Intercept (one guidance channel): ``infoset`` (:mod:`estim.nodeset` by default, the
 slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
-``ukf`` (:mod:`estim.kalman`). Attitude (batched runs): ``perfect``
+``ukf`` (:mod:`estim.kalman`); the set-membership families ``ellipsoid``, ``zonotope``
+and ``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
 (:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
 (:mod:`estim.attitude_box`). A scenario's ``[estimator.<name>]`` table is validated by
 the options model below (one declaration per field: type, bounds, default, unit, doc).

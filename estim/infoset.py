@@ -31,7 +31,10 @@ prediction is a shear of determinant 1. ``d(omega x^2)/dt = v x`` holds for any
 closing speed, so ``w`` evolves independently of the true closing speed; only the
 range does not.
 
-Operations on all sections at once (:class:`~estim.polygons.ConvexPolygons`):
+Operations on all sections at once (:class:`estim.sections.SectionBatch`: convex
+polygons, :class:`~estim.polygons.ConvexPolygons`, by default; the slab set may hold an
+ellipsoid, a zonotope or a box per section instead, :mod:`estim.catalog_sets`, with
+every operation below an outer bound of the same exact one):
 
 * bearing update: clip with ``|alpha - alpha_m| <= bound(x_lo_j)`` (the widest
   strip over the interval, since the bound shrinks with range);
@@ -90,6 +93,7 @@ from estim.base import Estimator, Status
 from estim.infoset_belief import InformationSet
 from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 from estim.polygons import ConvexPolygons
+from estim.sections import PolygonFamily, SectionFamily
 
 __all__ = ["InformationSet", "InformationSetEstimator", "kinematic_margin_mps2"]
 
@@ -186,6 +190,12 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         at most ``max_sections`` sections. Thin slabs keep the link between range
         and zero-effort miss that a wide slab loses near the target (module
         docstring); ``split_ratio = inf`` turns splitting off.
+    family : SectionFamily or None
+        The set held per section (:mod:`estim.sections`): None for convex polygons
+        (simplified with ``simplify_rel_area`` and ``max_vertices``), or an ellipsoid,
+        zonotope or box family (:mod:`estim.catalog_sets`; ``"slabs"`` only). The
+        initial polygons are converted by the family (an outer bound); every later
+        operation is the family's.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -199,6 +209,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     kinematic_margin: bool = True
     split_ratio: float = 1.5
     max_sections: int = 128
+    family: SectionFamily | None = None
 
     def __post_init__(self) -> None:
         if self.n_sections < 1:
@@ -217,6 +228,15 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             raise ValueError("split_ratio must be > 1 (inf: no splitting)")
         if self.max_sections < self.n_sections:
             raise ValueError("max_sections must be >= n_sections")
+        if self.family is not None and self.sections != "slabs":
+            raise ValueError("other set families than polygons need sections='slabs'")
+
+    @property
+    def section_family(self) -> SectionFamily:
+        """The family of the sections (:class:`estim.sections.PolygonFamily` by default)."""
+        if self.family is None:
+            return PolygonFamily(self.simplify_rel_area, self.max_vertices)
+        return self.family
 
     @property
     def speed_interval(self) -> tuple[float, float]:
@@ -279,7 +299,10 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             zeros = np.zeros_like(xm)
             polys = polys.minkowski_segment(np.column_stack([spread_a, zeros]))
             polys = polys.minkowski_segment(np.column_stack([zeros, spread_w]))
-        return InformationSet(self.model, x_lo, x_hi, polys, self.alpha_scale_rad, self.w_scale_m)
+        return InformationSet(
+            self.model, x_lo, x_hi, self.section_family.from_polygons(polys),
+            self.alpha_scale_rad, self.w_scale_m,
+        )  # fmt: skip
 
     def from_sections(
         self, x_lo_m: ArrayLike, sections: list[ArrayLike], x_hi_m: ArrayLike | None = None
@@ -293,8 +316,8 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             s = np.asarray(sec, dtype=float).reshape(-1, 2)
             w = self.model.zero_effort_miss_m(s[:, 1], x)
             scaled.append(np.column_stack([s[:, 0] / self.alpha_scale_rad, w / self.w_scale_m]))
-        polys = ConvexPolygons.from_list(scaled)
-        return InformationSet(self.model, lo, hi, polys, self.alpha_scale_rad, self.w_scale_m)
+        sections = self.section_family.from_polygons(ConvexPolygons.from_list(scaled))
+        return InformationSet(self.model, lo, hi, sections, self.alpha_scale_rad, self.w_scale_m)
 
     # -- Estimator interface ---------------------------------------------------------
     def update(self, belief: InformationSet, measurement: Bearing | Range) -> InformationSet:
@@ -307,13 +330,12 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             half = self.model.bearing_bound(belief.x_lo_m) / self.alpha_scale_rad
             half = half * (1.0 + STRIP_MARGIN) + STRIP_MARGIN
             centre = measurement.alpha_rad / self.alpha_scale_rad
-            clipped = belief.polygons.clip_slab(0, centre - half, centre + half)
-            keep = clipped.counts > 0
+            clipped, keep = belief.sections.clip_alpha(centre - half, centre + half)
             if keep.all():
                 return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, clipped)
             if not keep.any():
                 return self._contradiction(belief)
-            return self._select(belief, keep, polygons=clipped)
+            return self._select(belief, keep, sections=clipped)
         if isinstance(measurement, Range):
             return self._update_range(belief, measurement)
         raise TypeError(f"unsupported measurement {type(measurement).__name__}")
@@ -355,11 +377,11 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         half = half + dk * belief.x_hi_m / self.model.e / self.w_scale_m
         if self.sections != "points":
             # the true change is omega += k cos^2(alpha)/x: widen by k sin^2(alpha) x/e
-            a_abs, _ = _k.section_abs_max(belief.polygons.xy, belief.polygons.offsets)
+            a_abs, _ = belief.sections.abs_max()
             sin2 = np.sin(np.minimum(a_abs * self.alpha_scale_rad, 0.5 * np.pi)) ** 2
             half = half + (abs(k) + dk) * sin2 * belief.x_hi_m / self.model.e / self.w_scale_m
-        polys = belief.polygons.shift_band(scale * belief.x_mid_m, half)
-        return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, polys)
+        sections = belief.sections.shift_band(scale * belief.x_mid_m, half)
+        return InformationSet._new(belief, belief.x_lo_m, belief.x_hi_m, sections)
 
     def predict(
         self, belief: InformationSet, dt_s: float, control: float | Impulse | None = None
@@ -389,10 +411,10 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         c_lo = self.model.e * dt_s / (belief.x_hi_m * x_hi1)
         ratio = self.w_scale_m / self.alpha_scale_rad
         nu = self.model.nu_mps2
-        polys = belief.polygons
+        sections = belief.sections
         points = self.sections == "points"
         if not points:
-            a_abs, w_abs = _k.section_abs_max(polys.xy, polys.offsets)
+            a_abs, w_abs = sections.abs_max()
         if not points and self.kinematic_margin:
             # the kinematic term the linear model neglects (module docstring)
             nu = nu + _k.kinematic_margin(
@@ -414,13 +436,10 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             # the other shears of the interval, as a horizontal segment
             g_alpha = g_alpha + 0.5 * (c_hi - c_lo) * ratio * w_abs
         # shear at the middle; then the disturbance (the seed's exact segment of
-        # constant disturbances for points, a box for slabs); then an outer
-        # simplification that bounds the vertex count without losing a state
-        xy, off = _k.predict_sections(
-            polys.xy, polys.offsets, 0.5 * (c_lo + c_hi) * ratio, g_alpha, g_w, points,
-            self.simplify_rel_area, self.max_vertices,
-        )  # fmt: skip
-        return InformationSet._new(belief, x_lo1, x_hi1, ConvexPolygons._make(xy, off))
+        # constant disturbances for points, a box for slabs); the representation's
+        # own outer bound (polygons: a simplification bounding the vertex count)
+        moved = sections.shear_add(0.5 * (c_lo + c_hi) * ratio, g_alpha, g_w, segment=points)
+        return InformationSet._new(belief, x_lo1, x_hi1, moved)
 
     # -- internals -------------------------------------------------------------------
     def _split(self, belief: InformationSet) -> InformationSet:
@@ -449,12 +468,12 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         lo, r = lo_all[idx], ratio[idx]
         x_lo = np.where(j == 0, belief.x_lo_m[idx], lo * r ** (j / k))
         x_hi = np.where(j == k - 1, belief.x_hi_m[idx], lo * r ** ((j + 1) / k))
-        return InformationSet._new(belief, x_lo, x_hi, belief.polygons.select(idx))
+        return InformationSet._new(belief, x_lo, x_hi, belief.sections.select(idx))
 
     @staticmethod
-    def _select(belief: InformationSet, keep, polygons: ConvexPolygons | None = None):
-        polys = (belief.polygons if polygons is None else polygons).select(keep)
-        return InformationSet._new(belief, belief.x_lo_m[keep], belief.x_hi_m[keep], polys)
+    def _select(belief: InformationSet, keep, sections=None) -> InformationSet:
+        chosen = (belief.sections if sections is None else sections).select(keep)
+        return InformationSet._new(belief, belief.x_lo_m[keep], belief.x_hi_m[keep], chosen)
 
     @staticmethod
     def _contradiction(belief: InformationSet) -> InformationSet:

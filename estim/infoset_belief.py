@@ -2,7 +2,9 @@
 
 The belief half of :mod:`estim.infoset` (the estimator, which builds and moves these
 values, and the discretisations are described there). Sections live in the scaled
-coordinates ``(alpha / alpha_scale_rad, w / w_scale_m)``, ``w = omega x^2 / e``.
+coordinates ``(alpha / alpha_scale_rad, w / w_scale_m)``, ``w = omega x^2 / e``, held
+by any set representation of :mod:`estim.sections` (convex polygons by default;
+ellipsoids, zonotopes or boxes).
 """
 
 from __future__ import annotations
@@ -16,28 +18,36 @@ from numpy.typing import ArrayLike, NDArray
 from estim.base import Belief, Extremes, StateFunction, Status
 from estim.base import frozen_array as _frozen
 from estim.base import frozen_view as _frozen_view
+from estim.costs import MissForecast, ZeroEffortMiss
 from estim.model import ChannelModel
 from estim.polygons import ConvexPolygons
+from estim.sections import PolygonFamily, PolygonSections, SectionBatch
 
 FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
 class InformationSet(Belief):
-    """An immutable stack of convex sections with their range intervals."""
+    """An immutable stack of convex sections with their range intervals.
+
+    ``sections`` is a :class:`estim.sections.SectionBatch` (a
+    :class:`~estim.polygons.ConvexPolygons` is taken as the polygon batch).
+    """
 
     model: ChannelModel
     x_lo_m: FloatArray
     x_hi_m: FloatArray
-    polygons: ConvexPolygons
+    sections: SectionBatch
     alpha_scale_rad: float
     w_scale_m: float
     status: Status = Status.OK
     contradictions: int = 0
 
     def __post_init__(self) -> None:
+        if isinstance(self.sections, ConvexPolygons):
+            object.__setattr__(self, "sections", PolygonSections(PolygonFamily(), self.sections))
         lo, hi = _frozen(self.x_lo_m), _frozen(self.x_hi_m)
-        if lo.ndim != 1 or lo.shape != hi.shape or len(lo) != self.polygons.n:
+        if lo.ndim != 1 or lo.shape != hi.shape or len(lo) != self.sections.n:
             raise ValueError("one range interval per section is required")
         if np.any(hi < lo):
             raise ValueError("section intervals need x_lo <= x_hi")
@@ -45,64 +55,82 @@ class InformationSet(Belief):
         object.__setattr__(self, "x_hi_m", hi)
 
     @classmethod
-    def _new(cls, like: InformationSet, x_lo, x_hi, polygons, **changes) -> InformationSet:
+    def _new(cls, like: InformationSet, x_lo, x_hi, sections, **changes) -> InformationSet:
         """Internal constructor from fresh arrays (no copies, no checks): the hot path."""
         obj = object.__new__(cls)
         for name in ("model", "alpha_scale_rad", "w_scale_m", "status", "contradictions"):
             object.__setattr__(obj, name, changes.get(name, getattr(like, name)))
         object.__setattr__(obj, "x_lo_m", _frozen_view(x_lo))
         object.__setattr__(obj, "x_hi_m", _frozen_view(x_hi))
-        object.__setattr__(obj, "polygons", polygons)
+        object.__setattr__(obj, "sections", sections)
         return obj
+
+    @property
+    def polygons(self) -> ConvexPolygons:
+        """The sections as convex polygons (the polygon representation only)."""
+        if not isinstance(self.sections, PolygonSections):
+            raise AttributeError(f"{type(self.sections).__name__} sections are not polygons")
+        return self.sections.polygons
 
     # -- Belief interface ------------------------------------------------------------
     @property
     def is_empty(self) -> bool:
-        return self.polygons.n == 0
+        return self.sections.n == 0
 
     @property
     def n_sections(self) -> int:
-        return self.polygons.n
+        return self.sections.n
 
     @property
     def x_mid_m(self) -> FloatArray:
         return 0.5 * (self.x_lo_m + self.x_hi_m)
 
-    def vertices(self, at: str = "mid") -> FloatArray:
+    def vertices(self, at: str = "mid", points: str = "boundary") -> FloatArray:
         """Section vertices as rows ``(alpha, omega, x)`` with ``x`` at each
-        section's ``"lo"``, ``"mid"`` or ``"hi"`` range."""
+        section's ``"lo"``, ``"mid"`` or ``"hi"`` range (``points="w"``: only the points
+        of least and largest ``w`` of each section, where the representation has them;
+        an ellipsoid's "vertices" are support points on a ring of directions)."""
         xs = {"lo": self.x_lo_m, "mid": self.x_mid_m, "hi": self.x_hi_m}[at]
-        x = xs[self.polygons.owner()]
-        alpha = self.polygons.xy[:, 0] * self.alpha_scale_rad
-        omega = self.model.omega_from_w(self.polygons.xy[:, 1] * self.w_scale_m, x)
+        if points == "w":
+            xy, own = self.sections.w_extreme_points()
+        else:
+            xy, own = self.sections.boundary_points()
+        x = xs[own]
+        alpha = xy[:, 0] * self.alpha_scale_rad
+        omega = self.model.omega_from_w(xy[:, 1] * self.w_scale_m, x)
         return np.column_stack([alpha, omega, x])
 
     def centre(self) -> FloatArray:
-        """Mean over sections of the vertex centroid, as ``(alpha, omega, x)``."""
+        """Mean over sections of the section centre (the polygons' vertex centroid), as
+        ``(alpha, omega, x)``."""
         if self.is_empty:
             return np.full(3, np.nan)
-        own = self.polygons.owner()
-        counts = self.polygons.counts
-        cen = [np.bincount(own, weights=self.polygons.xy[:, k]) / counts for k in range(2)]
+        cen = self.sections.centres()
         x = float(self.x_mid_m.mean())
-        alpha = float(cen[0].mean()) * self.alpha_scale_rad
-        w = float(cen[1].mean()) * self.w_scale_m
+        alpha = float(cen[:, 0].mean()) * self.alpha_scale_rad
+        w = float(cen[:, 1].mean()) * self.w_scale_m
         return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the set, from the section vertices taken at both
-        ends of each section's range interval.
+        """Min and max of ``fn`` over the set, from points of each section taken at both
+        ends of its range interval.
 
-        Exact for functions whose extremes over a section sit at a vertex and at an
-        end of the interval: linear functions of ``(alpha, w)`` monotone in ``x``, and
-        the miss forecast ``Pi = w + sign(w) nu (x/e)^2 / 2`` of seed 003 (for fixed
-        ``x`` increasing in ``omega``, with a jump up at ``omega = 0``).
+        The miss forecast ``Pi = w + sign(w) nu (x/e)^2 / 2`` of seed 003 and the
+        zero-effort miss ``w`` (:mod:`estim.costs`, recognised by type) depend on ``w``
+        and ``x`` only; at fixed ``x`` they are nondecreasing in ``w`` (``Pi`` jumps up at
+        ``w = 0``) and at fixed ``w`` monotone in ``x``, so over a section and its interval
+        their extremes sit at the section's points of least and largest ``w`` (support
+        points) at an end of the interval: exact for every representation. Any other
+        function is evaluated at the sections' boundary points: exact for functions
+        linear in ``(alpha, w)`` and monotone in ``x`` over polygons, zonotopes and boxes
+        (vertices), an inner approximation over ellipsoids.
         """
         if self.is_empty:
             raise ValueError(f"extremes of an empty information set (status {self.status})")
-        pts = self.vertices("hi")
+        kind = "w" if isinstance(fn, MissForecast | ZeroEffortMiss) else "boundary"
+        pts = self.vertices("hi", kind)
         if np.any(self.x_hi_m > self.x_lo_m):
-            pts = np.vstack([self.vertices("lo"), pts])
+            pts = np.vstack([self.vertices("lo", kind), pts])
         values = np.asarray(fn(pts), dtype=float)
         i_min, i_max = int(np.argmin(values)), int(np.argmax(values))
         return Extremes(float(values[i_min]), pts[i_min], float(values[i_max]), pts[i_max])
@@ -113,8 +141,9 @@ class InformationSet(Belief):
         Slabs: the state is inside when a section whose interval contains ``x``
         contains ``(alpha, w)``. Points (zero-width intervals): between two sections
         the set is taken as the x-section of the convex hull of the neighbouring
-        sections (a heuristic; exact at a section's own range). ``tol`` is a
-        distance in the scaled coordinates (numerical tolerance).
+        sections (a heuristic; exact at a section's own range; polygons only). ``tol``
+        is a relative numerical tolerance (of the polygons' magnitude in the scaled
+        coordinates; each representation's own for the others).
         """
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float))
         if self.is_empty:
@@ -124,7 +153,7 @@ class InformationSet(Belief):
             float(self.model.zero_effort_miss_m(omega, x)) / self.w_scale_m,
         )
         span = max(float(self.x_hi_m.max() - self.x_lo_m.min()), 1.0)
-        if np.all(self.x_hi_m == self.x_lo_m) and self.n_sections > 1:
+        if np.all(self.x_hi_m == self.x_lo_m) and self.n_sections > 1 and self._is_polygons:
             pts = self._interpolated(x, span * tol)
             if pts is None:
                 return False
@@ -132,8 +161,11 @@ class InformationSet(Belief):
             hull = shapely.MultiPoint(pts).convex_hull
             return bool(shapely.distance(hull, shapely.Point(p)) <= tol * scale)
         idx = np.flatnonzero((self.x_lo_m <= x + tol * span) & (self.x_hi_m >= x - tol * span))
-        scale = max(1.0, float(np.abs(self.polygons.xy).max()))
-        return self.polygons.contains_point(idx, p, tol * scale)
+        return self.sections.contains(idx, p, tol)
+
+    @property
+    def _is_polygons(self) -> bool:
+        return isinstance(self.sections, PolygonSections)
 
     def _interpolated(self, x: float, x_tol: float) -> FloatArray | None:
         xs = self.x_lo_m
@@ -148,8 +180,8 @@ class InformationSet(Belief):
 
     # -- summaries -------------------------------------------------------------------
     def alpha_range_rad(self) -> tuple[float, float]:
-        a = self.polygons.xy[:, 0] * self.alpha_scale_rad
-        return float(a.min()), float(a.max())
+        lo, hi = self.sections.alpha_bounds()
+        return lo * self.alpha_scale_rad, hi * self.alpha_scale_rad
 
     def x_range_m(self) -> tuple[float, float]:
         return float(self.x_lo_m.min()), float(self.x_hi_m.max())

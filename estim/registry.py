@@ -33,7 +33,7 @@ from estim.base import Estimator
 PROBLEMS = ("intercept", "attitude")
 ENTRY_POINT_GROUP = "kalman_vs_infoset.estimators"
 #: modules whose import registers the package's own estimators
-BUILTIN = ("estim.catalog",)
+BUILTIN = ("estim.catalog", "estim.catalog_sets")
 
 _REGISTRY: dict[tuple[str, str], Registration] = {}
 _loaded = False

@@ -100,12 +100,15 @@ def set_under_test(name: str, sc, model):
     return build_estimator(name, sc, model, "lateral")
 
 
-def auxiliary_model_options(sc, margin: bool):
-    """The scenario with the information set's kinematic margin as asked: the margin
-    bounds a term of the *nonlinear* motion that this command's truth (the auxiliary
-    model) does not have."""
+def auxiliary_model_options(sc, margin: bool, names=("infoset",)):
+    """The scenario with the kinematic margin of the estimators ``names`` (those that
+    have one: the information set, the set families) as asked: the margin bounds a term
+    of the *nonlinear* motion that this command's truth (the auxiliary model) does not
+    have."""
     options = dict(sc.estimator.options)
-    options["infoset"] = {**options.get("infoset", {}), "kinematic_margin": margin}
+    for name in names:
+        if "kinematic_margin" in registry.get("intercept", name).options.model_fields:
+            options[name] = {**options.get(name, {}), "kinematic_margin": margin}
     return sc.model_copy(update={"estimator": sc.estimator.model_copy(update={"options": options})})
 
 
@@ -242,8 +245,9 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 
 def run(args) -> dict[str, Any]:
     sc = auxiliary_model_options(
-        load_scenario(args.scenario, args.overrides), args.kinematic_margin
-    )
+        load_scenario(args.scenario, args.overrides), args.kinematic_margin,
+        names=sorted({"infoset", args.estimator}),
+    )  # fmt: skip
     seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / "tightness"
     if out.exists() and not out.is_dir():

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from estim import registry
 from experiments import runner
 from experiments.cli import main
 from experiments.runner import run_experiment
@@ -308,19 +309,22 @@ def test_bench_reports_every_field_side_by_side(capsys):
 
 
 def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, capsys):
-    """Issue 4: compare returns one row per estimator x noise, zero failures, zero
-    containment violations for the information set, writes Parquet and PNG; run j
-    has the same truth for every estimator; the same seed twice gives the same table."""
+    """Issue 4: compare returns one row per estimator x noise (every registered
+    estimator by default), zero failures, zero containment violations for the set
+    estimators, writes Parquet and PNG; run j has the same truth for every estimator;
+    the same seed twice gives the same table."""
     args = ("compare", short, "--runs", "3", "--json", "--workers", "1", "--no-progress")
     r = cli_inproc(capsys, *args, "--out", tmp_path / "a")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert len(out["rows"]) == 6
+    names = registry.names("intercept")
+    assert len(out["rows"]) == 2 * len(names)
     assert {(x["estimator"], x["noise"]) for x in out["rows"]} == {
-        (e, n) for e in ("infoset", "ekf", "ukf") for n in ("random", "game")
+        (e, n) for e in names for n in ("random", "game")
     }
     assert all(x["failures"] == 0 for x in out["rows"])
-    assert all(x["truth_outside"] == 0 for x in out["rows"] if x["estimator"] == "infoset")
+    sets = ("infoset", "ellipsoid", "zonotope", "box")
+    assert all(x["truth_outside"] == 0 for x in out["rows"] if x["estimator"] in sets)
     assert any(f.endswith(".parquet") for f in out["files"])
     assert any(f.endswith(".png") for f in out["files"])
     table = pd.read_parquet(next(f for f in out["files"] if f.endswith(".parquet")))
