@@ -32,13 +32,31 @@ NAN = math.nan
 
 #: every key :func:`describe_channel` returns, with its unit in its name
 FIELDS = (
-    "alpha_est_rad", "omega_est_radps", "x_est_m", "zem_est_m",
-    "forecast_lo_m", "forecast_hi_m", "forecast_x_lo_m", "forecast_x_hi_m",
-    "zem_lo_m", "zem_hi_m", "alpha_lo_rad", "alpha_hi_rad",
-    "omega_lo_radps", "omega_hi_radps", "x_lo_m", "x_hi_m",
-    "status", "contradictions", "empty",
-    "n_sections", "n_vertices", "area_max_radm", "n_sigma", "innovation_outliers",
-)  # fmt: skip
+    "alpha_est_rad",
+    "omega_est_radps",
+    "x_est_m",
+    "zem_est_m",
+    "forecast_lo_m",
+    "forecast_hi_m",
+    "forecast_x_lo_m",
+    "forecast_x_hi_m",
+    "zem_lo_m",
+    "zem_hi_m",
+    "alpha_lo_rad",
+    "alpha_hi_rad",
+    "omega_lo_radps",
+    "omega_hi_radps",
+    "x_lo_m",
+    "x_hi_m",
+    "status",
+    "contradictions",
+    "empty",
+    "n_sections",
+    "n_vertices",
+    "area_max_radm",
+    "n_sigma",
+    "innovation_outliers",
+)
 
 
 def _column(k: int):

@@ -116,9 +116,17 @@ def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq)
     s = setup
     rng = [np.random.default_rng(seed_seq)]
     r = simulate_turn(
-        s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, rng, s.cfg, estimator,
+        s.gyro,
+        s.law,
+        s.q0,
+        s.q_target,
+        s.beta_Nm,
+        s.disturbance,
+        rng,
+        s.cfg,
+        estimator,
         record=True,
-    )  # fmt: skip
+    )
     st = r.states[0]
     eta = error_quaternion(st[:, Q], s.q_target)
     deta = eta_v_rate(eta, st[:, X])

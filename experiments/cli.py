@@ -1,4 +1,4 @@
-"""Command line: ``python -m experiments COMMAND ...`` (SPEC section 3.1).
+"""Command line: ``python -m experiments COMMAND ...`` (docs/models.md §3.1).
 
 Each command lives in its own module ``experiments.cmd_<name>`` exposing
 ``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed

@@ -141,10 +141,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         results.append(res)
         frames.append(df)
         files.append(str(job_path(out_dir, job)))
-        if traced:
+        ok_runs = traces.traceable(traced, df, job.desc)
+        if ok_runs:
             tracer = partial(TRACERS[controller], setup, controller, args.noise, est)
             base = {"scenario": name, **choice, "seed": seed}
-            runs = [tracer(run_seed(seed, 0, j)).assign(**base, run=j) for j in traced]
+            runs = [tracer(run_seed(seed, 0, j)).assign(**base, run=j) for j in ok_runs]
             path = traces.trace_paths(job_path(out_dir, job))[0]
             files.append(str(traces.write_parquet(pd.concat(runs, ignore_index=True), path)))
             histories += runs

@@ -93,10 +93,13 @@ def run(args) -> dict[str, Any]:
     )
     if traced:  # one trace per estimator x noise, drawn together
         written = []
-        for est in args.estimators:
-            for noise in args.noise:
-                path = results_path(out / "runs", sc, est, noise, seed)
-                written += traces.write_intercept_trace(sc, est, noise, seed, traced, path)
+        for (est, noise), df in zip(
+            [(e, n) for e in args.estimators for n in args.noise], frames, strict=True
+        ):
+            ok = traces.traceable(traced, df, f"{sc.name} {est}-{noise}")
+            path = results_path(out / "runs", sc, est, noise, seed)
+            if ok:
+                written += traces.write_intercept_trace(sc, est, noise, seed, ok, path)
         files += written + draw_traces(written, sc)
     return {
         "scenario": sc.name,

@@ -88,6 +88,7 @@ def run(args) -> dict[str, Any]:
     )
     result = summarise(df, sc, estimator, noise, seed, time.perf_counter() - t0)
     result["out"] = str(out)
+    traced = traces.traceable(traced, df, f"{sc.name} {estimator}-{noise}")
     if traced:
         path = results_path(out, sc, estimator, noise, seed)
         files = traces.write_intercept_trace(sc, estimator, noise, seed, traced, path)

@@ -49,8 +49,10 @@ def _paper_from_json(path: Path) -> dict[str, tuple[Any, Any]] | None:
         ref = json.loads(meta.read_text())["scenario"]["reference"]
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    return {"random": (ref.get("miss_random_m"), ref.get("fuel_random_mps")),
-            "game": (ref.get("miss_game_m"), ref.get("fuel_game_mps"))}  # fmt: skip
+    return {
+        "random": (ref.get("miss_random_m"), ref.get("fuel_random_mps")),
+        "game": (ref.get("miss_game_m"), ref.get("fuel_game_mps")),
+    }
 
 
 def _noises(df: pd.DataFrame) -> list[str]:

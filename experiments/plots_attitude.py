@@ -42,19 +42,31 @@ def _style(df: pd.DataFrame) -> dict:
     return fs.line(str(df["estimator"].iloc[0]), str(df["noise"].iloc[0]))
 
 
-def axis_panels(axes, traces: Sequence[pd.DataFrame], column: str, ylabel: str,
-                what: str = "", limit: str | None = None) -> None:  # fmt: skip
-    """``column`` of each trace against time on three axis panels (``axes`` of 3)."""
+def axis_panels(
+    axes,
+    traces: Sequence[pd.DataFrame],
+    column: str,
+    ylabel: str,
+    what: str = "",
+    limit: str | None = None,
+    lw: float | None = None,
+) -> None:
+    """``column`` of each trace against time on three axis panels (``axes`` of 3); ``lw``
+    (line width) tells apart variants of one estimator and noise."""
     for ax, k in zip(axes, AXES, strict=True):
         for df in traces:
             d = df[df["axis"] == k]
-            ax.plot(d["t_s"], d[column], **_style(df), label=_label(df, what))
+            style = {**_style(df), **({"lw": lw} if lw else {})}
+            ax.plot(d["t_s"], d[column], **style, label=_label(df, what))
             if limit is not None and limit in d and np.isfinite(d[limit]).any():
                 lim = d[limit].to_numpy(dtype=float)
                 ax.plot(d["t_s"], lim, color=fs.REFERENCE, lw=0.8, ls="-", label="limit")
                 ax.plot(d["t_s"], -lim, color=fs.REFERENCE, lw=0.8, ls="-", label="limit")
-        ax.set_ylabel(f"{ylabel} ({'xyz'[k - 1]})" if ", " not in ylabel else
-                      ylabel.replace(",", f" ({'xyz'[k - 1]}),", 1))  # fmt: skip
+        ax.set_ylabel(
+            f"{ylabel} ({'xyz'[k - 1]})"
+            if ", " not in ylabel
+            else ylabel.replace(",", f" ({'xyz'[k - 1]}),", 1)
+        )
         ax.set_xlabel("time t, s")
 
 
@@ -94,8 +106,14 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
         bottom[0].plot(d["t_s"], d["angle_deg"], **style, label=_label(df, "error angle"))
         kb = d["knowledge_bound_deg"].to_numpy(dtype=float)
         if np.nanmax(kb, initial=0.0) > 1e-9:  # a perfect, noiseless belief has none
-            bottom[0].plot(d["t_s"], kb, color=style["color"], lw=0.8, ls=":",
-                           label=_label(df, "knowledge bound of the belief"))  # fmt: skip
+            bottom[0].plot(
+                d["t_s"],
+                kb,
+                color=style["color"],
+                lw=0.8,
+                ls=":",
+                label=_label(df, "knowledge bound of the belief"),
+            )
         bottom[1].plot(d["t_s"], d["energy_N2m2s"], **style, label=_label(df, "energy so far"))
         bottom[2].plot(d["t_s"], d["rate_norm_degps"], **style, label=_label(df, "rate norm"))
         if "guaranteed_time_s" in d:

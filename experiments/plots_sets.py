@@ -30,8 +30,11 @@ from experiments import figstyle as fs
 def _sections(d: pd.DataFrame):
     """``(x_km, alpha_mrad, w_km)`` vertex arrays of each section of one snapshot."""
     for _, s in d.sort_values(["section", "vertex"]).groupby("section", sort=True):
-        yield (s["x_m"].to_numpy() / 1e3, s["alpha_rad"].to_numpy() * 1e3,
-               s["zem_m"].to_numpy() / 1e3)  # fmt: skip
+        yield (
+            s["x_m"].to_numpy() / 1e3,
+            s["alpha_rad"].to_numpy() * 1e3,
+            s["zem_m"].to_numpy() / 1e3,
+        )
 
 
 def _snapshot(sets: pd.DataFrame, run: int, step: int, phase: str, channel=None):
@@ -92,10 +95,14 @@ def stacked_3d(sets: pd.DataFrame, run: int, step: int, steps=None, channel=None
     truth = _truth(steps, run, step, channel)
     t = float(post["t_s"].iloc[0]) if len(post) else float("nan")
     for i, (name, parts) in enumerate(
-        (("(a) before the measurements", [(prior, False, "set before the measurements")]),
-         ("(b) after the measurements", [(prior, False, "set before the measurements"),
-                                         (post, True, "part that remains")]))
-    ):  # fmt: skip
+        (
+            ("(a) before the measurements", [(prior, False, "set before the measurements")]),
+            (
+                "(b) after the measurements",
+                [(prior, False, "set before the measurements"), (post, True, "part that remains")],
+            ),
+        )
+    ):
         ax = fig.add_subplot(1, 2, i + 1, projection="3d")
         for d, shaded, label in parts:
             _draw_3d(ax, d, colour, shaded, f"{est}: {label}")
@@ -143,16 +150,29 @@ def slices(sets: pd.DataFrame, run: int, steps_df=None, times=None, channel=None
 def _draw_2d(ax, d: pd.DataFrame, colour: str, est: str) -> None:
     """Every section of a snapshot as one collection (filled faintly, edges drawn)."""
     polys = [np.column_stack([a, w * 1e3]) for _, a, w in _sections(d)]
-    coll = PolyCollection(polys, facecolors=colour, edgecolors=colour, alpha=0.35,
-                          linewidths=0.7, label=f"{est}: sections at their ranges")  # fmt: skip
+    coll = PolyCollection(
+        polys,
+        facecolors=colour,
+        edgecolors=colour,
+        alpha=0.35,
+        linewidths=0.7,
+        label=f"{est}: sections at their ranges",
+    )
     ax.add_collection(coll)
     ax.autoscale_view()
     ax.set_xlabel("bearing alpha, mrad")
     ax.set_ylabel("zero-effort miss w, m")
 
 
-def animate(sets: pd.DataFrame, run: int, path: Path, steps_df=None, channel=None, fps=3,
-            max_frames: int = 12):  # fmt: skip
+def animate(
+    sets: pd.DataFrame,
+    run: int,
+    path: Path,
+    steps_df=None,
+    channel=None,
+    fps=3,
+    max_frames: int = 12,
+):
     """A GIF of the set after the measurements over the engagement (pillow writer), at
     most ``max_frames`` recorded steps evenly spread."""
     post = sets[(sets["run"] == run) & (sets["phase"] == "posterior")]

@@ -22,6 +22,7 @@ Files, beside ``<job>.parquet``:
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -72,11 +73,23 @@ def check_runs(traced: list[int] | None, runs: int) -> list[int]:
     return traced
 
 
+def traceable(traced: list[int], df: pd.DataFrame, what: str) -> list[int]:
+    """The traced runs that finished (a failed run is replayed by no trace: its error is
+    in the run table and on stderr already)."""
+    ok = set(df.loc[df["status"] == "ok", "run"].astype(int)) if len(df) else set()
+    skipped = [j for j in traced if j not in ok]
+    if skipped:
+        print(f"{what}: no trace of the failed runs {skipped}", file=sys.stderr)
+    return [j for j in traced if j in ok]
+
+
 def trace_paths(results: Path) -> tuple[Path, Path]:
     """``(<stem>-trace.parquet, <stem>-trace-sets.parquet)`` beside a results table."""
     stem = results.name.removesuffix(".parquet")
-    return (results.with_name(f"{stem}-trace.parquet"),
-            results.with_name(f"{stem}-trace-sets.parquet"))  # fmt: skip
+    return (
+        results.with_name(f"{stem}-trace.parquet"),
+        results.with_name(f"{stem}-trace-sets.parquet"),
+    )
 
 
 def write_parquet(df: pd.DataFrame, path: Path) -> Path:
