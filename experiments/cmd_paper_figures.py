@@ -120,8 +120,14 @@ def run(args) -> dict[str, Any]:
         t1 = time.perf_counter()
         numbers.update(GROUPS[group](ctx))
         print(f"paper-figures: {group} in {time.perf_counter() - t1:.1f} s", file=sys.stderr)
-    meta = {"runs": args.runs, "quick": args.quick, "numbers": numbers}
     path = ctx.out / "paper_figures.json"
+    try:  # figures drawn by an earlier call (--only) keep their numbers
+        before = json.loads(path.read_text())
+        if before.get("runs") == args.runs and before.get("quick") == args.quick:
+            numbers = {**before.get("numbers", {}), **numbers}
+    except (OSError, ValueError, AttributeError):
+        pass
+    meta = {"runs": args.runs, "quick": args.quick, "numbers": numbers}
     atomic_write(path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2, default=str)))
     return {
         "out": str(ctx.out),

@@ -241,7 +241,7 @@ def write_figures(
         f"$M_{{max}}$={st.torque_max_Nm} N m, $L_{{max}}$={st.momentum_max_Nms} N m s",
         fontsize=8,
     )
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="upper left", facecolor="0.8")  # the white line shows
     fig.tight_layout()
     paths += _save(fig, out, "fig10_settle_map")
     plt.close(fig)

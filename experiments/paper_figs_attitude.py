@@ -215,7 +215,7 @@ def _gain_figures(ctx) -> dict[str, Any]:
     ax.set_ylim(smap.k_q[0], smap.k_q[-1])
     ax.set_xlabel("k_w, 1/s")
     ax.set_ylabel("k_q, 1/s^2")
-    fs.legend(ax, loc="upper left", fontsize=6.5)
+    fs.legend(ax, loc="upper left", fontsize=6.5, facecolor="0.8")  # the white line shows
     fig.suptitle(f"akimov_fig10: settle time of the 150 deg turn over the gains (grid {step})")
     ctx.save(fig, "akimov_fig10")
     fig, axes = fs.figure(1, 1, size=(6.6, 4.4))

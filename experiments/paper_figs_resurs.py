@@ -139,7 +139,7 @@ def resurs(ctx) -> dict[str, Any]:
         "resurs_fig9",
         [energy],
         "momentum_Nms",
-        "gyrodines' momentum K_G, N m s",
+        "momentum K_G, N m s",
         "resurs_fig9: the gyrodines' total momentum (paper: back to zero)",
         marks=mark,
     )
@@ -162,8 +162,11 @@ def resurs(ctx) -> dict[str, Any]:
 
 
 def _swing(df: pd.DataFrame, window_s: float = 30.0) -> float:
-    d = df[df["t_s"] <= window_s].pivot(index="step", columns="axis", values="torque_Nm")
-    return float(np.nansum(np.abs(np.diff(d.to_numpy(), axis=0))))
+    """Excess total variation of the commanded torque over the first ``window_s``: the
+    initial oscillation (as ``TurnResult.initial_oscillation_Nm``)."""
+    d = df[df["t_s"] < window_s - 1e-9].pivot(index="step", columns="axis", values="command_Nm")
+    u = d.to_numpy()
+    return float(np.sum(np.abs(np.diff(u, axis=0)).sum(axis=0) - np.abs(u[-1] - u[0])))
 
 
 def _lyapunov(setup) -> np.ndarray:
