@@ -45,19 +45,19 @@ PANELS = (
 def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     """CDF figures (PNG, SVG) of the runs' rows, one curve per controller x estimator x
     noise (the tables themselves are the runner's)."""
+    from experiments import figstyle as fs
     from experiments import plots  # matplotlib only when writing files
 
-    fig, axes = plots.plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
-    styles = ["-", "--", "-.", ":"]
+    fig, grid = fs.figure(1, 3, size=(15, 4.4))
+    axes = grid[0]
     groups = list(df.groupby(["controller", "estimator", "noise"], sort=True))
     for ax, (col, label) in zip(axes, PANELS, strict=True):
-        for i, (key, grp) in enumerate(groups):
+        for key, grp in groups:
             name = " / ".join(key) + f" (n={len(grp)})"
-            plots._cdf(ax, grp[col].to_numpy(dtype=float), name, linestyle=styles[i % 4], lw=1.6)
+            plots._cdf(ax, grp[col].to_numpy(dtype=float), name, **fs.line(key[1], key[2]))
         ax.set_xlabel(label)
-        ax.set_ylabel("fraction of runs (CDF)")
+        ax.set_ylabel(plots.CDF_LABEL)
         ax.set_ylim(0, 1.02)
-        ax.grid(True, alpha=0.3)
         vals = df[col].to_numpy(dtype=float)
         vals = vals[np.isfinite(vals)]
         if (
@@ -67,43 +67,36 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
             and vals.max() > 20 * vals.min()
         ):
             ax.set_xscale("log")
-    if axes[0].get_legend_handles_labels()[0]:
-        axes[0].legend(fontsize=8, loc="lower right")
-    fig.suptitle(f"{stem}: controller / estimator / noise", fontsize=10)
+    fs.figure_legend(fig, axes)  # a panel may be empty (no run settled)
+    fig.suptitle(f"{stem}: controller / estimator / noise (colour: estimator, line: noise)")
     return [str(f) for f in plots.save(fig, out_dir / f"{stem}-cdf")]
 
 
 def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Path]:
     """README figure: one row per scenario, columns settle time / energy / final error,
     one CDF curve per estimator x noise, from the per-run Parquet tables."""
+    from experiments import figstyle as fs
     from experiments import plots
 
-    fig, axes = plots.plt.subplots(
-        len(tables), 3, figsize=(15, 3.3 * len(tables)), constrained_layout=True, squeeze=False
-    )
-    styles = {"perfect": ":", "ukf": "--", "box": "-"}
-    colours = {"random": "C0", "game": "C3", "none": "C2"}
+    fig, axes = fs.figure(len(tables), 3, size=(15, 3.3 * len(tables)))
     for row, (name, paths) in zip(axes, tables.items(), strict=True):
         df = pd.concat([pd.read_parquet(p) for p in paths], ignore_index=True)
         for ax, (col, label) in zip(row, PANELS, strict=True):
             for (est, noise), grp in df.groupby(["estimator", "noise"], sort=True):
                 plots._cdf(
-                    ax, grp[col].to_numpy(dtype=float), f"{est} / {noise}",
-                    linestyle=styles.get(est, "-"), color=colours.get(noise, "k"), lw=1.5,
-                )  # fmt: skip
+                    ax, grp[col].to_numpy(dtype=float), f"{est} / {noise}", **fs.line(est, noise)
+                )
             vals = df[col].to_numpy(dtype=float)
             vals = vals[np.isfinite(vals)]
             if col != "settle_time_s" and vals.size and vals.min() > 0:
                 if vals.max() / vals.min() > 20:
                     ax.set_xscale("log")
             ax.set_xlabel(label)
-            ax.set_ylabel("fraction of runs")
+            ax.set_ylabel(plots.CDF_LABEL)
             ax.set_ylim(0, 1.02)
-            ax.grid(True, alpha=0.3)
         ctrl = ", ".join(sorted(set(df["controller"])))
         row[0].set_title(f"{name} ({ctrl})", loc="left", fontsize=9)
-        if row[0].get_legend_handles_labels()[0]:
-            row[0].legend(fontsize=7, loc="lower right")
+    fs.figure_legend(fig, axes.flat)
     return plots.save(fig, out_stem)
 
 

@@ -1,4 +1,4 @@
-"""Command line: ``python -m experiments COMMAND ...`` (SPEC section 3.1).
+"""Command line: ``python -m experiments COMMAND ...`` (docs/models.md §3.1).
 
 Each command lives in its own module ``experiments.cmd_<name>`` exposing
 ``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed
@@ -30,6 +30,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "pd-gains": ("experiments.cmd_pd_gains", "quaternion-PD gain study, f0(phi0) fit"),
     "bench": ("experiments.cmd_bench", "per-step costs of the estimators, side by side"),
     "tightness": ("experiments.cmd_tightness", "a set's interval of the miss vs the exact one"),
+    "plot": ("experiments.cmd_plot", "figures of traces written by --trace"),
+    "paper-figures": ("experiments.cmd_paper_figures", "redraw every paper figure we model"),
 }
 
 

@@ -28,10 +28,12 @@ from typing import Any
 
 import pandas as pd
 
+from experiments import traces
 from experiments.attitude_est import resolve_estimators, write_figure
+from experiments.attitude_traces import TRACERS
 from experiments.cmd_intercept import positive_int, seed_int
 from experiments.errors import InputError
-from experiments.runner import Job, batched_task, check_seed, job_path, run_job
+from experiments.runner import Job, batched_task, check_seed, job_path, run_job, run_seed
 from experiments.scenario import read
 from experiments.sim.estimator_loop import NOISES
 from experiments.sim.intercept_config import check_name
@@ -65,6 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=positive_int, help="local worker processes")
     parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    traces.add_argument(parser)
     parser.add_argument(
         "--set",
         action="append",
@@ -99,6 +102,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if args.noise not in NOISES:
         raise InputError(f"--noise must be one of {', '.join(NOISES)}, got '{args.noise}'")
     seed = check_seed(args.seed)
+    # a single run is shown as its time histories (a CDF of one run is one step)
+    traced = traces.check_runs(args.trace if args.trace is not None else
+                               ([0] if args.runs == 1 else []), args.runs)  # fmt: skip
     module = resolve_module(controller)
     default_est = data.pop("estimator", None)
     if default_est is not None and not isinstance(default_est, str):
@@ -113,7 +119,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(f"--out {out_dir}: not a directory")
     scenario = json.loads(json.dumps(data, default=str))
-    results, frames, files = [], [], []
+    results, frames, files, histories = [], [], [], []
     for est in estimators:
         t0 = time.perf_counter()
         choice = {"controller": controller, "estimator": est, "noise": args.noise}
@@ -135,13 +141,26 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         results.append(res)
         frames.append(df)
         files.append(str(job_path(out_dir, job)))
+        ok_runs = traces.traceable(traced, df, job.desc)
+        if ok_runs:
+            tracer = partial(TRACERS[controller], setup, controller, args.noise, est)
+            base = {"scenario": name, **choice, "seed": seed}
+            runs = [tracer(run_seed(seed, 0, j)).assign(**base, run=j) for j in ok_runs]
+            path = traces.trace_paths(job_path(out_dir, job))[0]
+            files.append(str(traces.write_parquet(pd.concat(runs, ignore_index=True), path)))
+            histories += runs
     result = dict(results[0])
     if len(results) > 1:
         result["rows"] = results
     table = pd.concat(frames, ignore_index=True)
     ok = table[table["status"] == "ok"] if len(table) else table
-    if len(ok):
-        stem = f"{name}-{controller}-{args.noise}-s{seed}"
+    stem = f"{name}-{controller}-{args.noise}-s{seed}"
+    if len(ok) and args.runs > 1:
         files += write_figure(out_dir, stem, ok)
+    if histories:
+        from experiments import figstyle, plots_attitude
+
+        fig = plots_attitude.time_histories(histories, f"{stem}: time histories")
+        files += [str(f) for f in figstyle.save(fig, out_dir / f"{stem}-history")]
     result["files"] = files
     return result

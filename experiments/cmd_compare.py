@@ -15,11 +15,11 @@ from typing import Any
 import pandas as pd
 
 from estim import registry
-from experiments import plots
+from experiments import plots, traces
 from experiments.cmd_fig5 import miss_floor_m
-from experiments.cmd_intercept import add_common, resolve
+from experiments.cmd_intercept import add_common, draw_traces, resolve
 from experiments.report import summary_markdown, write_tables, write_text
-from experiments.runner import run_experiment, summarise
+from experiments.runner import results_path, run_experiment, summarise
 from experiments.sim.intercept_config import NOISES
 
 
@@ -41,6 +41,7 @@ def _list_of(allowed):
 
 def add_arguments(p) -> None:
     add_common(p)
+    traces.add_argument(p)
     estimators = registry.names("intercept")
     p.add_argument(
         "--estimators",
@@ -73,6 +74,7 @@ def run_grid(sc, args, runs: int, seed: int, out) -> tuple[list[dict], list[pd.D
 
 def run(args) -> dict[str, Any]:
     sc, runs, seed, out = resolve(args)
+    traced = traces.check_runs(getattr(args, "trace", None), runs)
     t0 = time.perf_counter()
     rows, frames = run_grid(sc, args, runs, seed, out)
     table = pd.concat(frames, ignore_index=True)
@@ -89,6 +91,16 @@ def run(args) -> dict[str, Any]:
     files.append(
         write_text(out / f"{sc.name}-compare.md", summary_markdown(rows, ["estimator", "noise"]))
     )
+    if traced:  # one trace per estimator x noise, drawn together
+        written = []
+        for (est, noise), df in zip(
+            [(e, n) for e in args.estimators for n in args.noise], frames, strict=True
+        ):
+            ok = traces.traceable(traced, df, f"{sc.name} {est}-{noise}")
+            path = results_path(out / "runs", sc, est, noise, seed)
+            if ok:
+                written += traces.write_intercept_trace(sc, est, noise, seed, ok, path)
+        files += written + draw_traces(written, sc)
     return {
         "scenario": sc.name,
         "runs": runs,

@@ -8,8 +8,9 @@ from pathlib import Path
 from typing import Any
 
 from estim import registry
+from experiments import traces
 from experiments.errors import InputError
-from experiments.runner import run_experiment, summarise
+from experiments.runner import results_path, run_experiment, summarise
 from experiments.scenario import load_scenario
 from experiments.sim.intercept_config import NOISES
 
@@ -60,6 +61,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_common(p)
+    traces.add_argument(p)
     estimators = registry.names("intercept")
     p.add_argument("--estimator", choices=estimators, help="default: the scenario's")
     p.add_argument("--noise", choices=NOISES, help="default: the scenario's")
@@ -79,13 +81,36 @@ def run(args) -> dict[str, Any]:
     sc, runs, seed, out = resolve(args)
     estimator = args.estimator or sc.experiment.estimator
     noise = args.noise or sc.experiment.noise
+    traced = traces.check_runs(args.trace, runs)
     t0 = time.perf_counter()
     df = run_experiment(
         sc, estimator, noise, runs, seed, out, args.workers, args.scheduler, not args.no_progress
     )
     result = summarise(df, sc, estimator, noise, seed, time.perf_counter() - t0)
     result["out"] = str(out)
+    traced = traces.traceable(traced, df, f"{sc.name} {estimator}-{noise}")
+    if traced:
+        path = results_path(out, sc, estimator, noise, seed)
+        files = traces.write_intercept_trace(sc, estimator, noise, seed, traced, path)
+        files += draw_traces(files, sc)
+        result["files"] = [str(f) for f in files]
     return result
+
+
+def draw_traces(files, sc) -> list:
+    """The figures of freshly written traces (:mod:`experiments.cmd_plot`), with the
+    paper's printed miss and fuel of the scenario's ``[reference]`` marked."""
+    from experiments.cmd_plot import plot_files
+
+    steps = [f for f in files if str(f).endswith("-trace.parquet")]
+    return plot_files(steps, paper=paper_marks(sc))
+
+
+def paper_marks(sc) -> dict[str, tuple[float | None, float | None]]:
+    """The scenario's ``[reference]`` as ``{noise: (miss_m, fuel_mps)}``."""
+    ref = sc.reference
+    return {"random": (ref.miss_random_m, ref.fuel_random_mps),
+            "game": (ref.miss_game_m, ref.fuel_game_mps)}  # fmt: skip
 
 
 def render(result: dict[str, Any]) -> str:
@@ -102,5 +127,6 @@ def render(result: dict[str, Any]) -> str:
             f"{result['empty_set']} runs; diverged: {result['diverged']} runs; "
             f"failures: {result['failures']}",
             f"  results in {result['out']} ({result['wall_s']:.1f} s)",
+            *(f"  {f}" for f in result.get("files", [])),
         ]
     )

@@ -222,13 +222,16 @@ def write_figures(
     t = np.where(np.isfinite(smap.time_s), smap.time_s, np.nan)
     mesh = ax.pcolormesh(smap.k_w, smap.k_q, t.T, shading="nearest", cmap="viridis",
                          vmax=np.nanpercentile(t, 95))  # fmt: skip
-    fig.colorbar(mesh, ax=ax, label="settle time, s")
+    fig.colorbar(mesh, ax=ax, label="settle time, s (colour capped at the 95th percentile)")
     kw, kq, _ = gs.efficient_curve(smap)
-    ax.plot(kw, kq, "r.", ms=4, label="efficient coefficients (min per $k_\\omega$)")
+    ax.plot(kw, kq, ".", color="#CC79A7", ms=4,
+            label="efficient coefficients (least settle time per $k_\\omega$)")  # fmt: skip
     kline = np.linspace(smap.k_w[0], smap.k_w[-1], 200)
     ax.plot(kline, baseline_kq(kline, smap.settings.quaternion_term), "w--",
-            label="$k_\\omega^2 = 2 k_q$ (eq. 9)")  # fmt: skip
-    ax.plot([2.625], [1.375], "m*", ms=12, label="seed: $k_q$=1.375, $k_\\omega$=2.625")
+            label="dashed: $k_\\omega^2 = 2 k_q$ (eq. 9, critical damping)")  # fmt: skip
+    ax.plot([2.625], [1.375], "k*", ms=12, label="seed: $k_q$=1.375, $k_\\omega$=2.625")
+    ax.fill([], [], facecolor="white", edgecolor="0.5",
+            label="white: not settled within the horizon")  # fmt: skip
     ax.set_ylim(smap.k_q[0], smap.k_q[-1])
     ax.set_xlabel("$k_\\omega$, 1/s")
     ax.set_ylabel("$k_q$, 1/s$^2$")
@@ -238,7 +241,7 @@ def write_figures(
         f"$M_{{max}}$={st.torque_max_Nm} N m, $L_{{max}}$={st.momentum_max_Nms} N m s",
         fontsize=8,
     )
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="upper left", facecolor="0.8")  # the white line shows
     fig.tight_layout()
     paths += _save(fig, out, "fig10_settle_map")
     plt.close(fig)
@@ -246,16 +249,18 @@ def write_figures(
     # Fig. 14: f0 against the seed's table and fits
     fig, ax = plt.subplots(figsize=(6, 4))
     ta = np.array(sorted(table))
-    ax.plot(ta, [table[a] for a in ta], "ko", ms=4, label="seed table")
+    ax.plot(ta, [table[a] for a in ta], "k*", ms=6, label="seed table")
     oa = np.array(sorted(f0_by_angle))
-    ax.plot(oa, [f0_by_angle[a] for a in oa], "rx", label="ours (efficient-curve fit)")
+    ax.plot(oa, [f0_by_angle[a] for a in oa], "x", color="#CC79A7",
+            label="ours (efficient-curve fit)")  # fmt: skip
     grid = np.linspace(min(ta[0], oa[0]), max(ta[-1], oa[-1]), 200)
-    ax.plot(grid, gs.f0_model(np.radians(grid), **fit), "r-", lw=1, label="our fit of eq. (28)")
+    ax.plot(grid, gs.f0_model(np.radians(grid), **fit), "-", color="#CC79A7", lw=1,
+            label="our fit of eq. (28)")  # fmt: skip
     s = term_scale(settings.quaternion_term)
     ax.plot(grid, gs.f0_model(np.radians(grid), **gs.SEED_FIT_EQ28) / s, "k--", lw=1,
             label=f"seed eq. (28), rad, / {s:g}")  # fmt: skip
     ax.set_xlabel("$\\varphi_0$, deg")
-    ax.set_ylabel("$f_0$ (dimensionless, $k_q = f_0 k_\\omega^2$)")
+    ax.set_ylabel("$f_0$ ($k_q = f_0 k_\\omega^2$), -")
     ax.legend(fontsize=8)
     fig.tight_layout()
     paths += _save(fig, out, "fig14_f0")
@@ -265,8 +270,9 @@ def write_figures(
     angles = np.round(np.arange(0.2, 6.0001, 0.1), 3)
     times = fig15_times(angles, k_w, fit, settings)
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(angles, times["baseline"], "b-", label="rule (10): $k_q = k_\\omega^2/2$ (vector part)")
-    ax.plot(angles, times["fitted"], "r-", label="rule (29), our fit")
+    ax.plot(angles, times["baseline"], "--", color="#6E6E6E",
+            label="rule (10): $k_q = k_\\omega^2/2$ (vector part)")  # fmt: skip
+    ax.plot(angles, times["fitted"], "-", color="#CC79A7", label="rule (29), our fit")
     ax.plot(angles, times["seed_eq29"], "k:", label="rule (29), seed coefficients")
     ax.set_xlabel("$\\varphi_0$, deg")
     ax.set_ylabel("settle time, s")

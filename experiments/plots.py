@@ -1,4 +1,9 @@
-"""CDF plots of miss and fuel (matplotlib, Agg backend), PNG and SVG."""
+"""CDF plots of miss and fuel, and sweep plots (matplotlib, Agg backend), PNG and SVG.
+
+Styled by :mod:`experiments.figstyle`: colour = estimator, line style = noise, line
+width = variant (e.g. with the range finder); reference marks are labelled lines
+(black dotted: the paper's numbers, grey: our bounds).
+"""
 
 from __future__ import annotations
 
@@ -6,14 +11,14 @@ import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from experiments import figstyle as fs
+from experiments.figstyle import plt  # noqa: F401 - re-exported for older callers
 
 PANELS = (("miss_m", "miss distance, m"), ("fuel_mps", "fuel (sum of |impulses|), m/s"))
+CDF_LABEL = "fraction of runs (CDF), -"
 
 
 def _cdf(ax, values: np.ndarray, label: str, **style) -> None:
@@ -26,6 +31,17 @@ def _cdf(ax, values: np.ndarray, label: str, **style) -> None:
     )
 
 
+def group_style(keys: Mapping[str, object], df: pd.DataFrame, variants: Sequence) -> dict:
+    """Colour from the group's (or the table's) estimator, line style from its noise,
+    line width from its variant's position in ``variants``."""
+    est = keys.get("estimator", df["estimator"].iloc[0] if "estimator" in df else "")
+    noise = keys.get("noise", df["noise"].iloc[0] if "noise" in df else "")
+    style = fs.line(str(est), str(noise))
+    if "variant" in keys and len(variants) > 1:
+        style["lw"] = 1.3 + 1.5 * list(variants).index(keys["variant"])
+    return style
+
+
 def cdf_figure(
     df: pd.DataFrame,
     group_cols: Sequence[str],
@@ -35,27 +51,29 @@ def cdf_figure(
 ):
     """One panel per metric (miss, fuel), one CDF curve per group of ``group_cols``.
 
-    ``references`` maps a metric column to ``(value, label)`` marks drawn as
-    vertical lines (the paper's numbers, lower bounds).
+    ``references`` maps a metric column to ``(value, label)`` marks drawn as labelled
+    vertical lines (the paper's numbers when the label starts with "seed" or "paper":
+    black; our lower bounds: grey).
     """
     ok = df[df["status"] == "ok"] if "status" in df else df
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
-    styles = ["-", "--", "-.", ":"]
-    for ax, (col, xlabel) in zip(axes, PANELS, strict=True):
-        for i, (key, grp) in enumerate(ok.groupby(list(group_cols), sort=True)):
+    fig, axes = fs.figure(1, 2, size=(11, 4.4))
+    variants = sorted(ok["variant"].unique()) if "variant" in ok else []
+    for ax, (col, xlabel) in zip(axes[0], PANELS, strict=True):
+        for key, grp in ok.groupby(list(group_cols), sort=True):
             key = key if isinstance(key, tuple) else (key,)
+            keys = dict(zip(group_cols, key, strict=True))
             label = " / ".join(str(k) for k in key) + f" (n={len(grp)})"
-            _cdf(ax, grp[col].to_numpy(dtype=float), label, linestyle=styles[i % 4], lw=1.6)
-        for j, (value, label) in enumerate((references or {}).get(col, ())):
-            ax.axvline(value, color=f"C{7 + j % 3}", lw=1.0, ls=":", alpha=0.9)
-            ax.text(value, 0.02 + 0.08 * j, " " + label, rotation=90, fontsize=7, va="bottom")
+            _cdf(ax, grp[col].to_numpy(dtype=float), label, **group_style(keys, ok, variants))
+        for value, label in (references or {}).get(col, ()):
+            paper = label.startswith(("seed", "paper"))
+            ax.axvline(value, color=fs.PAPER if paper else fs.REFERENCE, lw=1.0,
+                       ls=":" if paper else "--", label=f"{label}: {value:.4g}")  # fmt: skip
         if col == "miss_m" and log_miss and (ok[col] > 0).all() and len(ok):
             ax.set_xscale("log")
         ax.set_xlabel(xlabel)
-        ax.set_ylabel("fraction of runs (CDF)")
+        ax.set_ylabel(CDF_LABEL)
         ax.set_ylim(0, 1.02)
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8, loc="upper left")
+        fs.legend(ax, fontsize=7, loc="lower right")
     fig.suptitle(title, fontsize=10)
     return fig
 
@@ -77,36 +95,27 @@ def sweep_figure(table: pd.DataFrame, key: str, title: str):
         if numeric
         else np.array([labels.index(v) for v in table["value"]], dtype=float)
     )
-    colours = {e: f"C{i}" for i, e in enumerate(dict.fromkeys(table["estimator"]))}
-    looks = ["o-", "s--", "^-.", "D:"]
-    noises = {n: looks[i % 4] for i, n in enumerate(dict.fromkeys(table["noise"]))}
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    markers = {"random": "o", "game": "s", "bias": "^", "none": "D"}
+    fig, axes = fs.figure(1, 2, size=(11, 4.4))
     groups = table.assign(_x=x).groupby(["estimator", "noise"], sort=False)
-    for ax, (col, ylabel) in zip(axes, PANELS, strict=True):
+    for ax, (col, ylabel) in zip(axes[0], PANELS, strict=True):
         for (est, noise), grp in groups:
             grp = grp.sort_values("_x")
-            ax.plot(grp["_x"], grp[f"{col}_mean"], noises[noise], color=colours[est], lw=1.5,
-                    label=f"{est} / {noise}")  # fmt: skip
+            ax.plot(grp["_x"], grp[f"{col}_mean"], marker=markers.get(noise, "o"),
+                    **fs.line(est, noise), label=f"{est} / {noise}")  # fmt: skip
         if numeric and (x > 0).all() and x.max() >= 10 * x.min():
             ax.set_xscale("log")
         if not numeric:
             ax.set_xticks(range(len(labels)), labels, fontsize=7)
         if col == "miss_m" and (table[f"{col}_mean"] > 0).all():
             ax.set_yscale("log")
-        ax.set_xlabel(key)
-        ax.set_ylabel(f"{ylabel}, mean over runs")
-        ax.grid(True, alpha=0.3)
-    axes[1].legend(fontsize=7, loc="best", ncol=2)
+        ax.set_xlabel(f"{key}, in the scenario's unit")
+        ax.set_ylabel(ylabel.replace(",", " (mean over runs),", 1))
+    fs.legend(axes[0, 1], fontsize=7, loc="best", ncol=2)
     fig.suptitle(title, fontsize=10)
     return fig
 
 
 def save(fig, path_stem: Path) -> list[Path]:
-    """Write ``<stem>.png`` and ``<stem>.svg``; returns the paths."""
-    path_stem.parent.mkdir(parents=True, exist_ok=True)
-    # appended, not with_suffix: names may hold dots (--set suffixes, "fig5.v2")
-    out = [path_stem.parent / f"{path_stem.name}.{ext}" for ext in ("png", "svg")]
-    for p in out:
-        fig.savefig(p, dpi=130)
-    plt.close(fig)
-    return out
+    """Write ``<stem>.png`` and ``<stem>.svg``; returns the paths (:func:`figstyle.save`)."""
+    return fs.save(fig, Path(path_stem))

@@ -130,6 +130,7 @@ def simulate_turn(
     rng: np.random.Generator | None = None,
     estimator: str = "perfect",
     noise: str | None = None,
+    record: dict | None = None,
 ) -> TurnResult:
     """One closed-loop turn; noise is drawn from ``rng`` (None: perfect measurements).
 
@@ -138,6 +139,11 @@ def simulate_turn(
     error rotation, the seed's variances) and the disturbance torque uniform within
     ``+-sqrt(3) disturbance_std`` per step (``noise="random"``) or, ``noise="game"``,
     ``-D sign(M)`` with ``D = game_disturbance_Nm`` (opposes the delivered torque).
+
+    ``record`` (a dict, filled when given; observing only) receives per instant
+    ``estimate`` (the belief's ``X``, rad and rad/s, ``(n+1, 6)``), ``knowledge_bound_rad``
+    and ``truth_inside`` (``(n+1,)``) and, for the energy law, the auxiliary state
+    ``xi`` (``(n+1, 6)``).
     """
     if controller not in CONTROLLERS:
         raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
@@ -195,6 +201,12 @@ def simulate_turn(
         ref_rot, ref_w, ref_dw = tracker.reference(np.arange(n) * dt)
 
     xm = estimate(belief)
+    rec = None
+    if record is not None:
+        rec = {"estimate": [xm], "knowledge_bound_rad": [float(loop.attitude_bound_rad(belief)[0])],
+               "truth_inside": [bool(loop.inside(belief, x[None])[0])], "xi": []}  # fmt: skip
+        if controller == "energy":
+            rec["xi"].append(ctrl.xi)
     for i in range(n):
         err[i], rate[i], hist_h[i] = truth[:3], x[4:7], x[7:10]
         h_gyro = cluster.momentum_Nms(beta)  # known on board from the precession angles
@@ -224,6 +236,14 @@ def simulate_turn(
         if controller == "energy":
             ctrl, diag = law.update(ctrl, a_i, b_i, xm)
             trace_k_u[i + 1], trace_inc[i] = diag.trace_k_u, diag.trace_increment
+        if rec is not None:
+            rec["estimate"].append(xm)
+            rec["knowledge_bound_rad"].append(float(loop.attitude_bound_rad(belief)[0]))
+            rec["truth_inside"].append(bool(loop.inside(belief, x[None])[0]))
+            if controller == "energy":
+                rec["xi"].append(ctrl.xi)
+    if rec is not None:
+        record.update({k: np.array(v) for k, v in rec.items()})
     err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
     return TurnResult(
         controller=controller,

@@ -104,6 +104,7 @@ def simulate_runs(
     noise: str,
     rngs: list[np.random.Generator],
     estimator: str = "perfect",
+    record: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Simulate the runs as one batch; per-run metrics.
 
@@ -111,6 +112,12 @@ def simulate_runs(
     momentum, known on board). Noise ``random``: constant disturbance per run uniform
     in ``[-d, d]``; ``game``: ``-d sign(M_u)`` (opposes the control); both with
     measurement errors uniform within the bounds; ``none``: exact measurements.
+
+    ``record`` (a dict, filled when given; observing only) receives the trajectory
+    (``time_s`` ``(n+1,)``, ``states`` ``(n+1, runs, 10)``, ``torque_Nm`` ``(n+1, runs,
+    3)``, the last held), the target quaternion ``q_target`` and per control sample
+    ``estimate`` ``(n, runs, 7)``, ``knowledge_bound_rad`` and ``truth_inside``
+    ``(n, runs)``.
     """
     body, _, _ = body_of(tables)
     law = make_controller(controller, tables)
@@ -127,7 +134,7 @@ def simulate_runs(
         np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))
     )
     state: dict[str, Any] = {"belief": None, "ctrl": None, "outside": np.zeros(n, dtype=int)}
-    bounds = []
+    bounds, centres, insides = [], [], []
 
     def measure(x: np.ndarray) -> AttitudeMeasurement:
         if noise == "none":
@@ -140,8 +147,12 @@ def simulate_runs(
             belief = loop.start(meas)
         else:
             belief = loop.step(state["belief"], state["ctrl"], period, meas)
-        state["outside"] += ~loop.inside(belief, x)
+        inside = loop.inside(belief, x)
+        state["outside"] += ~inside
         bounds.append(loop.attitude_bound_rad(belief))
+        if record is not None:
+            centres.append(loop.centre(belief))
+            insides.append(inside)
         x_est = np.concatenate([loop.centre(belief), x[:, 7:10]], axis=-1)
         u = wheels.limit(law.from_belief(PointBelief(x_est)), x[:, 7:10], period)
         state["belief"], state["ctrl"] = belief, AttitudeControl.held(u, x[:, 7:10], period)
@@ -155,6 +166,12 @@ def simulate_runs(
     traj = simulate_closed_loop(
         body, wheels, control, x0, sim["duration_s"], period, sim["substeps"], disturbance
     )
+    if record is not None:
+        record.update(
+            time_s=traj.time_s, states=traj.x, torque_Nm=traj.torque_Nm,
+            q_target=np.asarray(law.q_target, dtype=float), estimate=np.array(centres),
+            knowledge_bound_rad=np.array(bounds), truth_inside=np.array(insides),
+        )  # fmt: skip
     angle, rate = angle_and_rate_deg(traj.x, law.q_target)
     settle = np.array(
         [

@@ -102,6 +102,8 @@ class LoopResult:
     torques_Nm: Array | None = None  # (R, n, 3)
     u_star: Array | None = None  # (R, n, 3)
     disturbance_Nm: Array | None = None  # (R, n, 3)
+    knowledge_bound_rad: Array | None = None  # (R, n+1) the belief's attitude bound
+    truth_inside: Array | None = None  # (R, n+1) the truth in the belief
 
 
 def disturbance_draws(disturbance: str, rngs, n: int, beta: NDArray) -> dict[str, NDArray]:
@@ -205,7 +207,8 @@ def simulate_turn(
 
     meas, phid = measure(state)
     belief = loop.start(meas)
-    outside = (~loop.inside(belief, state)).astype(int)
+    inside = loop.inside(belief, state)
+    outside = (~inside).astype(int)
     bound_sum = np.zeros(runs)
     last_out, energy = np.zeros(runs), np.zeros(runs)
     max_u, max_rotor = np.zeros((runs, 3)), np.zeros(runs)
@@ -213,6 +216,8 @@ def simulate_turn(
         states = np.empty((runs, n + 1, STATE_DIM))
         states[:, 0] = state
         rec_u, rec_us, rec_v = (np.empty((runs, n, 3)) for _ in range(3))
+        rec_b, rec_in = np.empty((runs, n + 1)), np.empty((runs, n + 1), dtype=bool)
+        rec_b[:, 0], rec_in[:, 0] = loop.attitude_bound_rad(belief), inside
 
     for k in range(n):
         est = loop.centre(belief)
@@ -231,8 +236,10 @@ def simulate_turn(
             raise FloatingPointError("gyrostat state became non-finite")
         meas, phid = measure(state)
         belief = loop.step(belief, known, h, meas)
-        outside += ~loop.inside(belief, state)
-        bound_sum += loop.attitude_bound_rad(belief)
+        inside = loop.inside(belief, state)
+        outside += ~inside
+        bound = loop.attitude_bound_rad(belief)
+        bound_sum += bound
         energy += np.sum(u * u, axis=-1) * h
         np.maximum(max_u, np.abs(u), out=max_u)
         np.maximum(max_rotor, np.max(np.abs(state[:, PHI]), axis=-1), out=max_rotor)
@@ -240,6 +247,7 @@ def simulate_turn(
         if record:
             states[:, k + 1] = state
             rec_u[:, k], rec_us[:, k], rec_v[:, k] = u, u_star, v
+            rec_b[:, k + 1], rec_in[:, k + 1] = bound, inside
 
     settled = last_out < n * h
     eta = error_quaternion(state[:, Q], q_t)
@@ -251,6 +259,8 @@ def simulate_turn(
             torques_Nm=rec_u,
             u_star=rec_us,
             disturbance_Nm=rec_v,
+            knowledge_bound_rad=rec_b,
+            truth_inside=rec_in,
         )
     return LoopResult(
         settle_time_s=np.where(settled, last_out + h, np.inf),

@@ -36,6 +36,7 @@ from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
 from experiments.noise import BiasNoise, GameNoise, RandomNoise
 from experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
 from experiments.sim.pointing import PointingCoupling, PointingLoop
+from experiments.sim.trace import Recorder, channel_row
 from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from guidance.intercept.truth import TwoBodyTruth
 
@@ -110,8 +111,12 @@ class EngagementResult:
 class Engagement:
     """One engagement in progress (mutable simulator state; see the module docstring)."""
 
-    def __init__(self, sc: InterceptScenario, estimator: str, noise: str, rng):
+    def __init__(
+        self, sc: InterceptScenario, estimator: str, noise: str, rng, record: Recorder | None = None
+    ):
         self.sc, self.rng = sc, rng
+        #: with a :class:`Recorder`, every step records its channels (observing only)
+        self.record = record
         self.setup(estimator, noise)
 
     def setup(self, estimator_name: str, noise_name: str) -> None:
@@ -180,14 +185,21 @@ class Engagement:
             errs = self.pointing.bearing_errors(r_km, self.channels)
             alphas = [a + err for a, err in zip(alphas, errs, strict=True)]
         est = self.estimators
+        rec = self.record
+        sets = rec is not None and rec.wants_sets(self.step_index)
+        if rec is not None and rec.wants_prior(self.step_index):
+            for c, b in zip(self.channels, self.beliefs, strict=True):
+                rec.add_sets(b, model, step=self.step_index, t_s=t, channel=c, phase="prior")
         beliefs = [
             e.update(b, Bearing(a)) for e, b, a in zip(est, self.beliefs, alphas, strict=True)
         ]
+        d_meas = math.nan
         if self.sc.range_finder.due(t):
             measured = dict(zip(self.channels, alphas, strict=True))
             meas = range_measurement(
                 self.noise.range(d_m), model, r_km, d_m, measured, self.axis_rng
             )
+            d_meas = meas.range_m
             beliefs = [e.update(b, meas) for e, b in zip(est, beliefs, strict=True)]
             self.noise.observe_range(meas)
         if x_m > self.check_floor_m:
@@ -204,6 +216,8 @@ class Engagement:
             if k != 0.0:
                 self.issued.append(abs(k))
             ks.append(k)
+        if rec is not None:
+            self._record(rec, beliefs, truth_ch, alphas, d_m, d_meas, ks, t, sets)
         dv = np.zeros(3)
         for c, k in zip(self.channels, ks, strict=True):
             dv[AXIS[c]] = k
@@ -226,6 +240,18 @@ class Engagement:
             self.pointing.step(dt)
         self.state = new_state
         return True
+
+    def _record(self, rec, beliefs, truth_ch, alphas, d_m, d_meas, ks, t, sets) -> None:
+        """The step's rows (after the measurements, with the impulses just issued)."""
+        checked = float(truth_ch[0][2]) > self.check_floor_m  # counted in truth_outside
+        for c, b, tc, a, k in zip(self.channels, beliefs, truth_ch, alphas, ks, strict=True):
+            row = channel_row(b, self.model, tc, d_m, a, d_meas)
+            row.update(step=self.step_index, t_s=t, channel=c, impulse_mps=float(k),
+                       fuel_mps=float(self.fuel), checked=bool(checked))  # fmt: skip
+            rec.rows.append(row)
+            if sets:
+                rec.add_sets(b, self.model, step=self.step_index, t_s=t, channel=c,
+                             phase="posterior")  # fmt: skip
 
     def finish(self) -> EngagementResult:
         """The result; after guidance, free flight to the closest approach."""
@@ -260,10 +286,15 @@ class Engagement:
 
 
 def run_engagement(
-    sc: InterceptScenario, estimator_name: str, noise_name: str, rng: np.random.Generator
+    sc: InterceptScenario,
+    estimator_name: str,
+    noise_name: str,
+    rng: np.random.Generator,
+    record: Recorder | None = None,
 ) -> EngagementResult:
-    """Simulate one engagement; ``rng`` draws the truth first, then the noise."""
-    eng = Engagement(sc, estimator_name, noise_name, rng)
+    """Simulate one engagement; ``rng`` draws the truth first, then the noise. With a
+    :class:`~experiments.sim.trace.Recorder` every step is recorded into it."""
+    eng = Engagement(sc, estimator_name, noise_name, rng, record)
     while eng.step():
         pass
     return eng.finish()

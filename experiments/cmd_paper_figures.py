@@ -1,0 +1,144 @@
+"""``python -m experiments paper-figures [--out results/figures] [--runs N]``.
+
+Redraws every figure of the papers that our models cover, each file named after the
+paper's figure (PNG and SVG): seed 003 ``kp_fig3``, ``kp_fig4``, ``kp_fig5`` (and our
+``kp_fig3_overlay``: the set, EKF and UKF on one realisation), seed 000
+``resurs_fig1``-``resurs_fig9``, seed 001 ``akimov_fig3``-``fig7``, ``fig10``-``fig12``,
+``fig14``, ``fig15``, and the gyrostat turn of seed 004 (``gyrostat_eta``,
+``gyrostat_switching``, ``gyrostat_torques``; its paper has no figures we can read). The
+paper's printed numbers are marked on them (black stars and dotted lines, "paper: ...").
+``--runs`` is the number of engagements per curve of ``kp_fig5`` (the paper: 50); the
+runs are kept in ``<out>/runs`` and reused (resumed) by the next call. ``--quick``
+coarsens the gain study (grid 0.1 instead of 0.025, four angles for ``f0``) and the
+attitude loops' steps (Resurs-P 0.5 s, the wheels 20 Hz, the gyrostat 5 Hz) for previews
+and tests; the figure titles say so, and their numbers are not the paper runs'.
+Writes ``paper_figures.json`` with the numbers each figure shows (ours and the
+paper's), from which ``docs/figures.md`` is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from experiments import figstyle as fs
+from experiments import paper_figs_attitude as att
+from experiments import paper_figs_kp as kp
+from experiments import paper_figs_resurs as resurs
+from experiments.cmd_intercept import positive_int
+from experiments.errors import InputError
+from experiments.files import atomic_write
+
+#: figure name -> group that draws it (a group draws all its figures at once)
+FIGURES: dict[str, str] = {
+    **{name: fn.__name__.replace("fig", "kp_fig") for name, fn in kp.FIGURES.items()},
+    **resurs.FIGURES,
+    **att.FIGURES,
+}
+GROUPS = {
+    "kp_fig3": kp.fig3,
+    "kp_fig4": kp.fig4,
+    "kp_fig5": kp.fig5,
+    **resurs.GROUPS,
+    **att.GROUPS,
+}
+
+
+@dataclass
+class Context:
+    """Where and how the figures are drawn."""
+
+    out: Path
+    runs: int
+    quick: bool
+    scenarios: Path
+    written: list[Path] = field(default_factory=list)
+
+    def save(self, fig, name: str) -> None:
+        if self.quick and fig._suptitle is not None:
+            fig._suptitle.set_text(fig._suptitle.get_text() + " [--quick]")
+        self.written += fs.save(fig, self.out / name)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", default="results/figures", help="folder (default results/figures)")
+    p.add_argument(
+        "--runs",
+        type=positive_int,
+        default=50,
+        help="engagements per kp_fig5 curve (default 50, the paper's)",
+    )
+    p.add_argument(
+        "--only",
+        default=None,
+        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat)",
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="coarser gain study and attitude steps (previews, tests)",
+    )
+    p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")
+
+
+def _groups(only: str | None) -> list[str]:
+    if only is None:
+        return list(GROUPS)
+    wanted = [w.strip() for w in only.split(",") if w.strip()]
+    groups = []
+    for w in wanted:
+        if w in FIGURES:
+            g = FIGURES[w]
+        elif w == "kp":
+            groups += ["kp_fig3", "kp_fig4", "kp_fig5"]
+            continue
+        elif w in GROUPS:
+            g = w
+        else:
+            raise InputError(
+                f"--only: unknown figure or group '{w}' "
+                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, "
+                "gyrostat)"
+            )
+        groups.append(g)
+    return list(dict.fromkeys(groups))
+
+
+def run(args) -> dict[str, Any]:
+    scenarios = Path(args.scenarios)
+    if not scenarios.is_dir():
+        raise InputError(f"--scenarios {scenarios}: not a folder")
+    ctx = Context(Path(args.out), args.runs, args.quick, scenarios)
+    numbers: dict[str, Any] = {}
+    t0 = time.perf_counter()
+    for group in _groups(args.only):
+        t1 = time.perf_counter()
+        numbers.update(GROUPS[group](ctx))
+        print(f"paper-figures: {group} in {time.perf_counter() - t1:.1f} s", file=sys.stderr)
+    path = ctx.out / "paper_figures.json"
+    try:  # figures drawn by an earlier call (--only) keep their numbers
+        before = json.loads(path.read_text())
+        if before.get("runs") == args.runs and before.get("quick") == args.quick:
+            numbers = {**before.get("numbers", {}), **numbers}
+    except (OSError, ValueError, AttributeError):
+        pass
+    meta = {"runs": args.runs, "quick": args.quick, "numbers": numbers}
+    atomic_write(path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2, default=str)))
+    return {
+        "out": str(ctx.out),
+        "figures": sorted({p.stem for p in ctx.written}),
+        "files": [str(p) for p in ctx.written] + [str(path)],
+        "numbers": numbers,
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def render(result: dict[str, Any]) -> str:
+    lines = [f"{len(result['figures'])} figures in {result['out']} ({result['wall_s']:.0f} s):"]
+    lines += ["  " + ", ".join(result["figures"])]
+    return "\n".join(lines)

@@ -1,0 +1,141 @@
+"""One figure style for every figure of the package (matplotlib, Agg backend).
+
+What encodes what, the same way in every figure:
+
+* **colour = estimator** (Okabe-Ito palette, safe for the common colour-vision
+  deficiencies): the set estimators blue, EKF vermillion, UKF bluish green, the
+  perfect-information point reddish purple; estimators registered later take the
+  remaining palette entries by name (stable across figures and runs);
+* **line style = noise**: random solid, game dashed, bias dotted, none dash-dotted;
+* **black = the truth**, grey = measurements and our own reference marks (lower
+  bounds, limits); the paper's printed numbers are black star markers or black
+  dotted lines labelled "paper: ...";
+* every axis label names its unit after a comma (``"miss, m"``; dimensionless
+  quantities say ``"-"``), every drawn line and patch has a legend entry, and every
+  figure is written as PNG and SVG (:func:`save`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
+import matplotlib.pyplot as plt  # noqa: E402
+
+#: Okabe & Ito (2008), "Color Universal Design"
+OKABE_ITO = {
+    "black": "#000000",
+    "orange": "#E69F00",
+    "sky_blue": "#56B4E9",
+    "bluish_green": "#009E73",
+    "yellow": "#F0E442",
+    "blue": "#0072B2",
+    "vermillion": "#D55E00",
+    "reddish_purple": "#CC79A7",
+}
+ESTIMATOR_COLOURS = {
+    "infoset": OKABE_ITO["blue"],
+    "box": OKABE_ITO["blue"],  # the attitude problem's guaranteed set
+    "ekf": OKABE_ITO["vermillion"],
+    "ukf": OKABE_ITO["bluish_green"],
+    "perfect": OKABE_ITO["reddish_purple"],
+}
+#: for estimators without a fixed colour (yellow is kept for fills only)
+_SPARE = (OKABE_ITO["orange"], OKABE_ITO["sky_blue"], "#8C6D1F", "#7F7F7F")
+NOISE_STYLES = {"random": "-", "game": "--", "bias": ":", "none": "-."}
+TRUTH = OKABE_ITO["black"]
+MEASURED = "#8C8C8C"
+REFERENCE = "#6E6E6E"
+PAPER = OKABE_ITO["black"]
+#: the paper's printed numbers
+PAPER_MARKER = {"marker": "*", "ms": 11, "color": PAPER, "ls": "none"}
+DPI = 110
+SIZE_ONE = (6.4, 4.2)
+
+
+def estimator_colour(name: str) -> str:
+    """The colour of an estimator: fixed for the package's own, else by name."""
+    if name in ESTIMATOR_COLOURS:
+        return ESTIMATOR_COLOURS[name]
+    digest = hashlib.sha256(name.encode()).digest()
+    return _SPARE[digest[0] % len(_SPARE)]
+
+
+def noise_style(noise: str) -> str | tuple:
+    """The line style of a noise kind (unknown kinds: a long dash)."""
+    return NOISE_STYLES.get(noise, (0, (8, 2)))
+
+
+def line(estimator: str, noise: str) -> dict:
+    """Keyword arguments of a curve of ``estimator`` under ``noise``."""
+    return {"color": estimator_colour(estimator), "ls": noise_style(noise), "lw": 1.5}
+
+
+def setup() -> None:
+    """The package's rc parameters (font sizes, grid)."""
+    plt.rcParams.update(
+        {
+            "font.size": 9,
+            "axes.titlesize": 9,
+            "axes.labelsize": 9,
+            "legend.fontsize": 7.5,
+            "axes.grid": True,
+            "grid.alpha": 0.3,
+            "svg.fonttype": "none",
+            "savefig.dpi": DPI,
+        }
+    )
+
+
+def figure(nrows: int = 1, ncols: int = 1, size=None, **kw):
+    """A new figure in the package's style (``constrained_layout``)."""
+    setup()
+    size = size or (SIZE_ONE[0] * max(1, ncols * 0.8), SIZE_ONE[1] * max(1, nrows * 0.6))
+    return plt.subplots(nrows, ncols, figsize=size, constrained_layout=True, squeeze=False, **kw)
+
+
+def legend(ax, **kw) -> None:
+    """A legend with one entry per distinct label (artists sharing a label share it)."""
+    handles, labels = ax.get_legend_handles_labels()
+    seen: dict[str, object] = {}
+    for h, lab in zip(handles, labels, strict=True):
+        seen.setdefault(lab, h)
+    if seen:
+        ax.legend(list(seen.values()), list(seen), **{"loc": "best", **kw})
+
+
+def figure_legend(fig, axes: Iterable, **kw) -> None:
+    """One legend for the whole figure from the labels of ``axes`` (outside, below)."""
+    seen: dict[str, object] = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            seen.setdefault(lab, h)
+    if seen:
+        fig.legend(
+            list(seen.values()),
+            list(seen),
+            **{"loc": "outside lower center", "ncol": min(4, len(seen)), **kw},
+        )
+
+
+def paper_line(ax, value: float, text: str, axis: str = "y") -> None:
+    """The paper's printed number as a black dotted line labelled ``paper: text``."""
+    draw = ax.axhline if axis == "y" else ax.axvline
+    draw(value, color=PAPER, ls=":", lw=1.2, label=f"paper: {text}")
+
+
+def save(fig, stem: Path, formats: tuple[str, ...] = ("png", "svg")) -> list[Path]:
+    """Write ``<stem>.png`` and ``<stem>.svg`` (names may hold dots); close the figure."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    out = [stem.parent / f"{stem.name}.{ext}" for ext in formats]
+    for i, p in enumerate(out):
+        fig.savefig(p, dpi=DPI)
+        if i == 0:  # laid out once: the other formats keep the positions (half the cost)
+            fig.set_layout_engine("none")
+    plt.close(fig)
+    return out

@@ -1,0 +1,350 @@
+"""The figures of the attitude papers redrawn from our runs (``paper-figures``).
+
+The helpers (:func:`trace`, the component and history figures) serve seed 000's
+figures too (:mod:`experiments.paper_figs_resurs`).
+
+Seed 001 (Akimov, ``smallsat_rw.toml``, noise none): ``akimov_fig3`` wheel momentum and
+torque of the 150-deg turn, ``fig4`` its angle, ``fig5`` the final transient, ``fig6`` and
+``fig7`` the same with the gains of rule (9), ``fig10`` the settle-time map, ``fig11``
+the efficient-coefficient curve, ``fig12`` the angle with the efficient gains (log),
+``fig14`` ``f0(phi0)`` against the paper's table, ``fig15`` settle time against angle.
+
+Seed 004 (Vorotnikov & Martyshenko, ``gyrostat_game.toml``; the paper's copy has no
+figures, ours show what its text describes): ``gyrostat_eta``, ``gyrostat_switching``,
+``gyrostat_torques``, without disturbance and under the adversary with the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from experiments import cmd_attitude
+from experiments import figstyle as fs
+from experiments import plots_attitude as pa
+from experiments.attitude_traces import TRACERS
+from experiments.runner import run_seed
+from experiments.scenario import read
+from guidance.attitude import gain_study as gs
+from guidance.attitude.pd import baseline_kq
+
+AKIMOV_SETTLE_S = 35.6
+
+
+#: --quick: coarser steps (previews and tests; the numbers are not the paper runs')
+QUICK = {
+    "resurs_p.toml": ["dt_s=0.5"],
+    "smallsat_rw.toml": ["simulation.control_period_s=0.05"],
+    "gyrostat_game.toml": ["simulation.control_period_s=0.2"],
+}
+
+
+def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overrides=()):
+    """Run 0 of a scenario replayed with recording (seed 0), labelled like a trace file."""
+    quick = QUICK.get(scenario, []) if ctx.quick else []
+    data, src = read(ctx.scenarios / scenario, [*overrides, *quick])
+    data.pop("estimator", None)
+    setup = cmd_attitude.resolve_module(controller).prepare(src, data, controller, noise)
+    df = TRACERS[controller](setup, controller, noise, estimator, run_seed(0, 0, 0))
+    return df.assign(scenario=data["name"], estimator=estimator, noise=noise, run=0), setup
+
+
+def _components(ctx, name, traces, column, ylabel, title, limit=None, marks=(), variants=None):
+    """Three axis panels of ``column``; ``variants`` names each trace and gives its line
+    width (traces of one estimator and noise that differ otherwise)."""
+    fig, axes = fs.figure(3, 1, size=(7.0, 7.0), sharex="col")
+    for i, df in enumerate(traces):
+        what, lw = variants[i] if variants else ("", None)
+        pa.axis_panels(axes[:, 0], [df], column, ylabel, what=what, limit=limit, lw=lw)
+    for ax in axes[:, 0]:
+        for value, label in marks:
+            ax.axvline(value, color=fs.PAPER, ls=":", lw=1.2, label=label)
+        fs.legend(ax, loc="best", fontsize=6.5)
+    fig.suptitle(title)
+    ctx.save(fig, name)
+
+
+def _history(ctx, name, traces, column, ylabel, title, log=False, paper=None, tol=None):
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
+    ax = axes[0, 0]
+    pa.step_panel(ax, traces, column, ylabel)
+    if paper is not None:
+        fs.paper_line(ax, paper[0], paper[1])
+    if tol is not None:
+        ax.axhline(tol, color=fs.REFERENCE, lw=0.9, label=f"tolerance {tol:g}")
+    if log:
+        ax.set_yscale("log")
+    fs.legend(ax, loc="best")
+    fig.suptitle(title)
+    ctx.save(fig, name)
+
+
+# -- seed 001 --------------------------------------------------------------------------
+def akimov(ctx) -> dict[str, Any]:
+    eff, tables = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect")
+    k_w = float(tables["pd"]["k_w"])
+    kq9 = float(baseline_kq(k_w, "vector"))
+    base, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect", [f"pd.k_q={kq9!r}"])
+    out = {}
+    for name, df, what in (
+        ("akimov_fig3", eff, f"k_q = {tables['pd']['k_q']}, k_w = {k_w}"),
+        ("akimov_fig6", base, f"rule (9): k_q = k_w^2/2 = {kq9:.3f}"),
+    ):
+        z = df[df["axis"] == 3]
+        fig, axes = fs.figure(2, 1, size=(7.0, 5.6), sharex="col")
+        for ax, col, lim, lab in (
+            (axes[0, 0], "momentum_Nms", "momentum_max_Nms", "wheel momentum L_z, N m s"),
+            (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
+        ):
+            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"perfect / none, {what}")
+            for s in (-1, 1):
+                ax.plot(z["t_s"], s * z[lim], color=fs.REFERENCE, lw=0.8, label="limit")
+            ax.set_ylabel(lab)
+            ax.set_xlabel("time t, s")
+            fs.legend(ax, loc="best")
+        fig.suptitle(f"{name}: 150 deg turn about z, wheels limited, {what}")
+        ctx.save(fig, name)
+        out[name] = {"settle_s": _settle(df)}
+    for name, df, what in (
+        ("akimov_fig4", eff, "gains of the scenario"),
+        ("akimov_fig7", base, f"rule (9), k_q = {kq9:.3f}"),
+    ):
+        _history_axis(ctx, name, df, f"{name}: turn angle about z, {what}")
+    ts = _settle(eff)
+    _zoom(ctx, "akimov_fig5", eff, ts, "akimov_fig5: the final transient (segment 4-5)")
+    _zoom(
+        ctx,
+        "akimov_fig12",
+        eff,
+        ts,
+        "akimov_fig12: angle with the efficient gains (k_q = 1.375, k_w = 2.625)",
+        log=True,
+    )
+    out["akimov_fig12"] = {"settle_s": ts, "paper_settle_s": AKIMOV_SETTLE_S}
+    out.update(_gain_figures(ctx))
+    return {"akimov": out}
+
+
+def _settle(df: pd.DataFrame, tol_deg: float = 0.01, tol_rate: float = 0.01) -> float:
+    d = df[df["axis"] == 1]
+    ok = (d["angle_deg"] <= tol_deg) & (d["rate_norm_degps"] <= tol_rate)
+    bad = np.flatnonzero(~ok.to_numpy())
+    return float(d["t_s"].iloc[bad[-1] + 1]) if len(bad) and bad[-1] + 1 < len(d) else np.nan
+
+
+def _history_axis(ctx, name, df, title) -> None:
+    z = df[df["axis"] == 3]
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.0))
+    axes[0, 0].plot(
+        z["t_s"],
+        z["error_deg"],
+        **fs.line("perfect", "none"),
+        label="perfect / none: rotation about z from the target",
+    )
+    axes[0, 0].set_xlabel("time t, s")
+    axes[0, 0].set_ylabel("turn angle, deg")
+    fs.legend(axes[0, 0])
+    fig.suptitle(title)
+    ctx.save(fig, name)
+
+
+def _zoom(ctx, name, df, settle_s, title, log=False) -> None:
+    d = df[df["axis"] == 1]
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.0))
+    ax = axes[0, 0]
+    if not log:
+        d = d[d["t_s"] >= max(settle_s - 15.0, 0.0)]
+        d = d[d["t_s"] <= settle_s + 15.0]
+    ax.plot(
+        d["t_s"],
+        d["angle_deg"],
+        **fs.line("perfect", "none"),
+        label=f"perfect / none: error angle, settles at {settle_s:.2f} s",
+    )
+    ax.axhline(0.01, color=fs.REFERENCE, lw=0.9, label="tolerance 0.01 deg")
+    ax.axvline(
+        AKIMOV_SETTLE_S,
+        color=fs.PAPER,
+        ls=":",
+        lw=1.2,
+        label=f"paper: settles at {AKIMOV_SETTLE_S} s",
+    )
+    ax.set_yscale("log" if log else "linear")
+    ax.set_xlabel("time t, s")
+    ax.set_ylabel("error angle, deg")
+    fs.legend(ax)
+    fig.suptitle(title)
+    ctx.save(fig, name)
+
+
+def _gain_figures(ctx) -> dict[str, Any]:
+    from experiments.cmd_pd_gains import fig15_times
+
+    step = 0.1 if ctx.quick else gs.MANEUVER_150.grid_step
+    smap = gs.settle_time_map(150.0, replace(gs.MANEUVER_150, grid_step=step))
+    fig, axes = fs.figure(1, 1, size=(7.0, 5.4))
+    ax = axes[0, 0]
+    t = np.where(np.isfinite(smap.time_s), smap.time_s, np.nan)
+    mesh = ax.pcolormesh(
+        smap.k_w, smap.k_q, t.T, shading="nearest", cmap="viridis", vmax=np.nanpercentile(t, 95)
+    )
+    fig.colorbar(mesh, ax=ax, label="settle time, s (colour capped at the 95th percentile)")
+    kw, kq, _ = gs.efficient_curve(smap)
+    ax.plot(
+        kw,
+        kq,
+        ".",
+        color=fs.estimator_colour("perfect"),
+        ms=4,
+        label="curve 2: efficient coefficients (least settle time per k_w)",
+    )
+    line = np.linspace(smap.k_w[0], smap.k_w[-1], 200)
+    ax.plot(
+        line,
+        baseline_kq(line, "vector"),
+        color="white",
+        ls="--",
+        lw=1.2,
+        label="curve 1: k_w^2 = 2 k_q (rule 9)",
+    )
+    ax.plot([2.625], [1.375], **fs.PAPER_MARKER, label="paper: k_q = 1.375, k_w = 2.625")
+    ax.fill([], [], facecolor="white", edgecolor="0.5", label="white: not settled in 150 s")
+    ax.set_ylim(smap.k_q[0], smap.k_q[-1])
+    ax.set_xlabel("k_w, 1/s")
+    ax.set_ylabel("k_q, 1/s^2")
+    fs.legend(ax, loc="upper left", fontsize=6.5, facecolor="0.8")  # the white line shows
+    fig.suptitle(f"akimov_fig10: settle time of the 150 deg turn over the gains (grid {step})")
+    ctx.save(fig, "akimov_fig10")
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.4))
+    ax = axes[0, 0]
+    ax.plot(
+        kw,
+        kq,
+        ".-",
+        color=fs.estimator_colour("perfect"),
+        ms=3,
+        lw=0.8,
+        label="curve 2: efficient coefficients (ours)",
+    )
+    ax.plot(
+        line,
+        baseline_kq(line, "vector"),
+        color=fs.REFERENCE,
+        ls="--",
+        label="curve 1: k_w^2 = 2 k_q (rule 9)",
+    )
+    ax.plot([2.625], [1.375], **fs.PAPER_MARKER, label="paper: k_q = 1.375 at k_w = 2.625")
+    ax.set_xlabel("k_w, 1/s")
+    ax.set_ylabel("k_q, 1/s^2")
+    fs.legend(ax)
+    fig.suptitle("akimov_fig11: the efficient-coefficient curve, 150 deg turn")
+    ctx.save(fig, "akimov_fig11")
+    return {"akimov_fig10": {"grid_step": step}, **_f0_figures(ctx, fig15_times)}
+
+
+def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
+    settings = gs.StudySettings()
+    table = gs.load_f0_table()
+    angles = (
+        (0.2, 0.5, 1.0, 3.0, 6.0)
+        if ctx.quick
+        else (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
+    )
+    f0 = {a: gs.f0_for_angle(a, settings) for a in angles}
+    fit = gs.fit_f0_curve(list(f0), list(f0.values()), settings.quaternion_term)
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
+    ax = axes[0, 0]
+    ta = np.array(sorted(table))
+    ax.plot(ta, [table[a] for a in ta], **{**fs.PAPER_MARKER, "ms": 6}, label="paper: table")
+    ax.plot(
+        list(f0),
+        list(f0.values()),
+        "x",
+        color=fs.estimator_colour("perfect"),
+        label="ours: efficient-curve fit per angle",
+    )
+    grid = np.linspace(0.2, 6.0, 200)
+    ax.plot(
+        grid,
+        gs.f0_model(np.radians(grid), **fit),
+        color=fs.estimator_colour("perfect"),
+        label="ours: fit of eq. (28)",
+    )
+    ax.set_xlabel("initial angle phi0, deg")
+    ax.set_ylabel("f0 (k_q = f0 k_w^2), -")
+    fs.legend(ax)
+    fig.suptitle("akimov_fig14: f0(phi0), our study against the paper's table")
+    ctx.save(fig, "akimov_fig14")
+    step = 0.5 if ctx.quick else 0.1
+    ang = np.round(np.arange(0.2, 6.0001, step), 3)
+    times = fig15_times(ang, 1.0, fit, settings)
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
+    ax = axes[0, 0]
+    ax.plot(ang, times["baseline"], color=fs.REFERENCE, ls="--", label="rule (10): k_q = k_w^2/2")
+    ax.plot(ang, times["fitted"], color=fs.estimator_colour("perfect"), label="rule (29), our fit")
+    ax.plot(ang, times["seed_eq29"], color=fs.PAPER, ls=":", label="paper: rule (29), its fit")
+    ax.set_xlabel("initial angle phi0, deg")
+    ax.set_ylabel("settle time, s")
+    fs.legend(ax)
+    fig.suptitle("akimov_fig15: settle time against the angle, k_w = 1 1/s, no wheel limits")
+    ctx.save(fig, "akimov_fig15")
+    diff = {a: 100.0 * (f0[a] / table[a] - 1.0) for a in f0 if a in table}
+    faster = bool(np.all(times["fitted"] <= times["baseline"]))
+    return {"akimov_fig14": {"f0_diff_pct": diff}, "akimov_fig15": {"fit_faster": faster}}
+
+
+# -- seed 004 --------------------------------------------------------------------------
+def gyrostat(ctx) -> dict[str, Any]:
+    quiet, setup = trace(ctx, "gyrostat_game.toml", "game", "none", "perfect")
+    game, _ = trace(ctx, "gyrostat_game.toml", "game", "game", "box")
+    tau = float(setup.design.tau_s)
+    mark = [(tau, f"guaranteed time tau = {tau:.1f} s (eq. 2.8)")]
+    both = [quiet, game]
+    _components(
+        ctx,
+        "gyrostat_eta",
+        both,
+        "eta",
+        "error quaternion eta_i, -",
+        "gyrostat_eta: the error quaternion's vector part",
+        marks=mark,
+    )
+    _components(
+        ctx,
+        "gyrostat_switching",
+        both,
+        "psi",
+        "switching function psi_i, -",
+        "gyrostat_switching: psi_i = -eta_i - eta_i' |eta_i'| / (2 (1 - rho_i) a*_i)",
+        marks=mark,
+    )
+    _components(
+        ctx,
+        "gyrostat_torques",
+        both,
+        "torque_Nm",
+        "rotor torque u_i, N m",
+        "gyrostat_torques: rotor torques against their limits alpha_i",
+        limit="torque_limit_Nm",
+        marks=mark,
+    )
+    settle = {
+        f"{d['estimator'].iloc[0]}/{d['noise'].iloc[0]}": _settle(d, 0.05, 0.01) for d in both
+    }
+    ratio = {
+        f"{d['estimator'].iloc[0]}/{d['noise'].iloc[0]}": float(
+            (d["torque_Nm"].abs() / d["torque_limit_Nm"]).max()
+        )
+        for d in both
+    }
+    return {"gyrostat": {"tau_s": tau, "settle_s": settle, "max_torque_ratio": ratio}}
+
+
+GROUPS = {"akimov": akimov, "gyrostat": gyrostat}
+FIGURES = {
+    **{f"akimov_fig{i}": "akimov" for i in (3, 4, 5, 6, 7, 10, 11, 12, 14, 15)},
+    **{n: "gyrostat" for n in ("gyrostat_eta", "gyrostat_switching", "gyrostat_torques")},
+}

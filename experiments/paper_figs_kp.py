@@ -1,0 +1,194 @@
+"""The figures of seed 003 (Kumkov & Patsko) redrawn from our runs (``paper-figures``).
+
+* ``kp_fig3``: control processes of the Fig. 3 engagement, random | game errors
+  (``kp_fig3.toml``, run 0 of its seed), the paper's miss and fuel marked;
+* ``kp_fig3_overlay``: ours, not the paper's: the set's, EKF's and UKF's forecast-miss
+  intervals on the same realisation (random and game errors side by side);
+* ``kp_fig4``: the set at ``t = 1 s`` before and after a bearing and a range
+  measurement (``kp_fig3.toml`` with the range finder on, random errors);
+* ``kp_fig5``: CDFs of miss and fuel over ``runs`` engagements of the Fig. 5 box, bearings
+  only and with the range finder, random and game errors (the paper prints curves
+  only; its Fig. 3 single-run numbers are marked, as in ``fig5``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from experiments import figstyle as fs
+from experiments import plots_intercept, plots_sets
+from experiments.cmd_fig5 import miss_floor_m
+from experiments.runner import run_experiment
+from experiments.scenario import load_scenario
+from experiments.traces import intercept_trace
+
+NOISES = ("random", "game")
+
+
+def _paper(sc) -> dict[str, tuple[Any, Any]]:
+    ref = sc.reference
+    return {
+        "random": (ref.miss_random_m, ref.fuel_random_mps),
+        "game": (ref.miss_game_m, ref.fuel_game_mps),
+    }
+
+
+def fig3(ctx) -> dict[str, Any]:
+    sc = load_scenario(ctx.scenarios / "kp_fig3.toml")
+    seed = sc.experiment.seed
+    frames = {}
+    for est in ("infoset", "ekf", "ukf"):
+        for noise in NOISES:
+            frames[est, noise] = intercept_trace(sc, est, noise, seed, [0], sets_every=0)[0]
+    steps = pd.concat(frames.values(), ignore_index=True)
+    ours = {
+        n: (
+            float(frames["infoset", n]["miss_m"].iloc[0]),
+            float(frames["infoset", n]["final_fuel_mps"].iloc[0]),
+        )
+        for n in NOISES
+    }
+    fig = plots_intercept.control_processes(
+        steps[steps["estimator"] == "infoset"], 0, "infoset", list(NOISES), paper=_paper(sc)
+    )
+    ctx.save(fig, "kp_fig3")
+    fig, axes = fs.figure(3, 2, size=(12.0, 8.0), sharex="col")
+    for col, noise in enumerate(NOISES):
+        plots_intercept.estimator_overlay(steps, 0, noise, axes=axes[:, col])
+        axes[0, col].set_title(f"{noise} errors")
+    fig.suptitle(
+        "kp_fig3 engagement: forecast-miss intervals of the set, EKF and UKF on the "
+        "same realisation (interval ends minus the truth's forecast)"
+    )
+    ctx.save(fig, "kp_fig3_overlay")
+    kal = {
+        f"{e}_{n}": (
+            float(frames[e, n]["miss_m"].iloc[0]),
+            float(frames[e, n]["final_fuel_mps"].iloc[0]),
+        )
+        for e in ("ekf", "ukf")
+        for n in NOISES
+    }
+    return {
+        "kp_fig3": {"ours_miss_fuel": ours, "paper_miss_fuel": _paper(sc)},
+        "kp_fig3_overlay": {"kalman_miss_fuel": kal},
+    }
+
+
+def fig4(ctx) -> dict[str, Any]:
+    sc = load_scenario(ctx.scenarios / "kp_fig3.toml", ["range_finder.enabled=true"])
+    steps, sets, _ = intercept_trace(
+        sc, "infoset", "random", sc.experiment.seed, [0], sets_every=1000
+    )
+    step = int(sets.loc[sets["t_s"] == 1.0, "step"].iloc[0])
+    fig = plots_sets.stacked_3d(
+        sets,
+        0,
+        step,
+        steps,
+        title="kp_fig4: the information set at t = 1 s, bearing and range measured "
+        "(node slices; between nodes the set is bounded, not drawn)",
+    )
+    ctx.save(fig, "kp_fig4")
+    at = sets[sets["step"] == step]
+    return {
+        "kp_fig4": {
+            "sections_before": int(at[at["phase"] == "prior"]["section"].nunique()),
+            "sections_after": int(at[at["phase"] == "posterior"]["section"].nunique()),
+            "range_measured_m": float(steps.loc[steps["step"] == step, "range_meas_m"].iloc[0]),
+        }
+    }
+
+
+def fig5(ctx) -> dict[str, Any]:
+    frames, means = [], {}
+    sc = None
+    for fname, variant in (
+        ("kp_fig5.toml", "bearings only"),
+        ("kp_fig5_range.toml", "bearings + range"),
+    ):
+        sc = load_scenario(ctx.scenarios / fname)
+        for noise in NOISES:
+            df = run_experiment(
+                sc,
+                "infoset",
+                noise,
+                ctx.runs,
+                sc.experiment.seed,
+                ctx.out / "runs",
+                workers=1,
+                progress=False,
+            )
+            ok = df[df["status"] == "ok"].assign(variant=variant)
+            frames.append(ok)
+            means[f"{variant}, {noise}"] = (
+                float(ok["miss_m"].mean()),
+                float(ok["fuel_mps"].mean()),
+            )
+    table = pd.concat(frames, ignore_index=True)
+    fig, axes = fs.figure(1, 2, size=(11.0, 4.4))
+    panels = (("miss_m", "miss distance, m", 0), ("fuel_mps", "fuel (sum of |impulses|), m/s", 1))
+    for col, xlabel, k in panels:
+        ax = axes[0, k]
+        for (variant, noise), grp in table.groupby(["variant", "noise"], sort=True):
+            v = np.sort(grp[col].to_numpy(dtype=float))
+            p = np.arange(1, len(v) + 1) / len(v)
+            lw = 1.3 if variant == "bearings only" else 2.8
+            ax.step(
+                np.r_[v[0], v],
+                np.r_[0.0, p],
+                where="post",
+                **{**fs.line("infoset", noise), "lw": lw},
+                label=f"infoset / {noise}, {variant} (n={len(v)})",
+            )
+        ref = _paper(sc)
+        for noise in NOISES:
+            value = ref[noise][k]
+            if value is not None:
+                ax.plot(
+                    [value],
+                    [0.5],
+                    **fs.PAPER_MARKER,
+                    label=f"paper, Fig. 3 single run, {noise}: {value:g}",
+                )
+        if col == "miss_m":
+            ax.axvline(
+                miss_floor_m(sc),
+                color=fs.REFERENCE,
+                ls=":",
+                lw=1.0,
+                label=f"bearing-limited miss scale {miss_floor_m(sc):.2f} m",
+            )
+            ax.set_xscale("log")
+        else:
+            floor = float(table["fuel_perfect_info_mps"].mean())
+            ax.axvline(
+                floor,
+                color=fs.REFERENCE,
+                ls=":",
+                lw=1.0,
+                label=f"perfect-information fuel (mean) {floor:.1f} m/s",
+            )
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("fraction of runs (CDF), -")
+        ax.set_ylim(0, 1.02)
+        fs.legend(ax, loc="lower right", fontsize=6.5)
+    axes[0, 0].set_title("(a) miss")
+    axes[0, 1].set_title("(b) fuel")
+    fig.suptitle(
+        f"kp_fig5: {ctx.runs} runs per curve (line width: thin = bearings only, "
+        "thick = with the range finder)"
+    )
+    ctx.save(fig, "kp_fig5")
+    return {"kp_fig5": {"runs": ctx.runs, "mean_miss_fuel": means}}
+
+
+FIGURES = {
+    "kp_fig3": fig3,
+    "kp_fig3_overlay": fig3,
+    "kp_fig4": fig4,
+    "kp_fig5": fig5,
+}

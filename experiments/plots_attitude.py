@@ -1,0 +1,133 @@
+"""Time histories of attitude traces (:mod:`experiments.attitude_traces`).
+
+:func:`time_histories` is the figure the ``attitude`` command draws for a traced run:
+per body axis (columns) the attitude error, the body rate, the torque on the body and
+the actuator momentum (with the limits where the loop has them), and below them the
+principal error angle with the estimator's knowledge bound, the energy index so far
+and, where the loop has them, the gyrostat's switching functions or the energy law's
+auxiliary system. :func:`axis_panels` and :func:`step_panel` are the building blocks
+of the paper figures (:mod:`experiments.paper_figures`).
+
+One curve per trace, coloured by its estimator and styled by its noise
+(:mod:`experiments.figstyle`); limits and references are grey, the truth is what the
+curves show (the loops' true state), the belief's centre is the thin curve.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from experiments import figstyle as fs
+
+AXES = (1, 2, 3)
+#: (column, axis label) of the per-axis rows, in order
+ROWS = (
+    ("error_deg", "attitude error, deg"),
+    ("rate_degps", "body rate, deg/s"),
+    ("torque_Nm", "torque on the body, N m"),
+    ("momentum_Nms", "actuator momentum, N m s"),
+)
+
+
+def _label(df: pd.DataFrame, what: str = "") -> str:
+    est, noise = str(df["estimator"].iloc[0]), str(df["noise"].iloc[0])
+    run = int(df["run"].iloc[0]) if "run" in df else 0
+    return f"{est} / {noise}, run {run}" + (f": {what}" if what else "")
+
+
+def _style(df: pd.DataFrame) -> dict:
+    return fs.line(str(df["estimator"].iloc[0]), str(df["noise"].iloc[0]))
+
+
+def axis_panels(
+    axes,
+    traces: Sequence[pd.DataFrame],
+    column: str,
+    ylabel: str,
+    what: str = "",
+    limit: str | None = None,
+    lw: float | None = None,
+) -> None:
+    """``column`` of each trace against time on three axis panels (``axes`` of 3); ``lw``
+    (line width) tells apart variants of one estimator and noise."""
+    for ax, k in zip(axes, AXES, strict=True):
+        for df in traces:
+            d = df[df["axis"] == k]
+            style = {**_style(df), **({"lw": lw} if lw else {})}
+            ax.plot(d["t_s"], d[column], **style, label=_label(df, what))
+            if limit is not None and limit in d and np.isfinite(d[limit]).any():
+                lim = d[limit].to_numpy(dtype=float)
+                ax.plot(d["t_s"], lim, color=fs.REFERENCE, lw=0.8, ls="-", label="limit")
+                ax.plot(d["t_s"], -lim, color=fs.REFERENCE, lw=0.8, ls="-", label="limit")
+        ax.set_ylabel(
+            f"{ylabel} ({'xyz'[k - 1]})"
+            if ", " not in ylabel
+            else ylabel.replace(",", f" ({'xyz'[k - 1]}),", 1)
+        )
+        ax.set_xlabel("time t, s")
+
+
+def step_panel(ax, traces: Sequence[pd.DataFrame], column: str, ylabel: str, what: str = ""):
+    """A per-step ``column`` of each trace against time."""
+    for df in traces:
+        d = df[df["axis"] == 1]
+        ax.plot(d["t_s"], d[column], **_style(df), label=_label(df, what))
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel("time t, s")
+
+
+def _limits(df: pd.DataFrame, column: str) -> str | None:
+    """The column of the limit of ``column`` in this loop, if it has one."""
+    if column == "torque_Nm":
+        return "torque_limit_Nm" if "torque_limit_Nm" in df else "torque_max_Nm"
+    return "momentum_max_Nms" if column == "momentum_Nms" else None
+
+
+def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
+    """The attitude command's figure of one or more traced runs (module docstring)."""
+    first = traces[0]
+    extra = []
+    if "psi" in first:
+        extra = [("eta", "error quaternion eta_i, -"), ("psi", "switching function psi_i, -")]
+    elif "xi_deg" in first and np.isfinite(first["xi_deg"]).any():
+        extra = [("xi_deg", "auxiliary system xi (angle), deg")]
+    rows = list(ROWS) + extra
+    fig, axes = fs.figure(len(rows) + 1, 3, size=(13.0, 2.3 * (len(rows) + 1)), sharex=True)
+    for r, (col, ylabel) in enumerate(rows):
+        if col in first:
+            axis_panels(axes[r], traces, col, ylabel, limit=_limits(first, col))
+    bottom = axes[len(rows)]
+    for df in traces:
+        d = df[df["axis"] == 1]
+        style = _style(df)
+        bottom[0].plot(d["t_s"], d["angle_deg"], **style, label=_label(df, "error angle"))
+        kb = d["knowledge_bound_deg"].to_numpy(dtype=float)
+        if np.nanmax(kb, initial=0.0) > 1e-9:  # a perfect, noiseless belief has none
+            bottom[0].plot(
+                d["t_s"],
+                kb,
+                color=style["color"],
+                lw=0.8,
+                ls=":",
+                label=_label(df, "knowledge bound of the belief"),
+            )
+        bottom[1].plot(d["t_s"], d["energy_N2m2s"], **style, label=_label(df, "energy so far"))
+        bottom[2].plot(d["t_s"], d["rate_norm_degps"], **style, label=_label(df, "rate norm"))
+        if "guaranteed_time_s" in d:
+            tau = float(d["guaranteed_time_s"].iloc[0])
+            for ax in bottom:
+                ax.axvline(tau, color=fs.REFERENCE, ls="--", lw=0.9, label="guaranteed time tau")
+    bottom[0].set_yscale("log")
+    bottom[0].set_ylabel("error angle, deg")
+    bottom[1].set_ylabel("energy index sum M^2 dt, N^2 m^2 s")
+    bottom[2].set_yscale("log")
+    bottom[2].set_ylabel("rate norm, deg/s")
+    for ax in bottom:
+        ax.set_xlabel("time t, s")
+    for ax in axes.flat:
+        fs.legend(ax, loc="best", fontsize=6)
+    fig.suptitle(title or f"{first['scenario'].iloc[0]}: time histories")
+    return fig

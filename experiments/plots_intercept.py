@@ -1,0 +1,170 @@
+"""Figures of intercept traces (:mod:`experiments.traces`): control processes and overlays.
+
+* :func:`control_processes`: the seed's Fig. 3 layout, one column per noise (random |
+  game side by side) for one estimator and run: the bearing and its measurement, the
+  bearing error within its bound, the forecast-miss interval the guidance uses against
+  the truth's forecast, the impulses and the fuel spent, with the paper's printed
+  miss and fuel marked when given;
+* :func:`estimator_overlay`: the forecast-miss intervals of several estimators on the
+  same realisation (same initial truth and noise stream), each against its own truth
+  (the loops are closed, so the truths part as the impulses differ): the interval
+  relative to the truth's forecast, its width, and the fuel spent.
+
+Style (colour = estimator, line style = noise): :mod:`experiments.figstyle`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from experiments import figstyle as fs
+
+
+def _one(df: pd.DataFrame, run: int, channel: str | None) -> pd.DataFrame:
+    d = df[df["run"] == run]
+    if channel is None:
+        channel = str(d["channel"].iloc[0])
+    return d[d["channel"] == channel].sort_values("step")
+
+
+def control_processes(
+    steps: pd.DataFrame,
+    run: int,
+    estimator: str,
+    noises: list[str],
+    channel: str | None = None,
+    paper: Mapping[str, tuple[float | None, float | None]] | None = None,
+):
+    """Fig. 3-style panels; ``paper`` maps a noise to its printed ``(miss_m, fuel_mps)``."""
+    fig, axes = fs.figure(5, len(noises), size=(5.2 * len(noises), 10.5), sharex="col")
+    for col, noise in enumerate(noises):
+        d = _one(steps[(steps["estimator"] == estimator) & (steps["noise"] == noise)], run, channel)
+        ax = axes[:, col]
+        style = fs.line(estimator, noise)
+        t = d["t_s"].to_numpy()
+        ax[0].plot(t, d["alpha_true_rad"] * 1e3, color=fs.TRUTH, lw=1.0, label="truth")
+        ax[0].plot(t, d["alpha_meas_rad"] * 1e3, ".", color=fs.MEASURED, ms=2, label="measured")
+        ax[0].set_ylabel("bearing alpha, mrad")
+        ax[1].plot(
+            t, d["alpha_err_rad"] * 1e6, ".", color=fs.MEASURED, ms=2, label="measurement error"
+        )
+        for sign in (-1, 1):
+            ax[1].plot(
+                t,
+                sign * d["alpha_bound_rad"] * 1e6,
+                color=fs.REFERENCE,
+                lw=0.8,
+                label="error bound",
+            )
+        ax[1].set_ylabel("bearing error, urad")
+        lo, hi = d["forecast_lo_m"].to_numpy(), d["forecast_hi_m"].to_numpy()
+        ax[2].fill_between(
+            t,
+            lo,
+            hi,
+            color=style["color"],
+            alpha=0.25,
+            lw=0,
+            label=f"{estimator}: forecast-miss interval",
+        )
+        for end in (lo, hi):
+            ax[2].plot(t, end, **style, label=f"{estimator} / {noise}: interval ends")
+        ax[2].plot(t, d["forecast_true_m"], color=fs.TRUTH, lw=1.0, label="truth's forecast miss")
+        ax[2].set_yscale("symlog", linthresh=10.0)
+        ax[2].set_ylabel("forecast miss Pi, m")
+        k = d["impulse_mps"].to_numpy()
+        fired = k != 0
+        ax[3].vlines(
+            t[fired],
+            0,
+            k[fired],
+            color=style["color"],
+            lw=1.0,
+            label=f"{estimator} / {noise}: impulses",
+        )
+        ax[3].set_ylabel("impulse, m/s")
+        ax[4].plot(t, d["fuel_mps"], **style, label=f"{estimator} / {noise}: fuel so far")
+        ax[4].set_ylabel("fuel spent, m/s")
+        ax[4].set_xlabel("time t, s")
+        miss = float(d["miss_m"].iloc[0]) if "miss_m" in d else float("nan")
+        ax[2].plot(
+            [t[-1]], [miss], "o", color=style["color"], ms=6, label=f"ours: miss {miss:.1f} m"
+        )
+        p_miss, p_fuel = (paper or {}).get(noise, (None, None))
+        if p_miss is not None:
+            ax[2].plot([t[-1]], [p_miss], **fs.PAPER_MARKER, label=f"paper: miss {p_miss:g} m")
+        if p_fuel is not None:
+            fs.paper_line(ax[4], p_fuel, f"fuel {p_fuel:g} m/s")
+        ax[0].set_title(
+            f"{noise} errors: miss {miss:.1f} m, fuel {float(d['fuel_mps'].iloc[-1]):.1f} m/s"
+        )
+        for a in ax:
+            fs.legend(a, loc="best")
+    fig.suptitle(f"{steps['scenario'].iloc[0]}: control processes, {estimator}, run {run}")
+    return fig
+
+
+def estimator_overlay(
+    steps: pd.DataFrame, run: int, noise: str, channel: str | None = None, axes=None
+):
+    """Forecast-miss intervals of every estimator in ``steps`` on one realisation; drawn
+    on three given ``axes`` (then None is returned) or on a new figure."""
+    fig = None
+    if axes is None:
+        fig, grid = fs.figure(3, 1, size=(7.0, 8.5), sharex="col")
+        axes = grid[:, 0]
+    ax = axes
+    for est, grp in steps[steps["noise"] == noise].groupby("estimator", sort=True):
+        d = _one(grp, run, channel)
+        t = d["t_s"].to_numpy()
+        style = fs.line(str(est), noise)
+        truth = d["forecast_true_m"].to_numpy()
+        lo, hi = d["forecast_lo_m"].to_numpy() - truth, d["forecast_hi_m"].to_numpy() - truth
+        ax[0].fill_between(
+            t,
+            lo,
+            hi,
+            color=style["color"],
+            alpha=0.18,
+            lw=0,
+            label=f"{est} / {noise}: interval - truth",
+        )
+        for end in (lo, hi):
+            ax[0].plot(t, end, **style, label=f"{est} / {noise}: interval ends - truth")
+        outside = ~d["truth_inside"].to_numpy(dtype=bool)
+        if outside.any():
+            ax[0].plot(
+                t[outside],
+                np.zeros(outside.sum()),
+                "|",
+                color=style["color"],
+                ms=8,
+                label=f"{est}: truth's state outside its belief",
+            )
+        ax[1].plot(
+            t,
+            d["forecast_hi_m"] - d["forecast_lo_m"],
+            **style,
+            label=f"{est} / {noise}: interval width",
+        )
+        miss = float(d["miss_m"].iloc[0])
+        ax[2].plot(t, d["fuel_mps"], **style, label=f"{est} / {noise}: fuel, miss {miss:.1f} m")
+    ax[0].axhline(0.0, color=fs.TRUTH, lw=1.0, label="truth's forecast miss")
+    ax[0].set_yscale("symlog", linthresh=10.0)
+    ax[0].set_ylabel("interval end - truth's Pi, m")
+    ax[1].set_yscale("log")
+    ax[1].set_ylabel("interval width, m")
+    ax[2].set_ylabel("fuel spent, m/s")
+    ax[2].set_xlabel("time t, s")
+    for a in ax:
+        fs.legend(a, loc="best", fontsize=6.5)
+    if fig is not None:
+        fig.suptitle(
+            f"{steps['scenario'].iloc[0]}: forecast-miss intervals on one realisation\n"
+            f"(run {run}, {noise} errors); the truth's forecast is inside where 0 lies "
+            "between the ends"
+        )
+    return fig

@@ -1,0 +1,205 @@
+"""Pictures of an information set from a trace's sets file (:mod:`experiments.traces`).
+
+The set of one channel is a stack of sections (polygons) in (bearing ``alpha``,
+zero-effort miss ``w = omega x^2 / e``), each at its range ``x``:
+
+* :func:`stacked_3d`: the sections stacked along the range in 3-D, like the seed's
+  Fig. 4 -- (a) before the step's measurements, (b) after them, the part that remains
+  shaded and the part cut away as outlines;
+* :func:`slices`: 2-D pictures at chosen times, every section's polygon projected onto
+  (bearing, zero-effort miss), the truth marked;
+* :func:`animate`: the same projection over the whole engagement as a GIF (matplotlib's
+  pillow writer).
+
+Colour = estimator (:mod:`experiments.figstyle`); the truth is black.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib import animation
+from matplotlib.collections import PolyCollection
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from experiments import figstyle as fs
+
+
+def _sections(d: pd.DataFrame):
+    """``(x_km, alpha_mrad, w_km)`` vertex arrays of each section of one snapshot."""
+    for _, s in d.sort_values(["section", "vertex"]).groupby("section", sort=True):
+        yield (
+            s["x_m"].to_numpy() / 1e3,
+            s["alpha_rad"].to_numpy() * 1e3,
+            s["zem_m"].to_numpy() / 1e3,
+        )
+
+
+def _snapshot(sets: pd.DataFrame, run: int, step: int, phase: str, channel=None):
+    d = sets[(sets["run"] == run) & (sets["step"] == step) & (sets["phase"] == phase)]
+    if channel is not None:
+        d = d[d["channel"] == channel]
+    return d
+
+
+def _truth(steps: pd.DataFrame | None, run: int, step: int, channel=None):
+    if steps is None:
+        return None
+    d = steps[(steps["run"] == run) & (steps["step"] == step)]
+    if channel is not None:
+        d = d[d["channel"] == channel]
+    if not len(d):
+        return None
+    r = d.iloc[0]
+    return r["x_true_m"] / 1e3, r["alpha_true_rad"] * 1e3, r["zem_true_m"] / 1e3
+
+
+def _draw_3d(ax, d: pd.DataFrame, colour: str, shaded: bool, label: str) -> None:
+    polys = [np.column_stack(v) for v in _sections(d)]
+    if not polys:
+        return
+    coll = Poly3DCollection(
+        polys,
+        facecolor=colour if shaded else "none",
+        edgecolor=colour,
+        alpha=0.45 if shaded else 0.9,
+        linewidths=0.8,
+        linestyles="-" if shaded else ":",
+        label=label,
+    )
+    ax.add_collection3d(coll)
+    ax.plot([], [], color=colour, ls="-" if shaded else ":", label=label)  # legend handle
+    allv = np.vstack(polys)
+    for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
+        lo, hi = allv[:, k].min(), allv[:, k].max()
+        pad = 0.05 * (hi - lo) + 1e-9
+        setter(lo - pad, hi + pad)
+
+
+def _labels_3d(ax) -> None:
+    ax.set_xlabel("range x, km")
+    ax.set_ylabel("bearing alpha, mrad")
+    ax.set_zlabel("zero-effort miss w, km")
+
+
+def stacked_3d(sets: pd.DataFrame, run: int, step: int, steps=None, channel=None, title=""):
+    """(a) the set before the step's measurements, (b) after (remaining part shaded)."""
+    fs.setup()
+    fig = fs.plt.figure(figsize=(11.0, 5.0), constrained_layout=True)
+    est = str(sets["estimator"].iloc[0])
+    colour = fs.estimator_colour(est)
+    prior = _snapshot(sets, run, step, "prior", channel)
+    post = _snapshot(sets, run, step, "posterior", channel)
+    truth = _truth(steps, run, step, channel)
+    t = float(post["t_s"].iloc[0]) if len(post) else float("nan")
+    for i, (name, parts) in enumerate(
+        (
+            ("(a) before the measurements", [(prior, False, "set before the measurements")]),
+            (
+                "(b) after the measurements",
+                [(prior, False, "set before the measurements"), (post, True, "part that remains")],
+            ),
+        )
+    ):
+        ax = fig.add_subplot(1, 2, i + 1, projection="3d")
+        for d, shaded, label in parts:
+            _draw_3d(ax, d, colour, shaded, f"{est}: {label}")
+        if truth is not None:
+            ax.plot(*[[v] for v in truth], "o", color=fs.TRUTH, ms=5, label="truth")
+        _labels_3d(ax)
+        ax.set_title(f"{name}, t = {t:g} s", fontsize=9)
+        ax.view_init(elev=18, azim=-58)
+        fs.legend(ax, loc="upper left")
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def slices(sets: pd.DataFrame, run: int, steps_df=None, times=None, channel=None, n=6):
+    """2-D pictures of the set after the measurements at ``n`` times (or ``times``, s)."""
+    post = sets[(sets["run"] == run) & (sets["phase"] == "posterior")]
+    if channel is not None:
+        post = post[post["channel"] == channel]
+    avail = np.array(sorted(post["step"].unique()))
+    if times is None:
+        chosen = avail[np.unique(np.linspace(0, len(avail) - 1, min(n, len(avail))).astype(int))]
+    else:
+        t_of = post.groupby("step")["t_s"].first()
+        chosen = [int(t_of.index[np.argmin(np.abs(t_of.to_numpy() - t))]) for t in times]
+    ncols = min(3, len(chosen))
+    nrows = int(np.ceil(len(chosen) / ncols))
+    fig, axes = fs.figure(nrows, ncols, size=(4.0 * ncols, 3.4 * nrows))
+    est = str(sets["estimator"].iloc[0])
+    colour = fs.estimator_colour(est)
+    for ax, step in zip(axes.flat, chosen, strict=False):
+        d = post[post["step"] == step]
+        _draw_2d(ax, d, colour, est)
+        tr = _truth(steps_df, run, int(step), channel)
+        if tr is not None:
+            ax.plot([tr[1]], [tr[2] * 1e3], "o", color=fs.TRUTH, ms=4, label="truth")
+        ax.set_title(f"t = {float(d['t_s'].iloc[0]):g} s, {d['section'].nunique()} sections")
+        fs.legend(ax, loc="best")
+    for ax in axes.flat[len(chosen) :]:
+        ax.set_visible(False)
+    fig.suptitle(f"{sets['scenario'].iloc[0]}: the set projected on (bearing, miss), run {run}")
+    return fig
+
+
+def _draw_2d(ax, d: pd.DataFrame, colour: str, est: str) -> None:
+    """Every section of a snapshot as one collection (filled faintly, edges drawn)."""
+    polys = [np.column_stack([a, w * 1e3]) for _, a, w in _sections(d)]
+    coll = PolyCollection(
+        polys,
+        facecolors=colour,
+        edgecolors=colour,
+        alpha=0.35,
+        linewidths=0.7,
+        label=f"{est}: sections at their ranges",
+    )
+    ax.add_collection(coll)
+    ax.autoscale_view()
+    ax.set_xlabel("bearing alpha, mrad")
+    ax.set_ylabel("zero-effort miss w, m")
+
+
+def animate(
+    sets: pd.DataFrame,
+    run: int,
+    path: Path,
+    steps_df=None,
+    channel=None,
+    fps=3,
+    max_frames: int = 12,
+):
+    """A GIF of the set after the measurements over the engagement (pillow writer), at
+    most ``max_frames`` recorded steps evenly spread."""
+    post = sets[(sets["run"] == run) & (sets["phase"] == "posterior")]
+    if channel is not None:
+        post = post[post["channel"] == channel]
+    frames = sorted(post["step"].unique())
+    pick = np.unique(np.linspace(0, len(frames) - 1, min(max_frames, len(frames))).astype(int))
+    frames = [frames[i] for i in pick]
+    est = str(sets["estimator"].iloc[0])
+    colour = fs.estimator_colour(est)
+    fs.setup()
+    fig = fs.plt.figure(figsize=(5.6, 4.2))  # fixed layout: re-laid out per frame is slow
+    ax = fig.add_axes((0.16, 0.13, 0.8, 0.78))
+
+    def draw(step):
+        ax.clear()
+        d = post[post["step"] == step]
+        _draw_2d(ax, d, colour, est)
+        tr = _truth(steps_df, run, int(step), channel)
+        if tr is not None:
+            ax.plot([tr[1]], [tr[2] * 1e3], "o", color=fs.TRUTH, ms=4, label="truth")
+        ax.set_title(f"{est}, run {run}: t = {float(d['t_s'].iloc[0]):g} s")
+        fs.legend(ax, loc="upper right")
+        return ()
+
+    anim = animation.FuncAnimation(fig, draw, frames=frames, blit=False)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(path, writer=animation.PillowWriter(fps=fps), dpi=72)
+    fs.plt.close(fig)
+    return path

@@ -1,0 +1,250 @@
+"""Traces and figures (issue 13): what a trace holds, that recording only observes, and
+that every figure is fit for print (checked through matplotlib's objects, not pixels).
+
+Every figure the package saves goes through :func:`experiments.figstyle.save`; the
+``checked`` fixture wraps it so that each figure is inspected before it is written:
+every visible axis has x and y (and z) labels naming a unit after a comma, and every
+line and labelled patch collection has an entry in a legend of its figure.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.collections import QuadMesh
+from matplotlib.lines import Line2D
+
+from estim import registry
+from estim.base import PointBelief
+from estim.describe import FIELDS, describe_channel
+from estim.model import ChannelModel
+from experiments import figstyle
+from experiments.cli import main
+from experiments.scenario import load_scenario
+from experiments.sim.intercept import run_engagement
+from experiments.sim.trace import Recorder
+from experiments.traces import intercept_trace
+
+UNIT = re.compile(r", \S")
+STEP_FIELDS = {
+    "alpha_true_rad", "alpha_meas_rad", "alpha_err_rad", "alpha_bound_rad", "range_meas_m",
+    "forecast_true_m", "zem_true_m", "truth_inside", "impulse_mps", "fuel_mps", "step", "t_s",
+    "channel", "run", "estimator", "noise", "miss_m", *FIELDS,
+}  # fmt: skip
+
+
+def figure_problems(fig) -> list[str]:
+    """What keeps a figure from being fit for print (labels, units, legend entries)."""
+    legends = [ax.get_legend() for ax in fig.axes] + list(fig.legends)
+    entries = {t.get_text() for leg in legends if leg is not None for t in leg.get_texts()}
+    bad = []
+    for ax in fig.axes:
+        if not ax.get_visible() or hasattr(ax, "_colorbar"):
+            continue
+        names = ["x", "y"] + (["z"] if hasattr(ax, "get_zlabel") else [])
+        for name in names:
+            label = getattr(ax, f"get_{name}label")()
+            if name == "x" and not label:  # a shared x axis is labelled once, below
+                label = " ".join(a.get_xlabel() for a in ax.get_shared_x_axes().get_siblings(ax))
+            if not UNIT.search(label):
+                bad.append(f"{ax.get_title()!r}: {name} label {label!r} names no unit")
+        artists = list(ax.get_lines()) + [c for c in ax.collections if not isinstance(c, QuadMesh)]
+        for art in artists:
+            label = art.get_label()
+            if isinstance(art, Line2D) and len(art.get_xdata()) == 0 and label in entries:
+                continue  # a legend handle
+            if label.startswith("_") or label not in entries:
+                bad.append(f"{ax.get_title()!r}: {type(art).__name__} {label!r} not in a legend")
+    return bad
+
+
+@pytest.fixture
+def checked(monkeypatch):
+    """Every figure saved while the test runs is checked; their names are collected."""
+    saved: list[str] = []
+    original = figstyle.save
+
+    def save(fig, stem, *args, **kw):
+        problems = figure_problems(fig)
+        assert not problems, f"{stem}:\n" + "\n".join(problems)
+        saved.append(str(stem))
+        return original(fig, stem, *args, **kw)
+
+    monkeypatch.setattr(figstyle, "save", save)
+    return saved
+
+
+SHORT = [  # the Fig. 3 engagement started 290 km out: 10 s, 20 steps
+    "truth.x_km=[290.0, 290.0]",
+    "estimator.x_km=[250.0, 330.0]",
+]
+
+
+@pytest.fixture(scope="module")
+def short():
+    return load_scenario("data/scenarios/kp_fig3.toml", SHORT)
+
+
+# -- traces ------------------------------------------------------------------------------
+def test_intercept_trace_command(tmp_path, capsys, checked):
+    """The judged command: one row per step with the fields; the set's traced forecast-miss
+    interval holds the truth's forecast on every row; the trace is the table's run."""
+    out = tmp_path / "out"
+    args = ["intercept", "data/scenarios/kp_fig3.toml", "--noise", "game", "--trace", "0"]
+    assert main([*args, "--json", "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    table = pd.read_parquet(out / "kp_fig3-infoset-game-s3.parquet")
+    trace = pd.read_parquet(out / "kp_fig3-infoset-game-s3-trace.parquet")
+    assert STEP_FIELDS <= set(trace.columns)
+    assert len(trace) == int(table["steps"].iloc[0]) and trace["step"].is_unique
+    assert (trace["forecast_lo_m"] <= trace["forecast_true_m"]).all()
+    assert (trace["forecast_true_m"] <= trace["forecast_hi_m"]).all()
+    assert trace["truth_inside"].all() and (trace["status"] == "ok").all()
+    assert trace["fuel_mps"].iloc[-1] == pytest.approx(table["fuel_mps"].iloc[0], rel=1e-12)
+    assert trace["miss_m"].iloc[0] == pytest.approx(result["miss_m"]["mean"], rel=1e-12)
+    assert (trace["n_sections"] > 0).all() and (trace["area_max_radm"] > 0).all()
+    assert any(f.endswith("-trace-sets.parquet") for f in result["files"])
+    assert any(f.endswith(".gif") for f in result["files"])
+    assert {"kp_fig3-infoset-game-run0-processes", "kp_fig3-infoset-game-s3-run0-set3d"} <= {
+        s.rsplit("/", 1)[-1] for s in checked
+    }
+
+
+@pytest.mark.parametrize("estimator", registry.names("intercept"))
+def test_every_registered_estimator_traces(short, estimator):
+    steps, sets, results = intercept_trace(short, estimator, "random", 2, [0], sets_every=5)
+    plain = run_engagement(short, estimator, "random", np.random.default_rng(
+        np.random.SeedSequence(2, spawn_key=(0,))))  # fmt: skip
+    assert results[0] == plain  # recording only observes
+    assert len(steps) == plain.steps and STEP_FIELDS <= set(steps.columns)
+    live = steps[~steps["empty"]]
+    for col in ("forecast_lo_m", "forecast_hi_m", "zem_lo_m", "alpha_lo_rad", "x_hi_m"):
+        assert np.isfinite(live[col]).all(), col
+    assert (live["forecast_lo_m"] <= live["forecast_hi_m"]).all()
+    if estimator == "infoset":
+        assert len(sets) and {"alpha_rad", "zem_m", "x_m", "phase"} <= set(sets.columns)
+
+
+def test_describe_takes_the_generic_route_for_any_belief():
+    """A belief with nothing but the interface (a point) still gives every field."""
+    model = ChannelModel()
+    d = describe_channel(PointBelief(np.array([1e-3, 2e-6, 5e6])), model)
+    assert set(d) == set(FIELDS)
+    assert (
+        d["forecast_lo_m"]
+        == d["forecast_hi_m"]
+        == pytest.approx(float(model.miss_forecast_m(np.array([1e-3, 2e-6, 5e6]))))
+    )
+    assert d["alpha_lo_rad"] == d["alpha_hi_rad"] == 1e-3 and np.isnan(d["n_sections"])
+
+
+def test_recorder_keeps_sets_when_asked():
+    rec = Recorder(sets_every=0)
+    assert not rec.wants_sets(0) and not rec.wants_prior(0)
+    rec = Recorder(sets_every=10, sets_first=3)
+    assert [s for s in range(25) if rec.wants_sets(s)] == [0, 1, 2, 10, 20]
+
+
+def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
+    p = tmp_path / "short.toml"
+    text = open("data/scenarios/kp_fig3.toml").read()
+    text = text.replace("x_km = [5801.3, 5801.3]", "x_km = [290.0, 290.0]")
+    p.write_text(text.replace("x_km = [5301.3, 6301.3]", "x_km = [250.0, 330.0]"))
+    args = ["compare", str(p), "--estimators", "infoset,ukf", "--noise", "game"]
+    assert main([*args, "--trace", "0", "--out", str(tmp_path / "o"), "--workers", "1",
+                 "--no-progress", "--json"]) == 0  # fmt: skip
+    files = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["files"]
+    names = {f.rsplit("/", 1)[-1] for f in files}
+    assert {"kp_fig3-game-run0-overlay.png", "kp_fig3-game-run0-overlay.svg"} <= names
+    assert "kp_fig3-infoset-game-run0-processes.png" in names
+    traces = sorted(f for f in files if f.endswith("-trace.parquet"))
+    assert len(traces) == 2
+    # the plot command redraws a trace (the UKF's: no sets), marking the paper's numbers
+    assert main(["plot", traces[1], "--out", str(tmp_path / "p")]) == 0
+    assert (tmp_path / "p" / "kp_fig3-ukf-game-run0-processes.svg").exists()
+
+
+def test_trace_arguments_are_checked(tmp_path, capsys):
+    args = ["intercept", "data/scenarios/kp_fig3.toml", "--out", str(tmp_path)]
+    for bad in ("x", "0,0", "-1", ""):
+        with pytest.raises(SystemExit) as exc:
+            main([*args, "--trace", bad])
+        assert exc.value.code == 2
+    assert main([*args, "--trace", "1"]) == 2  # only run 0 exists
+    assert "--trace 1" in capsys.readouterr().err
+    assert main(["plot", str(tmp_path / "none.parquet")]) == 2
+
+
+TINY_RW = """
+name = "tiny_rw"
+controller = "pd"
+[body]
+inertia_kgm2 = [1.5, 1.5, 1.5]
+[wheels]
+torque_max_Nm = 0.0275
+momentum_max_Nms = 0.2
+[maneuver]
+axis = [0.0, 0.0, 1.0]
+angle_deg = 10.0
+[simulation]
+duration_s = 5.0
+control_period_s = 0.05
+[pd]
+k_q = 1.375
+k_w = 2.625
+"""
+
+
+def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):
+    p = tmp_path / "tiny_rw.toml"
+    p.write_text(TINY_RW)
+    out = tmp_path / "out"
+    args = ["attitude", str(p), "--noise", "random", "--estimator", "box,perfect"]
+    assert main([*args, "--out", str(out), "--json", "--no-progress"]) == 0
+    files = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["files"]
+    assert any(f.endswith("-history.png") for f in files)
+    assert not any(f.endswith("-cdf.png") for f in files)  # one run: no CDF
+    table = pd.read_parquet(out / "tiny_rw-pd-box-random-s0.parquet")
+    trace = pd.read_parquet(out / "tiny_rw-pd-box-random-s0-trace.parquet")
+    assert set(trace["axis"]) == {1, 2, 3} and len(trace) == 3 * 101
+    last = trace[trace["step"] == trace["step"].max()]
+    assert last["energy_N2m2s"].iloc[0] == pytest.approx(table["energy_N2m2s"].iloc[0])
+    assert trace["truth_inside"].all()
+    # more runs: the CDF, and histories only of the traced runs
+    assert main([*args, "--out", str(out / "b"), "--runs", "2", "--json", "--no-progress"]) == 0
+    files = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["files"]
+    assert any(f.endswith("-cdf.png") for f in files)
+    assert not any(f.endswith("-history.png") for f in files)
+
+
+# -- figures --------------------------------------------------------------------------------
+def test_style_is_colour_blind_safe_and_consistent():
+    palette = set(figstyle.OKABE_ITO.values())
+    for name in ("infoset", "ekf", "ukf", "box", "perfect"):
+        assert figstyle.estimator_colour(name) in palette
+    assert figstyle.estimator_colour("zonotope") == figstyle.estimator_colour("zonotope")
+    styles = [figstyle.noise_style(n) for n in ("random", "game", "bias", "none")]
+    assert len(set(styles)) == 4
+    assert matplotlib.get_backend().lower() == "agg"
+
+
+def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
+    """Every paper figure (reduced count and coarser steps), PNG and SVG, checked."""
+    from experiments.cmd_paper_figures import FIGURES
+
+    out = tmp_path / "fig"
+    assert main(["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    for name in FIGURES:
+        for ext in ("png", "svg"):
+            assert (out / f"{name}.{ext}").is_file(), f"{name}.{ext}"
+    assert set(FIGURES) == set(result["figures"])
+    numbers = json.loads((out / "paper_figures.json").read_text())["numbers"]
+    assert numbers["kp_fig3"]["paper_miss_fuel"]["random"] == [4.3, 244.7]
+    assert numbers["resurs"]["Z_paper"] == {"energy": 2150.0, "euler": 11200.0}
+    assert {f.rsplit("/", 1)[-1] for f in checked} == set(FIGURES)
