@@ -185,6 +185,16 @@ def test_initial_set_holds_every_corner_of_box_and_speed_interval(name):
     y=-10e3, v=-100.0, x0=6301.299e3, e=58.1e3, mode="bias_low", v_mode="zero",
     controls="none", switch_s=0.0, seed=0, long=False,
 )  # fmt: skip
+# a range interval at the truth's edge emptied the node set's band of the truth (fixed:
+# a piece emptied by a range interval is re-gridded where its bracket meets the limits)
+@example(
+    y=10e3, v=-100.0, x0=5799013.0, e=57926.0, mode="bias_high", v_mode="zero",
+    controls="range", switch_s=60.0, seed=124, long=False,
+)  # fmt: skip
+@example(
+    y=-9166.0, v=-100.0, x0=5301.3e3, e=58007.0, mode="uniform", v_mode="bounds",
+    controls="range", switch_s=0.0, seed=1277, long=False,
+)  # fmt: skip
 def test_set_contains_physical_truth_at_every_step(
     name, y, v, x0, e, mode, v_mode, controls, switch_s, seed, long
 ):
