@@ -302,8 +302,15 @@ def test_bench_reports_every_field_side_by_side(capsys):
         "runs_per_s_2",
         "speedup_2_workers",
         "infoset_to_ukf_ratio",
+        "hinf_step_us",
+        "pf_step_us",
     ):
         assert out[key] > 0, key
+    from estim import registry
+
+    names = registry.names("intercept")  # every registered estimator, side by side
+    assert set(out["step_us"]) == set(names)
+    assert all(out[f"{n}_step_us"] == out["step_us"][n] > 0 for n in names)
     assert out["machine"]["cpus"] >= 1
 
 
