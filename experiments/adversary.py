@@ -39,8 +39,13 @@ by its own correction. An empty belief (the law issues nothing) counts as centre
   auxiliary model (``v = 0``, nominal closing speed: the adversary knows the truth now,
   not its future disturbances), and the pursuer predicts. The value of a branch is ``D``
   after the k-th update (``objective = "misdirection"``, default: ``k = 1`` with
-  ``c = n`` is ``targeted``) or the fuel the pursuer spends along it, ``sum |k_j|`` over
-  its k impulses (``"fuel"``: a best response for the fuel the study reports); the first
+  ``c = n`` is ``targeted``) or the fuel the pursuer is pushed to spend along it,
+  ``sum |k_j|`` over its k commanded impulses (``"fuel"``: a best response for the fuel
+  the study reports; the commands before the law's limits, since the issued impulses are
+  zero below ``mu1`` and would leave most branches tied), or the width
+  ``Pi_max - Pi_min`` of its forecast interval after the k-th update (``"width"``:
+  information denial, the white-box form of the seed's rule, which keeps the worst
+  point in the set); the first
   error of the best branch is issued (receding horizon: the search is redone at the
   next step). Cost per decision step and channel: ``c + c^2 + ... + c^k`` updates and
   forecasts, ``c + ... + c^(k-1)`` predictions. Ranges: the greedy rule.
@@ -65,7 +70,7 @@ from estim.model import Bearing, ChannelModel, Impulse, Range
 #: relative margin inside the bound (the other generators' too)
 MARGIN = 1e-9
 #: what the look-ahead maximises over its tree
-OBJECTIVES = ("misdirection", "fuel")
+OBJECTIVES = ("misdirection", "fuel", "width")
 
 
 @dataclass(frozen=True)
@@ -201,9 +206,10 @@ class LookaheadNoise(WhiteBoxNoise):
         Candidate errors per step of the tree.
     range_candidates : int
         Candidates of the greedy range rule.
-    objective : {"misdirection", "fuel"}
-        Value of a branch: the misdirection after its last update, or the fuel the
-        pursuer spends along it (module docstring).
+    objective : {"misdirection", "fuel", "width"}
+        Value of a branch: the misdirection after its last update, the fuel the
+        pursuer is pushed to spend along it, or the width of its forecast interval after
+        its last update (module docstring).
     """
 
     def __init__(
@@ -241,9 +247,9 @@ class LookaheadNoise(WhiteBoxNoise):
             if updated is None:
                 continue
             k = view.law.impulse_mps(updated, fuel)
-            spent = abs(k) if self.objective == "fuel" else 0.0
+            spent = abs(view.law.command_mps(updated)) if self.objective == "fuel" else 0.0
             if depth == 1 or updated.is_empty or truth[2] - model.e * self.dt_s <= model.eps_m:
-                value = spent if self.objective == "fuel" else misdirection(updated, truth, fc)
+                value = spent if self.objective == "fuel" else self.leaf_value(updated, truth, fc)
             else:
                 moved = self.truth_step(truth, k, model)
                 below, _ = self._search(
@@ -254,6 +260,15 @@ class LookaheadNoise(WhiteBoxNoise):
             if value > best[0]:
                 best = (value, float(err))
         return best
+
+    def leaf_value(self, belief: Belief, truth: np.ndarray, fc: MissForecast) -> float:
+        """Misdirection, or the width ``Pi_max - Pi_min`` of the forecast interval."""
+        if self.objective == "misdirection":
+            return misdirection(belief, truth, fc)
+        if belief.is_empty:
+            return 0.0
+        ext = belief.extremes(fc)
+        return ext.max_value - ext.min_value
 
     def truth_step(self, row: np.ndarray, k_mps: float, model: ChannelModel) -> np.ndarray:
         """The truth's row after the impulse ``k`` (``omega += k/x``) and one step of the

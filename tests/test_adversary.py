@@ -104,6 +104,26 @@ def test_lookahead_of_depth_one_is_the_greedy_rule():
     assert np.isclose(a2 - truth[0], candidate_errors(MODEL.bearing_bound(d), 3), rtol=1e-9).any()
 
 
+def test_lookahead_objectives_by_brute_force_at_depth_one():
+    """fuel: the largest commanded impulse |k| after the update; width: the widest
+    forecast interval; both over the same admissible candidates."""
+    est, b, truth, view = _pursuer()
+    d = float(truth[2])
+    errs = candidate_errors(MODEL.bearing_bound(d), 5)
+    updated = [est.update(b, Bearing(truth[0] + e)) for e in errs]
+    fc, law = MissForecast(MODEL), view.law
+    expect = {
+        "fuel": np.argmax([abs(law.command_mps(u)) for u in updated]),
+        "width": np.argmax([u.extremes(fc).max_value - u.extremes(fc).min_value for u in updated]),
+    }
+    for objective, j in expect.items():
+        noise = LookaheadNoise(MODEL, 0.5, steps=1, candidates=5, objective=objective)
+        noise.observe_pursuer(view)
+        assert noise.bearings([truth], d) == [pytest.approx(truth[0] + errs[j])]
+    with pytest.raises(ValueError, match="objective"):
+        LookaheadNoise(MODEL, 0.5, objective="chaos")
+
+
 def test_a_white_box_generator_must_be_shown_the_pursuer():
     with pytest.raises(RuntimeError, match="observe_pursuer"):
         TargetedNoise(MODEL).bearings([np.array([0.0, 0.0, 1e6])], 1e6)

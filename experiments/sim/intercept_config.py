@@ -198,8 +198,8 @@ class AdversaryTable(Table):
     candidates: integer(2, 101) = field(9, "targeted: candidate errors a measurement")
     lookahead_steps: integer(1, 6) = field(2, "lookahead: depth k of the search, decision steps")
     lookahead_candidates: integer(2, 21) = field(5, "lookahead: candidate errors a step")
-    lookahead_objective: Literal["misdirection", "fuel"] = field(
-        "misdirection", "lookahead: value of a branch (forecast's misdirection or fuel)"
+    lookahead_objective: Literal["misdirection", "fuel", "width"] = field(
+        "misdirection", "lookahead: value of a branch (misdirection, fuel or forecast width)"
     )
 
     @model_validator(mode="after")
