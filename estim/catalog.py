@@ -2,8 +2,9 @@
 
 Intercept (one guidance channel): ``infoset`` (:mod:`estim.nodeset` by default, the
 slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
-``ukf`` (:mod:`estim.kalman`); the set-membership families ``ellipsoid``, ``zonotope``
-and ``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
+``ukf`` (:mod:`estim.kalman`), ``hinf`` (:mod:`estim.hinf_channel`) and ``pf``
+(:mod:`estim.pf_channel`); the set-membership families ``ellipsoid``, ``zonotope`` and
+``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
 (:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
 (:mod:`estim.attitude_box`). A scenario's ``[estimator.<name>]`` table is validated by
 the options model below (one declaration per field: type, bounds, default, unit, doc).
@@ -19,10 +20,12 @@ from estim.attitude_box import BoxAttitudeEstimator
 from estim.attitude_model import AttitudeModel
 from estim.attitude_perfect import PerfectAttitudeEstimator
 from estim.attitude_ukf import UkfAttitudeEstimator
+from estim.hinf_channel import HInfinityChannelEstimator
 from estim.infoset import InformationSetEstimator
 from estim.kalman import KalmanChannelEstimator
 from estim.model import ChannelSetting
 from estim.nodeset import NodeSetEstimator
+from estim.pf_channel import ParticleChannelEstimator
 from estim.registry import register
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -105,6 +108,60 @@ class KalmanOptions(BaseModel):
     ] = 1.0
 
 
+class HinfOptions(BaseModel):
+    """Options of the H-infinity filter (:class:`estim.hinf_channel.HInfinityChannelEstimator`)."""
+
+    model_config = _STRICT
+
+    theta: Annotated[
+        float,
+        Field(ge=0.0, lt=1.0, description="bound J < 1/theta, relative weight (0: the EKF)"),
+    ] = 0.05
+    weight: Annotated[
+        Literal["state", "zem"],
+        Field(description="estimate the whole state or the zero-effort miss alone"),
+    ] = "state"
+    n_sigma: Annotated[
+        float, Field(ge=0.5, le=10.0, description="radius of the ellipsoid, standard deviations")
+    ] = 3.0
+    range_constraint: Annotated[
+        bool, Field(description="project the range estimate onto the a-priori interval")
+    ] = False
+    noise_inflation: Annotated[
+        float, Field(ge=1.0, le=1e6, description="factor on every noise variance, R and Q")
+    ] = 1.0
+
+
+class PfOptions(BaseModel):
+    """Options of the particle filter (:class:`estim.pf_channel.ParticleChannelEstimator`)."""
+
+    model_config = _STRICT
+
+    n_particles: Annotated[int, Field(ge=10, le=1_000_000, description="particles")] = 2000
+    seed: Annotated[
+        int, Field(ge=0, le=2**63 - 1, description="root of the filter's random streams")
+    ] = 0
+    n_sigma: Annotated[
+        float, Field(ge=0.5, le=10.0, description="contains: radius of the moments' ellipsoid")
+    ] = 3.0
+    resample_threshold: Annotated[
+        float, Field(ge=0.0, le=1.0, description="resample when N_eff < this fraction of N")
+    ] = 0.5
+    resampler: Annotated[
+        Literal["systematic", "stratified"], Field(description="resampling scheme")
+    ] = "systematic"
+    roughening: Annotated[
+        float, Field(ge=0.0, le=10.0, description="Gordon et al.'s roughening constant K")
+    ] = 0.2
+    disturbance: Annotated[
+        Literal["uniform", "gaussian"], Field(description="distribution of v (variance nu^2/3)")
+    ] = "uniform"
+    bearing_error: Annotated[
+        Literal["uniform", "gaussian"],
+        Field(description="likelihood: bounded (uniform) or normal of variance a^2/3"),
+    ] = "uniform"
+
+
 class NoOptions(BaseModel):
     """An estimator without options."""
 
@@ -171,6 +228,24 @@ def _kalman(kind: str):
     return build
 
 
+def _hinf(opt: HinfOptions, setting: ChannelSetting) -> HInfinityChannelEstimator:
+    return HInfinityChannelEstimator(
+        setting.model,
+        theta=opt.theta,
+        weight=opt.weight,
+        n_sigma=opt.n_sigma,
+        range_constraint=opt.range_constraint,
+        closing_speed_mps=setting.closing_speed_mps,
+        noise_inflation=opt.noise_inflation,
+    )
+
+
+def _pf(opt: PfOptions, setting: ChannelSetting) -> ParticleChannelEstimator:
+    return ParticleChannelEstimator(
+        setting.model, closing_speed_mps=setting.closing_speed_mps, **opt.model_dump()
+    )
+
+
 def _box(opt: BoxOptions, model: AttitudeModel) -> BoxAttitudeEstimator:
     return BoxAttitudeEstimator(model, abs_inflation_rad=opt.abs_inflation_rad)
 
@@ -182,6 +257,8 @@ def _ukf_attitude(opt: UkfAttitudeOptions, model: AttitudeModel) -> UkfAttitudeE
 register("infoset", "intercept", InfosetOptions, _infoset, "convex-section information set")
 register("ekf", "intercept", KalmanOptions, _kalman("ekf"), "EKF read as its n-sigma ellipsoid")
 register("ukf", "intercept", KalmanOptions, _kalman("ukf"), "UKF read as its n-sigma ellipsoid")
+register("hinf", "intercept", HinfOptions, _hinf, "H-infinity filter read as its n-sigma ellipsoid")
+register("pf", "intercept", PfOptions, _pf, "bootstrap particle filter, bounded likelihood")
 register(
     "perfect", "attitude", NoOptions, lambda opt, model: PerfectAttitudeEstimator(),
     "the measurement taken as the state",

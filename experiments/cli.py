@@ -24,6 +24,7 @@ from experiments.errors import InputError
 COMMANDS: dict[str, tuple[str, str]] = {
     "intercept": ("experiments.cmd_intercept", "Monte Carlo of the impulsive intercept"),
     "compare": ("experiments.cmd_compare", "estimators x noises on paired realisations"),
+    "adversaries": ("experiments.cmd_adversaries", "adversary strength: game, greedy, look-ahead"),
     "sweep": ("experiments.cmd_sweep", "compare repeated over the values of one scenario field"),
     "fig5": ("experiments.cmd_fig5", "the seed's Fig. 5 statistics (four variants)"),
     "attitude": ("experiments.cmd_attitude", "attitude-loop scenarios"),

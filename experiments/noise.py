@@ -40,8 +40,9 @@ from estim.costs import MissForecast
 from estim.infoset import InformationSet, InformationSetEstimator
 from estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
 
-#: noise kinds of the intercept (``random`` and ``game`` are SPEC 1.6's required two)
-NOISES = ("random", "game", "bias")
+#: noise kinds of the intercept (``random`` and ``game`` are SPEC 1.6's required two;
+#: ``targeted`` and ``lookahead`` see the pursuer: :mod:`experiments.adversary`)
+NOISES = ("random", "game", "bias", "targeted", "lookahead")
 
 
 def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -> float:

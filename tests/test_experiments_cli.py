@@ -303,8 +303,15 @@ def test_bench_reports_every_field_side_by_side(capsys):
         "runs_per_s_2",
         "speedup_2_workers",
         "infoset_to_ukf_ratio",
+        "hinf_step_us",
+        "pf_step_us",
     ):
         assert out[key] > 0, key
+    from estim import registry
+
+    names = registry.names("intercept")  # every registered estimator, side by side
+    assert set(out["step_us"]) == set(names)
+    assert all(out[f"{n}_step_us"] == out["step_us"][n] > 0 for n in names)
     assert out["machine"]["cpus"] >= 1
 
 
@@ -314,6 +321,7 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
     estimators, writes Parquet and PNG; run j has the same truth for every estimator;
     the same seed twice gives the same table."""
     args = ("compare", short, "--runs", "3", "--json", "--workers", "1", "--no-progress")
+    args += ("--estimators", "infoset,ekf,ukf")  # the default is every registered one
     r = cli_inproc(capsys, *args, "--out", tmp_path / "a")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout.strip().splitlines()[-1])

@@ -6,7 +6,9 @@ and the law; each :meth:`Engagement.step` is one decision step; :meth:`Engagemen
 flies to the closest approach and returns the :class:`EngagementResult`.
 :func:`run_engagement` runs the three.
 
-Per decision step ``t_i = i Delta``: measure the bearings (and the range when the
+Per decision step ``t_i = i Delta``: show a white-box adversary the pursuer
+(:class:`experiments.adversary.PursuerView`: estimators, beliefs, law, fuel; other
+noises are shown nothing), measure the bearings (and the range when the
 range finder is due, with the bound of its off-axis angle taken from the bearings of
 both axes: :func:`range_measurement`), update every channel's belief, count the steps
 where the truth lies outside it, compute the impulses and apply them to the truth,
@@ -33,6 +35,7 @@ from estim import registry
 from estim.base import Belief, Estimator, Status
 from estim.infoset import InformationSetEstimator
 from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from experiments.adversary import LookaheadNoise, PursuerView, TargetedNoise, WhiteBoxNoise
 from experiments.noise import BiasNoise, GameNoise, RandomNoise
 from experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
 from experiments.sim.pointing import PointingCoupling, PointingLoop
@@ -71,6 +74,14 @@ def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels,
         est = make_estimator("infoset", sc, model)
         sets = [est.initial(sc.estimator.prior(ch)) for ch in channels]
         return GameNoise(est, sets, sensor.bearing_bound)
+    adv = sc.adversary
+    if name == "targeted":  # sees the pursuer (Engagement.step shows it)
+        return TargetedNoise(sensor, adv.candidates)
+    if name == "lookahead":
+        return LookaheadNoise(
+            sensor, sc.model.dt_s, adv.lookahead_steps, adv.lookahead_candidates,
+            adv.candidates, adv.lookahead_objective,
+        )  # fmt: skip
     raise ValueError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
 
 
@@ -180,6 +191,7 @@ class Engagement:
             model.from_cartesian(r_km[AXIS[c]] * 1e3, v_kmps[AXIS[c]] * 1e3, x_m, v_kmps[0] * 1e3)
             for c in self.channels
         ]
+        self._show_pursuer(self.beliefs)
         alphas = self.noise.bearings(truth_ch, d_m)
         if self.pointing is not None:
             errs = self.pointing.bearing_errors(r_km, self.channels)
@@ -196,6 +208,7 @@ class Engagement:
         d_meas = math.nan
         if self.sc.range_finder.due(t):
             measured = dict(zip(self.channels, alphas, strict=True))
+            self._show_pursuer(beliefs)
             meas = range_measurement(
                 self.noise.range(d_m), model, r_km, d_m, measured, self.axis_rng
             )
@@ -253,6 +266,12 @@ class Engagement:
                 rec.add_sets(b, self.model, step=self.step_index, t_s=t, channel=c,
                              phase="posterior")  # fmt: skip
 
+    def _show_pursuer(self, beliefs: list[Belief]) -> None:
+        """Hand a white-box adversary the pursuer as it stands (others see nothing)."""
+        if isinstance(self.noise, WhiteBoxNoise):
+            view = PursuerView(tuple(self.estimators), tuple(beliefs), self.law, self.fuel)
+            self.noise.observe_pursuer(view)
+
     def finish(self) -> EngagementResult:
         """The result; after guidance, free flight to the closest approach."""
         if self.result is None:
@@ -266,6 +285,8 @@ class Engagement:
     def _result(self, miss_m: float, steps: int, t_ca: float) -> EngagementResult:
         statuses = {b.status for b in self.beliefs}
         extras = () if self.pointing is None else tuple(self.pointing.summary().items())
+        if isinstance(self.noise, WhiteBoxNoise):
+            extras += tuple(self.noise.summary().items())
         return EngagementResult(
             miss_m=float(miss_m),
             fuel_mps=float(self.fuel),

@@ -5,7 +5,8 @@ every estimator is given, the closing-speed interval, and one ``[estimator.<name
 table of options per estimator, validated by the options model that estimator
 registered: :mod:`estim.registry`), ``[truth]`` (the boxes the true initial state is
 drawn from, uniformly; a degenerate interval fixes a value; default: the estimator's
-boxes), ``[range_finder]``, ``[guidance]``, ``[experiment]``, an optional
+boxes), ``[range_finder]``, ``[guidance]``, ``[experiment]``, ``[adversary]`` (the white-box
+noises' search: :mod:`experiments.adversary`), an optional
 ``[reference]`` of the paper's numbers and an optional ``[attitude]`` loop holding the
 spacecraft's axis (:class:`experiments.sim.pointing.PointingConfig`).
 
@@ -187,6 +188,31 @@ class ExperimentTable(Table):
     estimator: str = field("infoset", "estimator name (registered)")
 
 
+#: most tree leaves the look-ahead adversary may search per decision step and channel
+MAX_LEAVES = 1000
+
+
+class AdversaryTable(Table):
+    """The search of the white-box noises (``targeted``, ``lookahead``)."""
+
+    candidates: integer(2, 101) = field(9, "targeted: candidate errors a measurement")
+    lookahead_steps: integer(1, 6) = field(2, "lookahead: depth k of the search, decision steps")
+    lookahead_candidates: integer(2, 21) = field(5, "lookahead: candidate errors a step")
+    lookahead_objective: Literal["misdirection", "fuel", "width"] = field(
+        "misdirection", "lookahead: value of a branch (misdirection, fuel or forecast width)"
+    )
+
+    @model_validator(mode="after")
+    def _bounded_cost(self) -> AdversaryTable:
+        leaves = self.lookahead_candidates**self.lookahead_steps
+        if leaves > MAX_LEAVES:
+            raise ValueError(
+                f"field 'adversary.lookahead_candidates' ** 'lookahead_steps' = {leaves} "
+                f"leaves a step; the limit is {MAX_LEAVES} (each leaf is an estimator update)"
+            )
+        return self
+
+
 class ReferenceTable(Table):
     miss_random_m: NONNEGATIVE | None = field(None, "paper's miss, random noise, m")
     fuel_random_mps: NONNEGATIVE | None = field(None, "paper's fuel, random noise, m/s")
@@ -206,6 +232,7 @@ class InterceptScenario(Table):
     range_finder: RangeFinderTable = field(RangeFinderTable(), "range measurements")
     guidance: GuidanceTable = field(GuidanceTable(), "guided channels, impulse limits")
     experiment: ExperimentTable = field(ExperimentTable(), "runs, seed, defaults")
+    adversary: AdversaryTable = field(AdversaryTable(), "search of the white-box noises")
     reference: ReferenceTable = field(ReferenceTable(), "the paper's numbers")
     attitude: PointingConfig | None = field(None, "an attitude loop holding the axis")
 
