@@ -107,7 +107,7 @@ class NodeRefinement:
         head = OpLog(*(a[:-1] for a in s.log.parts()))
         alpha_m = float(s.log.pa[-1])
         piece = np.full(self.n_nodes, p)
-        for _ in range(40):
+        for _ in range(12):  # each level narrows the bracket ~(n_nodes - 1) / 2 times
             labels = np.linspace(lo, hi, self.n_nodes)
             if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
                 break
