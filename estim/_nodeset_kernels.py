@@ -16,46 +16,49 @@ from estim._kernels import _dedupe_tail
 
 #: operation codes of the log
 BEARING, IMPULSE, RANGE, PREDICT = 0, 1, 2, 3
+#: turns smaller than this (rad) are rounding: such vertices are dropped after a
+#: prediction (the triangle lost is 1e-13 of an edge high, far under the strips' 1e-9
+#: outward margin)
+HULL_TURN_RAD = 1e-13
 
 
 @njit(cache=True)
-def _convex_pass(out, start, k, tol):
-    """Drop the vertices of ``out[start:k]`` (a CCW polygon, convex up to rounding)
-    that do not turn left by more than ``tol`` (a stack pass from the lowest-x vertex:
-    linear time). Returns the new end."""
-    m = k - start
+def _hull_into(src, m, dst, tol):
+    """The vertices of ``src[:m]`` (a CCW polygon, convex up to rounding) that turn left
+    by more than ``tol`` (rad), written to ``dst`` (a stack pass from the lowest-x vertex:
+    linear time, no allocation): duplicate, collinear and rounding-reflex vertices go.
+    Returns their number."""
     if m < 3:
-        return k
-    first = start
-    for v in range(start + 1, k):
-        if out[v, 0] < out[first, 0] or (out[v, 0] == out[first, 0] and out[v, 1] < out[first, 1]):
+        for j in range(m):
+            dst[j, 0], dst[j, 1] = src[j, 0], src[j, 1]
+        return m
+    first = 0
+    for v in range(1, m):
+        if src[v, 0] < src[first, 0] or (src[v, 0] == src[first, 0] and src[v, 1] < src[first, 1]):
             first = v
-    buf = np.empty((m + 1, 2))
     h = 0
     for r in range(m + 1):
-        v = start + (first - start + r) % m
-        px, py = out[v, 0], out[v, 1]
+        v = (first + r) % m
+        px, py = src[v, 0], src[v, 1]
         while h >= 2:
-            ax, ay = buf[h - 2, 0], buf[h - 2, 1]
-            bx, by = buf[h - 1, 0], buf[h - 1, 1]
-            if (bx - ax) * (py - ay) - (by - ay) * (px - ax) > tol:
+            ax, ay = dst[h - 2, 0], dst[h - 2, 1]
+            bx, by = dst[h - 1, 0], dst[h - 1, 1]
+            ux, uy, wx, wy = bx - ax, by - ay, px - ax, py - ay
+            # a turn by less than tol rad is rounding: without it a sliver (a polygon
+            # flat to rounding along the disturbance) doubles its vertices every step
+            if ux * wy - uy * wx > tol * np.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy)):
                 break
             h -= 1
-        buf[h, 0], buf[h, 1] = px, py
+        dst[h, 0], dst[h, 1] = px, py
         h += 1
-    h -= 1  # the last point repeats the first
-    for r in range(h):
-        out[start + r, 0], out[start + r, 1] = buf[r, 0], buf[r, 1]
-    return start + h
+    return h - 1  # the last point repeats the first
 
 
 @njit(cache=True)
 def _clip1(src, m, nx, ny, bound, dst):
-    """Sutherland-Hodgman of one polygon against ``nx x + ny y <= bound``."""
+    """Sutherland-Hodgman of one polygon against ``nx x + ny y <= bound`` (``nx`` or
+    ``ny`` zero: a strip's side; the rounding scale is taken from ``bound``)."""
     k = 0
-    sc_max = 0.0
-    for j in range(m):
-        sc_max = max(sc_max, abs(src[j, 0]), abs(src[j, 1]))
     for j in range(m):
         c = (j + 1) % m
         sa = src[j, 0] * nx + src[j, 1] * ny - bound
@@ -68,7 +71,7 @@ def _clip1(src, m, nx, ny, bound, dst):
             dst[k, 0] = src[j, 0] + t * (src[c, 0] - src[j, 0])
             dst[k, 1] = src[j, 1] + t * (src[c, 1] - src[j, 1])
             k += 1
-    return _dedupe_tail(dst, 0, k, 1e-15 * max(sc_max, 1.0))
+    return _dedupe_tail(dst, 0, k, 1e-15 * max(abs(bound), 1.0))
 
 
 @njit(cache=True)
@@ -193,8 +196,7 @@ def apply_ops(
                 for j in range(m):
                     a_buf[j, 1] += dy
                 m = _segment1(a_buf, m, 0.0, 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs, b_buf)
-                for j in range(m):
-                    a_buf[j, 0], a_buf[j, 1] = b_buf[j, 0], b_buf[j, 1]
+                a_buf, b_buf = b_buf, a_buf
             elif kind == RANGE:
                 if label[i] < h_lo[o + 1, b] or label[i] > h_hi[o + 1, b]:
                     m = 0
@@ -217,15 +219,8 @@ def apply_ops(
                 # a disturbance that varies within the step (the kinematic term does)
                 # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)
                 m = _segment1(b_buf, m, 0.5 * ga, nu_s * dt * dt / 4.0 * e_nom, a_buf)
-                for j in range(m):
-                    b_buf[j, 0], b_buf[j, 1] = a_buf[j, 0], a_buf[j, 1]
-                sc = 0.0
-                for j in range(m):
-                    sc = max(sc, abs(b_buf[j, 0]), abs(b_buf[j, 1]))
-                m = _dedupe_tail(b_buf, 0, m, 1e-15 * sc)
-                m = _convex_pass(b_buf, 0, m, 0.0)
-                for j in range(m):
-                    a_buf[j, 0], a_buf[j, 1] = b_buf[j, 0], b_buf[j, 1]
+                m = _hull_into(a_buf, m, b_buf, HULL_TURN_RAD)
+                a_buf, b_buf = b_buf, a_buf
         if k_out + m > out.shape[0]:
             grown = np.empty((2 * (k_out + m), 2))
             grown[:k_out] = out[:k_out]

@@ -77,7 +77,7 @@ class InfosetOptions(BaseModel):
     tighten_rtol: Annotated[
         float,
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
-    ] = 0.005
+    ] = 0.01
 
     @model_validator(mode="after")
     def _room_for_the_sections(self) -> InfosetOptions:

@@ -106,7 +106,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     min_live_nodes: int = 5
     split_ratio: float = 2.0
     max_pieces: int = 24
-    tighten_rtol: float = 0.005
+    tighten_rtol: float = 0.01
     max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = True

@@ -160,7 +160,8 @@ class NodeRefinement:
         exceeds the exact values at the cell's two nodes by more than
         ``tighten_rtol`` of the set's width (typically a cell at the end of the
         surviving range, bounded from one side only), a node is added at the cell's
-        middle (exact, by replay), up to ``max_inserts`` per call.
+        middle, three at its quarters for a cell with a dead end (exact, by replay),
+        for up to ``max_inserts`` rounds per call.
         """
         for _ in range(self.max_inserts):
             sm = s._summary
@@ -185,14 +186,17 @@ class NodeRefinement:
                 lo, hi = sm["span"][c]
                 tiny = MIN_SPACING_REL * max(abs(hi), 1.0)
                 if slack > self.tighten_rtol * width and hi - lo > tiny:
-                    new_piece.append(p)
-                    new_label.append(0.5 * (lo + hi) + s.t_s)
+                    # a cell with a dead end is bounded from one side only: three nodes
+                    # at once locate the end of the feasible interval four times closer
+                    edge = not (s.live[i] and s.live[j])
+                    for f in (0.25, 0.5, 0.75) if edge else (0.5,):
+                        new_piece.append(p)
+                        new_label.append(lo + f * (hi - lo) + s.t_s)
             if not new_piece:
                 break
-            piece = np.array(new_piece, dtype=np.int64)
-            labels = np.array(new_label)
-            if len(labels) == 2 and piece[0] == piece[1] and labels[0] == labels[1]:
-                piece, labels = piece[:1], labels[:1]
+            pairs = sorted(set(zip(new_piece, new_label, strict=True)))
+            piece = np.array([q for q, _ in pairs], dtype=np.int64)
+            labels = np.array([lab for _, lab in pairs])
             polys = self._exact_slices(s, piece, labels)
             s = _merge(s, np.ones(s.polygons.n, dtype=bool), piece, labels, polys)
         return s
