@@ -103,6 +103,8 @@ def _describe_schema(s: dict[str, Any]) -> str:
     if "anyOf" in s:
         parts = [_describe_schema(x) for x in s["anyOf"] if x.get("type") != "null"]
         return " or ".join(parts)
+    if "$ref" in s:  # a nested table
+        return "a table"
     if "enum" in s or "const" in s:
         return "one of " + ", ".join(repr(v) for v in s.get("enum", [s.get("const")]))
     kind = s.get("type")
@@ -164,7 +166,8 @@ def first_error(
         allowed = f" (allowed: {', '.join(names_ok)})" if names_ok else ""
         return f"unknown key '{dotted}'{allowed}"
     if kind == "missing":
-        return f"missing field '{dotted}'"
+        what = describe(model, loc)
+        return f"missing table '[{dotted}]'" if what == "a table" else f"missing field '{dotted}'"
     msg = msg.removeprefix("Value error, ")
     if kind == "value_error" and msg.startswith(("field ", "table ")):
         return msg  # a table's own check: its message names the field
