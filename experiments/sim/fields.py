@@ -165,6 +165,8 @@ def first_error(
         names_ok = sorted(f for f in fields or () if f != "options")
         allowed = f" (allowed: {', '.join(names_ok)})" if names_ok else ""
         return f"unknown key '{dotted}'{allowed}"
+    if kind == "missing" and loc and isinstance(loc[-1], int):  # a list too short
+        loc, kind = loc[:-1], "too_short"
     if kind == "missing":
         what = describe(model, loc)
         return f"missing table '[{dotted}]'" if what == "a table" else f"missing field '{dotted}'"
@@ -174,6 +176,7 @@ def first_error(
     if kind == "value_error" and not names:
         return f"table '{prefix.rstrip('.')}': {msg}" if prefix else msg
     got = err.get("input")
+    got = list(got) if isinstance(got, tuple) else got  # as written in TOML
     shown = "" if isinstance(got, dict) else f" (got {got!r})"
     what = describe(model, loc)
     if what is None:
