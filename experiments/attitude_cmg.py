@@ -1,6 +1,6 @@
 """``attitude`` command, controllers ``energy`` and ``euler``: Resurs-P (seed 000, SPEC 2.1).
 
-The scenario (validated: :func:`prepare`), the runner's task (one turn a run:
+The scenario (typed tables: :func:`prepare`), the runner's task (one turn a run:
 :func:`experiments.sim.attitude_cmg.one_run`) and the JSON of SPEC 3.1 with
 ``lower_bound_energy_N2m2s`` and diagnostics from the runs' rows (:func:`summarise`).
 """
@@ -23,8 +23,6 @@ from experiments.stats import summary_stats
 
 #: runs per task (each turn is its own loop)
 CHUNK = 1
-#: most steps a turn may take (the loop keeps its histories)
-MAX_STEPS = 100_000
 
 
 def prepare(source: str, scenario: dict, controller: str, noise: str) -> TurnSetup:
@@ -38,11 +36,6 @@ def prepare(source: str, scenario: dict, controller: str, noise: str) -> TurnSet
         raise InputError(
             f"{source}: noise 'game' is not defined for controller '{controller}' while "
             "noise.game_disturbance_Nm = 0 (set the adversary's torque bound, N m)"
-        )
-    if setup.n_steps > MAX_STEPS:
-        raise InputError(
-            f"{source}: field 'horizon_s' {setup.horizon_s} s at 'dt_s' {setup.dt_s} s is "
-            f"{setup.n_steps} steps a run; the limit is {MAX_STEPS}"
         )
     return setup
 

@@ -38,20 +38,21 @@ def _energy(torque_Nm: np.ndarray, dt_s: float) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(steps)])
 
 
-def trace_rw(tables, controller: str, noise: str, estimator: str, seed_seq) -> pd.DataFrame:
-    """Reaction-wheel loops (``pd``, ``lqr``)."""
+def trace_rw(config, controller: str, noise: str, estimator: str, seed_seq) -> pd.DataFrame:
+    """Reaction-wheel loops (``pd``, ``lqr``; ``config`` an
+    :class:`experiments.sim.attitude_rw_config.RwScenario`)."""
     from experiments.sim.attitude_rw import simulate_runs
 
     rec: dict = {}
-    simulate_runs(tables, controller, noise, [np.random.default_rng(seed_seq)], estimator, rec)
+    simulate_runs(config, controller, noise, [np.random.default_rng(seed_seq)], estimator, rec)
     x = rec["states"][:, 0]
     q_t = rec["q_target"]
     n = len(rec["time_s"])
-    period = tables["simulation"]["control_period_s"]
+    period = config.simulation.control_period_s
     torque = rec["torque_Nm"][:-1, 0]
     err = _error_rotvec_deg(x[:, 0:4], q_t)
     est = _error_rotvec_deg(rec["estimate"][:, 0, 0:4], q_t)
-    wh = tables["wheels"]
+    wh = config.wheels
     return long_rows(
         rec["time_s"],
         {
@@ -68,8 +69,8 @@ def trace_rw(tables, controller: str, noise: str, estimator: str, seed_seq) -> p
             "knowledge_bound_deg": np.degrees(rec["knowledge_bound_rad"][:, 0]),
             "truth_inside": np.concatenate([rec["truth_inside"][:, 0], [True]])[:n],
         },
-        torque_max_Nm=float(wh["torque_max_Nm"]),
-        momentum_max_Nms=float(wh["momentum_max_Nms"]),
+        torque_max_Nm=float(wh.torque_max_Nm),
+        momentum_max_Nms=float(wh.momentum_max_Nms),
     )
 
 

@@ -4,7 +4,7 @@ A sensitivity study: the ``compare`` experiment (estimators x noises on paired r
 repeated for each value of one scenario field, e.g. the Kalman filters' noise
 inflation, the disturbance bound ``model.nu_mps2`` or the slab set's
 ``estimator.split_ratio``. Each value is a ``--set KEY=VALUE`` override
-(:func:`experiments.schema.apply_overrides`): validated like the file, its runs stored
+(:func:`experiments.scenario.apply_overrides`): validated like the file, its runs stored
 under the suffixed scenario name (so they resume, and never mix with the plain
 scenario's), and every value sees the same truths (same seed, paired).
 

@@ -84,13 +84,13 @@ def _history(ctx, name, traces, column, ylabel, title, log=False, paper=None, to
 
 # -- seed 001 --------------------------------------------------------------------------
 def akimov(ctx) -> dict[str, Any]:
-    eff, tables = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect")
-    k_w = float(tables["pd"]["k_w"])
+    eff, config = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect")
+    k_w = float(config.pd.k_w)
     kq9 = float(baseline_kq(k_w, "vector"))
     base, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect", [f"pd.k_q={kq9!r}"])
     out = {}
     for name, df, what in (
-        ("akimov_fig3", eff, f"k_q = {tables['pd']['k_q']}, k_w = {k_w}"),
+        ("akimov_fig3", eff, f"k_q = {config.pd.k_q}, k_w = {k_w}"),
         ("akimov_fig6", base, f"rule (9): k_q = k_w^2/2 = {kq9:.3f}"),
     ):
         z = df[df["axis"] == 3]

@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 from estim.rotations import cross
 from experiments.attitude_cmg import run, setup_from_scenario
 from experiments.errors import InputError
-from experiments.schema import load_toml
+from experiments.scenario import load_toml
 from guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster, rk4_step
 from guidance.attitude.energy import resurs_p_inertia
 from guidance.attitude.euler_turn import EulerAxisProfile

@@ -286,7 +286,7 @@ def test_euler_baseline_tracks_profile_and_costs_3x_the_energy_law(euler_turn, e
     theta0 = np.linalg.norm(setup.initial_error_rad)
     axis = setup.initial_error_rad / theta0
     eu = setup.euler
-    prof = EulerAxisProfile(theta0, setup.duration_s, eu["accel_time_s"], eu["jerk_time_s"])
+    prof = EulerAxisProfile(theta0, setup.duration_s, eu.accel_time_s, eu.jerk_time_s)
     t = np.linspace(0, setup.duration_s, 300001)
     ideal = np.sum((J @ axis) ** 2) * np.trapezoid(prof.accel(t) ** 2, t)
     z = res.energy_N2m2s()

@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 from estim.rotations import error_quaternion, quaternion_rate
 from experiments.attitude_gyrostat import initial_quaternion, parse_scenario, run
 from experiments.errors import InputError
-from experiments.schema import load_toml
+from experiments.scenario import load_toml
 from experiments.sim.gyrostat import LoopConfig, simulate_turn
 from guidance.attitude import plant
 from guidance.attitude.game import (
@@ -190,7 +190,7 @@ def test_guaranteed_time_2_8_is_the_worst_case_of_the_scalar_game():
 
 
 def test_a_star_iteration_is_maximal_and_respects_limits():
-    eta0 = initial_quaternion(parse_scenario("s", load_toml(SCENARIO))["manoeuvre"])[:3]
+    eta0 = initial_quaternion(parse_scenario("s", load_toml(SCENARIO)).manoeuvre)[:3]
     alpha, beta, rho = np.array([0.25, 0.2, 0.15]), np.full(3, 0.005), np.full(3, 0.4)
     d = design_a_star(GYRO, eta0, alpha, beta, rho)
     assert np.all(d.torque_bound_Nm <= alpha)
@@ -224,12 +224,12 @@ def test_turn_completes_within_tau_and_torques_within_alpha(scenario, noise, dis
 
 
 def test_disturbances_are_admissible_and_the_adversary_delays(scenario):
-    tables = parse_scenario("s", scenario)
-    g = tables["gyrostat"]
-    beta, rho = np.array(g["beta_Nm"]), np.array(g["rho"])
-    q0 = initial_quaternion(tables["manoeuvre"])
+    config = parse_scenario("s", scenario)
+    g = config.gyrostat
+    beta, rho = np.array(g.beta_Nm), np.array(g.rho)
+    q0 = initial_quaternion(config.manoeuvre)
     eta0 = error_quaternion(q0, np.array([0, 0, 0, 1.0]))[:3]
-    d = design_a_star(GYRO, eta0, g["alpha_Nm"], beta, rho)
+    d = design_a_star(GYRO, eta0, g.alpha_Nm, beta, rho)
     law = GameLaw(d.a_star, rho, 0.1)
     cfg = LoopConfig(period_s=0.1, horizon_s=1.2 * d.tau_s)
     settle = {}

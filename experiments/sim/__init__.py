@@ -9,7 +9,9 @@ one) and never reads files or command-line dicts. Above it: scenario files
   :class:`.intercept_config.InterceptScenario`;
 * :mod:`.pointing` -- the attitude loop holding the interceptor's axis (end-to-end);
 * :mod:`.attitude_rw`, :mod:`.attitude_cmg`, :mod:`.gyrostat` -- the attitude loops of
-  seeds 001/002, 000 and 004;
+  seeds 001/002, 000 and 004, configured by the typed scenarios of
+  :mod:`.attitude_rw_config`, :mod:`.attitude_cmg_config` (through
+  :class:`.turn_setup.TurnSetup`) and :mod:`.gyrostat_config`;
 * :mod:`.estimator_loop` -- a registered attitude estimator run over a batch of runs;
 * :mod:`.fields` -- the typed tables' building blocks and their one-line errors.
 """

@@ -1,7 +1,8 @@
 """Resurs-P turn with six gyrodines: the energy-saving law and the Euler-axis baseline.
 
 Seed 000 (SPEC 2.1). :func:`simulate_turn` runs one turn from a :class:`TurnSetup`
-(built from a scenario by :func:`experiments.attitude_cmg_setup.setup_from_scenario`);
+(built from the typed scenario :class:`experiments.sim.attitude_cmg_config.CmgScenario`
+by :meth:`TurnSetup.from_config`);
 :func:`one_run` is its row of the runner's table.
 
 Closed loop, each step of ``dt``: the truth ``(q, w, h)`` is measured (noise
@@ -193,10 +194,10 @@ def simulate_turn(
             j,
             setup.initial_error_rad,
             setup.duration_s,
-            eu["accel_time_s"],
-            eu["jerk_time_s"],
-            eu["natural_freq_radps"],
-            eu["damping"],
+            eu.accel_time_s,
+            eu.jerk_time_s,
+            eu.natural_freq_radps,
+            eu.damping,
         )
         ref_rot, ref_w, ref_dw = tracker.reference(np.arange(n) * dt)
 

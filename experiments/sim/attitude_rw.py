@@ -13,14 +13,13 @@ scenario's 1-sigma values, same variance), plus a constant disturbance torque pe
 uniform in ``[-d, d]`` per axis; ``game`` = the same measurement errors and a bounded
 disturbance ``-d sign(M_u)`` that opposes the control every sample. Random initial
 attitudes (``maneuver.random_attitude``) are drawn for every noise setting, from the
-run's own generator. ``tables`` are the validated tables of the scenario
-(:func:`experiments.attitude_rw.parse_scenario`).
+run's own generator. ``config`` is the typed scenario
+(:class:`experiments.sim.attitude_rw_config.RwScenario`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -32,6 +31,7 @@ from estim.attitude_model import (
     draw_measurement,
 )
 from estim.base import PointBelief
+from experiments.sim.attitude_rw_config import RwScenario
 from experiments.sim.estimator_loop import EstimatorLoop
 from guidance.attitude.lqr import LQRController
 from guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
@@ -39,67 +39,76 @@ from guidance.attitude.plant import RigidBody
 from guidance.attitude.wheels import ReactionWheels, simulate_closed_loop
 
 
-def body_of(tables: Mapping[str, Any]) -> tuple[RigidBody, np.ndarray, np.ndarray]:
-    """``J = W diag(J_diag) W^T`` with ``W`` from ``axes_rotvec_deg``; returns (body, J_diag, W)."""
-    jd = np.asarray(tables["body"]["inertia_kgm2"], dtype=float)
-    w = Rotation.from_rotvec(np.radians(tables["body"]["axes_rotvec_deg"])).as_matrix()
+def body_of(config: RwScenario) -> tuple[RigidBody, np.ndarray, np.ndarray]:
+    """``J = W diag(J_diag) W^T`` with ``W`` from ``axes_rotvec_deg``.
+
+    Returns
+    -------
+    body : RigidBody
+    j_diag_kgm2 : ndarray (3,)
+    axes : ndarray (3, 3)
+        ``W``, whose columns are the principal axes.
+    """
+    jd = np.asarray(config.body.inertia_kgm2, dtype=float)
+    w = Rotation.from_rotvec(np.radians(config.body.axes_rotvec_deg)).as_matrix()
     return RigidBody(w @ np.diag(jd) @ w.T), jd, w
 
 
-def make_controller(controller: str, tables: Mapping[str, Any]) -> QuaternionPD | LQRController:
-    body, jd, w = body_of(tables)
-    q_t = tuple(np.asarray(tables["maneuver"]["target_quaternion"]) / 1.0)
+def make_controller(controller: str, config: RwScenario) -> QuaternionPD | LQRController:
+    """The law ``controller`` (``pd`` or ``lqr``) of the scenario (``ValueError`` if its
+    table is missing or describes no valid law)."""
+    body, jd, w = body_of(config)
+    q_t = tuple(np.asarray(config.maneuver.target_quaternion) / 1.0)
+    p = config.law_table(controller)
     if controller == "pd":
-        p = tables["pd"]
-        return QuaternionPD(body, p["k_q"], p["k_w"], p["quaternion_term"], q_target=q_t)
-    p = tables["lqr"]
+        return QuaternionPD(body, p.k_q, p.k_w, p.quaternion_term, q_target=q_t)
     return LQRController(
         body.inertia_kgm2,
-        p["q"],
-        p["r"],
-        enforce_constraint=p["enforce_constraint"],
+        p.q,
+        p.r,
+        enforce_constraint=p.enforce_constraint,
         q_target=q_t,
-        shortest=p["shortest"],
+        shortest=p.shortest,
         axes=w,
     )
 
 
-def initial_states(tables: Mapping[str, Any], rngs: list[np.random.Generator]) -> np.ndarray:
+def initial_states(config: RwScenario, rngs: list[np.random.Generator]) -> np.ndarray:
     """Initial plant states ``(runs, 10)``: the maneuver's turn, or random attitudes/rates."""
-    man = tables["maneuver"]
-    q_t = Rotation.from_quat(man["target_quaternion"])
-    axis = np.asarray(man["axis"]) / np.linalg.norm(man["axis"])
+    man = config.maneuver
+    q_t = Rotation.from_quat(man.target_quaternion)
+    axis = np.asarray(man.axis) / np.linalg.norm(man.axis)
     x = np.zeros((len(rngs), 10))
     for k, rng in enumerate(rngs):
-        if man["random_attitude"]:
+        if man.random_attitude:
             rot = Rotation.random(rng=rng)
         else:
-            rot = q_t * Rotation.from_rotvec(np.radians(man["angle_deg"]) * axis)
+            rot = q_t * Rotation.from_rotvec(np.radians(man.angle_deg) * axis)
         x[k, 0:4] = rot.as_quat()
-        x[k, 4:7] = np.radians(man["initial_rate_degps"]) + np.radians(
-            man["random_rate_degps"]
+        x[k, 4:7] = np.radians(man.initial_rate_degps) + np.radians(
+            man.random_rate_degps
         ) * rng.uniform(-1.0, 1.0, 3)
     return x
 
 
-def estimator_model(tables: Mapping[str, Any]) -> AttitudeModel:
+def estimator_model(config: RwScenario) -> AttitudeModel:
     """What the estimators know: J, the disturbance bound and the measurement bounds.
 
     The scenario's ``meas_*`` values are 1-sigma; the errors are drawn uniform within
     ``+-sqrt(3) sigma`` (same variance, bounded: admissible for the box estimator).
     """
-    body, _, _ = body_of(tables)
-    nz = tables["noise"]
+    body, _, _ = body_of(config)
+    nz = config.noise
     return AttitudeModel(
         body.inertia_kgm2,
-        nz["disturbance_Nm"],
-        max(np.sqrt(3.0) * np.radians(nz["meas_angle_deg"]), 1e-12),
-        max(np.sqrt(3.0) * np.radians(nz["meas_rate_degps"]), 1e-12),
+        nz.disturbance_Nm,
+        max(np.sqrt(3.0) * np.radians(nz.meas_angle_deg), 1e-12),
+        max(np.sqrt(3.0) * np.radians(nz.meas_rate_degps), 1e-12),
     )
 
 
 def simulate_runs(
-    tables: Mapping[str, Any],
+    config: RwScenario,
     controller: str,
     noise: str,
     rngs: list[np.random.Generator],
@@ -108,6 +117,31 @@ def simulate_runs(
 ) -> dict[str, np.ndarray]:
     """Simulate the runs as one batch; per-run metrics.
 
+    Parameters
+    ----------
+    config : RwScenario
+        The typed scenario.
+    controller : {"pd", "lqr"}
+        The law (its table must be in ``config``).
+    noise : {"none", "random", "game"}
+        Measurement errors and disturbance (module docstring).
+    rngs : list of numpy.random.Generator
+        One generator per run: the run's initial state and noise.
+    estimator : str
+        A registered attitude estimator.
+    record : dict, optional
+        Filled with the trajectories (below).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Per-run metrics ``(runs,)``: ``settle_time_s`` (inf if not settled),
+        ``energy_N2m2s``, ``final_angle_deg``, ``final_rate_degps``, ``max_torque_Nm``,
+        ``truth_outside``, ``empty_steps``, ``mean_knowledge_bound_deg`` and, for the LQR,
+        ``lyapunov_max_increase``.
+
+    Notes
+    -----
     The controller reads ``(q, w)`` from the estimator's belief (plus the wheel
     momentum, known on board). Noise ``random``: constant disturbance per run uniform
     in ``[-d, d]``; ``game``: ``-d sign(M_u)`` (opposes the control); both with
@@ -119,21 +153,21 @@ def simulate_runs(
     ``estimate`` ``(n, runs, 7)``, ``knowledge_bound_rad`` and ``truth_inside``
     ``(n, runs)``.
     """
-    body, _, _ = body_of(tables)
-    law = make_controller(controller, tables)
-    wh = tables["wheels"]
-    wheels = ReactionWheels(wh["torque_max_Nm"], wh["momentum_max_Nms"])
-    sim, nz = tables["simulation"], tables["noise"]
-    period = sim["control_period_s"]
-    x0 = initial_states(tables, rngs)
+    body, _, _ = body_of(config)
+    law = make_controller(controller, config)
+    wh = config.wheels
+    wheels = ReactionWheels(wh.torque_max_Nm, wh.momentum_max_Nms)
+    sim = config.simulation
+    period = sim.control_period_s
+    x0 = initial_states(config, rngs)
     n = len(rngs)
-    model = estimator_model(tables)
+    model = estimator_model(config)
     loop = EstimatorLoop(estimator, model)
-    d = nz["disturbance_Nm"]
+    d = config.noise.disturbance_Nm
     const_dist = (
         np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))
     )
-    state: dict[str, Any] = {"belief": None, "ctrl": None, "outside": np.zeros(n, dtype=int)}
+    state = SimpleNamespace(belief=None, ctrl=None, outside=np.zeros(n, dtype=int))
     bounds, centres, insides = [], [], []
 
     def measure(x: np.ndarray) -> AttitudeMeasurement:
@@ -143,19 +177,19 @@ def simulate_runs(
 
     def control(_t: float, x: np.ndarray) -> np.ndarray:
         meas = measure(x)
-        if state["belief"] is None:
+        if state.belief is None:
             belief = loop.start(meas)
         else:
-            belief = loop.step(state["belief"], state["ctrl"], period, meas)
+            belief = loop.step(state.belief, state.ctrl, period, meas)
         inside = loop.inside(belief, x)
-        state["outside"] += ~inside
+        state.outside += ~inside
         bounds.append(loop.attitude_bound_rad(belief))
         if record is not None:
             centres.append(loop.centre(belief))
             insides.append(inside)
         x_est = np.concatenate([loop.centre(belief), x[:, 7:10]], axis=-1)
         u = wheels.limit(law.from_belief(PointBelief(x_est)), x[:, 7:10], period)
-        state["belief"], state["ctrl"] = belief, AttitudeControl.held(u, x[:, 7:10], period)
+        state.belief, state.ctrl = belief, AttitudeControl.held(u, x[:, 7:10], period)
         return u
 
     def disturbance(_t: float, _x: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -164,7 +198,7 @@ def simulate_runs(
         return const_dist
 
     traj = simulate_closed_loop(
-        body, wheels, control, x0, sim["duration_s"], period, sim["substeps"], disturbance
+        body, wheels, control, x0, sim.duration_s, period, sim.substeps, disturbance
     )
     if record is not None:
         record.update(
@@ -179,8 +213,8 @@ def simulate_runs(
                 traj.time_s,
                 angle[:, k],
                 rate[:, k],
-                sim["settle_angle_deg"],
-                sim["settle_rate_degps"],
+                sim.settle_angle_deg,
+                sim.settle_rate_degps,
             )
             for k in range(n)
         ]
@@ -192,8 +226,8 @@ def simulate_runs(
         "final_angle_deg": angle[-1],
         "final_rate_degps": rate[-1],
         "max_torque_Nm": np.max(np.abs(u), axis=(0, 2)),
-        "truth_outside": state["outside"],
-        "empty_steps": loop.empty_steps(state["belief"]),
+        "truth_outside": state.outside,
+        "empty_steps": loop.empty_steps(state.belief),
         "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
     }
     if isinstance(law, LQRController):

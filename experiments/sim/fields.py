@@ -103,6 +103,8 @@ def _describe_schema(s: dict[str, Any]) -> str:
     if "anyOf" in s:
         parts = [_describe_schema(x) for x in s["anyOf"] if x.get("type") != "null"]
         return " or ".join(parts)
+    if "$ref" in s:  # a nested table
+        return "a table"
     if "enum" in s or "const" in s:
         return "one of " + ", ".join(repr(v) for v in s.get("enum", [s.get("const")]))
     kind = s.get("type")
@@ -163,14 +165,18 @@ def first_error(
         names_ok = sorted(f for f in fields or () if f != "options")
         allowed = f" (allowed: {', '.join(names_ok)})" if names_ok else ""
         return f"unknown key '{dotted}'{allowed}"
+    if kind == "missing" and loc and isinstance(loc[-1], int):  # a list too short
+        loc, kind = loc[:-1], "too_short"
     if kind == "missing":
-        return f"missing field '{dotted}'"
+        what = describe(model, loc)
+        return f"missing table '[{dotted}]'" if what == "a table" else f"missing field '{dotted}'"
     msg = msg.removeprefix("Value error, ")
     if kind == "value_error" and msg.startswith(("field ", "table ")):
         return msg  # a table's own check: its message names the field
     if kind == "value_error" and not names:
         return f"table '{prefix.rstrip('.')}': {msg}" if prefix else msg
     got = err.get("input")
+    got = list(got) if isinstance(got, tuple) else got  # as written in TOML
     shown = "" if isinstance(got, dict) else f" (got {got!r})"
     what = describe(model, loc)
     if what is None:
