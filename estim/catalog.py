@@ -69,8 +69,8 @@ class InfosetOptions(BaseModel):
         ),
     ] = None
     max_pieces: Annotated[
-        int, Field(ge=1, le=256, description="nodes: most pieces splitting may make")
-    ] = 24
+        int, Field(ge=1, le=256, description="nodes: most pieces per closing-speed band")
+    ] = 16
     node_split_ratio: Annotated[
         float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
     ] = 2.0

@@ -84,8 +84,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     split_ratio, max_pieces : float, int
         Before each prediction a piece whose ranges span more than ``split_ratio``
         (largest over smallest) is split in two at a node near its geometric middle,
-        while there are fewer than ``max_pieces`` pieces: each piece sizes its own
-        kinematic margin (large only near the target) and impulse widening.
+        while its closing-speed band has fewer than ``max_pieces`` pieces: each piece
+        sizes its own kinematic margin (large only near the target) and impulse
+        widening.
     tighten_rtol, max_inserts : float, int
         After each update, nodes are added (up to ``max_inserts``) in the cells where
         the bounds of the zero-effort miss exceed the nodes' exact values by more than
@@ -105,7 +106,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     n_nodes: int = 12
     min_live_nodes: int = 5
     split_ratio: float = 2.0
-    max_pieces: int = 24
+    max_pieces: int = 16
     tighten_rtol: float = 0.01
     max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4

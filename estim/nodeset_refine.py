@@ -207,8 +207,8 @@ class NodeRefinement:
         per-piece summary) and the pending ``ops`` get a copy of the split piece's row
         and column."""
         for p in range(len(per)):
-            if len(s.u_lo) >= self.max_pieces:
-                break
+            if np.count_nonzero(s.u_lo == s.u_lo[p]) >= self.max_pieces:
+                continue  # this closing-speed band has its pieces
             if not np.isfinite(per[p, 4]):
                 continue
             lo = max(float(per[p, 4]), self.model.eps_m * float(s.u_lo[p]))
