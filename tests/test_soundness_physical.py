@@ -67,7 +67,6 @@ def _nodes(model: ChannelModel, box: Box, **options):
 #: name -> factory(model, box) -> (estimator, initial belief). One line per estimator.
 FACTORIES: dict[str, Callable] = {
     "nodes": _nodes,
-    "nodes-few": lambda m, b: _nodes(m, b, n_nodes=6, min_live_nodes=4),
     "slabs": _infoset,
     # the auxiliary-model truth needs no kinematic margin: the discretisation alone
     "slabs-no-margin": lambda m, b: _infoset(m, b, kinematic_margin=False),
