@@ -108,10 +108,9 @@ class KalmanOptions(BaseModel):
     ] = 1.0
 
 
-class HinfOptions(BaseModel):
-    """Options of the H-infinity filter (:class:`estim.hinf_channel.HInfinityChannelEstimator`)."""
-
-    model_config = _STRICT
+class HinfOptions(KalmanOptions):
+    """Options of the H-infinity filter (:class:`estim.hinf_channel.HInfinityChannelEstimator`):
+    the Kalman filters' own, and its bound."""
 
     theta: Annotated[
         float,
@@ -121,15 +120,6 @@ class HinfOptions(BaseModel):
         Literal["state", "zem"],
         Field(description="estimate the whole state or the zero-effort miss alone"),
     ] = "state"
-    n_sigma: Annotated[
-        float, Field(ge=0.5, le=10.0, description="radius of the ellipsoid, standard deviations")
-    ] = 3.0
-    range_constraint: Annotated[
-        bool, Field(description="project the range estimate onto the a-priori interval")
-    ] = False
-    noise_inflation: Annotated[
-        float, Field(ge=1.0, le=1e6, description="factor on every noise variance, R and Q")
-    ] = 1.0
 
 
 class PfOptions(BaseModel):
