@@ -7,31 +7,16 @@ import json
 
 import pandas as pd
 import pytest
+from harness_texts import TINY_RW as TINY
 
 from experiments import attitude_rw
 from experiments.cli import main
 
-TINY_RW = """
-name = "tiny_rw"
-controller = "pd"
-[body]
-inertia_kgm2 = [1.5, 1.5, 1.5]
-[wheels]
-torque_max_Nm = 0.0275
-momentum_max_Nms = 0.2
-[maneuver]
-axis = [0.0, 0.0, 1.0]
-angle_deg = 10.0
-random_attitude = true
-[simulation]
-duration_s = 5.0
-control_period_s = 0.05
-[pd]
-k_q = 1.375
-k_w = 2.625
-[noise]
-disturbance_Nm = 1e-4
-"""
+# a random initial attitude under a small disturbance torque
+TINY_RW = TINY.replace("angle_deg = 10.0\n", "angle_deg = 10.0\nrandom_attitude = true\n") + (
+    "[noise]\ndisturbance_Nm = 1e-4\n"
+)
+
 RUNS = 2 * attitude_rw.CHUNK + 3  # three chunks
 
 

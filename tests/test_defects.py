@@ -12,81 +12,19 @@ import signal
 import subprocess
 import sys
 import time
-import traceback
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from harness_texts import SHORT as SHORT_ENGAGEMENT
+from harness_texts import TINY_RW, Result, experiment, one_line_error
+from harness_texts import run_cli as run
 from scipy.spatial.transform import Rotation
-
-from experiments.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# a short engagement (~1000 km, 35 steps) so these tests stay fast
-SHORT = """
-name = "short"
-[model]
-nominal_range_km = 1000.0
-[estimator]
-x_km = [900.0, 1100.0]
-n_sections = 9
-closing_speed_kmps = [57.9, 58.1]
-[truth]
-y_km = [-1.0, 1.0]
-z_km = [-1.0, 1.0]
-x_km = [950.0, 1050.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [-0.05, 0.05]
-vx_kmps = [-58.1, -57.9]
-[experiment]
-runs = 2
-seed = 11
-"""
-
-# a short reaction-wheel turn (100 control steps)
-TINY_RW = """
-name = "tiny_rw"
-controller = "pd"
-[body]
-inertia_kgm2 = [1.5, 1.5, 1.5]
-[wheels]
-torque_max_Nm = 0.0275
-momentum_max_Nms = 0.2
-[maneuver]
-axis = [0.0, 0.0, 1.0]
-angle_deg = 10.0
-[simulation]
-duration_s = 5.0
-control_period_s = 0.05
-[pd]
-k_q = 1.375
-k_w = 2.625
-"""
-
-
-class Result:
-    def __init__(self, code, out, err):
-        self.returncode, self.stdout, self.stderr = code, out, err
-
-
-def run(capsys, *args) -> Result:
-    """``experiments.cli.main`` in this process; an escaping exception is a traceback."""
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    except Exception:  # noqa: BLE001 - what a user would see
-        out = capsys.readouterr()
-        return Result(-1, out.out, out.err + traceback.format_exc())
-    out = capsys.readouterr()
-    return Result(code, out.out, out.err)
-
-
-def one_line_error(r: Result) -> bool:
-    lines = r.stderr.strip().splitlines()
-    return r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr
+SHORT = SHORT_ENGAGEMENT + experiment(runs=2)
 
 
 def files_under(path: Path) -> list[Path]:

@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from harness_texts import RANGE_FINDER, experiment
+from harness_texts import SHORT as SHORT_ENGAGEMENT
 
 from estim import registry
 from experiments import runner
@@ -17,29 +19,7 @@ from experiments.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = ROOT / "data" / "scenarios" / "kp_fig3.toml"
-
-# a short engagement (~1000 km, 35 steps) so harness tests stay fast
-SHORT = """
-name = "short"
-[model]
-nominal_range_km = 1000.0
-[estimator]
-x_km = [900.0, 1100.0]
-n_sections = 9
-closing_speed_kmps = [57.9, 58.1]
-[truth]
-y_km = [-1.0, 1.0]
-z_km = [-1.0, 1.0]
-x_km = [950.0, 1050.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [-0.05, 0.05]
-vx_kmps = [-58.1, -57.9]
-[range_finder]
-enabled = true
-[experiment]
-runs = 4
-seed = 11
-"""
+SHORT = SHORT_ENGAGEMENT + RANGE_FINDER + experiment(runs=4)
 
 
 def cli(*args, cwd=ROOT):

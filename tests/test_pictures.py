@@ -16,6 +16,7 @@ import matplotlib
 import numpy as np
 import pandas as pd
 import pytest
+from harness_texts import TINY_RW
 from matplotlib.collections import QuadMesh
 from matplotlib.lines import Line2D
 
@@ -178,26 +179,6 @@ def test_trace_arguments_are_checked(tmp_path, capsys):
     assert main([*args, "--trace", "1"]) == 2  # only run 0 exists
     assert "--trace 1" in capsys.readouterr().err
     assert main(["plot", str(tmp_path / "none.parquet")]) == 2
-
-
-TINY_RW = """
-name = "tiny_rw"
-controller = "pd"
-[body]
-inertia_kgm2 = [1.5, 1.5, 1.5]
-[wheels]
-torque_max_Nm = 0.0275
-momentum_max_Nms = 0.2
-[maneuver]
-axis = [0.0, 0.0, 1.0]
-angle_deg = 10.0
-[simulation]
-duration_s = 5.0
-control_period_s = 0.05
-[pd]
-k_q = 1.375
-k_w = 2.625
-"""
 
 
 def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pytest
+from harness_texts import RANGE_FINDER, SHORT, TINY_RW
 from pydantic import BaseModel, ConfigDict, Field
 
 from estim import registry
@@ -37,44 +38,6 @@ from estim.model import (
 )
 from estim.rotations import qinv, qlog, qmul
 from experiments.cli import main
-
-SHORT = """
-name = "short"
-[model]
-nominal_range_km = 1000.0
-[estimator]
-x_km = [900.0, 1100.0]
-n_sections = 9
-closing_speed_kmps = [57.9, 58.1]
-[truth]
-y_km = [-1.0, 1.0]
-z_km = [-1.0, 1.0]
-x_km = [950.0, 1050.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [-0.05, 0.05]
-vx_kmps = [-58.1, -57.9]
-[range_finder]
-enabled = true
-"""
-
-TINY_RW = """
-name = "tiny_rw"
-controller = "pd"
-[body]
-inertia_kgm2 = [1.5, 1.5, 1.5]
-[wheels]
-torque_max_Nm = 0.0275
-momentum_max_Nms = 0.2
-[maneuver]
-axis = [0.0, 0.0, 1.0]
-angle_deg = 10.0
-[simulation]
-duration_s = 5.0
-control_period_s = 0.05
-[pd]
-k_q = 1.375
-k_w = 2.625
-"""
 
 
 # -- a toy intercept estimator: an (alpha, omega, x) box, corners moved by the model ----
@@ -235,7 +198,7 @@ def _main(capsys, *args):
 
 def test_a_toy_estimator_runs_through_compare_without_editing_the_package(toys, tmp_path, capsys):
     scenario = tmp_path / "short.toml"
-    scenario.write_text(SHORT)
+    scenario.write_text(SHORT + RANGE_FINDER)
     result = _main(
         capsys, "compare", scenario, "--estimators", "toy,infoset", "--noise", "random,game",
         "--runs", 2, "--workers", 1, "--out", tmp_path, "--no-progress", "--json",

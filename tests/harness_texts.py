@@ -1,0 +1,87 @@
+"""Small scenarios and a command-line runner shared by the harness tests.
+
+The scenarios are short on purpose (an intercept of ~1000 km, 35 steps; an attitude
+turn of 100 control steps) so that tests of the harness, not of the physics, stay
+fast. Test modules add the sections they need (``SHORT + RANGE_FINDER``).
+"""
+
+from __future__ import annotations
+
+import traceback
+from dataclasses import dataclass
+
+from experiments.cli import main
+
+# an intercept started ~1000 km out: 35 steps of the Fig. 3 model
+SHORT = """
+name = "short"
+[model]
+nominal_range_km = 1000.0
+[estimator]
+x_km = [900.0, 1100.0]
+n_sections = 9
+closing_speed_kmps = [57.9, 58.1]
+[truth]
+y_km = [-1.0, 1.0]
+z_km = [-1.0, 1.0]
+x_km = [950.0, 1050.0]
+vy_kmps = [-0.05, 0.05]
+vz_kmps = [-0.05, 0.05]
+vx_kmps = [-58.1, -57.9]
+"""
+
+RANGE_FINDER = """[range_finder]
+enabled = true
+"""
+
+# a 10-degree reaction-wheel turn (100 control steps)
+TINY_RW = """
+name = "tiny_rw"
+controller = "pd"
+[body]
+inertia_kgm2 = [1.5, 1.5, 1.5]
+[wheels]
+torque_max_Nm = 0.0275
+momentum_max_Nms = 0.2
+[maneuver]
+axis = [0.0, 0.0, 1.0]
+angle_deg = 10.0
+[simulation]
+duration_s = 5.0
+control_period_s = 0.05
+[pd]
+k_q = 1.375
+k_w = 2.625
+"""
+
+
+def experiment(runs: int, seed: int = 11) -> str:
+    """An ``[experiment]`` section."""
+    return f"[experiment]\nruns = {runs}\nseed = {seed}\n"
+
+
+@dataclass(frozen=True)
+class Result:
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def run_cli(capsys, *args) -> Result:
+    """``experiments.cli.main`` in this process; an escaping exception comes back as
+    exit status -1 with its traceback in ``stderr`` (what a user would see)."""
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    except Exception:  # noqa: BLE001 - what a user would see
+        out = capsys.readouterr()
+        return Result(-1, out.out, out.err + traceback.format_exc())
+    out = capsys.readouterr()
+    return Result(code, out.out, out.err)
+
+
+def one_line_error(r: Result) -> bool:
+    """Bad input: one line on stderr, exit status 2, no traceback."""
+    lines = r.stderr.strip().splitlines()
+    return r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr
