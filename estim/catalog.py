@@ -20,6 +20,7 @@ from estim.attitude_box import BoxAttitudeEstimator
 from estim.attitude_model import AttitudeModel
 from estim.attitude_perfect import PerfectAttitudeEstimator
 from estim.attitude_ukf import UkfAttitudeEstimator
+from estim.catalog_sets import SlabOptions
 from estim.hinf_channel import HInfinityChannelEstimator
 from estim.infoset import InformationSetEstimator
 from estim.kalman import KalmanChannelEstimator
@@ -31,10 +32,10 @@ from estim.registry import register
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
-class InfosetOptions(BaseModel):
-    """Options of the information set (:class:`estim.infoset.InformationSetEstimator`)."""
-
-    model_config = _STRICT
+class InfosetOptions(SlabOptions):
+    """Options of the information set: the node set's (``sections="nodes"``,
+    :class:`estim.nodeset.NodeSetEstimator`) and, inherited, those of the slabs and point
+    sections (:class:`estim.infoset.InformationSetEstimator`)."""
 
     sections: Annotated[
         Literal["nodes", "slabs", "points"],
@@ -43,19 +44,6 @@ class InfosetOptions(BaseModel):
             "seed's point sections"
         ),
     ] = "nodes"
-    n_sections: Annotated[
-        int, Field(ge=2, le=400, description="slabs, points: sections of the initial set")
-    ] = 29
-    kinematic_margin: Annotated[
-        bool, Field(description="slabs: bound the kinematic term the linear model neglects")
-    ] = True
-    split_ratio: Annotated[
-        float, Field(gt=1.0, le=1e6, description="slabs: split a slab wider than x_hi/x_lo")
-    ] = 1.5
-    max_sections: Annotated[
-        int, Field(ge=2, le=4000, description="slabs: most sections splitting may make")
-    ] = 128
-
     n_nodes: Annotated[
         int, Field(ge=4, le=200, description="nodes: nodes per piece after (re)gridding")
     ] = 12
@@ -80,11 +68,7 @@ class InfosetOptions(BaseModel):
     ] = 0.01
 
     @model_validator(mode="after")
-    def _room_for_the_sections(self) -> InfosetOptions:
-        if self.n_sections > self.max_sections:
-            raise ValueError(
-                f"n_sections ({self.n_sections}) must be <= max_sections ({self.max_sections})"
-            )
+    def _room_for_the_nodes(self) -> InfosetOptions:
         if self.min_live_nodes > self.n_nodes:
             raise ValueError(
                 f"min_live_nodes ({self.min_live_nodes}) must be <= n_nodes ({self.n_nodes})"

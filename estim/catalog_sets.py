@@ -29,11 +29,13 @@ _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class SlabOptions(BaseModel):
-    """Options every slab family shares (those of the slab information set)."""
+    """Options every slab family shares, the information set's slabs and point sections too."""
 
     model_config = _STRICT
 
-    n_sections: Annotated[int, Field(ge=2, le=400, description="slabs of the initial set")] = 29
+    n_sections: Annotated[
+        int, Field(ge=2, le=400, description="sections (slabs) of the initial set")
+    ] = 29
     kinematic_margin: Annotated[
         bool, Field(description="bound the kinematic term the linear model neglects")
     ] = True
