@@ -50,7 +50,9 @@ def _toml_values(text: str) -> list[Any]:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_compare_arguments(p)
-    p.add_argument("--key", required=True, help="the field to vary, TABLE.KEY")
+    p.add_argument(
+        "--key", required=True, help="the field to vary, TABLE.KEY or TABLE.SUBTABLE.KEY"
+    )
     p.add_argument(
         "--values",
         required=True,
@@ -61,8 +63,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args) -> dict[str, Any]:
     key = args.key.strip()
-    if key.count(".") != 1 or not all(key.split(".")):
-        raise InputError(f"--key {args.key!r}: expected TABLE.KEY (e.g. model.nu_mps2)")
+    parts = key.split(".")
+    if not 2 <= len(parts) <= 3 or not all(parts):  # the keys --set takes
+        raise InputError(
+            f"--key {args.key!r}: expected TABLE.KEY or TABLE.SUBTABLE.KEY "
+            "(e.g. model.nu_mps2, estimator.infoset.n_nodes)"
+        )
     t0 = time.perf_counter()
     # compare's folder by default: the runs' files carry the +key=value suffix and the
     # tables the key, so nothing collides

@@ -431,10 +431,26 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     assert res["rows"][0]["miss_m"] != res["rows"][2]["miss_m"]  # nu changes the set
 
 
+def test_sweep_takes_an_estimator_option_as_set_does(short, tmp_path, capsys):
+    """A nested key (``estimator.infoset.n_nodes``, the keys ``--set`` takes) is swept:
+    one row per value, and the option reaches the estimator (the two rows differ)."""
+    r = cli_inproc(
+        capsys, "sweep", short, "--key", "estimator.infoset.n_nodes", "--values", "[6, 16]",
+        "--estimators", "infoset", "--noise", "random", "--runs", "1", "--out", tmp_path,
+        "--no-progress", "--json",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout.strip().splitlines()[-1])["rows"]
+    assert [row["value"] for row in rows] == ["6", "16"]
+    assert rows[0]["miss_m"] != rows[1]["miss_m"]
+
+
 @pytest.mark.parametrize(
     "args,message",
     [
         (["--key", "nu_mps2", "--values", "[1]"], "expected TABLE.KEY"),
+        (["--key", "estimator.infoset.n.nodes", "--values", "[1]"], "expected TABLE.KEY"),
+        (["--key", "estimator.infoset.n_nodez", "--values", "[8]"], "n_nodez"),
         (["--key", "model.nu_mps2", "--values", "[]"], "non-empty TOML array"),
         (["--key", "model.nu_mps2", "--values", "0.1"], "non-empty TOML array"),
         (["--key", "model.nu_mps2", "--values", "[0.1, -1]"], "field 'model.nu_mps2' must be"),
