@@ -6,8 +6,9 @@ slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
 (:mod:`estim.pf_channel`); the set-membership families ``ellipsoid``, ``zonotope`` and
 ``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
 (:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
-(:mod:`estim.attitude_box`). A scenario's ``[estimator.<name>]`` table is validated by
-the options model below (one declaration per field: type, bounds, default, unit, doc).
+(:mod:`estim.attitude_box`), ``zonotope`` (:mod:`estim.attitude_zonotope`). A scenario's
+``[estimator.<name>]`` table is validated by the options model below (one declaration per
+field: type, bounds, default, unit, doc).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from estim.attitude_box import BoxAttitudeEstimator
 from estim.attitude_model import AttitudeModel
 from estim.attitude_perfect import PerfectAttitudeEstimator
 from estim.attitude_ukf import UkfAttitudeEstimator
+from estim.attitude_zonotope import ZonotopeAttitudeEstimator
 from estim.catalog_sets import SlabOptions
 from estim.hinf_channel import HInfinityChannelEstimator
 from estim.infoset import InformationSetEstimator
@@ -152,6 +154,23 @@ class BoxOptions(BaseModel):
     ] = 1e-12
 
 
+class ZonotopeAttitudeOptions(BoxOptions):
+    """Options of the attitude zonotope intersected with the box
+    (:class:`estim.attitude_zonotope.ZonotopeAttitudeEstimator`): the box's, and its own."""
+
+    max_generators: Annotated[
+        int,
+        Field(ge=6, le=16, description="generators kept after each order reduction (Girard)"),
+    ] = 8
+    strip_choice: Annotated[
+        Literal["hull", "frobenius"],
+        Field(
+            description="strip update (Alamo et al. 2005): least interval hull or least "
+            "Frobenius norm of the generators"
+        ),
+    ] = "hull"
+
+
 class UkfAttitudeOptions(BaseModel):
     """Options of the attitude UKF (:class:`estim.attitude_ukf.UkfAttitudeEstimator`)."""
 
@@ -224,6 +243,17 @@ def _box(opt: BoxOptions, model: AttitudeModel) -> BoxAttitudeEstimator:
     return BoxAttitudeEstimator(model, abs_inflation_rad=opt.abs_inflation_rad)
 
 
+def _zonotope_attitude(
+    opt: ZonotopeAttitudeOptions, model: AttitudeModel
+) -> ZonotopeAttitudeEstimator:
+    return ZonotopeAttitudeEstimator(
+        model,
+        abs_inflation_rad=opt.abs_inflation_rad,
+        max_generators=opt.max_generators,
+        strip_choice=opt.strip_choice,
+    )
+
+
 def _ukf_attitude(opt: UkfAttitudeOptions, model: AttitudeModel) -> UkfAttitudeEstimator:
     return UkfAttitudeEstimator(model, gate_prob=opt.gate_prob)
 
@@ -239,3 +269,7 @@ register(
 )  # fmt: skip
 register("ukf", "attitude", UkfAttitudeOptions, _ukf_attitude, "UKF on the error state")
 register("box", "attitude", BoxOptions, _box, "guaranteed box on the error state")
+register(
+    "zonotope", "attitude", ZonotopeAttitudeOptions, _zonotope_attitude,
+    "guaranteed zonotope on the error state, intersected with the box",
+)  # fmt: skip
