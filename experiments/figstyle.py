@@ -3,10 +3,15 @@
 What encodes what, the same way in every figure:
 
 * **colour = estimator** (Okabe-Ito palette, safe for the common colour-vision
-  deficiencies): the set estimators blue, EKF vermillion, UKF bluish green, the
-  perfect-information point reddish purple; estimators registered later take the
-  remaining palette entries by name (stable across figures and runs);
-* **line style = noise**: random solid, game dashed, bias dotted, none dash-dotted;
+  deficiencies, for the package's first estimators): the information set blue, the box
+  sky blue, EKF vermillion, UKF bluish green, the perfect-information point reddish
+  purple; the other registered families have fixed darker hues (ellipsoid orange,
+  zonotope brown, H-infinity wine, particle filter indigo), so a figure with all eight
+  intercept estimators has eight colours; estimators registered later take spare
+  colours by name (stable across figures and runs);
+* **line style = noise**: random solid, game dashed, bias dotted, none dash-dotted,
+  the white-box adversaries (targeted, lookahead) and switching errors dash-dot
+  patterns of their own;
 * **black = the truth**, grey = measurements and our own reference marks (lower
   bounds, limits); the paper's printed numbers are black star markers or black
   dotted lines labelled "paper: ...";
@@ -39,14 +44,26 @@ OKABE_ITO = {
 }
 ESTIMATOR_COLOURS = {
     "infoset": OKABE_ITO["blue"],
-    "box": OKABE_ITO["blue"],  # the attitude problem's guaranteed set
+    "box": OKABE_ITO["sky_blue"],
     "ekf": OKABE_ITO["vermillion"],
     "ukf": OKABE_ITO["bluish_green"],
     "perfect": OKABE_ITO["reddish_purple"],
+    "ellipsoid": OKABE_ITO["orange"],
+    "zonotope": "#8C6D1F",  # brown
+    "hinf": "#882255",  # wine (Tol's muted palette)
+    "pf": "#332288",  # indigo (Tol's muted palette)
 }
 #: for estimators without a fixed colour (yellow is kept for fills only)
-_SPARE = (OKABE_ITO["orange"], OKABE_ITO["sky_blue"], "#8C6D1F", "#7F7F7F")
-NOISE_STYLES = {"random": "-", "game": "--", "bias": ":", "none": "-."}
+_SPARE = ("#44AA99", "#999933", "#AA4499", "#7F7F7F")
+NOISE_STYLES = {
+    "random": "-",
+    "game": "--",
+    "bias": ":",
+    "none": "-.",
+    "targeted": (0, (6, 1.5, 1, 1.5, 1, 1.5)),
+    "lookahead": (0, (2, 1, 2, 1, 6, 1)),
+    "switch": (0, (10, 2)),
+}
 TRUTH = OKABE_ITO["black"]
 MEASURED = "#8C8C8C"
 REFERENCE = "#6E6E6E"

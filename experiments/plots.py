@@ -19,6 +19,8 @@ from experiments.figstyle import plt  # noqa: F401 - re-exported for older calle
 
 PANELS = (("miss_m", "miss distance, m"), ("fuel_mps", "fuel (sum of |impulses|), m/s"))
 CDF_LABEL = "fraction of runs (CDF), -"
+#: above this many curves the legend goes below the panels (4 columns)
+CROWDED_CURVES = 10
 
 
 def _cdf(ax, values: np.ndarray, label: str, **style) -> None:
@@ -56,7 +58,10 @@ def cdf_figure(
     black; our lower bounds: grey).
     """
     ok = df[df["status"] == "ok"] if "status" in df else df
-    fig, axes = fs.figure(1, 2, size=(11, 4.4))
+    n_curves = ok.groupby(list(group_cols)).ngroups if len(ok) else 0
+    crowded = n_curves > CROWDED_CURVES
+    rows = -(-(n_curves + 2 * len(references or {})) // 4)  # legend rows below, 4 columns
+    fig, axes = fs.figure(1, 2, size=(11, 4.4 + (0.17 * rows if crowded else 0.0)))
     variants = sorted(ok["variant"].unique()) if "variant" in ok else []
     for ax, (col, xlabel) in zip(axes[0], PANELS, strict=True):
         for key, grp in ok.groupby(list(group_cols), sort=True):
@@ -73,7 +78,10 @@ def cdf_figure(
         ax.set_xlabel(xlabel)
         ax.set_ylabel(CDF_LABEL)
         ax.set_ylim(0, 1.02)
-        fs.legend(ax, fontsize=7, loc="lower right")
+        if not crowded:
+            fs.legend(ax, fontsize=7, loc="lower right")
+    if crowded:  # one legend below both panels: inside an axis it would hide the curves
+        fs.figure_legend(fig, axes[0], fontsize=7, ncol=4)
     fig.suptitle(title, fontsize=10)
     return fig
 

@@ -209,9 +209,28 @@ def test_style_is_colour_blind_safe_and_consistent():
     for name in ("infoset", "ekf", "ukf", "box", "perfect"):
         assert figstyle.estimator_colour(name) in palette
     assert figstyle.estimator_colour("zonotope") == figstyle.estimator_colour("zonotope")
-    styles = [figstyle.noise_style(n) for n in ("random", "game", "bias", "none")]
-    assert len(set(styles)) == 4
+    # every registered estimator of a domain has a colour of its own (one figure each)
+    for domain in ("intercept", "attitude"):
+        colours = [figstyle.estimator_colour(n) for n in registry.names(domain)]
+        assert len(set(colours)) == len(colours), domain
+    kinds = ("random", "game", "bias", "none", "targeted", "lookahead", "switch")
+    assert len({str(figstyle.noise_style(n)) for n in kinds}) == len(kinds)
     assert matplotlib.get_backend().lower() == "agg"
+
+
+def test_crowded_cdf_puts_one_legend_below_the_panels():
+    """Eight estimators x four noises: the legend leaves the axes (it hid the curves)."""
+    from experiments import plots
+
+    rng = np.random.default_rng(0)
+    rows = [{"estimator": e, "noise": n, "miss_m": m, "fuel_mps": 100 + m}
+            for e in registry.names("intercept") for n in ("random", "game", "bias", "targeted")
+            for m in rng.uniform(0.1, 10, 5)]  # fmt: skip
+    fig = plots.cdf_figure(pd.DataFrame(rows), ["estimator", "noise"], "many", {})
+    assert figure_problems(fig) == []
+    assert len(fig.legends) == 1 and all(ax.get_legend() is None for ax in fig.axes)
+    few = plots.cdf_figure(pd.DataFrame(rows[:10]), ["estimator", "noise"], "few", {})
+    assert not few.legends and few.axes[0].get_legend() is not None
 
 
 def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
