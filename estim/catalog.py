@@ -6,9 +6,9 @@ slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
 (:mod:`estim.pf_channel`); the set-membership families ``ellipsoid``, ``zonotope`` and
 ``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
 (:mod:`estim.attitude_perfect`), ``ukf`` (:mod:`estim.attitude_ukf`), ``box``
-(:mod:`estim.attitude_box`), ``zonotope`` (:mod:`estim.attitude_zonotope`). A scenario's
-``[estimator.<name>]`` table is validated by the options model below (one declaration per
-field: type, bounds, default, unit, doc).
+(:mod:`estim.attitude_box`), ``zonotope`` (:mod:`estim.attitude_zonotope`), ``ellipsoid``
+(:mod:`estim.attitude_ellipsoid`). A scenario's ``[estimator.<name>]`` table is validated by
+the options model below (one declaration per field: type, bounds, default, unit, doc).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from estim.attitude_box import BoxAttitudeEstimator
+from estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
 from estim.attitude_model import AttitudeModel
 from estim.attitude_perfect import PerfectAttitudeEstimator
 from estim.attitude_ukf import UkfAttitudeEstimator
@@ -171,6 +172,19 @@ class ZonotopeAttitudeOptions(BoxOptions):
     ] = "hull"
 
 
+class EllipsoidAttitudeOptions(BoxOptions):
+    """Options of the attitude ellipsoid intersected with the box
+    (:class:`estim.attitude_ellipsoid.EllipsoidAttitudeEstimator`): the box's, and its own."""
+
+    criterion: Annotated[
+        Literal["volume", "trace"],
+        Field(
+            description="member of the strip (Fogel & Huang 1982) and Minkowski-sum "
+            "(Schweppe 1968) families: minimum volume (unit-free) or minimum trace"
+        ),
+    ] = "volume"
+
+
 class UkfAttitudeOptions(BaseModel):
     """Options of the attitude UKF (:class:`estim.attitude_ukf.UkfAttitudeEstimator`)."""
 
@@ -254,6 +268,14 @@ def _zonotope_attitude(
     )
 
 
+def _ellipsoid_attitude(
+    opt: EllipsoidAttitudeOptions, model: AttitudeModel
+) -> EllipsoidAttitudeEstimator:
+    return EllipsoidAttitudeEstimator(
+        model, abs_inflation_rad=opt.abs_inflation_rad, criterion=opt.criterion
+    )
+
+
 def _ukf_attitude(opt: UkfAttitudeOptions, model: AttitudeModel) -> UkfAttitudeEstimator:
     return UkfAttitudeEstimator(model, gate_prob=opt.gate_prob)
 
@@ -272,4 +294,8 @@ register("box", "attitude", BoxOptions, _box, "guaranteed box on the error state
 register(
     "zonotope", "attitude", ZonotopeAttitudeOptions, _zonotope_attitude,
     "guaranteed zonotope on the error state, intersected with the box",
+)  # fmt: skip
+register(
+    "ellipsoid", "attitude", EllipsoidAttitudeOptions, _ellipsoid_attitude,
+    "guaranteed ellipsoid on the error state, intersected with the box",
 )  # fmt: skip
