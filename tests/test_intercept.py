@@ -70,6 +70,21 @@ def test_impulse_recentres_the_forecast_interval_seed003_law():
     assert centre_after < 0.02 * centre_before
 
 
+def test_law_issues_no_impulse_on_an_unbounded_forecast():
+    """A sound set may be unbounded (a cell it cannot bound): no centre, no impulse
+    (it was nan, and the run failed downstream)."""
+    from estim.base import Extremes, PointBelief
+
+    class Unbounded(PointBelief):
+        def extremes(self, fn):
+            row = np.array([0.0, 0.0, 1e6])
+            return Extremes(-np.inf, row, np.inf, row)
+
+    law = ForecastCentringLaw(MODEL)
+    assert law.command_mps(Unbounded(np.array([0.0, 0.0, 1e6]))) == 0.0
+    assert law.impulse_mps(Unbounded(np.array([0.0, 0.0, 1e6])), 0.0) == 0.0
+
+
 @given(
     k=st.floats(-50, 50),
     used=st.floats(0, 2100),

@@ -242,3 +242,32 @@ def test_beliefs_are_never_mutated():
 def test_bad_options_are_refused(bad):
     with pytest.raises(ValueError):
         NodeSetEstimator(MODEL, **bad)
+
+
+def test_thin_piece_with_few_nodes_is_refined_until_bounded(monkeypatch):
+    """Regression (found by the n_nodes sweep): with ``n_nodes = 6`` a closing-speed
+    piece narrowed to a sliver kept one live node after four re-grids, the cells beside
+    it were unbounded and the guidance's impulse became nan (kp_fig5, seed 5, run 38 of
+    50, at 99.5 s). Now every forecast the law asks for is finite and the truth stays
+    inside."""
+    from experiments.runner import run_seed
+    from experiments.scenario import load_scenario
+    from experiments.sim.intercept import Engagement
+    from guidance.intercept.law import ForecastCentringLaw
+
+    forecasts = []
+    law_forecast = ForecastCentringLaw.forecast
+
+    def recording(law, belief):
+        ext = law_forecast(law, belief)
+        forecasts.append((ext.min_value, ext.max_value))
+        return ext
+
+    monkeypatch.setattr(ForecastCentringLaw, "forecast", recording)
+    sc = load_scenario("data/scenarios/kp_fig5.toml", ["estimator.infoset.n_nodes=6"])
+    eng = Engagement(sc, "infoset", "random", np.random.default_rng(run_seed(5, 50, 38)), None)
+    while eng.step():
+        pass
+    result = eng.finish()
+    assert forecasts and np.isfinite(forecasts).all()
+    assert result.truth_outside == 0

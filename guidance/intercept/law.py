@@ -61,12 +61,16 @@ class ForecastCentringLaw:
         return belief.extremes(MissForecast(self.model))
 
     def command_mps(self, belief: Belief) -> float:
-        """Unlimited impulse ``k = -(Pi_min + Pi_max) e / (x* + x**)``; 0 if empty."""
+        """Unlimited impulse ``k = -(Pi_min + Pi_max) e / (x* + x**)``; 0 if the belief
+        is empty or its forecast interval is unbounded (no centre to move: a sound set
+        may be unbounded where it cannot bound a cell, and an impulse computed from inf
+        would be nan)."""
         if belief.is_empty:
             return 0.0
         ext = self.forecast(belief)
         x_sum = float(ext.argmin[2] + ext.argmax[2])
-        return -(ext.min_value + ext.max_value) * self.model.e / x_sum
+        k = -(ext.min_value + ext.max_value) * self.model.e / x_sum
+        return float(k) if np.isfinite(k) else 0.0
 
     def impulse_mps(self, belief: Belief, fuel_used_mps: float) -> float:
         """The impulse issued: the command with the limits and the reserve applied."""
