@@ -147,8 +147,34 @@ def _with(belief: BoxAttitudeBelief, **changes: Any) -> BoxAttitudeBelief:
     return new
 
 
+class EmptyRunCounts:
+    """The status of a batched attitude set from its per-run counters ``n_empty`` (updates
+    whose intersection was empty) and ``last_empty`` (the last update was): shared by the
+    box and the sets intersected with it."""
+
+    n_empty: FloatArray
+    last_empty: FloatArray
+
+    @property
+    def is_empty(self) -> bool:
+        return bool(np.any(self.last_empty))
+
+    @property
+    def status(self) -> Status:
+        """``CONTRADICTION`` when some run's last update was empty, else ``OK``."""
+        return Status.CONTRADICTION if self.is_empty else Status.OK
+
+    @property
+    def contradictions(self) -> int:
+        return int(np.sum(self.n_empty))
+
+    @property
+    def empty_counts(self) -> NDArray[np.int_]:
+        return np.asarray(self.n_empty, dtype=int)
+
+
 @dataclass(frozen=True, eq=False)
-class BoxAttitudeBelief(AttitudeBelief):
+class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     """Reference quaternions ``(R, 4)`` and boxes (centre, radius) of ``e`` and ``w`` ``(R, 3)``.
 
     ``n_empty`` counts, per run, the updates whose intersection was empty; ``last_empty`` flags
@@ -178,23 +204,6 @@ class BoxAttitudeBelief(AttitudeBelief):
     @property
     def runs(self) -> int:
         return self.q_ref.shape[0]
-
-    @property
-    def is_empty(self) -> bool:
-        return bool(np.any(self.last_empty))
-
-    @property
-    def status(self) -> Status:
-        """``CONTRADICTION`` when some run's last update was empty, else ``OK``."""
-        return Status.CONTRADICTION if self.is_empty else Status.OK
-
-    @property
-    def contradictions(self) -> int:
-        return int(np.sum(self.n_empty))
-
-    @property
-    def empty_counts(self) -> NDArray[np.int_]:
-        return np.asarray(self.n_empty, dtype=int)
 
     def centre(self) -> FloatArray:
         """``(q, w)`` of the box centre, ``(R, 7)``."""

@@ -41,7 +41,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.attitude_box import BoxAttitudeBelief, BoxAttitudeEstimator, inorm_max
+from estim.attitude_box import (
+    BoxAttitudeBelief,
+    BoxAttitudeEstimator,
+    EmptyRunCounts,
+    inorm_max,
+)
 from estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
@@ -50,7 +55,7 @@ from estim.attitude_model import (
     AttitudePrior,
 )
 from estim.attitude_sets_maps import NoEnclosure, meet_measurement, predict_map, recentre_map
-from estim.base import Estimator, Extremes, StateFunction, Status
+from estim.base import Estimator, Extremes, StateFunction
 from estim.base import frozen_view as _frozen_view
 from estim.rotations import qexp, qinv, qlog, qmul
 
@@ -58,7 +63,7 @@ FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class SetAttitudeBelief(AttitudeBelief):
+class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     """``S = Z ∩ B``: the box belief ``box`` and a set ``Z`` of centre ``z_c`` ``(R, 6)`` and
     matrix ``z_m`` (generators or shape matrix, by subclass). Runs whose box is not finite
     (no enclosure, :class:`BoxAttitudeBelief`) are the whole space until the next update."""
@@ -111,22 +116,6 @@ class SetAttitudeBelief(AttitudeBelief):
         lost = self.lost[:, None] | ~(lo <= hi)
         lo, hi = np.where(lost, bc - br, lo), np.where(lost, bc + br, hi)
         return 0.5 * (lo + hi), 0.5 * (hi - lo)
-
-    @property
-    def is_empty(self) -> bool:
-        return bool(np.any(self.last_empty))
-
-    @property
-    def status(self) -> Status:
-        return Status.CONTRADICTION if self.is_empty else Status.OK
-
-    @property
-    def contradictions(self) -> int:
-        return int(np.sum(self.n_empty))
-
-    @property
-    def empty_counts(self) -> NDArray[np.int_]:
-        return np.asarray(self.n_empty, dtype=int)
 
     @property
     def n_unbounded(self) -> int:
