@@ -294,6 +294,22 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert out["machine"]["cpus"] >= 1
 
 
+def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
+    """`bench --steps 190` raised a traceback: a slab-family set diverged late in the
+    unguided approach and its extremes were asked for. The timing stops there (and at
+    the blind range), and says over how many steps it ran."""
+    from experiments.cmd_bench import step_cost_us
+    from experiments.scenario import load_scenario
+
+    fig3 = load_scenario("data/scenarios/kp_fig3.toml")
+    model = fig3.channel_model()  # the bench's truth starts at 5801.3 km
+    approach = int((5801.3e3 - model.eps_m) / model.e / fig3.model.dt_s)
+    for name in registry.names("intercept"):
+        us, timed = step_cost_us(name, fig3, 10 * approach, 1)
+        assert np.isfinite(us) and us > 0, name
+        assert 0 < timed <= approach + 1, name
+
+
 def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, capsys):
     """Issue 4: compare returns one row per estimator x noise, zero failures, zero
     containment violations for the set estimators, writes Parquet and PNG; run j has the
