@@ -148,8 +148,9 @@ def test_the_engagement_shows_the_pursuer_to_white_box_generators_only(tiny, mon
 
 @pytest.mark.parametrize("noise", ["targeted", "lookahead"])
 def test_the_information_set_keeps_the_truth_against_white_box_noise(tiny, noise):
-    """Every candidate is consistent with the truth: a sound set never loses it."""
-    sc = load_scenario(tiny, ["adversary.lookahead_candidates=3"])
+    """Every candidate is consistent with the truth: a sound set never loses it (five
+    greedy candidates: the bounds, zero and the half-bounds)."""
+    sc = load_scenario(tiny, ["adversary.lookahead_candidates=3", "adversary.candidates=5"])
     r = run_engagement(sc, "infoset", noise, np.random.default_rng(2))
     assert r.truth_outside == 0 and r.contradictions == 0 and r.checked_steps > 20
     assert dict(r.extras)["adversary_skipped"] == 0  # no branch raised
