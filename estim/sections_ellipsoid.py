@@ -27,12 +27,8 @@ enclosing parallelogram ``c + G [-1, 1]^2``
 
 References
 ----------
-F. C. Schweppe, "Recursive state estimation: unknown but bounded errors and system
-inputs", IEEE Trans. Automatic Control 13(1), 1968.
-E. Fogel & Y. F. Huang, "On the value of information in system identification --
-bounded noise case", Automatica 18(2), 229-238, 1982.
-F. L. Chernousko, *State Estimation for Dynamic Systems*, CRC Press, 1994.
-A. B. Kurzhanski & I. Valyi, *Ellipsoidal Calculus for Estimation and Control*, 1997.
+Schweppe (1968), Fogel & Huang (1982), Chernousko (1994), Kurzhanski & Valyi (1997):
+full entries in :mod:`estim.sets.ellipsoid` and docs/references.md.
 """
 
 from __future__ import annotations
