@@ -79,8 +79,9 @@ REL_INFLATION = 1e-12
 _J, _K = [1, 2, 0], [2, 0, 1]
 
 
-class _NoEnclosure(Exception):
-    """The Picard inclusion did not close within the iterations (step too long)."""
+class NoEnclosure(Exception):
+    """An enclosure of a step could not be closed (the Picard inclusion within its
+    iterations, or a remainder of the sets' maps): the step is too long."""
 
 
 # --- midpoint-radius interval arithmetic (arrays of centres c and radii r) -------------
@@ -312,7 +313,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 return self._predict_once(belief, dt_s, ctrl)
-        except (_NoEnclosure, FloatingPointError):
+        except (NoEnclosure, FloatingPointError):
             if depth >= 6:
                 # no enclosure: the guaranteed set is the whole state space (the next
                 # update restarts from the measurement); counted in n_unbounded
@@ -324,29 +325,31 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
             half = self._predict(belief, 0.5 * dt_s, ctrl, depth + 1)
             return self._predict(half, 0.5 * dt_s, ctrl, depth + 1)
 
+    def rate_enclosure(self, wc, wr, ctrl: AttitudeControl, dt_s: float):
+        """``(W*, F(W*))`` as centre/radius pairs: an a-priori enclosure ``W*`` of the rate
+        ``w(s)``, ``s`` in ``[0, dt]``, from ``W0 = (wc, wr)`` (Picard inclusion:
+        ``W0 + [0, dt] F(W*)`` inside ``W*``, verified), and the rate field over it;
+        :class:`NoEnclosure` when it does not close within ``picard_iterations``."""
+        fc, fr = self._rate_field(wc, wr, ctrl)
+        sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
+        ac, ar = wc + sc, 2.0 * (wr + sr) + 1e-15
+        for _ in range(self.picard_iterations):
+            fc, fr = self._rate_field(ac, ar, ctrl)
+            sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
+            tc, tr = wc + sc, wr + sr
+            if not np.all(np.isfinite(tr)):
+                raise NoEnclosure
+            if np.all(np.abs(tc - ac) + tr <= ar):
+                return (ac, ar), self._rate_field(ac, ar, ctrl)
+            lo, hi = np.minimum(ac - ar, tc - tr), np.maximum(ac + ar, tc + tr)
+            ac, ar = 0.5 * (lo + hi), 0.5 * (hi - lo) * 1.5 + 1e-15
+        raise NoEnclosure
+
     def _predict_once(
         self, belief: BoxAttitudeBelief, dt_s: float, ctrl: AttitudeControl
     ) -> BoxAttitudeBelief:
         w0c, w0r = belief.w_c, belief.w_r
-        # a-priori enclosure W* of w(s), s in [0, dt]: W0 + [0, dt] F(W*) subset W*
-        fc, fr = self._rate_field(w0c, w0r, ctrl)
-        sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
-        ac, ar = w0c + sc, 2.0 * (w0r + sr) + 1e-15
-        for _ in range(self.picard_iterations):
-            fc, fr = self._rate_field(ac, ar, ctrl)
-            sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
-            tc, tr = w0c + sc, w0r + sr
-            if not np.all(np.isfinite(tr)):
-                raise _NoEnclosure
-            if np.all(np.abs(tc - ac) + tr <= ar):
-                break
-            lo = np.minimum(ac - ar, tc - tr)
-            hi = np.maximum(ac + ar, tc + tr)
-            ac, ar = 0.5 * (lo + hi), 0.5 * (hi - lo) * 1.5 + 1e-15
-        else:
-            raise _NoEnclosure
-        # a-priori enclosure verified: w(s) in (ac, ar); end rate by the mean-value form
-        fc, fr = self._rate_field(ac, ar, ctrl)
+        (ac, ar), (fc, fr) = self.rate_enclosure(w0c, w0r, ctrl, dt_s)
         w1c = w0c + dt_s * fc
         w1r = _inflate(w1c, w0r + dt_s * fr, self.abs_inflation_rad)
         # attitude (Taylor model): int_0^dt w = dt w(0) + int_0^dt s F ds in dt W0 + dt^2/2 F(W*);

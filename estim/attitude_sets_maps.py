@@ -43,8 +43,8 @@ from estim.attitude_box import (
     REL_INFLATION,
     BoxAttitudeBelief,
     BoxAttitudeEstimator,
+    NoEnclosure,
     icross,
-    imul,
     inorm_max,
 )
 from estim.attitude_model import AttitudeControl
@@ -52,10 +52,6 @@ from estim.rotations import qexp, qmatrix
 
 FloatArray = NDArray[np.float64]
 _EYE3 = np.eye(3)
-
-
-class NoEnclosure(Exception):
-    """The remainders of a step could not be enclosed (the set falls back to the box)."""
 
 
 def skew(v: FloatArray) -> FloatArray:
@@ -90,30 +86,12 @@ def inflate(c: FloatArray, r: FloatArray, abs_r: float) -> FloatArray:
     return r + REL_INFLATION * (np.abs(c) + r) + abs_r
 
 
-def rate_enclosure(box: BoxAttitudeEstimator, wc, wr, ctrl: AttitudeControl, dt_s: float):
-    """``(W*, F(W*))`` as centre/radius pairs: the box's Picard inclusion over ``(wc, wr)``."""
-    fc, fr = box._rate_field(wc, wr, ctrl)
-    sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
-    ac, ar = wc + sc, 2.0 * (wr + sr) + 1e-15
-    for _ in range(box.picard_iterations):
-        fc, fr = box._rate_field(ac, ar, ctrl)
-        sc, sr = imul(0.5 * dt_s, 0.5 * dt_s, fc, fr)
-        tc, tr = wc + sc, wr + sr
-        if not np.all(np.isfinite(tr)):
-            raise NoEnclosure
-        if np.all(np.abs(tc - ac) + tr <= ar):
-            return (ac, ar), box._rate_field(ac, ar, ctrl)
-        lo, hi = np.minimum(ac - ar, tc - tr), np.maximum(ac + ar, tc + tr)
-        ac, ar = 0.5 * (lo + hi), 0.5 * (hi - lo) * 1.5 + 1e-15
-    raise NoEnclosure
-
-
 def predict_map(box: BoxAttitudeEstimator, hc, hr, c, ctrl: AttitudeControl, dt_s: float):
     """``(A, b, rho)``: :math:`x' \\in A x + b \\oplus [-\\rho, \\rho]` for every state of the
     hull ``(hc, hr)`` (module docstring), the reference moved by ``c``."""
     runs = hc.shape[0]
     ec, er, wc, wr = hc[:, :3], hr[:, :3], hc[:, 3:], hr[:, 3:]
-    (ac, ar), (fc, fr) = rate_enclosure(box, wc, wr, ctrl, dt_s)
+    (ac, ar), (fc, fr) = box.rate_enclosure(wc, wr, ctrl, dt_s)
     rho_m = inorm_max(ac, ar) * inorm_max(fc, fr) * dt_s**3 / 6
     bc = dt_s * wc + 0.5 * dt_s**2 * fc - c
     br = 0.5 * dt_s**2 * fr + rho_m[:, None]
