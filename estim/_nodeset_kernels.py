@@ -46,7 +46,10 @@ def _hull_into(src, m, dst, tol):
             ux, uy, wx, wy = bx - ax, by - ay, px - ax, py - ay
             # a turn by less than tol rad is rounding: without it a sliver (a polygon
             # flat to rounding along the disturbance) doubles its vertices every step
-            if ux * wy - uy * wx > tol * np.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy)):
+            cross = ux * wy - uy * wx
+            uu, ww = ux * ux + uy * uy, wx * wx + wy * wy
+            # sqrt(uu ww) <= (uu + ww) / 2: a clear left turn needs no square root
+            if cross > tol * (uu + ww) or cross > tol * np.sqrt(uu * ww):
                 break
             h -= 1
         dst[h, 0], dst[h, 1] = px, py
@@ -75,41 +78,45 @@ def _clip1(src, m, nx, ny, bound, dst):
 
 
 @njit(cache=True)
-def _segment1(src, m, g0, g1, dst):
-    """One polygon plus the segment ``[-g, g]`` (as ``_kernels.minkowski_segment``)."""
+def _segment1(src, m, g0, g1, dst, scale):
+    """One polygon plus the segment ``[-g, g]`` (as ``_kernels.minkowski_segment``);
+    ``scale`` is the largest coordinate of ``src`` (in magnitude; the callers have it
+    from their own pass). Returns the number of vertices and the same for ``dst``."""
     if m == 0:
-        return 0
+        return 0, 0.0
     if g0 == 0.0 and g1 == 0.0:
         for j in range(m):
             dst[j, 0], dst[j, 1] = src[j, 0], src[j, 1]
-        return m
-    scale = 0.0
-    for j in range(m):
-        scale = max(scale, abs(src[j, 0]), abs(src[j, 1]))
+        return m, scale
     tol = 1e-14 * scale * max(abs(g0), abs(g1))
     flat = True
     for j in range(m):
         c = (j + 1) % m
-        cr = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
-        if abs(cr) > tol:
+        if abs(g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])) > tol:
             flat = False
+            break
+    # the cross product of edge j-1 -> j (its sign: which end of the segment the
+    # vertex takes before it); each edge's is computed once
+    crc = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0])
     k = 0
+    out_scale = 0.0
     for j in range(m):
         if flat:
             sp, sc = -1.0, 1.0
         else:
-            p = (j - 1) % m
             c = (j + 1) % m
-            crp = g0 * (src[j, 1] - src[p, 1]) - g1 * (src[j, 0] - src[p, 0])
+            crp = crc
             crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
             sp = 1.0 if crp > 0.0 else -1.0
             sc = 1.0 if crc > 0.0 else -1.0
         dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
+        out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
         k += 1
         if sc != sp:
             dst[k, 0], dst[k, 1] = src[j, 0] + sc * g0, src[j, 1] + sc * g1
+            out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
             k += 1
-    return k
+    return k, out_scale
 
 
 @njit(cache=True)
@@ -188,14 +195,25 @@ def apply_ops(
                 a = max(bb_end + (bb_start - bb_end) * x / bb_ref, floor)
                 h = a / scale * (1.0 + strip_margin) + strip_margin
                 c = pa[o] / scale
+                x_lo, x_hi = a_buf[0, 0], a_buf[0, 0]
+                for j in range(1, m):
+                    x_lo, x_hi = min(x_lo, a_buf[j, 0]), max(x_hi, a_buf[j, 0])
+                if x_hi <= c + h and x_lo >= c - h:
+                    # inside the strip: the clips would only copy and drop duplicates
+                    m = _dedupe_tail(a_buf, 0, m, 1e-15 * max(abs(c + h), 1.0))
+                    m = _dedupe_tail(a_buf, 0, m, 1e-15 * max(abs(-(c - h)), 1.0))
+                    continue
                 m = _clip1(a_buf, m, 1.0, 0.0, c + h, b_buf)
                 m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
             elif kind == IMPULSE:
                 zs = e_nom * tau
                 dy = 0.5 * (q_lo[o, b] + q_hi[o, b]) * zs
+                big = 0.0
                 for j in range(m):
                     a_buf[j, 1] += dy
-                m = _segment1(a_buf, m, 0.0, 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs, b_buf)
+                    big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
+                g = 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs
+                m, _ = _segment1(a_buf, m, 0.0, g, b_buf, big)
                 a_buf, b_buf = b_buf, a_buf
             elif kind == RANGE:
                 if label[i] < h_lo[o + 1, b] or label[i] > h_hi[o + 1, b]:
@@ -211,14 +229,16 @@ def apply_ops(
                 nu_s = 0.5 * (q_hi[o, b] - q_lo[o, b])
                 shear = dt / (tau * t1) / (e_nom * scale)
                 ca, cz = dt * dt / (2.0 * t1) / scale, dt * (tau + t1) / 2.0 * e_nom
+                big = 0.0
                 for j in range(m):
                     a_buf[j, 0] += shear * a_buf[j, 1] + mid * ca
                     a_buf[j, 1] += mid * cz
+                    big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
                 ga, gz = nu_s * ca, nu_s * cz
-                m = _segment1(a_buf, m, ga, gz, b_buf)
+                m, big = _segment1(a_buf, m, ga, gz, b_buf, big)
                 # a disturbance that varies within the step (the kinematic term does)
                 # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)
-                m = _segment1(b_buf, m, 0.5 * ga, nu_s * dt * dt / 4.0 * e_nom, a_buf)
+                m, _ = _segment1(b_buf, m, 0.5 * ga, nu_s * dt * dt / 4.0 * e_nom, a_buf, big)
                 m = _hull_into(a_buf, m, b_buf, HULL_TURN_RAD)
                 a_buf, b_buf = b_buf, a_buf
         if k_out + m > out.shape[0]:
