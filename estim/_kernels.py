@@ -373,17 +373,58 @@ def section_abs_max(xy, offsets):
 
 
 @njit(cache=True)
+def _margin1(w0, a0, x_min, x_max, rho_factor, dt, e, max_bearing):
+    a = min(abs(a0), max_bearing)
+    h = e * abs(w0) / np.cos(a) ** 2 + rho_factor * x_max
+    ag = min(a + h * dt / x_min**2, np.pi / 6.0)
+    return 2.0 * h * h / x_min**3 * np.cos(ag) ** 3 * np.sin(ag)
+
+
+@njit(cache=True)
 def kinematic_margin(w0, a0, x_min, x_max, dt, e, nu, max_bearing):
     """Elementwise body of :func:`estim.infoset.kinematic_margin_mps2` (see there)."""
     n = w0.shape[0]
     out = np.empty(n)
     rho_factor = nu * dt / np.cos(max_bearing)
     for i in range(n):
-        a = min(abs(a0[i]), max_bearing)
-        h = e * abs(w0[i]) / np.cos(a) ** 2 + rho_factor * x_max[i]
-        ag = min(a + h * dt / x_min[i] ** 2, np.pi / 6.0)
-        out[i] = 2.0 * h * h / x_min[i] ** 3 * np.cos(ag) ** 3 * np.sin(ag)
+        out[i] = _margin1(w0[i], a0[i], x_min[i], x_max[i], rho_factor, dt, e, max_bearing)
     return out
+
+
+@njit(cache=True)
+def _g(a):
+    # ** 3.0 (a float power, as numpy's ** 3), not repeated multiplication
+    return np.cos(a) ** 3.0 * np.sin(a)
+
+
+@njit(cache=True)
+def kinematic_interval(w_lo, w_hi, a_lo, a_hi, x_min, x_max, dt, e, nu, max_bearing):
+    """Elementwise body of :func:`estim.kinematics.kinematic_interval_mps2` (see there)."""
+    n = w_lo.shape[0]
+    lo, hi = np.empty(n), np.empty(n)
+    rho_factor = nu * dt / np.cos(max_bearing)
+    for i in range(n):
+        w_abs = max(abs(w_lo[i]), abs(w_hi[i]))
+        a_abs = max(abs(a_lo[i]), abs(a_hi[i]))
+        upper = _margin1(w_abs, a_abs, x_min[i], x_max[i], rho_factor, dt, e, max_bearing)
+        # the same crude rho bound as the upper bound (rho <= x / cos(max_bearing))
+        drift = nu * dt * x_max[i] / np.cos(max_bearing)
+        h_max = e * w_abs / np.cos(min(a_abs, max_bearing)) ** 2 + drift
+        swing = h_max * dt / x_min[i] ** 2
+        lo_a, hi_a = a_lo[i] - swing, a_hi[i] + swing
+        lo[i], hi[i] = -upper, upper
+        if not (lo_a > 0 or hi_a < 0):
+            continue
+        w_min = min(abs(w_lo[i]), abs(w_hi[i])) if (w_lo[i] > 0 or w_hi[i] < 0) else 0.0
+        h_min = max(e * w_min - drift, 0.0)
+        near, far = min(abs(lo_a), abs(hi_a)), min(max(abs(lo_a), abs(hi_a)), 0.5 * np.pi)
+        g_min = min(_g(near), _g(far))
+        lower = min(2.0 * h_min**2 * g_min / x_max[i] ** 3.0, upper)
+        if lo_a > 0:
+            hi[i] = -lower
+        else:
+            lo[i] = lower
+    return lo, hi
 
 
 def warm_up() -> None:
@@ -417,3 +458,4 @@ def warm_up() -> None:
         convex_hulls(p, o)
     for x_max in (one, ro(one)):
         kinematic_margin(one, zero, one, x_max, 0.5, 1.0, 0.0, 1.5)
+    kinematic_interval(one, one, zero, one, one, one, 0.5, 1.0, 0.0, 1.5)

@@ -250,3 +250,33 @@ def apply_ops(
             k_out += 1
         new_off[i + 1] = k_out
     return out[:k_out].copy(), new_off, times[n_ops], h_lo[n_ops], h_hi[n_ops]
+
+
+@njit(cache=True)
+def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
+    """Interval of the ``V~`` increment of an impulse ``k +- dk`` per piece, and (in
+    place) the per-piece bounds of ``w`` in ``per`` moved by it (the formulas are
+    :meth:`estim.nodeset.NodeSetEstimator._impulse`'s). A piece without cells
+    (``inf`` bounds) gets ``nan`` bounds of ``w``: it is skipped downstream."""
+    n = u_lo.shape[0]
+    lo, hi = np.empty(n), np.empty(n)
+    for b in range(n):
+        a_abs = max(abs(per[b, 2]), abs(per[b, 3]))
+        sin2 = np.sin(min(a_abs, 0.5 * np.pi)) ** 2
+        e0, e1 = k * u_lo[b] * (1.0 - sin2), k * u_hi[b]
+        lo[b] = min(e0, e1) - dk * u_hi[b]
+        hi[b] = max(e0, e1) + dk * u_hi[b]
+        f0, f1 = (1.0 / (u_hi[b] * e_nom)) ** 2, (1.0 / (u_lo[b] * e_nom)) ** 2
+        p_min, p_max, nan = np.inf, -np.inf, False
+        for t in (max(per[b, 4], 0.0), max(per[b, 5], 0.0)):
+            for d in (lo[b], hi[b]):
+                for f in (f0, f1):
+                    v = e_nom * t * d * f
+                    nan = nan or v != v
+                    p_min, p_max = min(p_min, v), max(p_max, v)
+        if nan:
+            per[b, 0], per[b, 1] = np.nan, np.nan
+        else:
+            per[b, 0] += min(p_min, 0.0)
+            per[b, 1] += max(p_max, 0.0)
+    return lo, hi

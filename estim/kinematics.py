@@ -33,13 +33,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from estim.infoset import MAX_BEARING_RAD, kinematic_margin_mps2
+from estim import _kernels as _k
+from estim.infoset import MAX_BEARING_RAD
 
 FloatArray = NDArray[np.float64]
-
-
-def _g(a: FloatArray) -> FloatArray:
-    return np.cos(a) ** 3 * np.sin(a)
 
 
 def kinematic_interval_mps2(
@@ -72,26 +69,13 @@ def kinematic_interval_mps2(
         ``lo <= -2 omega^2 x tan(alpha) <= hi`` for every state of the group over
         the step (m/s^2).
     """
-    w_lo, w_hi, a_lo, a_hi, x_min, x_max = np.broadcast_arrays(
+    # compiled (one loop over the groups; called every step with a handful of them)
+    args = np.broadcast_arrays(
         *(np.asarray(v, dtype=float) for v in (w_lo_m, w_hi_m, alpha_lo_rad, alpha_hi_rad,
                                                x_min_m, x_max_m))
     )  # fmt: skip
-    w_abs = np.maximum(np.abs(w_lo), np.abs(w_hi))
-    a_abs = np.maximum(np.abs(a_lo), np.abs(a_hi))
-    upper = kinematic_margin_mps2(w_abs, a_abs, x_min, x_max, dt_s, e_mps, nu_mps2)
-    # the same crude rho bound as the upper bound (rho <= x / cos(MAX_BEARING_RAD))
-    drift = nu_mps2 * dt_s * x_max / np.cos(MAX_BEARING_RAD)
-    h_max = e_mps * w_abs / np.cos(np.minimum(a_abs, MAX_BEARING_RAD)) ** 2 + drift
-    swing = h_max * dt_s / x_min**2
-    lo_a, hi_a = a_lo - swing, a_hi + swing
-    one_sided = (lo_a > 0) | (hi_a < 0)
-    w_min = np.where((w_lo > 0) | (w_hi < 0), np.minimum(np.abs(w_lo), np.abs(w_hi)), 0.0)
-    h_min = np.maximum(e_mps * w_min - drift, 0.0)
-    near, far = np.minimum(np.abs(lo_a), np.abs(hi_a)), np.maximum(np.abs(lo_a), np.abs(hi_a))
-    far = np.minimum(far, 0.5 * np.pi)
-    g_min = np.where(one_sided, np.minimum(_g(near), _g(far)), 0.0)
-    lower = np.minimum(2.0 * h_min**2 * g_min / x_max**3, upper)
-    positive_alpha = lo_a > 0
-    lo = np.where(one_sided, np.where(positive_alpha, -upper, lower), -upper)
-    hi = np.where(one_sided, np.where(positive_alpha, -lower, upper), upper)
-    return lo, hi
+    flat = (np.ascontiguousarray(np.ravel(v)) for v in args)
+    lo, hi = _k.kinematic_interval(
+        *flat, float(dt_s), float(e_mps), float(nu_mps2), MAX_BEARING_RAD
+    )
+    return lo.reshape(args[0].shape), hi.reshape(args[0].shape)
