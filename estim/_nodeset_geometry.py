@@ -81,17 +81,37 @@ def support_table(xy, off, tau, nodes4, p, q, scale, e_nom):
 
 
 @njit(cache=True)
-def _lines(xy, off, j, tau_j, scale, e_nom, sign, a_out, b_out):
-    """The vertices of node ``j`` as lines ``sign e_nom (Y~ + V~ tau) = A + B tau``;
+def _node_lines(xy, off, tau, scale, e_nom):
+    """Every vertex as the line ``e_nom (Y~ + V~ tau) = A + B tau`` of its node, and
+    where it meets the next vertex's line (``nan`` if parallel): the breakpoints of
+    the node's upper envelope. Negating a line (the lower bounds) is exact, and
+    leaves its breakpoints where they are."""
+    n_v = xy.shape[0]
+    a_line, b_line, cross = np.empty(n_v), np.empty(n_v), np.empty(n_v)
+    for j in range(off.shape[0] - 1):
+        for v in range(off[j], off[j + 1]):
+            a = xy[v, 0] * scale
+            a_line[v] = e_nom * a * tau[j]
+            b_line[v] = xy[v, 1] / tau[j] - e_nom * a
+        m = off[j + 1] - off[j]
+        for v in range(m):
+            i, w = off[j] + v, off[j] + (v + 1) % m
+            db = b_line[i] - b_line[w]
+            cross[i] = (a_line[w] - a_line[i]) / db if db != 0.0 else np.nan
+    return a_line, b_line, cross
+
+
+@njit(cache=True)
+def _lines(lines, off, j, sign, a_out, b_out):
+    """Node ``j``'s lines (:func:`_node_lines`) times ``sign`` into ``a_out, b_out``;
     returns their number (0 for an empty or missing node)."""
     if j < 0:
         return 0
+    a_line, b_line = lines[0], lines[1]
     m = off[j + 1] - off[j]
     for v in range(m):
-        a = xy[off[j] + v, 0] * scale
-        zs = xy[off[j] + v, 1]
-        a_out[v] = sign * e_nom * a * tau_j
-        b_out[v] = sign * (zs / tau_j - e_nom * a)
+        a_out[v] = sign * a_line[off[j] + v]
+        b_out[v] = sign * b_line[off[j] + v]
     return m
 
 
@@ -113,14 +133,12 @@ def _quad(l0, l1, d0, d1, s0, s1):
 
 
 @njit(cache=True)
-def _zem_bound_cell(xy, off, tau, nodes, t4, lo_s, hi_s, scale, e_nom, sign, buf_a, buf_b, rtol):
+def _zem_bound_cell(lines, off, nodes, t4, lo_s, hi_s, sign, buf_a, buf_b, rtol, pts, counts):
     """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``sign zs`` (see
-    :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained."""
-    counts = np.zeros(4, dtype=np.int64)
+    :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained.
+    ``pts`` and ``counts`` are scratch."""
     for k in range(4):
-        j = nodes[k]
-        tj = tau[j] if j >= 0 else 1.0
-        counts[k] = _lines(xy, off, j, tj, scale, e_nom, sign, buf_a[k], buf_b[k])
+        counts[k] = _lines(lines, off, nodes[k], sign, buf_a[k], buf_b[k])
     if counts[1] == 0 and counts[2] == 0:
         return -np.inf, lo_s
     has_l = counts[0] > 0 and counts[1] > 0 and t4[1] > t4[0]
@@ -131,22 +149,17 @@ def _zem_bound_cell(xy, off, tau, nodes, t4, lo_s, hi_s, scale, e_nom, sign, buf
             return buf_a[1, v] + buf_b[1, v] * t4[1], lo_s
         return np.inf, lo_s
     # breakpoints: where the largest line of a node changes (consecutive vertices tie)
-    nbk = 0
-    for k in range(4):
-        nbk += counts[k]
-    pts = np.empty(nbk + 2)
     pts[0], pts[1] = lo_s, hi_s
     npts = 2
+    cross = lines[2]
     for k in range(4):
-        m = counts[k]
-        for v in range(m):
-            w = (v + 1) % m
-            db = buf_b[k, v] - buf_b[k, w]
-            if db != 0.0:
-                tx = (buf_a[k, w] - buf_a[k, v]) / db
-                if lo_s < tx < hi_s:
-                    pts[npts] = tx
-                    npts += 1
+        if counts[k] == 0:
+            continue
+        for i in range(off[nodes[k]], off[nodes[k] + 1]):
+            tx = cross[i]
+            if lo_s < tx < hi_s:
+                pts[npts] = tx
+                npts += 1
     pts = np.sort(pts[:npts])
     h_l = t4[1] - t4[0]
     h_r = t4[3] - t4[2]
@@ -239,15 +252,19 @@ def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
         vmax = max(vmax, off[j + 1] - off[j])
     buf_a = np.empty((4, vmax))
     buf_b = np.empty((4, vmax))
+    pts = np.empty(xy.shape[0] + 2)
+    counts = np.zeros(4, dtype=np.int64)
     out = np.empty((m, 4))
+    # a node's lines serve the (up to) four cells around it
+    lines = _node_lines(xy, off, tau, scale, e_nom)
     for c in range(m):
         up, a_up = _zem_bound_cell(
-            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, 1.0,
-            buf_a, buf_b, rtol,
+            lines, off, table[c], tau4[c], lo_s[c], hi_s[c], 1.0, buf_a, buf_b, rtol, pts,
+            counts,
         )  # fmt: skip
         dn, a_dn = _zem_bound_cell(
-            xy, off, tau, table[c], tau4[c], lo_s[c], hi_s[c], scale, e_nom, -1.0,
-            buf_a, buf_b, rtol,
+            lines, off, table[c], tau4[c], lo_s[c], hi_s[c], -1.0, buf_a, buf_b, rtol, pts,
+            counts,
         )  # fmt: skip
         out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
     return out
