@@ -398,32 +398,57 @@ def _g(a):
 
 
 @njit(cache=True)
+def _interval1(w_lo, w_hi, a_lo, a_hi, x_min, x_max, rho_factor, dt, e, nu, max_bearing):
+    w_abs = max(abs(w_lo), abs(w_hi))
+    a_abs = max(abs(a_lo), abs(a_hi))
+    upper = _margin1(w_abs, a_abs, x_min, x_max, rho_factor, dt, e, max_bearing)
+    # the same crude rho bound as the upper bound (rho <= x / cos(max_bearing))
+    drift = nu * dt * x_max / np.cos(max_bearing)
+    h_max = e * w_abs / np.cos(min(a_abs, max_bearing)) ** 2 + drift
+    swing = h_max * dt / x_min**2
+    lo_a, hi_a = a_lo - swing, a_hi + swing
+    if not (lo_a > 0 or hi_a < 0):
+        return -upper, upper
+    w_min = min(abs(w_lo), abs(w_hi)) if (w_lo > 0 or w_hi < 0) else 0.0
+    h_min = max(e * w_min - drift, 0.0)
+    near, far = min(abs(lo_a), abs(hi_a)), min(max(abs(lo_a), abs(hi_a)), 0.5 * np.pi)
+    g_min = min(_g(near), _g(far))
+    lower = min(2.0 * h_min**2 * g_min / x_max**3.0, upper)
+    return (-upper, -lower) if lo_a > 0 else (lower, upper)
+
+
+@njit(cache=True)
 def kinematic_interval(w_lo, w_hi, a_lo, a_hi, x_min, x_max, dt, e, nu, max_bearing):
     """Elementwise body of :func:`estim.kinematics.kinematic_interval_mps2` (see there)."""
     n = w_lo.shape[0]
     lo, hi = np.empty(n), np.empty(n)
     rho_factor = nu * dt / np.cos(max_bearing)
     for i in range(n):
-        w_abs = max(abs(w_lo[i]), abs(w_hi[i]))
-        a_abs = max(abs(a_lo[i]), abs(a_hi[i]))
-        upper = _margin1(w_abs, a_abs, x_min[i], x_max[i], rho_factor, dt, e, max_bearing)
-        # the same crude rho bound as the upper bound (rho <= x / cos(max_bearing))
-        drift = nu * dt * x_max[i] / np.cos(max_bearing)
-        h_max = e * w_abs / np.cos(min(a_abs, max_bearing)) ** 2 + drift
-        swing = h_max * dt / x_min[i] ** 2
-        lo_a, hi_a = a_lo[i] - swing, a_hi[i] + swing
-        lo[i], hi[i] = -upper, upper
-        if not (lo_a > 0 or hi_a < 0):
+        lo[i], hi[i] = _interval1(
+            w_lo[i], w_hi[i], a_lo[i], a_hi[i], x_min[i], x_max[i], rho_factor, dt, e, nu,
+            max_bearing,
+        )  # fmt: skip
+    return lo, hi
+
+
+@njit(cache=True)
+def piece_kinematic(per, u_lo, u_hi, dt, eps, e, nu, max_bearing):
+    """The kinematic interval of every piece of a node set from its per-piece bounds
+    ``per`` (``w``, ``alpha``, ``tau``), as
+    :meth:`estim.nodeset.NodeSetEstimator._kinematic` describes; a piece without cells
+    (``tau_lo = inf``) gets zero."""
+    n = u_lo.shape[0]
+    lo, hi = np.zeros(n), np.zeros(n)
+    rho_factor = nu * dt / np.cos(max_bearing)
+    for b in range(n):
+        if not np.isfinite(per[b, 4]):
             continue
-        w_min = min(abs(w_lo[i]), abs(w_hi[i])) if (w_lo[i] > 0 or w_hi[i] < 0) else 0.0
-        h_min = max(e * w_min - drift, 0.0)
-        near, far = min(abs(lo_a), abs(hi_a)), min(max(abs(lo_a), abs(hi_a)), 0.5 * np.pi)
-        g_min = min(_g(near), _g(far))
-        lower = min(2.0 * h_min**2 * g_min / x_max[i] ** 3.0, upper)
-        if lo_a > 0:
-            hi[i] = -lower
-        else:
-            lo[i] = lower
+        x_max = max(per[b, 5], 0.0) / u_lo[b]
+        x_min = max(min((per[b, 4] - dt) / u_hi[b], x_max), eps)
+        lo[b], hi[b] = _interval1(
+            per[b, 0], per[b, 1], per[b, 2], per[b, 3], x_min, x_max, rho_factor, dt, e, nu,
+            max_bearing,
+        )  # fmt: skip
     return lo, hi
 
 

@@ -366,3 +366,27 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
         per_piece[p, 4] = min(per_piece[p, 4], span[c, 0])
         per_piece[p, 5] = max(per_piece[p, 5], span[c, 1])
     return table, tau4, span, cpiece, zs, w, alpha, per_piece
+
+
+@njit(cache=True)
+def forecast_extremes(span, w, cpiece, u_lo, u_hi, half_nu, forecast):
+    """The cells of the lowest and the highest bound of the zero-effort miss ``w``
+    (``forecast``: of the forecast miss ``w + sign(w) nu (x/e_nom)^2 / 2``, ``half_nu
+    = nu / (2 e_nom^2)``, ``x`` in ``[tau_lo / u_hi, tau_hi / u_lo]``), and the bounds:
+    ``i_lo, v_lo, i_hi, v_hi`` (first index on ties; a ``nan`` wins, as in numpy)."""
+    i_lo, i_hi = 0, 0
+    v_lo, v_hi = np.inf, -np.inf
+    nan_lo, nan_hi = False, False
+    for c in range(w.shape[0]):
+        hi, lo = w[c, 1], w[c, 0]
+        if forecast:
+            p = cpiece[c]
+            c_max = half_nu * (span[c, 1] / u_lo[p]) ** 2
+            c_min = half_nu * (span[c, 0] / u_hi[p]) ** 2
+            hi = hi + c_max if hi >= 0 else hi - c_min
+            lo = lo - c_max if lo <= 0 else lo + c_min
+        if not nan_hi and (hi > v_hi or hi != hi or c == 0):
+            i_hi, v_hi, nan_hi = c, hi, hi != hi
+        if not nan_lo and (lo < v_lo or lo != lo or c == 0):
+            i_lo, v_lo, nan_lo = c, lo, lo != lo
+    return i_lo, v_lo, i_hi, v_hi

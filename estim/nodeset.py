@@ -53,8 +53,7 @@ from numpy.typing import NDArray
 from estim import _kernels as _k
 from estim import _nodeset_kernels as _nk
 from estim.base import Estimator, Status
-from estim.infoset import DIVERGED_W_PER_X, STRIP_MARGIN
-from estim.kinematics import kinematic_interval_mps2
+from estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
 from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 from estim.nodeset_belief import NodeSet
 from estim.nodeset_bounds import OpLog
@@ -296,13 +295,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         """Interval of the kinematic term of each piece over the next step (m/s^2), from
         the per-piece bounds ``per`` of ``w``, ``alpha`` and ``tau``; pieces without
         cells get zero."""
-        has = np.isfinite(per[:, 4])
-        x_max = np.where(has, np.maximum(per[:, 5], 0.0) / s.u_lo, 1.0)
-        x_min = np.maximum(np.minimum((per[:, 4] - dt_s) / s.u_hi, x_max), self.model.eps_m)
-        w = np.where(has[:, None], per[:, 0:2], 0.0)
-        a = np.where(has[:, None], per[:, 2:4], 0.0)
-        lo, hi = kinematic_interval_mps2(
-            w[:, 0], w[:, 1], a[:, 0], a[:, 1], np.where(has, x_min, 1.0), x_max, dt_s,
-            s.e_nom, self.model.nu_mps2,
+        # x in [(tau_lo - dt) / u_hi (at least eps), tau_hi / u_lo] over the step;
+        # compiled (kinematic_interval_mps2 per piece: a handful of numbers every step)
+        return _k.piece_kinematic(
+            per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
+            MAX_BEARING_RAD,
         )  # fmt: skip
-        return np.where(has, lo, 0.0), np.where(has, hi, 0.0)

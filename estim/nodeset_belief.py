@@ -35,6 +35,11 @@ IntArray = NDArray[np.int64]
 
 
 def _ro(a: ArrayLike, dtype=float) -> NDArray:
+    # a read-only array that owns its data (one of ours, passed on by ``replace``)
+    # needs no copy
+    if isinstance(a, np.ndarray) and a.dtype == dtype and a.base is None:
+        if not a.flags.writeable:
+            return a
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr
@@ -185,18 +190,14 @@ class NodeSet(Belief):
 
     def _forecast_extremes(self, forecast: bool) -> Extremes:
         s = self._summary
-        span, zs, piece = s["span"], s["zs"], s["piece"]
-        w_lo, w_hi = s["w"][:, 0], s["w"][:, 1]
-        if forecast:
-            # Pi = w + sign(w) nu (x/e_nom)^2/2, x in [tau_lo/u_hi, tau_hi/u_lo]
-            half_nu = 0.5 * self.model.nu_mps2 / self.e_nom**2
-            c_max = half_nu * (span[:, 1] / self.u_lo[piece]) ** 2
-            c_min = half_nu * (span[:, 0] / self.u_hi[piece]) ** 2
-            v_hi = np.where(w_hi >= 0, w_hi + c_max, w_hi - c_min)
-            v_lo = np.where(w_lo <= 0, w_lo - c_max, w_lo + c_min)
-        else:
-            v_hi, v_lo = w_hi, w_lo
-        i_hi, i_lo = int(np.argmax(v_hi)), int(np.argmin(v_lo))
+        zs, w_lo, w_hi = s["zs"], s["w"][:, 0], s["w"][:, 1]
+        if len(w_lo) == 0:
+            raise ValueError("the node set has live nodes but no cell within its hard limits")
+        # Pi = w + sign(w) nu (x/e_nom)^2/2, x in [tau_lo/u_hi, tau_hi/u_lo] (compiled)
+        half_nu = 0.5 * self.model.nu_mps2 / self.e_nom**2
+        i_lo, v_lo, i_hi, v_hi = _ng.forecast_extremes(
+            s["span"], s["w"], s["piece"], self.u_lo, self.u_hi, half_nu, forecast
+        )
         alpha = s["alpha"]
 
         def row(i: int, tau: float, w: float) -> FloatArray:
@@ -205,8 +206,8 @@ class NodeSet(Belief):
             return np.array([a, float(self.model.omega_from_w(w, x)), x])
 
         return Extremes(
-            float(v_lo[i_lo]), row(i_lo, zs[i_lo, 3], w_lo[i_lo]),
-            float(v_hi[i_hi]), row(i_hi, zs[i_hi, 1], w_hi[i_hi]),
+            float(v_lo), row(i_lo, zs[i_lo, 3], w_lo[i_lo]),
+            float(v_hi), row(i_hi, zs[i_hi, 1], w_hi[i_hi]),
         )  # fmt: skip
 
     def vertices(self) -> FloatArray:
