@@ -195,13 +195,20 @@ def apply_ops(
                 a = max(bb_end + (bb_start - bb_end) * x / bb_ref, floor)
                 h = a / scale * (1.0 + strip_margin) + strip_margin
                 c = pa[o] / scale
+                tol_hi, tol_lo = 1e-15 * max(abs(c + h), 1.0), 1e-15 * max(abs(-(c - h)), 1.0)
+                tol = max(tol_hi, tol_lo)
                 x_lo, x_hi = a_buf[0, 0], a_buf[0, 0]
-                for j in range(1, m):
+                close = False  # consecutive vertices (cyclic) within the clips' tolerance
+                for j in range(m):
                     x_lo, x_hi = min(x_lo, a_buf[j, 0]), max(x_hi, a_buf[j, 0])
+                    k = j + 1 if j + 1 < m else 0
+                    if abs(a_buf[k, 0] - a_buf[j, 0]) <= tol:
+                        close = close or abs(a_buf[k, 1] - a_buf[j, 1]) <= tol
                 if x_hi <= c + h and x_lo >= c - h:
                     # inside the strip: the clips would only copy and drop duplicates
-                    m = _dedupe_tail(a_buf, 0, m, 1e-15 * max(abs(c + h), 1.0))
-                    m = _dedupe_tail(a_buf, 0, m, 1e-15 * max(abs(-(c - h)), 1.0))
+                    if close:
+                        m = _dedupe_tail(a_buf, 0, m, tol_hi)
+                        m = _dedupe_tail(a_buf, 0, m, tol_lo)
                     continue
                 m = _clip1(a_buf, m, 1.0, 0.0, c + h, b_buf)
                 m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
