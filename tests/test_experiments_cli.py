@@ -292,6 +292,11 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert set(out["step_us"]) == set(names)
     assert all(out[f"{n}_step_us"] == out["step_us"][n] > 0 for n in names)
     assert out["machine"]["cpus"] >= 1
+    # the whole approach (to the blind range) whatever --steps says
+    whole, n_steps = out["whole_approach_step_us"], out["whole_approach_steps"]
+    assert set(whole) == {"infoset", "ukf"} and all(whole[n] > 0 for n in whole)
+    assert n_steps["infoset"] == n_steps["ukf"] > 3
+    assert out["whole_approach_ratio"] == whole["infoset"] / whole["ukf"]
 
 
 def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
