@@ -390,3 +390,12 @@ def forecast_extremes(span, w, cpiece, u_lo, u_hi, half_nu, forecast):
         if not nan_lo and (lo < v_lo or lo != lo or c == 0):
             i_lo, v_lo, nan_lo = c, lo, lo != lo
     return i_lo, v_lo, i_hi, v_hi
+
+
+@njit(cache=True)
+def zs_extent(xy, off, i):
+    """Smallest and largest ``zs`` of node ``i``'s polygon (``inf, -inf`` when empty)."""
+    lo, hi = np.inf, -np.inf
+    for v in range(off[i], off[i + 1]):
+        lo, hi = min(lo, xy[v, 1]), max(hi, xy[v, 1])
+    return lo, hi

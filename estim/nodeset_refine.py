@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
+from estim import _nodeset_geometry as _ng
 from estim import _nodeset_kernels as _nk
 from estim.infoset import STRIP_MARGIN
 from estim.nodeset_belief import NodeSet
@@ -55,6 +56,9 @@ class NodeRefinement:
         reaches one of their ends, which are nodes of the new grid). Dead nodes outside
         the brackets are dropped.
         """
+        n_live = np.bincount(s.piece[s.live], minlength=len(s.u_lo))
+        if n_live.min() >= self.min_live_nodes:
+            return s  # every piece has its live nodes (the loop below would break at once)
         for p in range(len(s.u_lo)):
             searched = False
             for _ in range(self._max_rounds()):
@@ -283,8 +287,7 @@ def _drop_empty_pieces(s: NodeSet) -> NodeSet:
 
 def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
     """Smallest and largest ``zs`` of node ``i``'s polygon (inf, -inf when empty)."""
-    zs = s.polygons.xy[s.polygons.offsets[i] : s.polygons.offsets[i + 1], 1]
-    return (float(zs.min()), float(zs.max())) if len(zs) else (np.inf, -np.inf)
+    return _ng.zs_extent(s.polygons.xy, s.polygons.offsets, int(i))
 
 
 def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
