@@ -287,3 +287,28 @@ def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
             per[b, 0] += min(p_min, 0.0)
             per[b, 1] += max(p_max, 0.0)
     return lo, hi
+
+
+@njit(cache=True)
+def prior_points(label, u_lo, u_hi, y0, y1, v0, v1, xa, xb, scale, e_nom):
+    """The box's corners ``(y, Vy)`` scaled by both ends of each node's ``u`` interval
+    ``[max(tau / x_hi, u_lo), min(tau / x_lo, u_hi)]``, in ``(a, zs)`` at ``tau =
+    label`` (8 points a node; none where the interval is empty): their hull is the
+    node's prior slice (:meth:`estim.nodeset.NodeSetEstimator.initial`)."""
+    n = label.shape[0]
+    xy = np.empty((8 * n, 2))
+    off = np.zeros(n + 1, dtype=np.int64)
+    corners = ((y0, v0), (y1, v0), (y1, v1), (y0, v1))
+    k = 0
+    for i in range(n):
+        tau = label[i]
+        u1 = max(tau / xb, u_lo[i])
+        u2 = min(tau / xa, u_hi[i])
+        if u1 <= u2 * (1 + 1e-12):
+            for u in (u1, u2):
+                for y, v in corners:
+                    yt, vt = u * y, u * v
+                    xy[k, 0], xy[k, 1] = yt / tau / scale, (yt + vt * tau) * e_nom
+                    k += 1
+        off[i + 1] = k
+    return xy[:k], off

@@ -172,20 +172,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     def _prior(self, s: NodeSet, piece: NDArray[np.int64], label: FloatArray) -> ConvexPolygons:
         """The prior slices at ``label`` (see :meth:`initial`)."""
         (y0, y1), (v0, v1), (xa, xb) = s.prior
-        u1 = np.maximum(label / xb, s.u_lo[piece])
-        u2 = np.minimum(label / xa, s.u_hi[piece])
-        ok = u1 <= u2 * (1 + 1e-12)
-        corners = np.array([[y0, v0], [y1, v0], [y1, v1], [y0, v1]])
-        pts = []
-        for u in (u1, u2):
-            yt = np.outer(u, corners[:, 0])
-            vt = np.outer(u, corners[:, 1])
-            tau = label[:, None]
-            pts.append(np.stack([yt / tau / self.alpha_scale_rad, (yt + vt * tau) * s.e_nom], -1))
-        xy = np.concatenate(pts, axis=1)  # (n, 8, 2)
-        counts = np.where(ok, 8, 0)
-        xy = xy[ok].reshape(-1, 2)
-        off = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        xy, off = _nk.prior_points(
+            np.ascontiguousarray(label, dtype=float), s.u_lo[piece], s.u_hi[piece],
+            *(float(v) for v in (y0, y1, v0, v1, xa, xb)), self.alpha_scale_rad, s.e_nom,
+        )  # fmt: skip
         return ConvexPolygons._make(*_k.convex_hulls(xy, off))
 
     # -- Estimator interface ---------------------------------------------------------

@@ -293,10 +293,11 @@ def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
 def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
     by piece, then label."""
+    kept = s.polygons if keep.all() else s.polygons.select(keep)
     all_piece = np.concatenate([s.piece[keep], piece])
     all_label = np.concatenate([s.label_s[keep], labels])
     order = np.lexsort((all_label, all_piece))
-    merged = _concat(s.polygons.select(keep), polys).select(order)
+    merged = _concat(kept, polys).select(order)
     return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
 
 
