@@ -78,10 +78,11 @@ def _clip1(src, m, nx, ny, bound, dst):
 
 
 @njit(cache=True)
-def _segment1(src, m, g0, g1, dst, scale):
+def _segment1(src, m, g0, g1, dst, scale, want_scale):
     """One polygon plus the segment ``[-g, g]`` (as ``_kernels.minkowski_segment``);
     ``scale`` is the largest coordinate of ``src`` (in magnitude; the callers have it
-    from their own pass). Returns the number of vertices and the same for ``dst``."""
+    from their own pass). Returns the number of vertices and, if ``want_scale``, the
+    same for ``dst`` (else 0)."""
     if m == 0:
         return 0, 0.0
     if g0 == 0.0 and g1 == 0.0:
@@ -110,11 +111,13 @@ def _segment1(src, m, g0, g1, dst, scale):
             sp = 1.0 if crp > 0.0 else -1.0
             sc = 1.0 if crc > 0.0 else -1.0
         dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
-        out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+        if want_scale:
+            out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
         k += 1
         if sc != sp:
             dst[k, 0], dst[k, 1] = src[j, 0] + sc * g0, src[j, 1] + sc * g1
-            out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+            if want_scale:
+                out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
             k += 1
     return k, out_scale
 
@@ -220,7 +223,7 @@ def apply_ops(
                     a_buf[j, 1] += dy
                     big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
                 g = 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs
-                m, _ = _segment1(a_buf, m, 0.0, g, b_buf, big)
+                m, _ = _segment1(a_buf, m, 0.0, g, b_buf, big, False)
                 a_buf, b_buf = b_buf, a_buf
             elif kind == RANGE:
                 if label[i] < h_lo[o + 1, b] or label[i] > h_hi[o + 1, b]:
@@ -242,10 +245,11 @@ def apply_ops(
                     a_buf[j, 1] += mid * cz
                     big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
                 ga, gz = nu_s * ca, nu_s * cz
-                m, big = _segment1(a_buf, m, ga, gz, b_buf, big)
+                m, big = _segment1(a_buf, m, ga, gz, b_buf, big, True)
                 # a disturbance that varies within the step (the kinematic term does)
                 # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)
-                m, _ = _segment1(b_buf, m, 0.5 * ga, nu_s * dt * dt / 4.0 * e_nom, a_buf, big)
+                gz2 = nu_s * dt * dt / 4.0 * e_nom
+                m, _ = _segment1(b_buf, m, 0.5 * ga, gz2, a_buf, big, False)
                 m = _hull_into(a_buf, m, b_buf, HULL_TURN_RAD)
                 a_buf, b_buf = b_buf, a_buf
         if k_out + m > out.shape[0]:
