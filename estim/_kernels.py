@@ -484,3 +484,6 @@ def warm_up() -> None:
     for x_max in (one, ro(one)):
         kinematic_margin(one, zero, one, x_max, 0.5, 1.0, 0.0, 1.5)
     kinematic_interval(one, one, zero, one, one, one, 0.5, 1.0, 0.0, 1.5)
+    per = np.ones((1, 6))
+    for u in (one, ro(one)):  # a node set's bands are read-only
+        piece_kinematic(per, u, u, 0.5, 1.0, 1.0, 0.0, 1.5)
