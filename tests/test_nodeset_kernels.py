@@ -1,0 +1,153 @@
+"""The node set's small compiled helpers against independent references.
+
+References: numpy's own reductions (argmin/argmax with their tie and nan rules,
+min/max), shapely's convex hull of the box corners mapped at both ends of each
+node's closing-speed interval (the prior slice of seed 003 section 4's auxiliary
+model), brute-force sampling for the impulse's interval, and the public
+:func:`estim.kinematics.kinematic_interval_mps2` for the per-piece kinematic term.
+"""
+
+import numpy as np
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from estim import _kernels as _k
+from estim import _nodeset_geometry as _ng
+from estim import _nodeset_kernels as _nk
+from estim import polygons
+from estim.infoset import MAX_BEARING_RAD
+from estim.kinematics import kinematic_interval_mps2
+
+E = 58e3
+
+
+def _numpy_forecast(span, w, piece, u_lo, u_hi, half_nu, forecast):
+    w_lo, w_hi = w[:, 0], w[:, 1]
+    if forecast:
+        c_max = half_nu * (span[:, 1] / u_lo[piece]) ** 2
+        c_min = half_nu * (span[:, 0] / u_hi[piece]) ** 2
+        w_hi = np.where(w_hi >= 0, w_hi + c_max, w_hi - c_min)
+        w_lo = np.where(w_lo <= 0, w_lo - c_max, w_lo + c_min)
+    i_lo, i_hi = int(np.argmin(w_lo)), int(np.argmax(w_hi))
+    return i_lo, w_lo[i_lo], i_hi, w_hi[i_hi]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    n=st.integers(1, 12),
+    seed=st.integers(0, 2**32 - 1),
+    ties=st.booleans(),
+    nan=st.booleans(),
+    forecast=st.booleans(),
+)
+def test_forecast_extremes_follow_numpy_argmin_argmax(n, seed, ties, nan, forecast):
+    """Same cells and values as numpy's argmin/argmax of the forecast bounds: the
+    first index on ties, and a nan wins (numpy's rule)."""
+    rng = np.random.default_rng(seed)
+    w = np.sort(rng.normal(0.0, 100.0, (n, 2)), axis=1)
+    if ties:
+        w[rng.integers(0, n, n)] = w[0]
+    if nan and n > 1:
+        w[rng.integers(1, n), rng.integers(0, 2)] = np.nan
+    span = np.sort(rng.uniform(1.0, 100.0, (n, 2)), axis=1)
+    piece = rng.integers(0, 2, n)
+    u_lo = 1.0 / rng.uniform(58.05e3, 58.1e3, 2)
+    u_hi = 1.0 / rng.uniform(57.9e3, 57.95e3, 2)
+    half_nu = 0.5 * 0.005 / E**2
+    got = _ng.forecast_extremes(span, w, piece, u_lo, u_hi, half_nu, forecast)
+    want = _numpy_forecast(span, w, piece, u_lo, u_hi, half_nu, forecast)
+    assert got[0] == want[0] and got[2] == want[2]
+    np.testing.assert_array_equal([got[1], got[3]], [want[1], want[3]])
+
+
+def test_zs_extent_is_the_polygons_min_and_max():
+    rng = np.random.default_rng(3)
+    xy = rng.normal(size=(9, 2))
+    off = np.array([0, 4, 4, 9])
+    assert _ng.zs_extent(xy, off, 0) == (xy[:4, 1].min(), xy[:4, 1].max())
+    assert _ng.zs_extent(xy, off, 1) == (np.inf, -np.inf)  # an empty node
+    assert _ng.zs_extent(xy, off, 2) == (xy[4:, 1].min(), xy[4:, 1].max())
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    tau=st.lists(st.floats(80.0, 120.0), min_size=1, max_size=6),
+    y=st.tuples(st.floats(-2e4, 0.0), st.floats(1.0, 2e4)),
+    vy=st.tuples(st.floats(-200.0, 0.0), st.floats(1.0, 200.0)),
+)
+def test_prior_slices_are_the_hull_of_the_mapped_box_corners(tau, y, vy):
+    """Seed 003 section 4: a state (y, Vy) at range x = tau e has ``Y~ = u y``, ``V~ =
+    u Vy`` with ``u = 1/e``; in the node coordinates ``a = Y~ / tau / scale``, ``zs =
+    e_nom (Y~ + V~ tau)``. The prior slice at ``tau`` is the hull of the box's
+    corners at both ends of ``u``'s interval (shapely's hull as the reference);
+    a node whose interval is empty has no slice."""
+    label = np.array(tau)
+    xa, xb, scale = 5.3e6, 6.3e6, 1e-4
+    u_lo, u_hi = np.full(len(label), 1 / 58.1e3), np.full(len(label), 1 / 57.9e3)
+    xy, off = _nk.prior_points(label, u_lo, u_hi, *y, *vy, xa, xb, scale, E)
+    hulls = polygons.ConvexPolygons._make(*_k.convex_hulls(xy, off))
+    for i, t in enumerate(label):
+        u = (max(t / xb, u_lo[i]), min(t / xa, u_hi[i]))
+        got = hulls.xy[hulls.offsets[i] : hulls.offsets[i + 1]]
+        if u[0] > u[1] * (1 + 1e-12):
+            assert len(got) == 0
+            continue
+        pts = [
+            (uu * yy / t / scale, (uu * yy + uu * vv * t) * E) for uu in u for yy in y for vv in vy
+        ]
+        want = shapely.convex_hull(shapely.multipoints(pts))
+        assert abs(shapely.Polygon(got).area - want.area) <= 1e-9 * want.area
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    k=st.floats(-50.0, 50.0),
+    dk=st.floats(0.0, 2.0),
+    alpha=st.floats(0.0, 0.2),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_impulse_interval_holds_every_sampled_increment(k, dk, alpha, seed):
+    """An impulse ``k +- dk`` changes ``V~`` by ``(k + d) u cos^2(a)`` for ``u`` in the
+    piece, ``|a|`` up to its largest bearing, ``|d| <= dk``; the interval holds every
+    sample, and the bounds of ``w`` move by at least every sampled ``e_nom tau dV~
+    (e/e_nom)^2``."""
+    rng = np.random.default_rng(seed)
+    u_lo, u_hi = np.array([1 / 58.1e3]), np.array([1 / 57.9e3])
+    per = np.array([[-30.0, 40.0, -alpha, alpha, 20.0, 90.0]])
+    moved = per.copy()
+    lo, hi = _nk.impulse_interval(moved, u_lo, u_hi, E, k, dk)
+    u = rng.uniform(u_lo[0], u_hi[0], 2000)
+    a = rng.uniform(-alpha, alpha, 2000)
+    d = rng.uniform(-dk, dk, 2000)
+    dv = (k + d) * u * np.cos(a) ** 2
+    # (rounding only: the kernel takes 1 - sin^2 of the largest bearing)
+    assert np.all(dv >= lo[0] - 1e-12 * abs(lo[0]))
+    assert np.all(dv <= hi[0] + 1e-12 * abs(hi[0]))
+    tau = rng.uniform(per[0, 4], per[0, 5], 2000)
+    dw = E * tau * dv * (1.0 / (u * E)) ** 2
+    assert moved[0, 0] <= per[0, 0] + min(dw.min(), 0.0) + 1e-9
+    assert moved[0, 1] >= per[0, 1] + max(dw.max(), 0.0) - 1e-9
+
+
+def test_piece_kinematic_is_the_public_interval_per_piece():
+    """Each piece's interval is :func:`kinematic_interval_mps2` at the piece's ranges
+    (``x`` from ``(tau_lo - dt) / u_hi``, at least eps, to ``tau_hi / u_lo``); a piece
+    without cells (``tau_lo = inf``) gets zero."""
+    per = np.array(
+        [
+            [120.0, 900.0, 0.002, 0.004, 20.0, 40.0],
+            [-50.0, 60.0, -0.001, 0.003, 30.0, 60.0],
+            [np.inf, -np.inf, np.inf, -np.inf, np.inf, -np.inf],
+        ]
+    )
+    u_lo, u_hi = np.full(3, 1 / 58.1e3), np.full(3, 1 / 57.9e3)
+    dt, eps, nu = 0.5, 5e3, 0.005
+    lo, hi = _k.piece_kinematic(per, u_lo, u_hi, dt, eps, E, nu, MAX_BEARING_RAD)
+    for b in range(2):
+        x_max = per[b, 5] / u_lo[b]
+        x_min = max(min((per[b, 4] - dt) / u_hi[b], x_max), eps)
+        want = kinematic_interval_mps2(*per[b, :4], x_min, x_max, dt, E, nu)
+        assert (lo[b], hi[b]) == (float(want[0]), float(want[1]))
+    assert lo[2] == hi[2] == 0.0
+    assert lo[0] < hi[0] < 0.0  # alpha > 0 and w > 0: the term's sign is known
