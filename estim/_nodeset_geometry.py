@@ -127,16 +127,34 @@ def _envelope_at(a, b, m, t):
 
 
 @njit(cache=True)
+def _sort_head(a, n):
+    """Sort ``a[:n]`` in place (insertion sort for the usual handful of breakpoints in
+    a cell, no allocation; numpy's sort beyond that)."""
+    if n > 32:
+        a[:n] = np.sort(a[:n])
+        return
+    for i in range(1, n):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
+
+
+@njit(cache=True)
 def _quad(l0, l1, d0, d1, s0, s1):
     """Coefficients of ``(l0 + l1 t) + (d0 + d1 t)(s0 + s1 t)`` in powers of ``t``."""
     return l0 + d0 * s0, l1 + d0 * s1 + d1 * s0, d1 * s1
 
 
 @njit(cache=True)
-def _zem_bound_cell(lines, off, nodes, t4, lo_s, hi_s, sign, buf_a, buf_b, rtol, pts, counts):
+def _zem_bound_cell(
+    lines, off, nodes, t4, lo_s, hi_s, sign, buf_a, buf_b, rtol, pts, counts, cand, coef
+):
     """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``sign zs`` (see
     :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained.
-    ``pts`` and ``counts`` are scratch."""
+    ``pts``, ``counts``, ``cand`` (8) and ``coef`` (2, 3) are scratch."""
     for k in range(4):
         counts[k] = _lines(lines, off, nodes[k], sign, buf_a[k], buf_b[k])
     if counts[1] == 0 and counts[2] == 0:
@@ -160,17 +178,16 @@ def _zem_bound_cell(lines, off, nodes, t4, lo_s, hi_s, sign, buf_a, buf_b, rtol,
             if lo_s < tx < hi_s:
                 pts[npts] = tx
                 npts += 1
-    pts = np.sort(pts[:npts])
+    _sort_head(pts, npts)
     h_l = t4[1] - t4[0]
     h_r = t4[3] - t4[2]
     best, arg = -np.inf, lo_s
-    cand = np.empty(8)
     for s in range(npts - 1):
         p, q = pts[s], pts[s + 1]
         if q < p:
             continue
         mid = 0.5 * (p + q)
-        coef = np.zeros((2, 3))
+        coef[:] = 0.0
         for side in range(2):
             k_in, k_out = (1, 0) if side == 0 else (2, 3)
             if (side == 0 and not has_l) or (side == 1 and not has_r):
@@ -254,17 +271,18 @@ def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
     buf_b = np.empty((4, vmax))
     pts = np.empty(xy.shape[0] + 2)
     counts = np.zeros(4, dtype=np.int64)
+    cand, coef = np.empty(8), np.zeros((2, 3))
     out = np.empty((m, 4))
     # a node's lines serve the (up to) four cells around it
     lines = _node_lines(xy, off, tau, scale, e_nom)
     for c in range(m):
         up, a_up = _zem_bound_cell(
             lines, off, table[c], tau4[c], lo_s[c], hi_s[c], 1.0, buf_a, buf_b, rtol, pts,
-            counts,
+            counts, cand, coef,
         )  # fmt: skip
         dn, a_dn = _zem_bound_cell(
             lines, off, table[c], tau4[c], lo_s[c], hi_s[c], -1.0, buf_a, buf_b, rtol, pts,
-            counts,
+            counts, cand, coef,
         )  # fmt: skip
         out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
     return out

@@ -151,3 +151,13 @@ def test_piece_kinematic_is_the_public_interval_per_piece():
         assert (lo[b], hi[b]) == (float(want[0]), float(want[1]))
     assert lo[2] == hi[2] == 0.0
     assert lo[0] < hi[0] < 0.0  # alpha > 0 and w > 0: the term's sign is known
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.floats(-1e6, 1e6), max_size=80), st.integers(0, 5))
+def test_in_place_sort_of_the_breakpoints_is_numpys_sort(values, spare):
+    a = np.array(values + [7.0] * spare)
+    n = len(values)
+    _ng._sort_head(a, n)
+    np.testing.assert_array_equal(a[:n], np.sort(np.array(values)))
+    assert np.all(a[n:] == 7.0)  # the scratch beyond n is not touched
