@@ -28,7 +28,7 @@ vertex of node ``j``, ``d.s = a alpha_scale (p tau_j - q) + zs q / (e_nom tau_j)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,6 +58,10 @@ class OpLog:
     pb: FloatArray
     q_lo: FloatArray
     q_hi: FloatArray
+    #: spare rows behind the arrays (which are views of it), shared by the logs that
+    #: are prefixes of one another: appending writes in place when this log is the
+    #: longest written so far, so a step's append does not copy the whole log
+    _spare: _Spare | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def empty(cls, n_pieces: int) -> OpLog:
@@ -78,9 +82,30 @@ class OpLog:
         return len(self.kinds)
 
     def __add__(self, other: OpLog) -> OpLog:
-        return OpLog(
-            *(np.concatenate([a, b]) for a, b in zip(self.parts(), other.parts(), strict=True))
-        )
+        n, k = len(self), len(other)
+        spare = self._spare
+        if (
+            spare is not None
+            and spare.fill == n
+            and n + k <= len(spare.arrays[0])
+            and spare.arrays[3].shape[1:] == other.q_lo.shape[1:]
+        ):
+            # rows below ``fill`` are never written again: every log sharing the
+            # buffer sees only its own prefix, unchanged
+            for buf, b in zip(spare.arrays, other.parts(), strict=True):
+                buf[n : n + k] = b
+        elif n < 32:  # a short log (one step's operations): concatenated
+            return OpLog(
+                *(np.concatenate([a, b]) for a, b in zip(self.parts(), other.parts(), strict=True))
+            )
+        else:
+            cap = 2 * (n + k)
+            arrays = tuple(np.empty((cap, *a.shape[1:]), dtype=a.dtype) for a in self.parts())
+            for buf, a, b in zip(arrays, self.parts(), other.parts(), strict=True):
+                buf[:n], buf[n : n + k] = a, b
+            spare = _Spare(arrays)
+        spare.fill = n + k
+        return OpLog(*(buf[: n + k] for buf in spare.arrays), _spare=spare)
 
     def with_copied_column(self, p: int) -> OpLog:
         """The log with piece ``p``'s parameters copied into a new last column (a
@@ -92,6 +117,16 @@ class OpLog:
 
     def parts(self) -> tuple:
         return self.kinds, self.pa, self.pb, self.q_lo, self.q_hi
+
+
+class _Spare:
+    """The growing buffers behind :class:`OpLog` (mutable, private to it)."""
+
+    __slots__ = ("arrays", "fill")
+
+    def __init__(self, arrays: tuple) -> None:
+        self.arrays = arrays
+        self.fill = 0
 
 
 __all__ = ["BEARING", "IMPULSE", "PREDICT", "RANGE", "BOUND_RTOL", "OpLog"]

@@ -161,3 +161,29 @@ def test_in_place_sort_of_the_breakpoints_is_numpys_sort(values, spare):
     _ng._sort_head(a, n)
     np.testing.assert_array_equal(a[:n], np.sort(np.array(values)))
     assert np.all(a[n:] == 7.0)  # the scratch beyond n is not touched
+
+
+def test_log_appends_in_place_without_changing_any_earlier_log():
+    """The operation log grows in a shared buffer (no copy of the whole log per
+    step); a log is a value: appending to it, or branching from an older log (the
+    lookahead adversary tries several measurements on one belief), never changes a
+    log already made. Reference: the same logs built by concatenation."""
+    from estim.nodeset_bounds import OpLog
+
+    def one(i):
+        return OpLog.one(i % 4, 2, pa=float(i), pb=-float(i), q_lo=[i, -i], q_hi=[2 * i, i])
+
+    def concat(ops):
+        return [np.concatenate(parts) for parts in zip(*(o.parts() for o in ops), strict=True)]
+
+    logs, made = [OpLog.empty(2)], [[]]
+    for i in range(100):
+        logs.append(logs[-1] + one(i))
+        made.append(made[-1] + [one(i)])
+    branch = logs[60] + one(1000)  # an older log extended: must not touch logs[61:]
+    longer = logs[-1] + one(2000)
+    for log, ops in zip(logs[1:], made[1:], strict=True):
+        for got, want in zip(log.parts(), concat(ops), strict=True):
+            np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(branch.pa, np.r_[np.arange(60.0), 1000.0])
+    np.testing.assert_array_equal(longer.pa, np.r_[np.arange(100.0), 2000.0])
