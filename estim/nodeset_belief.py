@@ -236,73 +236,23 @@ class NodeSet(Belief):
             return False
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float)[:3])
         s = self._summary
-        for ci in range(len(s["piece"])):
-            b = int(s["piece"][ci])
-            u_lo = max(float(self.u_lo[b]), float(s["span"][ci, 0]) / x)
-            u_hi = min(float(self.u_hi[b]), float(s["span"][ci, 1]) / x)
-            if u_lo > u_hi * (1 + 1e-12):
-                continue
-            if self._cell_admits(ci, alpha, omega, x, u_lo, u_hi, tol):
-                return True
-        return False
-
-    def _cell_admits(self, ci, alpha, omega, x, u_lo, u_hi, tol) -> bool:
-        s = self._summary
-        table = s["table"][ci]
-        d = self._cell_normals(table)
-        if len(d) == 0:
-            return False
-        hi4 = _ng.support_table(
-            self.polygons.xy, self.polygons.offsets, np.ascontiguousarray(self.tau_s), table,
-            np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]),
-            self.alpha_scale_rad, self.e_nom,
-        )  # fmt: skip
-        tau4 = np.broadcast_to(s["tau4"][ci], hi4.shape)
-        # d.s(u) = A u + B
-        a_coef = d[:, 0] * alpha * x + d[:, 1] * omega * x
-        b_coef = -d[:, 1] * alpha
-        lo_u, hi_u = u_lo, u_hi
-        scale = np.abs(np.where(np.isfinite(hi4), hi4, 0.0)).max(axis=1) + 1e-300
-        for left in (True, False):
-            i0, i1 = (0, 1) if left else (3, 2)
-            f0, f1 = hi4[:, i0], hi4[:, i1]
-            ok = np.isfinite(f0) & np.isfinite(f1)
-            t0, t1 = tau4[:, i0], tau4[:, i1]
-            with np.errstate(invalid="ignore"):  # -inf - -inf where ok is False
-                slope = np.where(ok, (f1 - f0) / np.where(ok, t1 - t0, 1.0), 0.0)
-            # A u + B <= f1 + slope (x u - t1) + tol scale  <=>  k u <= r
-            k = a_coef - slope * x
-            r = f1 - slope * t1 - b_coef + tol * scale
-            k, r = k[ok], r[ok]
-            pos, neg = k > 0, k < 0
-            if np.any((k == 0) & (r < 0)):
-                return False
-            if pos.any():
-                hi_u = min(hi_u, float((r[pos] / k[pos]).min()))
-            if neg.any():
-                lo_u = max(lo_u, float((r[neg] / k[neg]).max()))
-        # node values bound their own slice: also check at the nodes directly
-        return lo_u <= hi_u * (1 + 1e-12) + 1e-300
-
-    def _cell_normals(self, table: IntArray) -> FloatArray:
-        """Outward edge normals of the two cell-end polygons as ``(Y~, V~)`` directions."""
-        out = []
-        for k in (1, 2):
-            j = int(table[k])
-            if j < 0 or not self.live[j]:
-                continue
-            poly = self.polygons.polygon(j)
-            tau = float(self.tau_s[j])
-            if len(poly) == 1:
-                nrm = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
-            else:
-                edge = np.roll(poly, -1, axis=0) - poly
-                nrm = np.column_stack([edge[:, 1], -edge[:, 0]])
-                if len(poly) == 2:
-                    nrm = np.vstack([nrm, edge, -edge])
-            nrm = nrm[np.any(nrm != 0.0, axis=1)]
-            # n . (a, zs) = n_a Y~/(tau A) + n_z e (Y~ + V~ tau)
-            p = nrm[:, 0] / (tau * self.alpha_scale_rad) + nrm[:, 1] * self.e_nom
-            q = nrm[:, 1] * self.e_nom * tau
-            out.append(np.column_stack([p, q]))
-        return np.vstack(out) if out else np.zeros((0, 2))
+        return bool(
+            _ng.contains_state(
+                self.polygons.xy,
+                self.polygons.offsets,
+                np.ascontiguousarray(self.tau_s),
+                self.live,
+                s["piece"],
+                s["span"],
+                s["table"],
+                s["tau4"],
+                self.u_lo,
+                self.u_hi,
+                alpha,
+                omega,
+                x,
+                float(tol),
+                self.alpha_scale_rad,
+                self.e_nom,
+            )  # fmt: skip
+        )

@@ -215,6 +215,40 @@ def test_range_measurement_drops_the_nodes_outside_its_interval():
     assert b.contains(_truth_row(0.0, 0.0, 5.8e6, E))
 
 
+def test_contains_rejects_states_the_last_bearing_rules_out():
+    """``contains`` is what every experiment's ``truth_outside`` count relies on, so it
+    must also say *no*: a state whose bearing lies three bounds off the last measured
+    one (seed 003 section 4: ``|alpha - alpha_m| <= a(x)``) is outside the set, for any
+    closing speed, and so is one whose zero-effort miss lies beyond the set's sound
+    bounds (``extremes``) by their width (and the 1 % the closing speed can scale it).
+    States are set vertices with the bearing or the rate moved (both sides), on a
+    Fig. 5 approach (closing speed unknown within 57.9-58.1 km/s)."""
+    est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS)
+    b = est.initial(PRIOR)
+    rng = np.random.default_rng(4)
+    y, vy, x, checked = 2e3, -30.0, 5.8e6, 0
+    for k in range(190):
+        alpha_m = y / x + rng.uniform(-1.0, 1.0) * float(MODEL.bearing_bound(x))
+        b = est.update(b, Bearing(alpha_m))
+        if k % 10 == 0:
+            ext = b.extremes(ZeroEffortMiss(MODEL))
+            lo, hi = ext.min_value, ext.max_value
+            far = (hi - lo) + 0.01 * max(abs(lo), abs(hi)) + 1.0
+            verts = b.vertices()
+            for st in verts[rng.choice(len(verts), min(20, len(verts)), replace=False)]:
+                assert b.contains(st)  # a vertex of the set itself
+                off = 3.0 * float(MODEL.bearing_bound(st[2]))
+                for side in (1.0, -1.0):
+                    assert not b.contains([alpha_m + side * off, st[1], st[2]]), (k, side)
+                    w = hi + far if side > 0 else lo - far
+                    omega = float(MODEL.omega_from_w(w, st[2]))
+                    assert not b.contains([st[0], omega, st[2]]), (k, side, w)
+                    checked += 2
+        b = est.predict(b, DT)
+        y, x = y + vy * DT, x - E * DT
+    assert checked >= 600
+
+
 def test_forecast_extremes_bound_the_miss_of_every_node_vertex():
     """Pi and w over the set bound their values at every vertex of every node."""
     est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS)
