@@ -405,7 +405,7 @@ def zs_extent(xy, off, i):
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
 def _cell_normals(xy, off, tau, live, table, scale, e_nom, p_out, q_out):
     """Outward edge normals of the two cell-end polygons (``table[1]``, ``table[2]``)
     as ``(Y~, V~)`` directions ``(p, q)``: ``n . (a, zs) = n_a Y~ / (tau scale) + n_z
@@ -442,7 +442,7 @@ def _cell_normals(xy, off, tau, live, table, scale, e_nom, p_out, q_out):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
 def _cell_admits(xy, off, tau, p, q, nd, table, tau4, alpha, omega, x, lo_u, hi_u, tol,
                  scale, e_nom):  # fmt: skip
     """Whether some ``u`` in ``[lo_u, hi_u]`` puts the state inside every secant bound
@@ -477,7 +477,7 @@ def _cell_admits(xy, off, tau, p, q, nd, table, tau4, alpha, omega, x, lo_u, hi_
     return lo_u <= hi_u * (1 + 1e-12) + 1e-300
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
 def contains_state(xy, off, tau, live, cpiece, span, table, tau4, u_lo, u_hi, alpha, omega,
                    x, tol, scale, e_nom):  # fmt: skip
     """The containment test of :meth:`estim.nodeset_belief.NodeSet.contains` over the

@@ -235,6 +235,8 @@ class NodeSet(Belief):
         if self.is_empty:
             return False
         alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float)[:3])
+        if not (np.isfinite(alpha) and np.isfinite(omega) and np.isfinite(x)):
+            return False  # (no bound would exclude a nan)
         s = self._summary
         return bool(
             _ng.contains_state(

@@ -247,6 +247,7 @@ def test_contains_rejects_states_the_last_bearing_rules_out():
         b = est.predict(b, DT)
         y, x = y + vy * DT, x - E * DT
     assert checked >= 600
+    assert not b.contains([np.nan, 0.0, x]) and not b.contains([0.0, np.inf, x])
 
 
 def test_forecast_extremes_bound_the_miss_of_every_node_vertex():
