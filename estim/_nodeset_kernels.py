@@ -58,6 +58,13 @@ def _hull_into(src, m, dst, tol):
 
 
 @njit(cache=True)
+def _clip_tol(bound):
+    """Distance under which :func:`_clip1` merges consecutive vertices (rounding of a
+    clip against ``bound``)."""
+    return 1e-15 * max(abs(bound), 1.0)
+
+
+@njit(cache=True)
 def _clip1(src, m, nx, ny, bound, dst):
     """Sutherland-Hodgman of one polygon against ``nx x + ny y <= bound`` (``nx`` or
     ``ny`` zero: a strip's side; the rounding scale is taken from ``bound``)."""
@@ -74,7 +81,7 @@ def _clip1(src, m, nx, ny, bound, dst):
             dst[k, 0] = src[j, 0] + t * (src[c, 0] - src[j, 0])
             dst[k, 1] = src[j, 1] + t * (src[c, 1] - src[j, 1])
             k += 1
-    return _dedupe_tail(dst, 0, k, 1e-15 * max(abs(bound), 1.0))
+    return _dedupe_tail(dst, 0, k, _clip_tol(bound))
 
 
 @njit(cache=True)
@@ -198,7 +205,8 @@ def apply_ops(
                 a = max(bb_end + (bb_start - bb_end) * x / bb_ref, floor)
                 h = a / scale * (1.0 + strip_margin) + strip_margin
                 c = pa[o] / scale
-                tol_hi, tol_lo = 1e-15 * max(abs(c + h), 1.0), 1e-15 * max(abs(-(c - h)), 1.0)
+                # the two clips' tolerances (their bounds are c + h and -(c - h))
+                tol_hi, tol_lo = _clip_tol(c + h), _clip_tol(-(c - h))
                 tol = max(tol_hi, tol_lo)
                 x_lo, x_hi = a_buf[0, 0], a_buf[0, 0]
                 close = False  # consecutive vertices (cyclic) within the clips' tolerance
