@@ -83,6 +83,7 @@ from numpy.typing import NDArray
 
 from estim.attitude_box import BoxAttitudeBelief
 from estim.attitude_sets_common import FloatArray, SetAttitudeBelief, SetAttitudeEstimator
+from estim.sets.ellipsoid import volume_weights
 
 N = 6
 Criterion = Literal["volume", "trace"]
@@ -162,14 +163,7 @@ def strip_weight(g, e, r, tr, m2, n: int, criterion: Criterion = "volume") -> Fl
     ``g = P_ii``, ``e`` the strip centre's offset, ``r`` its half-width (> 0), ``tr = tr P``,
     ``m2 = |P e_i|^2``."""
     big_g, eps = g / (r * r), e * e / (r * r)
-    a0 = n * (1.0 - eps) - big_g
-    a1 = big_g * (2 * n - 1 + eps - big_g)
-    a2 = (n - 1) * big_g * big_g
-    disc = np.sqrt(np.clip(a1 * a1 - 4.0 * a2 * a0, 0.0, None))
-    a2s = np.where(a2 > 0, a2, 1.0)
-    den = np.where(a1 + disc > 0, a1 + disc, 1.0)
-    vol = np.where(a1 >= 0, -2.0 * a0 / den, (disc - a1) / (2.0 * a2s))
-    vol = np.where(a0 >= 0.0, 0.0, vol)
+    vol = volume_weights(n, big_g, eps)
     if criterion == "volume":
         return vol
     # tr P+ = (n3 l^3 + n2 l^2 + n1 l + n0) / (1 + G l)^2; stationary: the cubic below

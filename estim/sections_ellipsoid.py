@@ -48,6 +48,7 @@ from estim.sections import (
     enclosing_parallelograms,
 )
 from estim.sets import Ellipsoid, EmptyIntersectionError
+from estim.sets.ellipsoid import volume_weights
 
 Criterion = Literal["volume", "trace"]
 #: directions of the support points that stand for an ellipsoid's "vertices"
@@ -144,16 +145,7 @@ def fogel_huang_volume(
     hyp_p = (1.0 - e * e / gs)[:, None, None] * (pp - papa / gs[:, None, None])
     # the general case
     rs = np.where(r > 0, r, 1.0)
-    big_g, eps = g / (rs * rs), e * e / (rs * rs)
-    a0 = n * (1.0 - eps) - big_g
-    a1 = big_g * (2 * n - 1 + eps - big_g)
-    a2 = (n - 1) * big_g * big_g
-    root = np.sqrt(np.clip(a1 * a1 - 4.0 * a2 * a0, 0.0, None))
-    a2s = np.where(a2 > 0, a2, 1.0)
-    rho = np.where(
-        a1 >= 0, -2.0 * a0 / np.where(a1 + root > 0, a1 + root, 1.0), (root - a1) / (2 * a2s)
-    )
-    rho = np.where(a0 >= 0.0, 0.0, rho)
+    rho = volume_weights(n, g / (rs * rs), e * e / (rs * rs))
     den = r * r + rho * g
     dens = np.where(den > 0, den, 1.0)
     delta = 1.0 + rho - rho * e * e / dens

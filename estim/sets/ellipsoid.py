@@ -275,6 +275,20 @@ def _volume_rho(n: int, gn: float, eps: float) -> float:
     return (-2.0 * a0) / (a1 + disc) if a1 >= 0 else (disc - a1) / (2.0 * a2)
 
 
+def volume_weights(n, gn, eps):
+    """:func:`_volume_rho` over arrays (``n``, ``gn``, ``eps`` broadcast): the batched
+    strip updates of the slab and attitude ellipsoids. Zero where the strip does not
+    cut enough to shrink the volume."""
+    a0 = n * (1.0 - eps) - gn
+    a1 = gn * (2 * n - 1 + eps - gn)
+    a2 = (n - 1) * gn * gn
+    disc = np.sqrt(np.clip(a1 * a1 - 4.0 * a2 * a0, 0.0, None))
+    a2s = np.where(a2 > 0, a2, 1.0)
+    den = np.where(a1 + disc > 0, a1 + disc, 1.0)
+    rho = np.where(a1 >= 0, -2.0 * a0 / den, (disc - a1) / (2.0 * a2s))
+    return np.where(a0 >= 0.0, 0.0, rho)
+
+
 def _trace_rho(tr: float, mn: float, gn: float, eps: float) -> float:
     """Minimum-trace weight. With ``D = 1 + G rho``, ``tr P+ = A(rho) B(rho) / D^2`` where
     ``A = G rho^2 + (1 + G - eps) rho + 1`` and ``B = T + (T G - M) rho`` (``T = tr P``,
