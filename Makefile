@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 # The main experiment: the paper's Fig. 5 (four variants, 50 runs each), CDF plots and table.
 run: $(STAMP)
-	$(BIN)/python -m experiments fig5 --out results/fig5
+	$(BIN)/kvi fig5 --out results/fig5
 
 test: $(STAMP)
 	$(BIN)/ruff check --no-cache .
@@ -36,7 +36,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check . && $(BIN)/ruff format --check .
 
 bench: $(STAMP)
-	$(BIN)/python -m experiments bench
+	$(BIN)/kvi bench
 
 clean:
 	rm -rf $(VENV) results .pytest_cache .hypothesis

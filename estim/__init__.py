@@ -1,5 +1,12 @@
 """Estimators behind one interface: the information set, EKF and UKF."""
 
-from estim.base import Belief, Estimator, Extremes, PerfectEstimator, PointBelief, Status
+from kalman_vs_infoset.estim.base import (
+    Belief,
+    Estimator,
+    Extremes,
+    PerfectEstimator,
+    PointBelief,
+    Status,
+)
 
 __all__ = ["Belief", "Estimator", "Extremes", "PerfectEstimator", "PointBelief", "Status"]

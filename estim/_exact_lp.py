@@ -1,4 +1,4 @@
-"""Assembly of the linear programs of :mod:`estim.exact_reference` (one channel).
+"""Assembly of the linear programs of :mod:`kalman_vs_infoset.estim.exact_reference` (one channel).
 
 Variables ``z = (Y_0 .. Y_{n-1}, V_0 .. V_{n-1}, u_0 .. u_{n-2})``: position and
 velocity at every history time (before its impulse) and the disturbance ``v_j = nu
@@ -29,10 +29,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+from kalman_vs_infoset.estim.model import ChannelModel
 from numpy.typing import NDArray
 from scipy.optimize import linprog
-
-from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
 X_UNIT_M = 1e3  # s is an LP variable in km (column scaling)

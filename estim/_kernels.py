@@ -1,4 +1,4 @@
-"""Compiled (numba) loops behind :class:`estim.polygons.ConvexPolygons`.
+"""Compiled (numba) loops behind :class:`kalman_vs_infoset.estim.polygons.ConvexPolygons`.
 
 Each function takes the whole ragged batch -- vertices ``xy`` (M, 2), CCW, and
 ``offsets`` (n + 1) -- and returns a new batch; one call handles every polygon, so
@@ -297,7 +297,7 @@ def shift_band(xy, offsets, dy, half_y):
 
 @njit(cache=True)
 def predict_sections(xy, offsets, shear, ga, gw, points, rel_tol, max_vertices):
-    """The information set's prediction on scaled coordinates (see estim.infoset):
+    """The information set's prediction on scaled coordinates (see kalman_vs_infoset.estim.infoset):
     ``alpha += shear[i] w``, then the disturbance -- the segment ``(ga, gw)`` for the
     seed's point sections, else the box ``[+-ga] x [+-gw]`` -- then simplification."""
     n = offsets.shape[0] - 1

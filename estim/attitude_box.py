@@ -58,19 +58,18 @@ from itertools import product
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
 )
-from estim.base import Estimator, Extremes, StateFunction, Status
-from estim.base import frozen_array as _frozen
-from estim.base import frozen_view as _frozen_view
-from estim.rotations import cross, qexp, qinv, qlog, qmatrix, qmul
+from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import frozen_array as _frozen
+from kalman_vs_infoset.estim.base import frozen_view as _frozen_view
+from kalman_vs_infoset.estim.rotations import cross, qexp, qinv, qlog, qmatrix, qmul
+from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 BCH_K = 0.25

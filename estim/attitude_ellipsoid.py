@@ -1,7 +1,7 @@
 """Guaranteed attitude ellipsoid on the error state, beside the box (SPEC 2.5, issue 14).
 
 The belief of each run is ``S = E ∩ B``: the box ``B`` of
-:class:`estim.attitude_box.BoxAttitudeEstimator` (run unchanged) and an ellipsoid
+:class:`kalman_vs_infoset.estim.attitude_box.BoxAttitudeEstimator` (run unchanged) and an ellipsoid
 
 .. math:: E(c, P) = \\{x : (x - c)^T P^{-1} (x - c) \\le 1\\}
           = \\{c + P^{1/2} u : |u| \\le 1\\} \\subset R^6,
@@ -25,7 +25,7 @@ outer bound whatever its free parameter, the parameter choosing only the tightne
   :math:`\\det = (1 + q)^n \\det P\\, (1 + L / q)`, stationary at
   :math:`n q^2 + (n - 1) L q - L = 0`, i.e.
   :math:`q = 2 L / ((n - 1) L + \\sqrt{(n - 1)^2 L^2 + 4 n L})` (:func:`segment_sum`; the
-  plane's formula of :func:`estim.sections_ellipsoid.segment_sum` for ``n = 2``).
+  plane's formula of :func:`kalman_vs_infoset.estim.sections_ellipsoid.segment_sum` for ``n = 2``).
   Minimum trace: :math:`q = |d| / \\sqrt{\\mathrm{tr} P}`. Then ``P`` gains
   :math:`\\epsilon\\,\\mathrm{diag}(P)`, :math:`\\epsilon = 10^{-12}` (a larger ellipsoid,
   still an outer bound), which keeps it positive definite per axis;
@@ -69,7 +69,7 @@ average, up to 6 %).
 References
 ----------
 Schweppe (1968), Fogel & Huang (1982), Chernousko (1994), Kurzhanski & Valyi (1997):
-full entries in :mod:`estim.sets.ellipsoid` and docs/references.md.
+full entries in :mod:`kalman_vs_infoset.estim.sets.ellipsoid` and docs/references.md.
 """
 
 from __future__ import annotations
@@ -79,11 +79,14 @@ from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
+from kalman_vs_infoset.estim.attitude_box import BoxAttitudeBelief
+from kalman_vs_infoset.estim.attitude_sets_common import (
+    FloatArray,
+    SetAttitudeBelief,
+    SetAttitudeEstimator,
+)
+from kalman_vs_infoset.estim.sets.ellipsoid import volume_weights
 from numpy.typing import NDArray
-
-from estim.attitude_box import BoxAttitudeBelief
-from estim.attitude_sets_common import FloatArray, SetAttitudeBelief, SetAttitudeEstimator
-from estim.sets.ellipsoid import volume_weights
 
 N = 6
 Criterion = Literal["volume", "trace"]

@@ -21,7 +21,7 @@ body-frame error rotation ``|n_i| <= b_a`` per axis, and a rate ``w_m = w + m`` 
 ``|m_i| <= b_w``. Everything is batched over a leading axis of ``R`` runs.
 
 Quaternions are scalar last (scipy's ``Rotation``); ``exp``/``log`` are
-``Rotation.from_rotvec``/``as_rotvec`` (:mod:`estim.rotations`).
+``Rotation.from_rotvec``/``as_rotvec`` (:mod:`kalman_vs_infoset.estim.rotations`).
 """
 
 from __future__ import annotations
@@ -30,11 +30,10 @@ from abc import abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Belief
+from kalman_vs_infoset.estim.integrate import renormalised, rk4_step
+from kalman_vs_infoset.estim.rotations import cross, qexp, qmul, quaternion_rate
 from numpy.typing import ArrayLike, NDArray
-
-from estim.base import Belief
-from estim.integrate import renormalised, rk4_step
-from estim.rotations import cross, qexp, qmul, quaternion_rate
 
 FloatArray = NDArray[np.float64]
 

@@ -12,11 +12,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim.attitude_model import (
+    AttitudeBelief,
+    AttitudeMeasurement,
+    AttitudePrior,
+)
+from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.rotations import qinv, qlog, qmul
 from numpy.typing import ArrayLike, NDArray
-
-from estim.attitude_model import AttitudeBelief, AttitudeMeasurement, AttitudePrior
-from estim.base import Estimator, Extremes, StateFunction, Status
-from estim.rotations import qinv, qlog, qmul
 
 FloatArray = NDArray[np.float64]
 #: per-component tolerance of :meth:`AttitudePointBelief.inside` (rad, rad/s)

@@ -13,7 +13,7 @@ axis; ``Z`` keeps what the box drops, the correlation of ``e`` and ``w`` (the at
 grows by about ``dt w``).
 
 **Prediction**: with :math:`x' \\in A x + b \\oplus [-\\rho, \\rho]` over the hull of ``S``
-(:func:`estim.attitude_sets_maps.predict_map`), :math:`Z' \\supset A Z + b \\oplus
+(:func:`kalman_vs_infoset.estim.attitude_sets_maps.predict_map`), :math:`Z' \\supset A Z + b \\oplus
 [-\\rho, \\rho]` (the subclass's outer bound) contains the image of ``S`` (the remainder
 holds for the states of ``S``, all in the hull), and so does ``S' = Z' ∩ B'`` with
 ``B'`` the box's prediction.
@@ -39,25 +39,29 @@ from itertools import product
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-
-from estim.attitude_box import (
+from kalman_vs_infoset.estim.attitude_box import (
     BoxAttitudeBelief,
     BoxAttitudeEstimator,
     EmptyRunCounts,
     inorm_max,
 )
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
 )
-from estim.attitude_sets_maps import NoEnclosure, meet_measurement, predict_map, recentre_map
-from estim.base import Estimator, Extremes, StateFunction
-from estim.base import frozen_view as _frozen_view
-from estim.rotations import qexp, qinv, qlog, qmul
+from kalman_vs_infoset.estim.attitude_sets_maps import (
+    NoEnclosure,
+    meet_measurement,
+    predict_map,
+    recentre_map,
+)
+from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction
+from kalman_vs_infoset.estim.base import frozen_view as _frozen_view
+from kalman_vs_infoset.estim.rotations import qexp, qinv, qlog, qmul
+from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 

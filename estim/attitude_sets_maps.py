@@ -35,9 +35,7 @@ re-centres.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
-
-from estim.attitude_box import (
+from kalman_vs_infoset.estim.attitude_box import (
     BCH_K,
     BCH_MAX,
     REL_INFLATION,
@@ -47,8 +45,9 @@ from estim.attitude_box import (
     icross,
     inorm_max,
 )
-from estim.attitude_model import AttitudeControl
-from estim.rotations import qexp, qmatrix
+from kalman_vs_infoset.estim.attitude_model import AttitudeControl
+from kalman_vs_infoset.estim.rotations import qexp, qmatrix
+from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 _EYE3 = np.eye(3)

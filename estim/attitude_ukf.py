@@ -16,7 +16,7 @@ through three functions (filterpy's hooks):
 
 Prediction: sigma points (Van der Merwe, ``alpha = 1, beta = 2, kappa = 0``, filterpy's
 :class:`MerweScaledSigmaPoints`) are mapped to full states ``(q_ref exp(a_i), w_i)``,
-propagated by RK4 through the rigid-body model of :mod:`estim.attitude_model` with
+propagated by RK4 through the rigid-body model of :mod:`kalman_vs_infoset.estim.attitude_model` with
 the known torque and the midpoint of the momentum interval, and expressed relative
 to the propagated mean point (torque ``M_u + d_i``). Process noise: a white torque of
 variance ``D^2/3`` (a uniform in ``[-D, D]``) held over the step, ``G diag(D^2/3)
@@ -46,10 +46,7 @@ from typing import Any
 
 import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
-from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
-
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
@@ -57,9 +54,11 @@ from estim.attitude_model import (
     AttitudePrior,
     rk4_attitude,
 )
-from estim.base import Estimator, Extremes, StateFunction, Status
-from estim.base import frozen_array as _frozen
-from estim.rotations import qexp, qinv, qlog, qmul
+from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import frozen_array as _frozen
+from kalman_vs_infoset.estim.rotations import qexp, qinv, qlog, qmul
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
 
 FloatArray = NDArray[np.float64]
 DIM = 9  # (a, w, d): attitude error, rate, disturbance torque

@@ -1,7 +1,7 @@
 """Guaranteed attitude zonotope on the error state, beside the box (SPEC 2.5, issue 14).
 
 The belief of each run is ``S = Z ∩ B``: the box ``B`` of
-:class:`estim.attitude_box.BoxAttitudeEstimator` (run unchanged) and a zonotope
+:class:`kalman_vs_infoset.estim.attitude_box.BoxAttitudeEstimator` (run unchanged) and a zonotope
 
 .. math:: Z = \\{z_c + G \\xi : \\|\\xi\\|_\\infty \\le 1\\} \\subset R^6,
           \\qquad G \\in R^{6 \\times m},
@@ -51,10 +51,13 @@ from itertools import combinations
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim.attitude_box import BoxAttitudeBelief
+from kalman_vs_infoset.estim.attitude_sets_common import (
+    FloatArray,
+    SetAttitudeBelief,
+    SetAttitudeEstimator,
+)
 from numpy.typing import NDArray
-
-from estim.attitude_box import BoxAttitudeBelief
-from estim.attitude_sets_common import FloatArray, SetAttitudeBelief, SetAttitudeEstimator
 
 N = 6
 

@@ -3,7 +3,7 @@
 Design (after Stone Soup): an *estimator* is an algorithm that holds configuration
 only; a *belief* is an immutable value. ``initial`` builds the first belief from the
 problem's prior (one prior type per problem: :class:`estim.model.ChannelPrior` for an
-intercept channel, :class:`estim.attitude_model.AttitudePrior` for attitude);
+intercept channel, :class:`kalman_vs_infoset.estim.attitude_model.AttitudePrior` for attitude);
 ``predict`` and ``update`` take a belief and return a new one; nothing is mutated in
 place. A known control enters ``predict(belief, dt_s, control)`` with one meaning
 everywhere: it acts over the step being predicted (an impulse at its start, a torque

@@ -1,7 +1,7 @@
 """The package's own estimators and their options, registered by name (:mod:`estim.registry`).
 
 Intercept (one guidance channel): ``infoset`` (:mod:`estim.nodeset` by default, the
-slab and point discretisations of :mod:`estim.infoset` as options), ``ekf`` and
+slab and point discretisations of :mod:`kalman_vs_infoset.estim.infoset` as options), ``ekf`` and
 ``ukf`` (:mod:`estim.kalman`), ``hinf`` (:mod:`estim.hinf_channel`) and ``pf``
 (:mod:`estim.pf_channel`); the set-membership families ``ellipsoid``, ``zonotope`` and
 ``box`` are registered by :mod:`estim.catalog_sets`. Attitude (batched runs): ``perfect``
@@ -15,22 +15,21 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
+from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_model import AttitudeModel
+from kalman_vs_infoset.estim.attitude_perfect import PerfectAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_ukf import UkfAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_zonotope import ZonotopeAttitudeEstimator
+from kalman_vs_infoset.estim.catalog_sets import SlabOptions
+from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+from kalman_vs_infoset.estim.model import ChannelSetting
+from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
+from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
+from kalman_vs_infoset.estim.registry import register
 from pydantic import BaseModel, ConfigDict, Field, model_validator
-
-from estim.attitude_box import BoxAttitudeEstimator
-from estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
-from estim.attitude_model import AttitudeModel
-from estim.attitude_perfect import PerfectAttitudeEstimator
-from estim.attitude_ukf import UkfAttitudeEstimator
-from estim.attitude_zonotope import ZonotopeAttitudeEstimator
-from estim.catalog_sets import SlabOptions
-from estim.hinf_channel import HInfinityChannelEstimator
-from estim.infoset import InformationSetEstimator
-from estim.kalman import KalmanChannelEstimator
-from estim.model import ChannelSetting
-from estim.nodeset import NodeSetEstimator
-from estim.pf_channel import ParticleChannelEstimator
-from estim.registry import register
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
@@ -38,7 +37,7 @@ _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 class InfosetOptions(SlabOptions):
     """Options of the information set: the node set's (``sections="nodes"``,
     :class:`estim.nodeset.NodeSetEstimator`) and, inherited, those of the slabs and point
-    sections (:class:`estim.infoset.InformationSetEstimator`)."""
+    sections (:class:`kalman_vs_infoset.estim.infoset.InformationSetEstimator`)."""
 
     sections: Annotated[
         Literal["nodes", "slabs", "points"],

@@ -1,12 +1,12 @@
 """The set-membership families of the intercept channel, registered by name
-(:mod:`estim.registry`): ``ellipsoid``, ``zonotope`` and ``box``.
+(:mod:`kalman_vs_infoset.estim.registry`): ``ellipsoid``, ``zonotope`` and ``box``.
 
 Each is the slab information set (:class:`estim.infoset.InformationSetEstimator` with
 ``sections="slabs"``: the same range slabs, shears over a slab, disturbance,
 impulse geometry, kinematic margin, splitting, range intervals and threshold, and so
 the same soundness argument) holding another set per section instead of a convex
 polygon (:mod:`estim.sections`): an ellipsoid (:mod:`estim.sections_ellipsoid`), a
-zonotope (:mod:`estim.sections_zonotope`) or an interval box
+zonotope (:mod:`kalman_vs_infoset.estim.sections_zonotope`) or an interval box
 (:mod:`estim.sections_box`). A scenario's ``[estimator.<name>]`` table is validated by
 the options model below.
 """
@@ -15,15 +15,14 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.model import ChannelSetting
+from kalman_vs_infoset.estim.registry import register
+from kalman_vs_infoset.estim.sections import SectionFamily
+from kalman_vs_infoset.estim.sections_box import BoxFamily
+from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidFamily
+from kalman_vs_infoset.estim.sections_zonotope import ZonotopeFamily
 from pydantic import BaseModel, ConfigDict, Field, model_validator
-
-from estim.infoset import InformationSetEstimator
-from estim.model import ChannelSetting
-from estim.registry import register
-from estim.sections import SectionFamily
-from estim.sections_box import BoxFamily
-from estim.sections_ellipsoid import EllipsoidFamily
-from estim.sections_zonotope import ZonotopeFamily
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
@@ -56,7 +55,7 @@ class SlabOptions(BaseModel):
 
 
 class EllipsoidOptions(SlabOptions):
-    """Options of the ellipsoid per slab (:mod:`estim.sections_ellipsoid`)."""
+    """Options of the ellipsoid per slab (:mod:`kalman_vs_infoset.estim.sections_ellipsoid`)."""
 
     criterion: Annotated[
         Literal["volume", "trace"],
@@ -69,7 +68,7 @@ class EllipsoidOptions(SlabOptions):
 
 
 class ZonotopeOptions(SlabOptions):
-    """Options of the zonotope per slab (:mod:`estim.sections_zonotope`)."""
+    """Options of the zonotope per slab (:mod:`kalman_vs_infoset.estim.sections_zonotope`)."""
 
     max_generators: Annotated[
         int, Field(ge=2, le=64, description="generators kept by the order reduction")
@@ -85,7 +84,7 @@ class ZonotopeOptions(SlabOptions):
 
 
 class BoxOptions(SlabOptions):
-    """Options of the interval box per slab (:mod:`estim.sections_box`)."""
+    """Options of the interval box per slab (:mod:`kalman_vs_infoset.estim.sections_box`)."""
 
 
 def _slab_estimator(opt: SlabOptions, setting: ChannelSetting, family: SectionFamily):

@@ -13,9 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.estim.model import ChannelModel
 from numpy.typing import ArrayLike, NDArray
-
-from estim.model import ChannelModel
 
 
 @dataclass(frozen=True)

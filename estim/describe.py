@@ -23,10 +23,9 @@ import math
 from typing import Any
 
 import numpy as np
-
-from estim.base import Belief
-from estim.costs import MissForecast, ZeroEffortMiss
-from estim.model import ChannelModel
+from kalman_vs_infoset.estim.base import Belief
+from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.model import ChannelModel
 
 NAN = math.nan
 

@@ -67,7 +67,7 @@ solver's feasibility tolerance (HiGHS, 1e-7). On seed 003's channel it stays und
 2e-4 of the width at 0.1-2 s per time point.
 
 The feasible range interval (issue 12 quotes "feasible initial range") is found by
-Kelley's cutting planes (:meth:`estim._exact_lp.ChannelLP.kelley`): minimise /
+Kelley's cutting planes (:meth:`kalman_vs_infoset.estim._exact_lp.ChannelLP.kelley`): minimise /
 maximise ``x0`` with tangents of ``g``, adding the tangents at the solution until it
 violates no bearing (outer end), then checked by the fixed-``(x0, e)`` LP (inner end).
 """
@@ -79,10 +79,9 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim._exact_lp import X_UNIT_M, Cell, ChannelLP
+from kalman_vs_infoset.estim.model import ChannelModel
 from numpy.typing import ArrayLike, NDArray
-
-from estim._exact_lp import X_UNIT_M, Cell, ChannelLP
-from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
 

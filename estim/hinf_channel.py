@@ -6,7 +6,7 @@ map of the auxiliary model (models.md §1.3) with its Jacobian ``F``, the proces
 ``Q`` of a disturbance uniform in ``[-nu, nu]`` and the bearing variance
 ``R = a(x_hat)^2/3``; the belief is a :class:`~estim.kalman_belief.GaussianBelief` read
 as the n-sigma ellipsoid of ``P``. Only the measurement update differs: it is the
-H-infinity update of :func:`estim.filters.hinf.hinf_step`.
+H-infinity update of :func:`kalman_vs_infoset.estim.filters.hinf.hinf_step`.
 
 Split of Simon's step. Simon's filter (Section 11.3) is a one-step predictor::
 
@@ -30,7 +30,7 @@ fixed before ``y_k`` is seen), with ``L = I`` (``weight="state"``, default) or
 ``L = (0, 1, 0)``, the zero-effort miss alone (``weight="zem"``, the quantity the
 guidance law centres). Then ``theta`` is dimensionless and the a-priori existence
 condition of Hassibi, Sayed & Kailath, ``P_k^-1 - theta Sbar_k > 0`` (the one under
-which ``J < 1/theta`` holds, see :mod:`estim.filters.hinf`), reads ``theta < 1``
+which ``J < 1/theta`` holds, see :mod:`kalman_vs_infoset.estim.filters.hinf`), reads ``theta < 1``
 (``P^(1/2) Sbar P^(1/2)`` is a projection): it holds at every step for every
 ``theta < 1`` and the filter never ceases to exist along an engagement. What the weight
 does is plain by Sherman-Morrison: with ``Pt = (P^-1 - theta Sbar)^-1``,
@@ -79,13 +79,12 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Estimator
+from kalman_vs_infoset.estim.filters.hinf import HInfinityEstimate, HInfinityModel, hinf_step
+from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+from kalman_vs_infoset.estim.kalman_belief import GaussianBelief
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
 from numpy.typing import NDArray
-
-from estim.base import Estimator
-from estim.filters.hinf import HInfinityEstimate, HInfinityModel, hinf_step
-from estim.kalman import KalmanChannelEstimator
-from estim.kalman_belief import GaussianBelief
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
 
 FloatArray = NDArray[np.float64]
 

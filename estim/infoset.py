@@ -4,7 +4,7 @@ The information set is the set of all states ``(alpha, omega, x)`` compatible wi
 the measurement and control history. It is stored as a stack of x-sections; each
 section ``j`` is a convex polygon of ``(alpha, omega)`` together with the range
 interval ``[x_lo_j, x_hi_j]`` it stands for. The value itself is
-:class:`estim.infoset_belief.InformationSet` (re-exported here); this module holds
+:class:`kalman_vs_infoset.estim.infoset_belief.InformationSet` (re-exported here); this module holds
 the estimator that builds and moves it.
 
 Two discretisations share the code:
@@ -31,7 +31,7 @@ prediction is a shear of determinant 1. ``d(omega x^2)/dt = v x`` holds for any
 closing speed, so ``w`` evolves independently of the true closing speed; only the
 range does not.
 
-Operations on all sections at once (:class:`estim.sections.SectionBatch`: convex
+Operations on all sections at once (:class:`kalman_vs_infoset.estim.sections.SectionBatch`: convex
 polygons, :class:`~estim.polygons.ConvexPolygons`, by default; the slab set may hold an
 ellipsoid, a zonotope or a box per section instead, :mod:`estim.catalog_sets`, with
 every operation below an outer bound of the same exact one):
@@ -76,7 +76,7 @@ set's zero-effort-miss bound exceeds ``DIVERGED_W_PER_X`` times its range (the
 kinematic margin of wide slabs near ``eps`` feeding on itself: the set knows nothing
 any more) the set is emptied with status ``Status.DIVERGED``; the caller counts it.
 
-A control (an impulse, :class:`~estim.model.Impulse` or m/s) enters
+A control (an impulse, :class:`~kalman_vs_infoset.estim.model.Impulse` or m/s) enters
 :meth:`InformationSetEstimator.predict`: it acts at the start of the predicted step.
 """
 
@@ -86,14 +86,20 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.base import Estimator, Status
+from kalman_vs_infoset.estim.infoset_belief import InformationSet
+from kalman_vs_infoset.estim.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+    impulse_parts,
+)
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sections import PolygonFamily, SectionFamily
 from numpy.typing import ArrayLike, NDArray
-
-from estim import _kernels as _k
-from estim.base import Estimator, Status
-from estim.infoset_belief import InformationSet
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
-from estim.polygons import ConvexPolygons
-from estim.sections import PolygonFamily, SectionFamily
 
 __all__ = ["InformationSet", "InformationSetEstimator", "kinematic_margin_mps2"]
 
@@ -191,9 +197,9 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         and zero-effort miss that a wide slab loses near the target (module
         docstring); ``split_ratio = inf`` turns splitting off.
     family : SectionFamily or None
-        The set held per section (:mod:`estim.sections`): None for convex polygons
+        The set held per section (:mod:`kalman_vs_infoset.estim.sections`): None for convex polygons
         (simplified with ``simplify_rel_area`` and ``max_vertices``), or an ellipsoid,
-        zonotope or box family (:mod:`estim.catalog_sets`; ``"slabs"`` only). The
+        zonotope or box family (:mod:`kalman_vs_infoset.estim.catalog_sets`; ``"slabs"`` only). The
         initial polygons are converted by the family (an outer bound); every later
         operation is the family's.
     """

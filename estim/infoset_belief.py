@@ -3,7 +3,7 @@
 The belief half of :mod:`estim.infoset` (the estimator, which builds and moves these
 values, and the discretisations are described there). Sections live in the scaled
 coordinates ``(alpha / alpha_scale_rad, w / w_scale_m)``, ``w = omega x^2 / e``, held
-by any set representation of :mod:`estim.sections` (convex polygons by default;
+by any set representation of :mod:`kalman_vs_infoset.estim.sections` (convex polygons by default;
 ellipsoids, zonotopes or boxes).
 """
 
@@ -13,15 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import frozen_array as _frozen
+from kalman_vs_infoset.estim.base import frozen_view as _frozen_view
+from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sections import PolygonFamily, PolygonSections, SectionBatch
 from numpy.typing import ArrayLike, NDArray
-
-from estim.base import Belief, Extremes, StateFunction, Status
-from estim.base import frozen_array as _frozen
-from estim.base import frozen_view as _frozen_view
-from estim.costs import MissForecast, ZeroEffortMiss
-from estim.model import ChannelModel
-from estim.polygons import ConvexPolygons
-from estim.sections import PolygonFamily, PolygonSections, SectionBatch
 
 FloatArray = NDArray[np.float64]
 
@@ -30,8 +29,8 @@ FloatArray = NDArray[np.float64]
 class InformationSet(Belief):
     """An immutable stack of convex sections with their range intervals.
 
-    ``sections`` is a :class:`estim.sections.SectionBatch` (a
-    :class:`~estim.polygons.ConvexPolygons` is taken as the polygon batch).
+    ``sections`` is a :class:`kalman_vs_infoset.estim.sections.SectionBatch` (a
+    :class:`~kalman_vs_infoset.estim.polygons.ConvexPolygons` is taken as the polygon batch).
     """
 
     model: ChannelModel

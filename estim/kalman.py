@@ -2,7 +2,7 @@
 
 State choice. Per channel the state is ``(alpha, r, x)``: bearing (rad), a rate
 coordinate ``r`` and the range along the nominal axis (m), i.e. the coordinates
-of the auxiliary model (SPEC 1.3, :mod:`estim.model`) and of the information set,
+of the auxiliary model (SPEC 1.3, :mod:`kalman_vs_infoset.estim.model`) and of the information set,
 whose polygons live in ``(alpha, w)`` at each ``x``. Two choices of ``r``:
 
 * ``coords="zem"`` (default): the zero-effort miss ``w = omega x^2 / e`` (m);
@@ -30,9 +30,9 @@ tens of km, so their threshold ends guidance far too early), which is why both
 are kept (``coords``). As in the set, ``x`` drifts at the *nominal* closing speed
 ``e`` with no process noise (the true closing speed's mismatch is part of what
 ``v`` stands for). The belief answers in rows
-``(alpha, omega, x)`` whatever ``r`` is (:mod:`estim.kalman_belief`).
+``(alpha, omega, x)`` whatever ``r`` is (:mod:`kalman_vs_infoset.estim.kalman_belief`).
 
-Model (SPEC 1.3, :meth:`estim.model.ChannelModel.step_coefficients`), one step
+Model (SPEC 1.3, :meth:`kalman_vs_infoset.estim.model.ChannelModel.step_coefficients`), one step
 ``Delta``, ``x1 = x0 - e Delta``, ``v`` constant over the step::
 
     alpha1 = alpha0 + w0 e Delta/(x0 x1) + g_alpha v      = alpha0 + omega0 x0 Delta/x1 + g_alpha v
@@ -68,7 +68,7 @@ Range constraint (optional, ``range_constraint=True``; off by default). The
 information set knows a priori that the true range lies in the initial ``x`` box
 moved by the closing-speed interval ``[e_lo, e_hi]``:
 ``x(t) in [x_lo - e_hi t, x_hi - e_lo t]``. With the option on the belief carries
-that interval (:attr:`~estim.kalman_belief.GaussianBelief.x_bounds_m`, set by
+that interval (:attr:`~kalman_vs_infoset.estim.kalman_belief.GaussianBelief.x_bounds_m`, set by
 :meth:`KalmanChannelEstimator.initial`, moved by every prediction) and a mean whose
 ``x`` leaves it is projected back onto the violated bound in the ``P^-1`` metric
 (estimate projection with ``W = P^-1``, Simon & Chia 2002; D. Simon, IET Control
@@ -79,7 +79,7 @@ left unchanged (:meth:`KalmanChannelEstimator.constrain`).
 
 filterpy objects are mutable: each call builds a fresh filter from the belief's
 ``(mean, cov)`` (copies), runs one filterpy step and returns a new
-:class:`~estim.kalman_belief.GaussianBelief`; no filter is ever stored. The
+:class:`~kalman_vs_infoset.estim.kalman_belief.GaussianBelief`; no filter is ever stored. The
 EKF's state map is filterpy's documented override point ``predict_x``; the UKF
 uses Van der Merwe's scaled sigma points with ``alpha = 1, beta = 2, kappa = 0``
 (points at ``+-sqrt(3)`` standard deviations, the edges of a uniform box).
@@ -93,12 +93,18 @@ from typing import Any
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, UnscentedKalmanFilter
+from kalman_vs_infoset.estim.base import Estimator, Status
+from kalman_vs_infoset.estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
+from kalman_vs_infoset.estim.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+    impulse_parts,
+)
 from numpy.typing import NDArray
 from scipy import special
-
-from estim.base import Estimator, Status
-from estim.kalman_belief import COORDS, GaussianBelief, psd_cholesky
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
 
 FloatArray = NDArray[np.float64]
 
@@ -442,7 +448,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief, ChannelPrior]):
     def _impulse(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
         """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``.
 
-        An :class:`~estim.model.Impulse` known to ``+-dk`` adds the variance of a
+        An :class:`~kalman_vs_infoset.estim.model.Impulse` known to ``+-dk`` adds the variance of a
         uniform error, ``(dk x/e)^2/3``, to the rate coordinate.
         """
         self._check(belief)

@@ -3,8 +3,8 @@
 A Kalman filter's belief is a mean ``m`` and a covariance ``P`` of its internal
 state ``q = (alpha, r, x)``, where ``r`` is either the bearing rate ``omega``
 (``coords="rate"``) or the zero-effort miss ``w = omega x^2 / e`` (``coords="zem"``,
-see :mod:`estim.kalman` for the choice). To answer the same questions as the
-information set (:class:`estim.base.Belief`) it is read as the n-sigma ellipsoid
+see :mod:`kalman_vs_infoset.estim.kalman` for the choice). To answer the same questions as the
+information set (:class:`kalman_vs_infoset.estim.base.Belief`) it is read as the n-sigma ellipsoid
 
     E = {q : (q - m)^T P^+ (q - m) <= n^2} = {m + n S u : |u| <= 1},   S S^T = P,
 
@@ -28,11 +28,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.model import ChannelModel
 from numpy.typing import ArrayLike, NDArray
-
-from estim.base import Belief, Extremes, StateFunction, Status
-from estim.costs import MissForecast
-from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
 

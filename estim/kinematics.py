@@ -3,14 +3,14 @@
 With the bearing ``alpha``, its rate ``omega`` and the planar angular momentum
 ``h = rho^2 omega = e w / cos^2(alpha)`` (``w`` the nominal zero-effort miss), the
 true motion is a motion of seed 003's auxiliary model with the disturbance
-(:mod:`estim.infoset`, module docstring)::
+(:mod:`kalman_vs_infoset.estim.infoset`, module docstring)::
 
     v = cos(alpha) a_perp - 2 omega^2 x tan(alpha)
       = cos(alpha) a_perp - 2 h^2 cos^3(alpha) sin(alpha) / x^3 .
 
 The first term is what ``nu`` stands for. The second has the sign of ``-alpha``:
 a line of sight off the axis always turns further off it. Its magnitude is bounded
-above by :func:`estim.infoset.kinematic_margin_mps2`; it is bounded *below* when
+above by :func:`kalman_vs_infoset.estim.infoset.kinematic_margin_mps2`; it is bounded *below* when
 neither ``w`` nor ``alpha`` can be zero over the step:
 
 * ``|h| >= e |w|_min - nu dt rho_max`` (``cos^2 <= 1``; ``dh/dt = rho a_perp``, the
@@ -31,10 +31,9 @@ set several times wider.
 from __future__ import annotations
 
 import numpy as np
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.infoset import MAX_BEARING_RAD
 from numpy.typing import ArrayLike, NDArray
-
-from estim import _kernels as _k
-from estim.infoset import MAX_BEARING_RAD
 
 FloatArray = NDArray[np.float64]
 

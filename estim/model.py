@@ -248,7 +248,7 @@ def _interval(value: ArrayLike, name: str) -> tuple[float, float]:
 @dataclass(frozen=True)
 class ChannelPrior:
     """The a-priori box of one intercept channel in SI units: what every estimator of
-    the channel starts from (:meth:`estim.base.Estimator.initial`).
+    the channel starts from (:meth:`kalman_vs_infoset.estim.base.Estimator.initial`).
 
     Parameters
     ----------

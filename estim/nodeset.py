@@ -23,7 +23,7 @@ The estimator keeps the slices of ``K`` at nodes ``tau_j = label_j - t`` exactly
 (each slice is a polygon moved by the seed's own exact operations: bearing strip,
 shear, Minkowski sum with the disturbance segment, shift by the impulse), and
 bounds ``K`` between nodes by the concavity of its support functions
-(:mod:`estim.nodeset_bounds`): no state is lost between nodes, and the bound is
+(:mod:`kalman_vs_infoset.estim.nodeset_bounds`): no state is lost between nodes, and the bound is
 tight where the nodes are dense. As bearings pin the range, nodes whose slice
 becomes empty are dropped; when fewer than ``min_live_nodes`` remain in a piece, the
 piece is re-gridded with ``n_nodes`` new nodes over the surviving interval and the
@@ -31,7 +31,7 @@ recorded operations are replayed on them (:meth:`NodeSetEstimator.refine`), so t
 nodes follow the surviving range interval.
 
 What the slices do not know: the kinematic term the linear model neglects near the
-target (``2 omega^2 x tan alpha``, :func:`estim.infoset.kinematic_margin_mps2`) is
+target (``2 omega^2 x tan alpha``, :func:`kalman_vs_infoset.estim.infoset.kinematic_margin_mps2`) is
 added to ``nu`` for the whole piece each step, from the piece's own extremes, and an
 impulse's geometry (``k cos^2 alpha``) widens it; both are common to the piece, which
 keeps ``K`` convex. Polygons are kept in ``(a, zs) = (alpha / alpha_scale, e_nom
@@ -48,17 +48,23 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from kalman_vs_infoset.estim.base import Estimator, Status
+from kalman_vs_infoset.estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
+from kalman_vs_infoset.estim.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+    impulse_parts,
+)
+from kalman_vs_infoset.estim.nodeset_belief import NodeSet
+from kalman_vs_infoset.estim.nodeset_bounds import OpLog
+from kalman_vs_infoset.estim.nodeset_refine import NodeRefinement
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import NDArray
-
-from estim import _kernels as _k
-from estim import _nodeset_kernels as _nk
-from estim.base import Estimator, Status
-from estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
-from estim.nodeset_belief import NodeSet
-from estim.nodeset_bounds import OpLog
-from estim.nodeset_refine import NodeRefinement
-from estim.polygons import ConvexPolygons
 
 __all__ = ["NodeSet", "NodeSetEstimator"]
 
@@ -227,7 +233,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         nodes under eps, split wide pieces and re-grid thinned ones.
 
         The disturbance of each piece is ``nu`` plus the interval of the kinematic
-        term over its states (:func:`estim.kinematics.kinematic_interval_mps2`),
+        term over its states (:func:`kalman_vs_infoset.estim.kinematics.kinematic_interval_mps2`),
         sized from the belief's own summary (the impulse's effect on ``w`` added), so
         a step computes the bounds between nodes once; impulse and prediction are
         one compiled call.

@@ -1,6 +1,6 @@
 """The node set as a value: exact slices of the information set and what lies between.
 
-The estimator (:mod:`estim.nodeset`) explains the model; this module holds the
+The estimator (:mod:`kalman_vs_infoset.estim.nodeset`) explains the model; this module holds the
 immutable belief and answers the questions guidance and the harness ask of it. Per
 closing-speed piece ``b`` (``u = 1/e`` in ``[u_lo, u_hi]``) the information set is a
 convex body in ``(Y~, V~, tau)``; the belief stores its slices at the nodes'
@@ -21,14 +21,13 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim import _nodeset_geometry as _ng
+from kalman_vs_infoset.estim import nodeset_bounds as nb
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import ArrayLike, NDArray
-
-from estim import _nodeset_geometry as _ng
-from estim import nodeset_bounds as nb
-from estim.base import Belief, Extremes, StateFunction, Status
-from estim.costs import MissForecast, ZeroEffortMiss
-from estim.model import ChannelModel
-from estim.polygons import ConvexPolygons
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

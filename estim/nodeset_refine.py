@@ -17,14 +17,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from kalman_vs_infoset.estim import _nodeset_geometry as _ng
+from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from kalman_vs_infoset.estim.infoset import STRIP_MARGIN
+from kalman_vs_infoset.estim.nodeset_belief import NodeSet
+from kalman_vs_infoset.estim.nodeset_bounds import OpLog
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import NDArray
-
-from estim import _nodeset_geometry as _ng
-from estim import _nodeset_kernels as _nk
-from estim.infoset import STRIP_MARGIN
-from estim.nodeset_belief import NodeSet
-from estim.nodeset_bounds import OpLog
-from estim.polygons import ConvexPolygons
 
 FloatArray = NDArray[np.float64]
 

@@ -2,12 +2,12 @@
 
 Particles are physical rows ``(Y_m, V_mps, x_m, e_mps)``: the channel's lateral offset
 and velocity, the range along the nominal axis and the particle's own closing speed
-(:mod:`estim.pf_channel` says why). A particle leaves the belief as a row
+(:mod:`kalman_vs_infoset.estim.pf_channel` says why). A particle leaves the belief as a row
 ``(alpha, omega, x)`` of the auxiliary model (models.md §1.3) by the exact map
-:meth:`estim.model.ChannelModel.from_cartesian` with ``Vx = -e``:
+:meth:`kalman_vs_infoset.estim.model.ChannelModel.from_cartesian` with ``Vx = -e``:
 ``alpha = atan2(Y, x)``, ``omega = (x V + Y e)/(x^2 + Y^2)``.
 
-How it answers the questions of :class:`estim.base.Belief`:
+How it answers the questions of :class:`kalman_vs_infoset.estim.base.Belief`:
 
 * ``extremes(fn)``: min and max of ``fn`` over the particles of positive weight (the
   cloud's support, not a set around it: an inner estimate of the extremes over the
@@ -26,12 +26,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.filters.particle import ParticleSet
+from kalman_vs_infoset.estim.kalman_belief import GaussianBelief
+from kalman_vs_infoset.estim.model import ChannelModel
 from numpy.typing import ArrayLike, NDArray
-
-from estim.base import Belief, Extremes, StateFunction, Status
-from estim.filters.particle import ParticleSet
-from estim.kalman_belief import GaussianBelief
-from estim.model import ChannelModel
 
 FloatArray = NDArray[np.float64]
 

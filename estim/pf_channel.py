@@ -62,12 +62,18 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Estimator, Status
+from kalman_vs_infoset.estim.filters.particle import ParticleSet
+from kalman_vs_infoset.estim.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+    impulse_parts,
+)
+from kalman_vs_infoset.estim.pf_belief import E, ParticleBelief, V, X, Y
 from numpy.typing import NDArray
-
-from estim.base import Estimator, Status
-from estim.filters.particle import ParticleSet
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range, impulse_parts
-from estim.pf_belief import E, ParticleBelief, V, X, Y
 
 FloatArray = NDArray[np.float64]
 
@@ -94,7 +100,7 @@ class ParticleChannelEstimator(Estimator[ParticleBelief, ChannelPrior]):
     resample_threshold : float
         Resample when the effective sample size is under this fraction of N.
     resampler : {"systematic", "stratified"}
-        The package's resampler (:mod:`estim.filters.particle`).
+        The package's resampler (:mod:`kalman_vs_infoset.estim.filters.particle`).
     roughening : float
         Gordon et al.'s ``K`` (0: no roughening).
     disturbance, bearing_error : {"uniform", "gaussian"}

@@ -3,7 +3,7 @@
 The information set keeps one convex polygon per x-section and applies the same
 operation to all of them every step. Doing that through GEOS costs about a
 millisecond per operation for 29 sections; here each operation is one call of a
-compiled kernel (:mod:`estim._kernels`) over the concatenated vertices:
+compiled kernel (:mod:`kalman_vs_infoset.estim._kernels`) over the concatenated vertices:
 
 * :meth:`ConvexPolygons.clip_halfplanes` -- Sutherland-Hodgman against one
   half-plane per polygon (a strip is two of them);
@@ -26,9 +26,8 @@ from functools import cached_property
 
 import numpy as np
 import shapely
+from kalman_vs_infoset.estim import _kernels as _k
 from numpy.typing import ArrayLike, NDArray
-
-from estim import _kernels as _k
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -12,10 +12,10 @@ import does).
 Problems and what their factories receive (besides the validated options):
 
 * ``"intercept"``: a :class:`estim.model.ChannelSetting` (channel model, closing-speed
-  interval); beliefs start from a :class:`estim.model.ChannelPrior`;
+  interval); beliefs start from a :class:`kalman_vs_infoset.estim.model.ChannelPrior`;
 * ``"attitude"``: an :class:`estim.attitude_model.AttitudeModel`; beliefs start from an
-  :class:`estim.attitude_model.AttitudePrior` and are batched
-  :class:`estim.attitude_model.AttitudeBelief` values.
+  :class:`kalman_vs_infoset.estim.attitude_model.AttitudePrior` and are batched
+  :class:`kalman_vs_infoset.estim.attitude_model.AttitudeBelief` values.
 """
 
 from __future__ import annotations
@@ -26,14 +26,13 @@ from dataclasses import dataclass
 from importlib import metadata
 from typing import Any
 
+from kalman_vs_infoset.estim.base import Estimator
 from pydantic import BaseModel
-
-from estim.base import Estimator
 
 PROBLEMS = ("intercept", "attitude")
 ENTRY_POINT_GROUP = "kalman_vs_infoset.estimators"
 #: modules whose import registers the package's own estimators
-BUILTIN = ("estim.catalog", "estim.catalog_sets")
+BUILTIN = ("kalman_vs_infoset.estim.catalog", "kalman_vs_infoset.estim.catalog_sets")
 
 _REGISTRY: dict[tuple[str, str], Registration] = {}
 _loaded = False

@@ -1,6 +1,6 @@
 """What the slab information set holds per section: the protocol and the polygon batch.
 
-The slab discretisation of :mod:`estim.infoset` keeps, for every range interval
+The slab discretisation of :mod:`kalman_vs_infoset.estim.infoset` keeps, for every range interval
 ``[x_lo_j, x_hi_j]``, one convex set of the scaled coordinates
 ``p = (alpha / alpha_scale_rad, w / w_scale_m)``. Everything the estimator does to
 those sets is a handful of operations, applied to all sections at once; a set
@@ -27,10 +27,10 @@ margin, splitting, range intervals and threshold:
 * ``contains``, ``centres``, ``select``, ``alpha_bounds``, ``magnitude``.
 
 Every operation returns a set containing the exact result (an outer bound), which is
-all the soundness argument of :mod:`estim.infoset` uses. Implementations:
+all the soundness argument of :mod:`kalman_vs_infoset.estim.infoset` uses. Implementations:
 :class:`PolygonSections` (the exact convex polygons of the original set, compiled
-kernels), :class:`estim.sections_ellipsoid.EllipsoidSections`,
-:class:`estim.sections_zonotope.ZonotopeSections` and
+kernels), :class:`kalman_vs_infoset.estim.sections_ellipsoid.EllipsoidSections`,
+:class:`kalman_vs_infoset.estim.sections_zonotope.ZonotopeSections` and
 :class:`estim.sections_box.BoxSections`. A *family* (:class:`SectionFamily`) is the
 configuration that builds a batch from the initial polygons; a batch carries its
 family, so the operations know how to reduce (vertex count, generators, criteria).
@@ -42,11 +42,10 @@ from dataclasses import dataclass
 from typing import Protocol, Self
 
 import numpy as np
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sets._common import TOUCH_RTOL
 from numpy.typing import ArrayLike, NDArray
-
-from estim import _kernels as _k
-from estim.polygons import ConvexPolygons
-from estim.sets._common import TOUCH_RTOL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -119,7 +118,7 @@ class SectionFamily(Protocol):
 # -- the polygon batch: the original information set ------------------------------------
 @dataclass(frozen=True)
 class PolygonFamily:
-    """Exact convex polygons (:class:`estim.polygons.ConvexPolygons`), kept to
+    """Exact convex polygons (:class:`kalman_vs_infoset.estim.polygons.ConvexPolygons`), kept to
     ``max_vertices`` by an outer simplification that also removes edges adding less
     than ``simplify_rel_area`` of a section's area."""
 

@@ -1,8 +1,8 @@
-"""An interval box per slab section (:class:`estim.sections.SectionBatch`).
+"""An interval box per slab section (:class:`kalman_vs_infoset.estim.sections.SectionBatch`).
 
 Section ``j`` is ``[lo_j, hi_j]`` of the scaled plane ``p = (alpha, w)``
-(:mod:`estim.sections`), vectorised over the sections. The operations are those of
-:class:`estim.sets.Box` written for all sections at once (interval arithmetic;
+(:mod:`kalman_vs_infoset.estim.sections`), vectorised over the sections. The operations are those of
+:class:`kalman_vs_infoset.estim.sets.Box` written for all sections at once (interval arithmetic;
 Jaulin et al. 2001, ch. 2 and 4):
 
 * the bearing strip ``lo <= p_0 <= hi`` is axis-aligned: the box's contraction by
@@ -25,10 +25,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sections import BoolArray, FloatArray, IntArray, clip_slabs
 from numpy.typing import ArrayLike
-
-from estim.polygons import ConvexPolygons
-from estim.sections import BoolArray, FloatArray, IntArray, clip_slabs
 
 
 @dataclass(frozen=True)

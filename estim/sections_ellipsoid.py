@@ -1,4 +1,4 @@
-"""An ellipsoid per slab section (:class:`estim.sections.SectionBatch`).
+"""An ellipsoid per slab section (:class:`kalman_vs_infoset.estim.sections.SectionBatch`).
 
 Section ``j`` is ``E(c_j, P_j) = {c_j + P_j^(1/2) u : |u| <= 1}`` of the scaled plane
 ``p = (alpha, w)`` (:mod:`estim.sections`); the batch keeps the centres ``(n, 2)`` and
@@ -17,18 +17,18 @@ shape matrices ``(n, 2, 2)``:
   eigenvalues of ``d d^T`` relative to ``P`` are ``0`` and ``L = d^T P^-1 d``, and the
   optimality condition ``sum_i (q^2 - l_i) / (l_i + q) = 0`` (``q = 1/p``) reads
   ``2 q^2 + L q - L = 0``, so ``q = 2 L / (L + sqrt(L^2 + 8 L))`` in closed form (the
-  tests check both against :meth:`estim.sets.Ellipsoid.minkowski_sum`);
+  tests check both against :meth:`kalman_vs_infoset.estim.sets.Ellipsoid.minkowski_sum`);
 * support functions ``h(d) = c.d + sqrt(d^T P d)`` and support points
   ``c + P d / sqrt(d^T P d)``: exact.
 
 The initial polygons enter as the minimum-volume ellipsoid ``E(c, 2 G G^T)`` of an
 enclosing parallelogram ``c + G [-1, 1]^2``
-(:func:`estim.sections.enclosing_parallelograms`).
+(:func:`kalman_vs_infoset.estim.sections.enclosing_parallelograms`).
 
 References
 ----------
 Schweppe (1968), Fogel & Huang (1982), Chernousko (1994), Kurzhanski & Valyi (1997):
-full entries in :mod:`estim.sets.ellipsoid` and docs/references.md.
+full entries in :mod:`kalman_vs_infoset.estim.sets.ellipsoid` and docs/references.md.
 """
 
 from __future__ import annotations
@@ -37,18 +37,17 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
-
-from estim.polygons import ConvexPolygons
-from estim.sections import (
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sections import (
     BoolArray,
     FloatArray,
     IntArray,
     clip_slabs,
     enclosing_parallelograms,
 )
-from estim.sets import Ellipsoid, EmptyIntersectionError
-from estim.sets.ellipsoid import volume_weights
+from kalman_vs_infoset.estim.sets import Ellipsoid, EmptyIntersectionError
+from kalman_vs_infoset.estim.sets.ellipsoid import volume_weights
+from numpy.typing import ArrayLike
 
 Criterion = Literal["volume", "trace"]
 #: directions of the support points that stand for an ellipsoid's "vertices"
@@ -110,7 +109,7 @@ def fogel_huang_volume(
 ) -> tuple[FloatArray, FloatArray]:
     """Fogel & Huang's minimum-volume update of ``E(c_j, P_j)`` by the slab ``lo_j <=
     p_0 <= hi_j``, already clipped to the ellipsoid's range of ``p_0``, for the sections
-    ``cut`` (the others are returned unchanged): :meth:`estim.sets.Ellipsoid.
+    ``cut`` (the others are returned unchanged): :meth:`kalman_vs_infoset.estim.sets.Ellipsoid.
     intersect_strip` with ``a = e_0``, vectorised over the sections (its special cases
     included: a segment and a vanishing slab are cut exactly).
 
@@ -175,7 +174,7 @@ class EllipsoidSections:
         return self.centre.shape[0]
 
     def ellipsoid(self, j: int) -> Ellipsoid:
-        """Section ``j`` as an :class:`estim.sets.Ellipsoid`."""
+        """Section ``j`` as an :class:`kalman_vs_infoset.estim.sets.Ellipsoid`."""
         return Ellipsoid._make(self.centre[j].copy(), self.shape[j].copy())
 
     def select(self, index: ArrayLike) -> EllipsoidSections:

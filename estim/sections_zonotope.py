@@ -1,4 +1,4 @@
-"""A zonotope per slab section (:class:`estim.sections.SectionBatch`).
+"""A zonotope per slab section (:class:`kalman_vs_infoset.estim.sections.SectionBatch`).
 
 Section ``j`` is ``Z(c_j, G_j) = {c_j + G_j xi : |xi|_inf <= 1}`` of the scaled plane
 ``p = (alpha, w)`` (:mod:`estim.sections`). The batch keeps the centres ``(n, 2)`` and
@@ -24,7 +24,7 @@ and applies the operations of :class:`estim.sets.Zonotope` to all sections at on
   of them are tried (Bravo, Alamo & Camacho 2006 make the same observation in ``n``
   dimensions). The choice is affine-invariant, and never larger than the input.
   ``"frobenius"`` is Alamo et al.'s F-radius choice ``lam = G G^T a / (a^T G G^T a +
-  s^2)`` (:meth:`estim.sets.Zonotope.intersect_strip`), which minimises the sum of
+  s^2)`` (:meth:`kalman_vs_infoset.estim.sets.Zonotope.intersect_strip`), which minimises the sum of
   squares of the new generators: in the scaled plane that is the ``w`` row's, and the
   ``w`` interval it leaves can grow several-fold over a few updates (measured on Fig.
   5's prior with one truth's bearings: from 24 km to 124 km in 30 steps, where the
@@ -52,24 +52,23 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
-
-from estim.polygons import ConvexPolygons
-from estim.sections import (
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.sections import (
     BoolArray,
     FloatArray,
     IntArray,
     clip_slabs,
     enclosing_parallelograms,
 )
-from estim.sets import Zonotope
+from kalman_vs_infoset.estim.sets import Zonotope
+from numpy.typing import ArrayLike
 
 
 @dataclass(frozen=True)
 class ZonotopeFamily:
     """Zonotopes of at most ``max_generators`` generators, reduced by ``method``; the
     initial polygons enter as enclosing parallelograms
-    (:func:`estim.sections.enclosing_parallelograms`)."""
+    (:func:`kalman_vs_infoset.estim.sections.enclosing_parallelograms`)."""
 
     max_generators: int = 8
     method: Literal["girard", "combastel"] = "girard"
@@ -136,7 +135,7 @@ class ZonotopeSections:
     def reduced(self) -> ZonotopeSections:
         """At most ``max_generators`` columns (module docstring). Zero columns rank
         below every other, so a section is reduced exactly as
-        :meth:`estim.sets.Zonotope.reduce` reduces its nonzero generators."""
+        :meth:`kalman_vs_infoset.estim.sets.Zonotope.reduce` reduces its nonzero generators."""
         g = self.generators
         n, _, m = g.shape
         cap = self.family.max_generators

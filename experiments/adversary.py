@@ -62,10 +62,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
-from estim.base import Belief, Estimator
-from estim.costs import MissForecast
-from estim.model import Bearing, ChannelModel, Impulse, Range
+from kalman_vs_infoset.estim.base import Belief, Estimator
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Impulse, Range
 
 #: relative margin inside the bound (the other generators' too)
 MARGIN = 1e-9

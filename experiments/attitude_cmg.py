@@ -1,7 +1,7 @@
 """``attitude`` command, controllers ``energy`` and ``euler``: Resurs-P (seed 000, SPEC 2.1).
 
 The scenario (typed tables: :func:`prepare`), the runner's task (one turn a run:
-:func:`experiments.sim.attitude_cmg.one_run`) and the JSON of SPEC 3.1 with
+:func:`kalman_vs_infoset.experiments.sim.attitude_cmg.one_run`) and the JSON of SPEC 3.1 with
 ``lower_bound_energy_N2m2s`` and diagnostics from the runs' rows (:func:`summarise`).
 """
 
@@ -10,16 +10,16 @@ from __future__ import annotations
 import sys
 from typing import Any
 
-from experiments.attitude_cmg_setup import TurnSetup, setup_from_scenario
-from experiments.attitude_est import run_here
-from experiments.errors import InputError
-from experiments.sim.attitude_cmg import (
+from kalman_vs_infoset.experiments.attitude_cmg_setup import TurnSetup, setup_from_scenario
+from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     CONTROLLERS,
     SEED_ENERGY_N2M2S,
     lower_bound_energy_N2m2s,
     one_run,
 )
-from experiments.stats import summary_stats
+from kalman_vs_infoset.experiments.stats import summary_stats
 
 #: runs per task (each turn is its own loop)
 CHUNK = 1

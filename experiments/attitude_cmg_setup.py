@@ -1,15 +1,15 @@
 """Resurs-P scenario (seed 000, SPEC 2.1): a scenario's tables read into the typed
-:class:`~experiments.sim.attitude_cmg_config.CmgScenario` and the
-:class:`~experiments.sim.turn_setup.TurnSetup` of the loop."""
+:class:`~kalman_vs_infoset.experiments.sim.attitude_cmg_config.CmgScenario` and the
+:class:`~kalman_vs_infoset.experiments.sim.turn_setup.TurnSetup` of the loop."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from typing import Any
 
-from experiments.scenario import validate
-from experiments.sim.attitude_cmg_config import CmgScenario
-from experiments.sim.turn_setup import SQRT3, TurnSetup  # noqa: F401 - re-exported
+from kalman_vs_infoset.experiments.scenario import validate
+from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario
+from kalman_vs_infoset.experiments.sim.turn_setup import SQRT3, TurnSetup  # noqa: F401 - re-exported
 
 
 def parse_scenario(source: str, scenario: Mapping[str, Any]) -> CmgScenario:

@@ -1,7 +1,7 @@
 """Attitude loops as consumers of estimators (SPEC 2.5): the names and the outputs.
 
 The loops themselves run a registered estimator through
-:class:`experiments.sim.estimator_loop.EstimatorLoop`; this module resolves the
+:class:`kalman_vs_infoset.experiments.sim.estimator_loop.EstimatorLoop`; this module resolves the
 ``--estimator`` names and draws the CDF figures (settle time, energy index and final
 error, one curve per controller x estimator x noise) of the per-run tables.
 """
@@ -15,9 +15,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from estim import registry
-from experiments.errors import InputError
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments.errors import InputError
 
 
 def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str) -> list[str]:
@@ -45,8 +44,8 @@ PANELS = (
 def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     """CDF figures (PNG, SVG) of the runs' rows, one curve per controller x estimator x
     noise (the tables themselves are the runner's)."""
-    from experiments import figstyle as fs
-    from experiments import plots  # matplotlib only when writing files
+    from kalman_vs_infoset.experiments import figstyle as fs
+    from kalman_vs_infoset.experiments import plots  # matplotlib only when writing files
 
     fig, grid = fs.figure(1, 3, size=(15, 4.4))
     axes = grid[0]
@@ -75,8 +74,8 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
 def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Path]:
     """README figure: one row per scenario, columns settle time / energy / final error,
     one CDF curve per estimator x noise, from the per-run Parquet tables."""
-    from experiments import figstyle as fs
-    from experiments import plots
+    from kalman_vs_infoset.experiments import figstyle as fs
+    from kalman_vs_infoset.experiments import plots
 
     fig, axes = fs.figure(len(tables), 3, size=(15, 3.3 * len(tables)))
     for row, (name, paths) in zip(axes, tables.items(), strict=True):
@@ -103,7 +102,7 @@ def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Pat
 def run_here(module, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
     """A module's attitude runs in this process, without files (tests, notebooks): the
     same chunks, retries and summary as the command (:mod:`experiments.runner`)."""
-    from experiments.runner import batched_task
+    from kalman_vs_infoset.experiments.runner import batched_task
 
     t0 = time.perf_counter()
     setup = module.prepare(source, dict(scenario), controller, noise)

@@ -1,14 +1,14 @@
 """``attitude`` command, controller ``game``: the three-rotor gyrostat of seed 004 (SPEC 2.4).
 
 :func:`prepare` reads the scenario's typed tables
-(:class:`experiments.sim.gyrostat_config.GyrostatScenario`) and designs a* by the
+(:class:`kalman_vs_infoset.experiments.sim.gyrostat_config.GyrostatScenario`) and designs a* by the
 iteration of seed section 3
-(:meth:`experiments.sim.gyrostat_config.GyrostatSetup.from_config`); :func:`task`
+(:meth:`kalman_vs_infoset.experiments.sim.gyrostat_config.GyrostatSetup.from_config`); :func:`task`
 simulates a chunk of turns batched (:func:`experiments.sim.gyrostat.simulate_turn`);
 :func:`summarise` gives the JSON of SPEC 3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
 
 The law reads ``(q, x)`` from an estimator (``perfect``, ``ukf``, ``box``;
-:mod:`experiments.sim.gyrostat`). Noise mapping: ``none`` = perfect measurements,
+:mod:`kalman_vs_infoset.experiments.sim.gyrostat`). Noise mapping: ``none`` = perfect measurements,
 no disturbance; ``random`` = uniform random disturbance torques and bounded uniform
 measurement errors; ``game`` = the adversarial disturbance and the same bounded
 measurement errors. ``[simulation] disturbance`` overrides the
@@ -22,18 +22,17 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-
-from experiments.attitude_est import run_here
-from experiments.errors import InputError
-from experiments.scenario import validate
-from experiments.sim.estimator_loop import NOISES
-from experiments.sim.gyrostat import simulate_turn
-from experiments.sim.gyrostat_config import (  # noqa: F401 - initial_quaternion re-exported
+from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.scenario import validate
+from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
+from kalman_vs_infoset.experiments.sim.gyrostat import simulate_turn
+from kalman_vs_infoset.experiments.sim.gyrostat_config import (  # noqa: F401 - initial_quaternion re-exported
     GyrostatScenario,
     GyrostatSetup,
     initial_quaternion,
 )
-from experiments.stats import summary_stats
+from kalman_vs_infoset.experiments.stats import summary_stats
 
 #: runs per task: the loop is vectorised over the runs of a chunk
 CHUNK = 8

@@ -2,7 +2,7 @@
 
 The scenario's typed tables (:class:`experiments.sim.attitude_rw_config.RwScenario`,
 read by :func:`prepare`), the runner's task over a chunk of runs (:func:`task`, the
-loop itself is :func:`experiments.sim.attitude_rw.simulate_runs`) and the JSON of
+loop itself is :func:`kalman_vs_infoset.experiments.sim.attitude_rw.simulate_runs`) and the JSON of
 SPEC 3.1 from the runs' rows (:func:`summarise`).
 """
 
@@ -13,16 +13,15 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-
-from experiments.attitude_est import run_here
-from experiments.errors import InputError
-from experiments.scenario import validate
-from experiments.sim.attitude_rw import make_controller, simulate_runs
-from experiments.sim.attitude_rw_config import RwScenario
-from experiments.sim.estimator_loop import NOISES
-from experiments.stats import summary_stats
-from guidance.attitude.lqr import LQRController
-from guidance.attitude.pd import regime_boundaries
+from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.scenario import validate
+from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
+from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
+from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
+from kalman_vs_infoset.experiments.stats import summary_stats
+from kalman_vs_infoset.guidance.attitude.lqr import LQRController
+from kalman_vs_infoset.guidance.attitude.pd import regime_boundaries
 
 CONTROLLERS = ("pd", "lqr")
 #: runs per task: the loop is vectorised over the runs of a chunk

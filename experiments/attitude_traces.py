@@ -1,7 +1,7 @@
 """Traces of the attitude loops: one run replayed with recording, as long-format rows.
 
 ``TRACERS[controller](setup, controller, noise, estimator, seed_seq)`` returns one row
-per (step, axis) (:func:`experiments.traces.long_rows`) for the run seeded by
+per (step, axis) (:func:`kalman_vs_infoset.experiments.traces.long_rows`) for the run seeded by
 ``seed_seq`` (the runner's seed of that run id: the same realisation as its row).
 Columns common to every loop (units in the names):
 
@@ -23,9 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-
-from estim.rotations import error_quaternion, qlog
-from experiments.traces import long_rows
+from kalman_vs_infoset.estim.rotations import error_quaternion, qlog
+from kalman_vs_infoset.experiments.traces import long_rows
 
 
 def _error_rotvec_deg(q: np.ndarray, q_target: np.ndarray) -> np.ndarray:
@@ -40,8 +39,8 @@ def _energy(torque_Nm: np.ndarray, dt_s: float) -> np.ndarray:
 
 def trace_rw(config, controller: str, noise: str, estimator: str, seed_seq) -> pd.DataFrame:
     """Reaction-wheel loops (``pd``, ``lqr``; ``config`` an
-    :class:`experiments.sim.attitude_rw_config.RwScenario`)."""
-    from experiments.sim.attitude_rw import simulate_runs
+    :class:`kalman_vs_infoset.experiments.sim.attitude_rw_config.RwScenario`)."""
+    from kalman_vs_infoset.experiments.sim.attitude_rw import simulate_runs
 
     rec: dict = {}
     simulate_runs(config, controller, noise, [np.random.default_rng(seed_seq)], estimator, rec)
@@ -76,7 +75,7 @@ def trace_rw(config, controller: str, noise: str, estimator: str, seed_seq) -> p
 
 def trace_cmg(setup, controller: str, noise: str, estimator: str, seed_seq) -> pd.DataFrame:
     """Gyrodine turns (``energy``, ``euler``; seed 000)."""
-    from experiments.sim.attitude_cmg import simulate_turn
+    from kalman_vs_infoset.experiments.sim.attitude_cmg import simulate_turn
 
     rng = np.random.default_rng(seed_seq) if noise != "none" else None
     rec: dict = {}
@@ -111,8 +110,8 @@ def trace_cmg(setup, controller: str, noise: str, estimator: str, seed_seq) -> p
 
 def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq) -> pd.DataFrame:
     """The gyrostat game law (seed 004)."""
-    from experiments.sim.gyrostat import simulate_turn
-    from guidance.attitude.gyrostat import PHI, Q, X, eta_v_rate
+    from kalman_vs_infoset.experiments.sim.gyrostat import simulate_turn
+    from kalman_vs_infoset.guidance.attitude.gyrostat import PHI, Q, X, eta_v_rate
 
     s = setup
     rng = [np.random.default_rng(seed_seq)]

@@ -1,6 +1,6 @@
-"""Command line: ``python -m experiments COMMAND ...`` (docs/models.md §3.1).
+"""Command line: ``kvi COMMAND ...`` (docs/models.md §3.1).
 
-Each command lives in its own module ``experiments.cmd_<name>`` exposing
+Each command lives in its own module ``kalman_vs_infoset.experiments.cmd_<name>`` exposing
 ``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed
 as one JSON object on the last line of stdout with ``--json``, or as a readable
 table otherwise (``render(result) -> str`` when the module has one). Bad input
@@ -17,22 +17,48 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import numpy as np
-
-from experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError
 
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "intercept": ("experiments.cmd_intercept", "Monte Carlo of the impulsive intercept"),
-    "compare": ("experiments.cmd_compare", "estimators x noises on paired realisations"),
-    "adversaries": ("experiments.cmd_adversaries", "adversary strength: game, greedy, look-ahead"),
-    "sweep": ("experiments.cmd_sweep", "compare repeated over the values of one scenario field"),
-    "fig5": ("experiments.cmd_fig5", "the seed's Fig. 5 statistics (four variants)"),
-    "attitude": ("experiments.cmd_attitude", "attitude-loop scenarios"),
-    "pd-gains": ("experiments.cmd_pd_gains", "quaternion-PD gain study, f0(phi0) fit"),
-    "bench": ("experiments.cmd_bench", "per-step costs of the estimators, side by side"),
-    "tightness": ("experiments.cmd_tightness", "a set's interval of the miss vs the exact one"),
-    "plot": ("experiments.cmd_plot", "figures of traces written by --trace"),
-    "paper-figures": ("experiments.cmd_paper_figures", "redraw every paper figure we model"),
+    "intercept": (
+        "kalman_vs_infoset.experiments.cmd_intercept",
+        "Monte Carlo of the impulsive intercept",
+    ),
+    "compare": (
+        "kalman_vs_infoset.experiments.cmd_compare",
+        "estimators x noises on paired realisations",
+    ),
+    "adversaries": (
+        "kalman_vs_infoset.experiments.cmd_adversaries",
+        "adversary strength: game, greedy, look-ahead",
+    ),
+    "sweep": (
+        "kalman_vs_infoset.experiments.cmd_sweep",
+        "compare repeated over the values of one scenario field",
+    ),
+    "fig5": (
+        "kalman_vs_infoset.experiments.cmd_fig5",
+        "the seed's Fig. 5 statistics (four variants)",
+    ),
+    "attitude": ("kalman_vs_infoset.experiments.cmd_attitude", "attitude-loop scenarios"),
+    "pd-gains": (
+        "kalman_vs_infoset.experiments.cmd_pd_gains",
+        "quaternion-PD gain study, f0(phi0) fit",
+    ),
+    "bench": (
+        "kalman_vs_infoset.experiments.cmd_bench",
+        "per-step costs of the estimators, side by side",
+    ),
+    "tightness": (
+        "kalman_vs_infoset.experiments.cmd_tightness",
+        "a set's interval of the miss vs the exact one",
+    ),
+    "plot": ("kalman_vs_infoset.experiments.cmd_plot", "figures of traces written by --trace"),
+    "paper-figures": (
+        "kalman_vs_infoset.experiments.cmd_paper_figures",
+        "redraw every paper figure we model",
+    ),
 }
 
 
@@ -71,7 +97,7 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="python -m experiments", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
@@ -109,7 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog} {args.command}: interrupted; rerun to resume", file=sys.stderr)
         return 130
     except RuntimeError as exc:
-        from experiments.runner import WorkerLost
+        from kalman_vs_infoset.experiments.runner import WorkerLost
 
         if not isinstance(exc, WorkerLost):
             raise

@@ -1,10 +1,10 @@
-"""``python -m experiments adversaries SCENARIO.toml``: how strong can the adversary be?
+"""``kvi adversaries SCENARIO.toml``: how strong can the adversary be?
 
 Three rules against the same estimators on the same truths (paired runs, the runner's
 seeding), strongest search last:
 
 * ``game``: the seed's adversary (its own information set, the worst point kept in the
-  measurement's interval; :class:`experiments.noise.GameNoise`);
+  measurement's interval; :class:`kalman_vs_infoset.experiments.noise.GameNoise`);
 * ``targeted``: white box, greedy over one step (:class:`experiments.adversary.TargetedNoise`);
 * ``lookahead``: white box, k-step best response by tree search over the pursuer's own
   estimator and law (:class:`experiments.adversary.LookaheadNoise`; ``--lookahead K``
@@ -23,12 +23,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from estim import registry
-from experiments import plots
-from experiments.cmd_compare import _list_of, run_grid
-from experiments.cmd_intercept import add_common, positive_int, resolve
-from experiments.report import write_tables, write_text
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import plots
+from kalman_vs_infoset.experiments.cmd_compare import _list_of, run_grid
+from kalman_vs_infoset.experiments.cmd_intercept import add_common, positive_int, resolve
+from kalman_vs_infoset.experiments.report import write_tables, write_text
 
 RULES = ("game", "targeted", "lookahead")
 

@@ -1,12 +1,12 @@
-"""``python -m experiments attitude SCENARIO.toml [--controller NAME] [--noise ...]`` (SPEC 3.1).
+"""``kvi attitude SCENARIO.toml [--controller NAME] [--noise ...]`` (SPEC 3.1).
 
 Loads the scenario (``--set`` overrides as for the intercept), takes the controller from
 ``--controller`` or the file's top-level ``controller`` key and dispatches by name to the
 module that validates it and runs it:
 
-* ``pd``, ``lqr``        -> :mod:`experiments.attitude_rw`
-* ``energy``, ``euler``  -> :mod:`experiments.attitude_cmg`
-* ``game``               -> :mod:`experiments.attitude_gyrostat`
+* ``pd``, ``lqr``        -> :mod:`kalman_vs_infoset.experiments.attitude_rw`
+* ``energy``, ``euler``  -> :mod:`kalman_vs_infoset.experiments.attitude_cmg`
+* ``game``               -> :mod:`kalman_vs_infoset.experiments.attitude_gyrostat`
 
 Each module offers ``prepare`` (validation), ``task`` (the rows of a chunk of runs),
 ``CHUNK`` and ``summarise`` (the JSON from the rows); the runs go through the same
@@ -27,24 +27,30 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-
-from experiments import traces
-from experiments.attitude_est import resolve_estimators, write_figure
-from experiments.attitude_traces import TRACERS
-from experiments.cmd_intercept import positive_int, seed_int
-from experiments.errors import InputError
-from experiments.runner import Job, batched_task, check_seed, job_path, run_job, run_seed
-from experiments.scenario import read
-from experiments.sim.estimator_loop import NOISES
-from experiments.sim.intercept_config import check_name
+from kalman_vs_infoset.experiments import traces
+from kalman_vs_infoset.experiments.attitude_est import resolve_estimators, write_figure
+from kalman_vs_infoset.experiments.attitude_traces import TRACERS
+from kalman_vs_infoset.experiments.cmd_intercept import positive_int, seed_int
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.runner import (
+    Job,
+    batched_task,
+    check_seed,
+    job_path,
+    run_job,
+    run_seed,
+)
+from kalman_vs_infoset.experiments.scenario import read
+from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
+from kalman_vs_infoset.experiments.sim.intercept_config import check_name
 
 #: controller name -> module exposing prepare, task, CHUNK and summarise
 DISPATCH = {
-    "pd": "experiments.attitude_rw",
-    "lqr": "experiments.attitude_rw",
-    "energy": "experiments.attitude_cmg",
-    "euler": "experiments.attitude_cmg",
-    "game": "experiments.attitude_gyrostat",
+    "pd": "kalman_vs_infoset.experiments.attitude_rw",
+    "lqr": "kalman_vs_infoset.experiments.attitude_rw",
+    "energy": "kalman_vs_infoset.experiments.attitude_cmg",
+    "euler": "kalman_vs_infoset.experiments.attitude_cmg",
+    "game": "kalman_vs_infoset.experiments.attitude_gyrostat",
 }
 
 
@@ -158,7 +164,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if len(ok) and args.runs > 1:
         files += write_figure(out_dir, stem, ok)
     if histories:
-        from experiments import figstyle, plots_attitude
+        from kalman_vs_infoset.experiments import figstyle, plots_attitude
 
         fig = plots_attitude.time_histories(histories, f"{stem}: time histories")
         files += [str(f) for f in figstyle.save(fig, out_dir / f"{stem}-history")]

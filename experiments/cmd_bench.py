@@ -1,4 +1,4 @@
-"""``python -m experiments bench``: per-step costs side by side, in one process
+"""``kvi bench``: per-step costs side by side, in one process
 (docs/models.md §3.1).
 
 Measured on the same problem (seed 003's Fig. 3 boxes, one channel):
@@ -38,14 +38,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from estim import registry
-from estim.costs import MissForecast
-from estim.model import Bearing
-from experiments.cmd_intercept import positive_int
-from experiments.runner import run_experiment
-from experiments.scenario import load_scenario
-from experiments.sim.intercept import build_estimator, run_engagement
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.model import Bearing
+from kalman_vs_infoset.experiments.cmd_intercept import positive_int
+from kalman_vs_infoset.experiments.runner import run_experiment
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept import build_estimator, run_engagement
 
 
 def add_arguments(p) -> None:

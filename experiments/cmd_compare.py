@@ -1,4 +1,4 @@
-"""``python -m experiments compare SCENARIO.toml``: estimators x noises, paired by run.
+"""``kvi compare SCENARIO.toml``: estimators x noises, paired by run.
 
 Every (estimator, noise) pair runs on the same seeds, so run ``j`` has the same
 initial truth (and, for random noise, the same noise stream) for every estimator.
@@ -13,14 +13,13 @@ import time
 from typing import Any
 
 import pandas as pd
-
-from estim import registry
-from experiments import plots, traces
-from experiments.cmd_fig5 import miss_floor_m
-from experiments.cmd_intercept import add_common, draw_traces, resolve
-from experiments.report import summary_markdown, write_tables, write_text
-from experiments.runner import results_path, run_experiment, summarise
-from experiments.sim.intercept_config import NOISES
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import plots, traces
+from kalman_vs_infoset.experiments.cmd_fig5 import miss_floor_m
+from kalman_vs_infoset.experiments.cmd_intercept import add_common, draw_traces, resolve
+from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
+from kalman_vs_infoset.experiments.runner import results_path, run_experiment, summarise
+from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
 
 
 def _list_of(allowed):

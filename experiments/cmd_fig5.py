@@ -1,4 +1,4 @@
-"""``python -m experiments fig5``: the statistics of seed 003 Fig. 5 (the main experiment).
+"""``kvi fig5``: the statistics of seed 003 Fig. 5 (the main experiment).
 
 Four variants, {bearing only, bearing + range} x {random, game} noise, 50 runs each
 on the same seeds; writes the per-run table (Parquet, CSV), a summary table
@@ -13,13 +13,12 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-
-from estim import registry
-from experiments import plots
-from experiments.cmd_intercept import positive_int, seed_int
-from experiments.report import summary_markdown, write_tables, write_text
-from experiments.runner import run_experiment, summarise
-from experiments.scenario import load_scenario
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import plots
+from kalman_vs_infoset.experiments.cmd_intercept import positive_int, seed_int
+from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
+from kalman_vs_infoset.experiments.runner import run_experiment, summarise
+from kalman_vs_infoset.experiments.scenario import load_scenario
 
 VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + range"))
 

@@ -1,4 +1,4 @@
-"""``python -m experiments intercept SCENARIO.toml``: Monte Carlo of the intercept (SPEC 3.1)."""
+"""``kvi intercept SCENARIO.toml``: Monte Carlo of the intercept (SPEC 3.1)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from estim import registry
-from experiments import traces
-from experiments.errors import InputError
-from experiments.runner import results_path, run_experiment, summarise
-from experiments.scenario import load_scenario
-from experiments.sim.intercept_config import NOISES
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import traces
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.runner import results_path, run_experiment, summarise
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
 
 
 def _int_at_least(lo: int, what: str):
@@ -100,7 +100,7 @@ def run(args) -> dict[str, Any]:
 def draw_traces(files, sc) -> list:
     """The figures of freshly written traces (:mod:`experiments.cmd_plot`), with the
     paper's printed miss and fuel of the scenario's ``[reference]`` marked."""
-    from experiments.cmd_plot import plot_files
+    from kalman_vs_infoset.experiments.cmd_plot import plot_files
 
     steps = [f for f in files if str(f).endswith("-trace.parquet")]
     return plot_files(steps, paper=paper_marks(sc))

@@ -1,4 +1,4 @@
-"""``python -m experiments paper-figures [--out results/figures] [--runs N]``.
+"""``kvi paper-figures [--out results/figures] [--runs N]``.
 
 Redraws every figure of the papers that our models cover, each file named after the
 paper's figure (PNG and SVG): seed 003 ``kp_fig3``, ``kp_fig4``, ``kp_fig5`` (and our
@@ -26,13 +26,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from experiments import figstyle as fs
-from experiments import paper_figs_attitude as att
-from experiments import paper_figs_kp as kp
-from experiments import paper_figs_resurs as resurs
-from experiments.cmd_intercept import positive_int
-from experiments.errors import InputError
-from experiments.files import atomic_write
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments import paper_figs_attitude as att
+from kalman_vs_infoset.experiments import paper_figs_kp as kp
+from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
+from kalman_vs_infoset.experiments.cmd_intercept import positive_int
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.files import atomic_write
 
 #: figure name -> group that draws it (a group draws all its figures at once)
 FIGURES: dict[str, str] = {

@@ -1,9 +1,9 @@
-"""``python -m experiments pd-gains [--angles-deg LIST]``: quaternion-PD gain study (SPEC 2.2, 3.1).
+"""``kvi pd-gains [--angles-deg LIST]``: quaternion-PD gain study (SPEC 2.2, 3.1).
 
 For every requested angle: the settle-time map over ``(k_q, k_w)`` (one numpy batch),
 the efficient-coefficient curve and its parabola ``k_q = f0 k_w^2`` (seed eq. (27));
 then the fit of eq. (28) to ``f0(phi0)``. Defaults follow the reading that reproduces
-the seed's table (:data:`guidance.attitude.gain_study.StudySettings` docstring);
+the seed's table (:data:`kalman_vs_infoset.guidance.attitude.gain_study.StudySettings` docstring);
 every convention is an option. Also writes (PNG + SVG in ``--out``): the 150 deg
 settle-time map with wheel limits (seed Fig. 10), ``f0`` against the table (Fig. 14)
 and the settle time against the angle for the fitted rule and the baseline rule (10)
@@ -19,11 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.guidance.attitude import gain_study as gs
+from kalman_vs_infoset.guidance.attitude.pd import baseline_kq, term_scale
 from tqdm import tqdm
-
-from experiments.errors import InputError
-from guidance.attitude import gain_study as gs
-from guidance.attitude.pd import baseline_kq, term_scale
 
 DEFAULT_FIT_ANGLES = (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
 

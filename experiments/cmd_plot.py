@@ -1,4 +1,4 @@
-"""``python -m experiments plot TRACE.parquet [...]``: the figures of traces.
+"""``kvi plot TRACE.parquet [...]``: the figures of traces.
 
 Every file is a trace written by ``--trace`` (:mod:`experiments.traces`). Intercept
 traces (several at once: e.g. the estimators and noises of one ``compare``) give, per
@@ -7,7 +7,7 @@ noise) and, when several estimators are given, their forecast-miss intervals ove
 per noise; a trace with a sets file beside it (``-trace-sets.parquet``) also gives the
 set in 3-D at ``t = 1 s`` before and after the measurements (the seed's Fig. 4), 2-D
 pictures at six times and an animation (GIF). Attitude traces give the time histories
-of :func:`experiments.plots_attitude.time_histories`. The paper's printed miss and
+of :func:`kalman_vs_infoset.experiments.plots_attitude.time_histories`. The paper's printed miss and
 fuel are marked when the results' JSON beside the trace holds a ``[reference]``.
 Figures are PNG and SVG beside the first trace (or in ``--out``).
 """
@@ -20,9 +20,8 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-
-from experiments import figstyle as fs
-from experiments.errors import InputError
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments.errors import InputError
 
 NOISE_ORDER = ("random", "game", "bias", "none")
 
@@ -62,7 +61,7 @@ def _noises(df: pd.DataFrame) -> list[str]:
 
 def plot_files(paths, paper=None, out: Path | None = None, animation: bool = True) -> list[Path]:
     """Draw every figure of the traces ``paths``; returns the files written."""
-    from experiments import plots_attitude, plots_intercept
+    from kalman_vs_infoset.experiments import plots_attitude, plots_intercept
 
     paths = [Path(p) for p in paths]
     if not paths:
@@ -96,7 +95,7 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
 
 
 def _set_figures(path: Path, out: Path, animation: bool) -> list[Path]:
-    from experiments import plots_sets
+    from kalman_vs_infoset.experiments import plots_sets
 
     sets_path = path.with_name(path.name.replace("-trace.parquet", "-trace-sets.parquet"))
     if not sets_path.exists():

@@ -1,4 +1,4 @@
-"""``python -m experiments sweep SCENARIO.toml --key TABLE.KEY --values "[...]"``.
+"""``kvi sweep SCENARIO.toml --key TABLE.KEY --values "[...]"``.
 
 A sensitivity study: the ``compare`` experiment (estimators x noises on paired runs)
 repeated for each value of one scenario field, e.g. the Kalman filters' noise
@@ -21,15 +21,14 @@ import tomllib
 from typing import Any
 
 import pandas as pd
-
-from experiments import plots
-from experiments.cmd_compare import add_arguments as add_compare_arguments
-from experiments.cmd_compare import run_grid
-from experiments.cmd_intercept import resolve
-from experiments.errors import InputError
-from experiments.files import atomic_write
-from experiments.report import summary_markdown, write_text
-from experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments import plots
+from kalman_vs_infoset.experiments.cmd_compare import add_arguments as add_compare_arguments
+from kalman_vs_infoset.experiments.cmd_compare import run_grid
+from kalman_vs_infoset.experiments.cmd_intercept import resolve
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.report import summary_markdown, write_text
+from kalman_vs_infoset.experiments.scenario import load_scenario
 
 
 def _toml_values(text: str) -> list[Any]:

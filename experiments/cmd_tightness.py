@@ -1,14 +1,14 @@
-"""``python -m experiments tightness SCENARIO.toml``: a set's interval of the miss
+"""``kvi tightness SCENARIO.toml``: a set's interval of the miss
 against the exact one (issue 12).
 
 One lateral channel of the scenario, in the auxiliary model of seed 003 (the model
-the exact reference solves, :mod:`estim.exact_reference`): the truth is drawn from
+the exact reference solves, :mod:`kalman_vs_infoset.estim.exact_reference`): the truth is drawn from
 the scenario's truth boxes (``y``, ``Vy``, ``x``, closing speed ``-Vx``) and moves by
 ``x -= e dt``, ``Y'' = v`` with ``v`` uniform in ``+-nu``, constant over each decision
 step, ``V += k`` per impulse; one channel, so the range is ``x``. Bearing errors by
 ``--noise``: ``random`` uniform in the bound; ``bias`` held at ``+a`` (a hair inside);
 ``switch`` held at ``+a``, then at ``-a`` from ``--switch-s`` on; ``game`` the seed's
-adversary with its own set (:class:`experiments.noise.GameNoise`). Range
+adversary with its own set (:class:`kalman_vs_infoset.experiments.noise.GameNoise`). Range
 measurements when the scenario's range finder is on (errors by the same kind).
 
 The estimator under test (:func:`set_under_test`) gets the same measurements; with
@@ -32,18 +32,22 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from estim import registry
-from estim.costs import ZeroEffortMiss
-from estim.exact_reference import ExactChannelSet, History, InconsistentHistory, PriorBox
-from estim.model import Bearing, Range
-from experiments.cmd_intercept import seed_int
-from experiments.errors import InputError
-from experiments.files import atomic_write
-from experiments.noise import RandomNoise
-from experiments.scenario import load_scenario
-from experiments.sim.intercept import build_estimator, build_noise
-from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.exact_reference import (
+    ExactChannelSet,
+    History,
+    InconsistentHistory,
+    PriorBox,
+)
+from kalman_vs_infoset.estim.model import Bearing, Range
+from kalman_vs_infoset.experiments.cmd_intercept import seed_int
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.noise import RandomNoise
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
+from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 
 NOISE_KINDS = ("random", "bias", "game", "switch")
 INSIDE_REL_TOL = 1e-6
@@ -277,7 +281,7 @@ def run(args) -> dict[str, Any]:
 
 
 def _write(result: dict[str, Any], stem: Path) -> list[Path]:
-    from experiments.plots import plt  # Agg backend
+    from kalman_vs_infoset.experiments.plots import plt  # Agg backend
 
     fig, (ax, ax_r) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
     cols = ("times_s", "set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "truth_w_m", "ratio")

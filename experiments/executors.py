@@ -17,10 +17,10 @@ from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 
-from estim import _kernels as _k
-from experiments import provenance
-from experiments.errors import InputError
-from experiments.provenance import code_identity
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.experiments import provenance
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.provenance import code_identity
 
 #: how often a pool worker checks that its parent is alive (s)
 WATCHDOG_S = 1.0

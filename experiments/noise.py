@@ -35,13 +35,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-
-from estim.costs import MissForecast
-from estim.infoset import InformationSet, InformationSetEstimator
-from estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.infoset import InformationSet, InformationSetEstimator
+from kalman_vs_infoset.estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
 
 #: noise kinds of the intercept (``random`` and ``game`` are SPEC 1.6's required two;
-#: ``targeted`` and ``lookahead`` see the pursuer: :mod:`experiments.adversary`)
+#: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
 NOISES = ("random", "game", "bias", "targeted", "lookahead")
 
 

@@ -1,7 +1,7 @@
 """The figures of the attitude papers redrawn from our runs (``paper-figures``).
 
 The helpers (:func:`trace`, the component and history figures) serve seed 000's
-figures too (:mod:`experiments.paper_figs_resurs`).
+figures too (:mod:`kalman_vs_infoset.experiments.paper_figs_resurs`).
 
 Seed 001 (Akimov, ``smallsat_rw.toml``, noise none): ``akimov_fig3`` wheel momentum and
 torque of the 150-deg turn, ``fig4`` its angle, ``fig5`` the final transient, ``fig6`` and
@@ -21,15 +21,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from experiments import cmd_attitude
-from experiments import figstyle as fs
-from experiments import plots_attitude as pa
-from experiments.attitude_traces import TRACERS
-from experiments.runner import run_seed
-from experiments.scenario import read
-from guidance.attitude import gain_study as gs
-from guidance.attitude.pd import baseline_kq
+from kalman_vs_infoset.experiments import cmd_attitude
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments import plots_attitude as pa
+from kalman_vs_infoset.experiments.attitude_traces import TRACERS
+from kalman_vs_infoset.experiments.runner import run_seed
+from kalman_vs_infoset.experiments.scenario import read
+from kalman_vs_infoset.guidance.attitude import gain_study as gs
+from kalman_vs_infoset.guidance.attitude.pd import baseline_kq
 
 AKIMOV_SETTLE_S = 35.6
 
@@ -181,7 +180,7 @@ def _zoom(ctx, name, df, settle_s, title, log=False) -> None:
 
 
 def _gain_figures(ctx) -> dict[str, Any]:
-    from experiments.cmd_pd_gains import fig15_times
+    from kalman_vs_infoset.experiments.cmd_pd_gains import fig15_times
 
     step = 0.1 if ctx.quick else gs.MANEUVER_150.grid_step
     smap = gs.settle_time_map(150.0, replace(gs.MANEUVER_150, grid_step=step))

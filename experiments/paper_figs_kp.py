@@ -17,13 +17,12 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from experiments import figstyle as fs
-from experiments import plots_intercept, plots_sets
-from experiments.cmd_fig5 import miss_floor_m
-from experiments.runner import run_experiment
-from experiments.scenario import load_scenario
-from experiments.traces import intercept_trace
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments import plots_intercept, plots_sets
+from kalman_vs_infoset.experiments.cmd_fig5 import miss_floor_m
+from kalman_vs_infoset.experiments.runner import run_experiment
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.traces import intercept_trace
 
 NOISES = ("random", "game")
 

@@ -15,10 +15,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from experiments import figstyle as fs
-from experiments import plots_attitude as pa
-from experiments.paper_figs_attitude import _components, _history, trace
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments import plots_attitude as pa
+from kalman_vs_infoset.experiments.paper_figs_attitude import _components, _history, trace
 
 PAPER_Z = {"energy": 2150.0, "euler": 11200.0}
 

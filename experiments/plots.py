@@ -13,9 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from experiments import figstyle as fs
-from experiments.figstyle import plt  # noqa: F401 - re-exported for older callers
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments.figstyle import plt  # noqa: F401 - re-exported for older callers
 
 PANELS = (("miss_m", "miss distance, m"), ("fuel_mps", "fuel (sum of |impulses|), m/s"))
 CDF_LABEL = "fraction of runs (CDF), -"

@@ -1,4 +1,4 @@
-"""Time histories of attitude traces (:mod:`experiments.attitude_traces`).
+"""Time histories of attitude traces (:mod:`kalman_vs_infoset.experiments.attitude_traces`).
 
 :func:`time_histories` is the figure the ``attitude`` command draws for a traced run:
 per body axis (columns) the attitude error, the body rate, the torque on the body and
@@ -6,7 +6,7 @@ the actuator momentum (with the limits where the loop has them), and below them 
 principal error angle with the estimator's knowledge bound, the energy index so far
 and, where the loop has them, the gyrostat's switching functions or the energy law's
 auxiliary system. :func:`axis_panels` and :func:`step_panel` are the building blocks
-of the paper figures (:mod:`experiments.paper_figures`).
+of the paper figures (:mod:`kalman_vs_infoset.experiments.paper_figures`).
 
 One curve per trace, coloured by its estimator and styled by its noise
 (:mod:`experiments.figstyle`); limits and references are grey, the truth is what the
@@ -19,8 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-
-from experiments import figstyle as fs
+from kalman_vs_infoset.experiments import figstyle as fs
 
 AXES = (1, 2, 3)
 #: (column, axis label) of the per-axis rows, in order

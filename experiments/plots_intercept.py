@@ -10,7 +10,7 @@
   (the loops are closed, so the truths part as the impulses differ): the interval
   relative to the truth's forecast, its width, and the fuel spent.
 
-Style (colour = estimator, line style = noise): :mod:`experiments.figstyle`.
+Style (colour = estimator, line style = noise): :mod:`kalman_vs_infoset.experiments.figstyle`.
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
-
-from experiments import figstyle as fs
+from kalman_vs_infoset.experiments import figstyle as fs
 
 
 def _one(df: pd.DataFrame, run: int, channel: str | None) -> pd.DataFrame:

@@ -11,7 +11,7 @@ zero-effort miss ``w = omega x^2 / e``), each at its range ``x``:
 * :func:`animate`: the same projection over the whole engagement as a GIF (matplotlib's
   pillow writer).
 
-Colour = estimator (:mod:`experiments.figstyle`); the truth is black.
+Colour = estimator (:mod:`kalman_vs_infoset.experiments.figstyle`); the truth is black.
 """
 
 from __future__ import annotations
@@ -20,11 +20,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.experiments import figstyle as fs
 from matplotlib import animation
 from matplotlib.collections import PolyCollection
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
-from experiments import figstyle as fs
 
 
 def _sections(d: pd.DataFrame):

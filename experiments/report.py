@@ -7,8 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-
-from experiments.files import atomic_write
+from kalman_vs_infoset.experiments.files import atomic_write
 
 
 def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:

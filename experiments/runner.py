@@ -39,15 +39,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
+from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
+from kalman_vs_infoset.experiments.stats import summary_stats
 from tqdm import tqdm
-
-from experiments.errors import InputError
-from experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
-from experiments.files import atomic_write
-from experiments.provenance import code_identity
-from experiments.sim.intercept import run_engagement
-from experiments.sim.intercept_config import InterceptScenario
-from experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
 

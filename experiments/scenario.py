@@ -1,6 +1,6 @@
 """Reading scenario files: TOML, ``--set`` overrides, typed validation, one-line errors.
 
-Above the simulations (:mod:`experiments.sim`): a file is read (UTF-8 TOML, stdlib
+Above the simulations (:mod:`kalman_vs_infoset.experiments.sim`): a file is read (UTF-8 TOML, stdlib
 ``tomllib``), overridden, and validated by the simulation's typed tables (pydantic);
 every problem becomes an :class:`~experiments.errors.InputError` of one line naming the
 file and the field, which the command line prints with exit status 2.
@@ -13,11 +13,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.sim.fields import first_error
+from kalman_vs_infoset.experiments.sim.intercept_config import SAFE_NAME, InterceptScenario
 from pydantic import BaseModel, ValidationError
-
-from experiments.errors import InputError
-from experiments.sim.fields import first_error
-from experiments.sim.intercept_config import SAFE_NAME, InterceptScenario
 
 M = TypeVar("M", bound=BaseModel)
 

@@ -10,7 +10,7 @@ before; a trace is rewritten whenever it is asked for.
 Files, beside ``<job>.parquet``:
 
 * ``<job>-trace.parquet``: intercept, one row per (run, step, channel) (the columns of
-  :func:`experiments.sim.trace.channel_row` plus ``step``, ``t_s``, ``channel``,
+  :func:`kalman_vs_infoset.experiments.sim.trace.channel_row` plus ``step``, ``t_s``, ``channel``,
   ``impulse_mps``, ``fuel_mps``, ``checked``, and the run's ``miss_m`` and
   ``final_fuel_mps``); attitude, one row per (run, step, axis)
   (the per-axis quantities, with the per-step ones repeated on the three axis rows);
@@ -28,11 +28,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from experiments.errors import InputError
-from experiments.files import atomic_write
-from experiments.sim.intercept import run_engagement
-from experiments.sim.trace import Recorder
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+from kalman_vs_infoset.experiments.sim.trace import Recorder
 
 #: most runs one --trace may name (each is replayed with every step recorded)
 MAX_TRACED = 20
@@ -101,7 +100,7 @@ def write_parquet(df: pd.DataFrame, path: Path) -> Path:
 def intercept_trace(sc, estimator: str, noise: str, seed: int, runs: list[int], sets_every=10):
     """Replay ``runs`` of a job with the recorder on: ``(steps, sets)`` DataFrames and
     the replayed results by run (for checks)."""
-    from experiments.runner import run_seed
+    from kalman_vs_infoset.experiments.runner import run_seed
 
     frames, set_frames, results = [], [], {}
     base = {"scenario": sc.name, "estimator": estimator, "noise": noise, "seed": seed}

@@ -10,7 +10,7 @@ from __future__ import annotations
 import traceback
 from dataclasses import dataclass
 
-from experiments.cli import main
+from kalman_vs_infoset.experiments.cli import main
 
 # an intercept started ~1000 km out: 35 steps of the Fig. 3 model
 SHORT = """

@@ -8,8 +8,7 @@ that cuts a corner is caught.
 from __future__ import annotations
 
 import numpy as np
-
-from estim.sets import Box, Ellipsoid, Zonotope
+from kalman_vs_infoset.estim.sets import Box, Ellipsoid, Zonotope
 
 
 def random_ellipsoid(rng: np.random.Generator, n: int, rank: int | None = None) -> Ellipsoid:

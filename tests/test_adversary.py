@@ -8,11 +8,10 @@ import json
 
 import numpy as np
 import pytest
-
-from estim.costs import MissForecast
-from estim.kalman import KalmanChannelEstimator
-from estim.model import Bearing, ChannelModel, ChannelPrior
-from experiments.adversary import (
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior
+from kalman_vs_infoset.experiments.adversary import (
     LookaheadNoise,
     PursuerView,
     TargetedNoise,
@@ -20,10 +19,10 @@ from experiments.adversary import (
     candidate_errors,
     misdirection,
 )
-from experiments.cli import main
-from experiments.scenario import load_scenario
-from experiments.sim.intercept import Engagement, run_engagement
-from guidance.intercept.law import ForecastCentringLaw
+from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept import Engagement, run_engagement
+from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw
 
 MODEL = ChannelModel()
 PRIOR = ChannelPrior((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
@@ -179,7 +178,7 @@ def test_node_set_accepts_an_admissible_range_at_the_edge_of_its_interval(tiny):
 
 
 def test_adversary_table_bounds_the_search(tiny):
-    from experiments.errors import InputError
+    from kalman_vs_infoset.experiments.errors import InputError
 
     with pytest.raises(InputError, match="leaves"):
         load_scenario(tiny, ["adversary.lookahead_steps=5", "adversary.lookahead_candidates=5"])

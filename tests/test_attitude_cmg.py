@@ -2,18 +2,17 @@
 
 import numpy as np
 import pytest
+from kalman_vs_infoset.estim.rotations import cross
+from kalman_vs_infoset.experiments.attitude_cmg import run, setup_from_scenario
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.scenario import load_toml
+from kalman_vs_infoset.guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster, rk4_step
+from kalman_vs_infoset.guidance.attitude.energy import resurs_p_inertia
+from kalman_vs_infoset.guidance.attitude.euler_turn import EulerAxisProfile
+from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.integrate import cumulative_trapezoid
 from scipy.linalg import pinv
 from scipy.spatial.transform import Rotation
-
-from estim.rotations import cross
-from experiments.attitude_cmg import run, setup_from_scenario
-from experiments.errors import InputError
-from experiments.scenario import load_toml
-from guidance.attitude.cmg import RESURS_P_BETA0_DEG, CmgCluster, rk4_step
-from guidance.attitude.energy import resurs_p_inertia
-from guidance.attitude.euler_turn import EulerAxisProfile
-from guidance.attitude.plant import AttitudeState, RigidBody, propagate
 
 CLUSTER = CmgCluster()
 BETA0 = np.radians(RESURS_P_BETA0_DEG)

@@ -1,6 +1,6 @@
 """Typed attitude scenarios (issue 15, item 2): the reaction-wheel, gyrodine and gyrostat
 tables (:mod:`experiments.sim.attitude_rw_config`, :mod:`experiments.sim.attitude_cmg_config`,
-:mod:`experiments.sim.gyrostat_config`).
+:mod:`kalman_vs_infoset.experiments.sim.gyrostat_config`).
 
 A bad value in any table, an unknown key in any table and a missing table are refused
 with one line on stderr naming the file and the field (with what is allowed), exit
@@ -17,19 +17,22 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pydantic import BaseModel, ValidationError
-
-from experiments import attitude_rw
-from experiments.cli import main
-from experiments.sim import attitude_cmg_config, attitude_rw_config, gyrostat_config
-from experiments.sim.attitude_rw import simulate_runs
-from experiments.sim.attitude_rw_config import (
+from kalman_vs_infoset.experiments import attitude_rw
+from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.sim import (
+    attitude_cmg_config,
+    attitude_rw_config,
+    gyrostat_config,
+)
+from kalman_vs_infoset.experiments.sim.attitude_rw import simulate_runs
+from kalman_vs_infoset.experiments.sim.attitude_rw_config import (
     BodyTable,
     ManeuverTable,
     PdTable,
     RwScenario,
     SimulationTable,
 )
+from pydantic import BaseModel, ValidationError
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "data" / "scenarios"

@@ -8,12 +8,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from numpy.typing import NDArray
-from scipy.linalg import expm, null_space
-
-from experiments.attitude_cmg_setup import setup_from_scenario
-from experiments.sim.attitude_cmg import lower_bound_energy_N2m2s, simulate_turn
-from guidance.attitude.energy import (
+from kalman_vs_infoset.experiments.attitude_cmg_setup import setup_from_scenario
+from kalman_vs_infoset.experiments.sim.attitude_cmg import lower_bound_energy_N2m2s, simulate_turn
+from kalman_vs_infoset.guidance.attitude.energy import (
     EnergySavingConfig,
     EnergySavingController,
     EnergySavingState,
@@ -21,8 +18,10 @@ from guidance.attitude.energy import (
     resurs_p_inertia,
     skew,
 )
-from guidance.attitude.euler_turn import EulerAxisProfile
-from guidance.attitude.min_energy import min_energy_turn
+from kalman_vs_infoset.guidance.attitude.euler_turn import EulerAxisProfile
+from kalman_vs_infoset.guidance.attitude.min_energy import min_energy_turn
+from numpy.typing import NDArray
+from scipy.linalg import expm, null_space
 
 J = resurs_p_inertia()
 J_INV = np.linalg.inv(J)

@@ -1,7 +1,7 @@
 """Attitude estimators (SPEC 2.5): the box's guarantee, the UKF against filterpy, the loops.
 
 Independent references: scipy's ``Rotation`` for the quaternion maps, scipy's DOP853
-(:func:`guidance.attitude.plant.propagate`) for the truth, filterpy's
+(:func:`kalman_vs_infoset.guidance.attitude.plant.propagate`) for the truth, filterpy's
 ``UnscentedKalmanFilter`` for the batched UKF, the chi-square law for its NEES.
 """
 
@@ -13,19 +13,23 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.spatial.transform import Rotation
-
-from estim.attitude_box import BoxAttitudeEstimator
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
     draw_measurement,
 )
-from estim.attitude_ukf import UkfAttitudeBelief, UkfAttitudeEstimator, residual_x, state_add
-from estim.rotations import qexp, qlog, qmatrix, qmul
-from guidance.attitude.plant import AttitudeState, RigidBody, propagate
+from kalman_vs_infoset.estim.attitude_ukf import (
+    UkfAttitudeBelief,
+    UkfAttitudeEstimator,
+    residual_x,
+    state_add,
+)
+from kalman_vs_infoset.estim.rotations import qexp, qlog, qmatrix, qmul
+from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
+from scipy.spatial.transform import Rotation
 
 
 def test_quaternion_maps_equal_scipy():
@@ -98,7 +102,7 @@ def test_box_never_loses_the_truth(seed, rate_scale, at_bounds, dt_s):
 
 def _rw_loop(est, model, runs=10, steps=300, dt=0.05, d_const=True, seed=3):
     """A small batched loop (truth by RK4 of the same plant); returns per-step inside flags."""
-    from guidance.attitude.wheels import rk4_step
+    from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
 
     rng = np.random.default_rng(seed)
     body = RigidBody(model.inertia_kgm2)
@@ -216,7 +220,7 @@ def test_ukf_is_consistent_without_unmodelled_effects():
 def test_attitude_command_estimators_paired_and_counted(tmp_path):
     """Short smallsat runs through the CLI: three estimators on the same realisations,
     Parquet + CDF figures written, the box never loses the truth."""
-    from experiments.cli import main
+    from kalman_vs_infoset.experiments.cli import main
 
     scen = tmp_path / "short.toml"
     text = (

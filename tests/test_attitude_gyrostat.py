@@ -10,16 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-from scipy.spatial.transform import Rotation
-
-from estim.rotations import error_quaternion, quaternion_rate
-from experiments.attitude_gyrostat import initial_quaternion, parse_scenario, run
-from experiments.errors import InputError
-from experiments.scenario import load_toml
-from experiments.sim.gyrostat import LoopConfig, simulate_turn
-from guidance.attitude import plant
-from guidance.attitude.game import (
+from kalman_vs_infoset.estim.rotations import error_quaternion, quaternion_rate
+from kalman_vs_infoset.experiments.attitude_gyrostat import initial_quaternion, parse_scenario, run
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.scenario import load_toml
+from kalman_vs_infoset.experiments.sim.gyrostat import LoopConfig, simulate_turn
+from kalman_vs_infoset.guidance.attitude import plant
+from kalman_vs_infoset.guidance.attitude.game import (
     GameLaw,
     beta_star,
     design_a_star,
@@ -27,7 +24,7 @@ from guidance.attitude.game import (
     reachable_torque_bound_Nm,
     time_to_go_s,
 )
-from guidance.attitude.gyrostat import (
+from kalman_vs_infoset.guidance.attitude.gyrostat import (
     Gyrostat,
     aux_disturbance,
     eta_v_accel,
@@ -38,6 +35,8 @@ from guidance.attitude.gyrostat import (
     rhs,
     rk4_step,
 )
+from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
 
 SCENARIO = Path(__file__).resolve().parents[1] / "data" / "scenarios" / "gyrostat_game.toml"
 GYRO = Gyrostat([120.0, 100.0, 80.0], [0.12, 0.10, 0.08])

@@ -4,12 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.integrate import solve_ivp
-from scipy.linalg import solve_continuous_are
-from scipy.spatial.transform import Rotation
-
-from estim import PerfectEstimator, PointBelief
-from guidance.attitude.lqr import (
+from kalman_vs_infoset.estim import PerfectEstimator, PointBelief
+from kalman_vs_infoset.guidance.attitude.lqr import (
     LQRController,
     analytic_riccati,
     complete_weights,
@@ -18,8 +14,11 @@ from guidance.attitude.lqr import (
     rate_gains,
     riccati_full,
 )
-from guidance.attitude.pd import error_quaternion
-from guidance.attitude.plant import RigidBody, attitude_rhs
+from kalman_vs_infoset.guidance.attitude.pd import error_quaternion
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody, attitude_rhs
+from scipy.integrate import solve_ivp
+from scipy.linalg import solve_continuous_are
+from scipy.spatial.transform import Rotation
 
 pos = st.floats(0.01, 100.0)
 vec3 = st.tuples(pos, pos, pos)
@@ -122,7 +121,7 @@ def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
     """SPEC 3.1 attitude contract on data/scenarios/lqr_large_angle.toml."""
     import json
 
-    from experiments.cli import main
+    from kalman_vs_infoset.experiments.cli import main
 
     args = ["attitude", "data/scenarios/lqr_large_angle.toml", "--runs", "2", "--json"]
     assert main([*args, "--out", str(tmp_path)]) == 0
@@ -136,11 +135,13 @@ def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
 
 
 def test_attitude_dispatcher_reports_unavailable_and_bad_input(monkeypatch, capsys):
-    from experiments import cmd_attitude
-    from experiments.cli import main
-    from experiments.errors import InputError
+    from kalman_vs_infoset.experiments import cmd_attitude
+    from kalman_vs_infoset.experiments.cli import main
+    from kalman_vs_infoset.experiments.errors import InputError
 
-    monkeypatch.setitem(cmd_attitude.DISPATCH, "game", "experiments.no_such_module_xyz")
+    monkeypatch.setitem(
+        cmd_attitude.DISPATCH, "game", "kalman_vs_infoset.experiments.no_such_module_xyz"
+    )
     with pytest.raises(InputError, match="controller game is not available"):
         cmd_attitude.resolve_module("game")
     assert main(["attitude", "data/scenarios/lqr_large_angle.toml", "--controller", "zzz"]) == 2

@@ -2,10 +2,8 @@
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
-
-from guidance.attitude import gain_study as gs
-from guidance.attitude.pd import (
+from kalman_vs_infoset.guidance.attitude import gain_study as gs
+from kalman_vs_infoset.guidance.attitude.pd import (
     QuaternionPD,
     angle_and_rate_deg,
     baseline_gains,
@@ -14,8 +12,13 @@ from guidance.attitude.pd import (
     rest_to_rest_initial_state,
     settle_time,
 )
-from guidance.attitude.plant import AttitudeState, RigidBody, propagate
-from guidance.attitude.wheels import ReactionWheels, rk4_step, simulate_closed_loop
+from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
+from kalman_vs_infoset.guidance.attitude.wheels import (
+    ReactionWheels,
+    rk4_step,
+    simulate_closed_loop,
+)
+from scipy.spatial.transform import Rotation
 
 J = 1.5
 M_MAX, L_MAX = 0.0275, 0.2
@@ -123,7 +126,7 @@ def test_seed_rule_29_beats_baseline_rule_10():
     settings = gs.StudySettings()
     angles = np.array([0.5, 2.0, 5.0])
     fit = {k: v / (2.0 if k.startswith("c") else 1.0) for k, v in gs.SEED_FIT_EQ28.items()}
-    from experiments.cmd_pd_gains import fig15_times
+    from kalman_vs_infoset.experiments.cmd_pd_gains import fig15_times
 
     t = fig15_times(angles, 1.0, fit, settings)
     assert np.all(np.isfinite(t["fitted"]))

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from experiments.errors import InputError
-from experiments.sim.pointing import PointingConfig, PointingLoop
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.sim.pointing import PointingConfig, PointingLoop
 
 
 @pytest.mark.parametrize("disturbance", ["random", "game"])
@@ -47,7 +46,7 @@ def test_step_carries_the_remainder_of_a_period():
 
 
 def test_bad_attitude_table_is_one_line_input_error(tmp_path):
-    from experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.scenario import load_scenario
 
     for table, field in (
         ("bogus = 1", r"attitude\.bogus"),

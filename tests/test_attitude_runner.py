@@ -8,9 +8,8 @@ import json
 import pandas as pd
 import pytest
 from harness_texts import TINY_RW as TINY
-
-from experiments import attitude_rw
-from experiments.cli import main
+from kalman_vs_infoset.experiments import attitude_rw
+from kalman_vs_infoset.experiments.cli import main
 
 # a random initial attitude under a small disturbance torque
 TINY_RW = TINY.replace("angle_deg = 10.0\n", "angle_deg = 10.0\nrandom_attitude = true\n") + (

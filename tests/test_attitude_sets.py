@@ -15,17 +15,18 @@ import pytest
 from harness_texts import TINY_RW, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.spatial.transform import Rotation
-from sets_sampling import sample_ellipsoid, sample_zonotope
-from test_attitude_estimators import _measure_at, _rw_loop
-
-from estim import attitude_ellipsoid as ell
-from estim import registry
-from estim.attitude_box import BoxAttitudeEstimator
-from estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
-from estim.attitude_model import AttitudeControl, AttitudeMeasurement, AttitudeModel, AttitudePrior
-from estim.attitude_sets_maps import predict_map, recentre_map, right_jacobian
-from estim.attitude_zonotope import (
+from kalman_vs_infoset.estim import attitude_ellipsoid as ell
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
+from kalman_vs_infoset.estim.attitude_model import (
+    AttitudeControl,
+    AttitudeMeasurement,
+    AttitudeModel,
+    AttitudePrior,
+)
+from kalman_vs_infoset.estim.attitude_sets_maps import predict_map, recentre_map, right_jacobian
+from kalman_vs_infoset.estim.attitude_zonotope import (
     ZonotopeAttitudeEstimator,
     affine_plus_box,
     axis_strips,
@@ -33,8 +34,11 @@ from estim.attitude_zonotope import (
     reduce_girard,
     zonotope_inside,
 )
-from estim.sets import Ellipsoid, Zonotope
-from guidance.attitude.plant import AttitudeState, RigidBody, propagate
+from kalman_vs_infoset.estim.sets import Ellipsoid, Zonotope
+from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
+from scipy.spatial.transform import Rotation
+from sets_sampling import sample_ellipsoid, sample_zonotope
+from test_attitude_estimators import _measure_at, _rw_loop
 
 ESTIMATORS = {"zonotope": ZonotopeAttitudeEstimator, "ellipsoid": EllipsoidAttitudeEstimator}
 MODEL = AttitudeModel(np.diag([1.0, 1.5, 2.0]), 1e-4, np.radians(0.01), np.radians(0.001))
@@ -251,7 +255,7 @@ def _zoom_argmin(f, lo: float, hi: float) -> float:
 def test_fogel_huang_1982_minimum_volume_weight_against_a_determinant_scan():
     """Fogel & Huang (1982), the minimum-volume weight in closed form: the same as the
     weight minimising ``det P+`` over a brute-force scan (6-D), and as
-    :meth:`estim.sets.Ellipsoid.intersect_strip`."""
+    :meth:`kalman_vs_infoset.estim.sets.Ellipsoid.intersect_strip`."""
     rng = np.random.default_rng(9)
     c, p = _random_ellipsoids(rng, runs=4)
     for r in range(4):

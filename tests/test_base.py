@@ -2,10 +2,14 @@
 
 import numpy as np
 import pytest
+from kalman_vs_infoset.estim import PerfectEstimator, PointBelief
+from kalman_vs_infoset.guidance.attitude.plant import (
+    AttitudeState,
+    RigidBody,
+    propagate,
+    total_momentum_Nms,
+)
 from scipy.spatial.transform import Rotation
-
-from estim import PerfectEstimator, PointBelief
-from guidance.attitude.plant import AttitudeState, RigidBody, propagate, total_momentum_Nms
 
 
 def test_point_belief_is_immutable_and_estimator_returns_new_values():

@@ -109,7 +109,7 @@ def test_e_attitude_run_too_long_to_allocate_is_refused_at_load(tiny_rw, tmp_pat
 
 
 def test_e_a_failed_attitude_run_reports_its_error(tiny_rw, tmp_path, capsys, monkeypatch):
-    from guidance.attitude import pd as pd_law
+    from kalman_vs_infoset.guidance.attitude import pd as pd_law
 
     def broken(self, x):
         raise ArithmeticError("broken law for the test")
@@ -163,7 +163,8 @@ def _alive(pid: int) -> bool:
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_g_pool_workers_exit_when_the_main_process_is_killed(tmp_path):
     proc = subprocess.Popen(
-        [sys.executable, "-m", "experiments", "intercept", ROOT / "data/scenarios/kp_fig5.toml",
+        [sys.executable, "-m", "kalman_vs_infoset", "intercept",
+         ROOT / "data/scenarios/kp_fig5.toml",
          "--runs", "400", "--workers", "2", "--no-progress", "--out", tmp_path / "out"],
         cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
@@ -254,7 +255,7 @@ def test_l_a_foreign_parquet_beside_a_valid_json_is_refused(short, tmp_path, cap
 
 # -- m ------------------------------------------------------------------------------
 def test_m_failed_attitude_runs_keep_the_seed_indices(tiny_rw, tmp_path, capsys, monkeypatch):
-    from guidance.attitude import pd as pd_law
+    from kalman_vs_infoset.guidance.attitude import pd as pd_law
 
     p = tmp_path / "random_start.toml"
     p.write_text(TINY_RW.replace("angle_deg = 10.0", "random_attitude = true"))

@@ -10,12 +10,11 @@ import pandas as pd
 import pytest
 from harness_texts import RANGE_FINDER, experiment
 from harness_texts import SHORT as SHORT_ENGAGEMENT
-
-from estim import registry
-from experiments import runner
-from experiments.cli import main
-from experiments.runner import run_experiment
-from experiments.scenario import load_scenario
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import runner
+from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.runner import run_experiment
+from kalman_vs_infoset.experiments.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = ROOT / "data" / "scenarios" / "kp_fig3.toml"
@@ -23,9 +22,9 @@ SHORT = SHORT_ENGAGEMENT + RANGE_FINDER + experiment(runs=4)
 
 
 def cli(*args, cwd=ROOT):
-    """``python -m experiments ARGS`` in a subprocess (the real entry point)."""
+    """``kvi ARGS`` in a subprocess (the real entry point)."""
     return subprocess.run(
-        [sys.executable, "-m", "experiments", *map(str, args)],
+        [sys.executable, "-m", "kalman_vs_infoset", *map(str, args)],
         capture_output=True,
         text=True,
         cwd=cwd,
@@ -34,7 +33,7 @@ def cli(*args, cwd=ROOT):
 
 
 def cli_inproc(capsys, *args):
-    """The same through ``experiments.cli.main`` in this process (fast)."""
+    """The same through ``kalman_vs_infoset.experiments.cli.main`` in this process (fast)."""
     try:
         code = main([str(a) for a in args])
     except SystemExit as exc:  # argparse
@@ -156,7 +155,7 @@ def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch):
     # workers running other sources are refused before any run (one line, exit 2)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True) as cluster:
         fake = {**runner.code_identity(), "sources_sha256": "f" * 64}
-        from experiments import executors
+        from kalman_vs_infoset.experiments import executors
 
         monkeypatch.setattr(executors, "code_identity", lambda: fake)  # this process only
         with pytest.raises(runner.InputError, match="runs other code"):
@@ -303,8 +302,8 @@ def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
     """`bench --steps 190` raised a traceback: a slab-family set diverged late in the
     unguided approach and its extremes were asked for. The timing stops there (and at
     the blind range), and says over how many steps it ran."""
-    from experiments.cmd_bench import step_cost_us
-    from experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.cmd_bench import step_cost_us
+    from kalman_vs_infoset.experiments.scenario import load_scenario
 
     fig3 = load_scenario("data/scenarios/kp_fig3.toml")
     model = fig3.channel_model()  # the bench's truth starts at 5801.3 km
@@ -373,7 +372,7 @@ def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_pat
     """Resuming must not mix runs: the JSON beside the results records the scenario and
     the code identity (version, SHA-256 of the sources, git commit); a mismatch in
     either is one line and exit 2, and the stored runs are left untouched."""
-    from experiments.provenance import code_identity
+    from kalman_vs_infoset.experiments.provenance import code_identity
 
     sc = load_scenario(short)
     run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
@@ -502,7 +501,7 @@ def test_code_identity_follows_the_sources_that_decide_a_run(tmp_path, monkeypat
     presentation module (plots, tables, command line)."""
     import shutil
 
-    from experiments import provenance
+    from kalman_vs_infoset.experiments import provenance
 
     for pkg in provenance.PACKAGES:
         shutil.copytree(ROOT / pkg, tmp_path / pkg, ignore=shutil.ignore_patterns("__pycache__"))

@@ -4,9 +4,13 @@ the Kalman filter at theta = 0, the game's cost bound, and filterpy's HInfinityF
 import numpy as np
 import pytest
 from filterpy.hinfinity import HInfinityFilter
+from kalman_vs_infoset.estim.filters.hinf import (
+    HInfinityEstimate,
+    HInfinityModel,
+    hinf_filter,
+    hinf_step,
+)
 from scipy.linalg import block_diag, eigh
-
-from estim.filters.hinf import HInfinityEstimate, HInfinityModel, hinf_filter, hinf_step
 
 
 def simon_reference(f, h, q, r, lm, s, theta, x0, p0, ys):

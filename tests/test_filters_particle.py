@@ -6,8 +6,7 @@ import pytest
 from filterpy.monte_carlo import resampling as fp_resampling
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from estim.filters.particle import (
+from kalman_vs_infoset.estim.filters.particle import (
     ParticleSet,
     bootstrap_step,
     stratified_resample,

@@ -5,9 +5,8 @@ inflated prior)."""
 
 import numpy as np
 import pytest
-
-from estim.hinf_channel import HInfinityChannelEstimator
-from estim.model import Bearing, ChannelModel
+from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel
 
 MODEL = ChannelModel()
 E, NU, DT = MODEL.e, MODEL.nu_mps2, 0.5

@@ -5,15 +5,14 @@ import pytest
 import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-
-from estim.infoset import (
+from kalman_vs_infoset.estim.infoset import (
     MAX_BEARING_RAD,
     STRIP_MARGIN,
     InformationSet,
     InformationSetEstimator,
     kinematic_margin_mps2,
 )
-from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 SLABS = InformationSetEstimator(MODEL, n_sections=29)
@@ -396,7 +395,7 @@ def test_wide_slab_near_eps_splits_or_is_reported_diverged_not_overflowed():
 def test_uncertain_impulse_keeps_every_possible_truth():
     """An Impulse(k, dk) widens the set so that any actual impulse in [k-dk, k+dk]
     keeps the truth inside (thrust misalignment from a pointing error)."""
-    from estim.model import Impulse
+    from kalman_vs_infoset.estim.model import Impulse
 
     rng = np.random.default_rng(5)
     s = SLABS.update(SLABS.from_boxes(B_Y, D_VY, B_X), Bearing(0.0))

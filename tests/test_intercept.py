@@ -4,12 +4,11 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-
-from estim.infoset import InformationSetEstimator
-from estim.model import ChannelModel
-from experiments.noise import BiasNoise, game_bearing, game_range
-from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
-from guidance.intercept.truth import TwoBodyTruth
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.experiments.noise import BiasNoise, game_bearing, game_range
+from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from kalman_vs_infoset.guidance.intercept.truth import TwoBodyTruth
 
 MODEL = ChannelModel()
 TRUTH = TwoBodyTruth()
@@ -73,7 +72,7 @@ def test_impulse_recentres_the_forecast_interval_seed003_law():
 def test_law_issues_no_impulse_on_an_unbounded_forecast():
     """A sound set may be unbounded (a cell it cannot bound): no centre, no impulse
     (it was nan, and the run failed downstream)."""
-    from estim.base import Extremes, PointBelief
+    from kalman_vs_infoset.estim.base import Extremes, PointBelief
 
     class Unbounded(PointBelief):
         def extremes(self, fn):
@@ -182,8 +181,8 @@ vertical = {vertical}
 def _assert_set_keeps_the_truth(tmp_path_factory, scenario_text, noise, seed):
     """Run one infoset engagement of the scenario text: the truth is inside the set at
     every checked step (more than 20) and no measurement contradicts it."""
-    from experiments.scenario import load_scenario
-    from experiments.sim.intercept import run_engagement
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
     p = tmp_path_factory.mktemp("sc") / "engagement.toml"
     p.write_text(scenario_text)
@@ -242,9 +241,9 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     """Forked Monte Carlo workers inherit what the parent loaded: after warm_up an
     engagement (random, game and bias noise) must not need a new compiled version of
     any kernel (read-only polygon arrays are a type of their own for numba)."""
-    from estim import _kernels as k
-    from experiments.scenario import load_scenario
-    from experiments.sim.intercept import run_engagement
+    from kalman_vs_infoset.estim import _kernels as k
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
     k.warm_up()
     kernels = {n: getattr(k, n) for n in dir(k) if hasattr(getattr(k, n), "signatures")}
@@ -260,8 +259,8 @@ def test_game_adversary_updates_its_sets_with_the_pursuers_range_measurement():
     issues. ``range`` only chooses the value; the set is updated in ``observe_range``
     with the measurement as the pursuer receives it (here: with an off-axis bound
     tighter than the model's assumed 0.1 rad), so both sets see the same data."""
-    from estim.model import Range
-    from experiments.noise import GameNoise
+    from kalman_vs_infoset.estim.model import Range
+    from kalman_vs_infoset.experiments.noise import GameNoise
 
     est = InformationSetEstimator(MODEL, n_sections=9, closing_speed_mps=(57.9e3, 58.1e3))
     s0 = est.from_boxes((-1e3, 1e3), (-100.0, 100.0), (700e3, 900e3))

@@ -10,13 +10,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+from kalman_vs_infoset.estim.kalman_belief import GaussianBelief, psd_cholesky
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range
 from scipy import stats
 from scipy.spatial.distance import mahalanobis
-
-from estim.costs import MissForecast
-from estim.kalman import KalmanChannelEstimator
-from estim.kalman_belief import GaussianBelief, psd_cholesky
-from estim.model import Bearing, ChannelModel, Range
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 E, NU, DT = MODEL.e, MODEL.nu_mps2, 0.5
@@ -317,8 +316,8 @@ def test_filters_on_the_auxiliary_model_pass_the_nees_test_early_on(kind):
 
 def test_one_engagement_on_fig3_runs_with_the_ekf():
     """The guidance law runs unchanged on the Kalman belief (seed 003 Fig. 3 setup)."""
-    from experiments.scenario import load_scenario
-    from experiments.sim.intercept import run_engagement
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
     sc = load_scenario("data/scenarios/kp_fig3.toml")
     res = run_engagement(sc, "ekf", "random", np.random.default_rng(3))
@@ -345,9 +344,8 @@ def test_range_projection_is_the_simon_2010_estimate_projection():
     D = e_k: project_on_bound equals the KKT solution of the constrained weighted
     least squares and scipy's SLSQP minimiser; the covariance is left unchanged and
     a mean inside the interval is not touched."""
+    from kalman_vs_infoset.estim.kalman import project_on_bound
     from scipy.optimize import minimize
-
-    from estim.kalman import project_on_bound
 
     rng = np.random.default_rng(5)
     for _ in range(20):
@@ -416,8 +414,8 @@ def test_constrained_range_stays_in_the_moving_interval_that_holds_the_truth(kin
     filters' range collapses to tens of km): every belief handed out has its mean's x
     in [x_lo - e_hi t, x_hi - e_lo t] (checked against that formula), the projection
     acts, and the interval holds the truth's x at every measurement."""
-    import experiments.sim.intercept as eng
-    from experiments.scenario import load_scenario
+    import kalman_vs_infoset.experiments.sim.intercept as eng
+    from kalman_vs_infoset.experiments.scenario import load_scenario
 
     sc = load_scenario("data/scenarios/kp_fig5_kalman_constrained.toml")
     e_lo, e_hi = (v * 1e3 for v in sc.closing_speed_kmps)
@@ -503,8 +501,8 @@ def test_range_constraint_off_reproduces_the_unconstrained_filter(kind):
 
 
 def test_scenario_key_kalman_range_constraint_is_validated():
-    from experiments.errors import InputError
-    from experiments.scenario import parse_scenario
+    from kalman_vs_infoset.experiments.errors import InputError
+    from kalman_vs_infoset.experiments.scenario import parse_scenario
 
     assert parse_scenario({}).estimator.options_for("ekf").range_constraint is False
     on = {"estimator": {"kalman_range_constraint": True, "closing_speed_kmps": [57.0, 59.0]}}
@@ -529,8 +527,8 @@ def test_noise_inflation_scales_the_process_noise(kind, coords):
 
 
 def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
-    from experiments.errors import InputError
-    from experiments.scenario import parse_scenario
+    from kalman_vs_infoset.experiments.errors import InputError
+    from kalman_vs_infoset.experiments.scenario import parse_scenario
 
     for bad in (0.5, float("inf"), float("nan")):
         with pytest.raises(ValueError, match="noise_inflation"):
@@ -550,9 +548,9 @@ def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
 def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, key, value):
     """The variants' files say "everything else identical to kp_fig5.toml": the same
     truths, boxes, guidance and seed, so their Kalman rows pair with kp_fig5's."""
-    from estim import registry
-    from experiments.scenario import load_scenario
-    from experiments.sim.intercept_config import LEGACY_OPTIONS
+    from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept_config import LEGACY_OPTIONS
 
     def resolved(sc):
         out = sc.model_dump(exclude={"name": True, "description": True})

@@ -10,11 +10,10 @@ import pytest
 import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-
-from estim.base import Status
-from estim.costs import MissForecast, ZeroEffortMiss
-from estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
-from estim.nodeset import NodeSetEstimator
+from kalman_vs_infoset.estim.base import Status
+from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
+from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 E, DT = MODEL.e, 0.5
@@ -285,10 +284,10 @@ def test_thin_piece_with_few_nodes_is_refined_until_bounded(monkeypatch):
     it were unbounded and the guidance's impulse became nan (kp_fig5, seed 5, run 38 of
     50, at 99.5 s). Now every forecast the law asks for is finite and the truth stays
     inside."""
-    from experiments.runner import run_seed
-    from experiments.scenario import load_scenario
-    from experiments.sim.intercept import Engagement
-    from guidance.intercept.law import ForecastCentringLaw
+    from kalman_vs_infoset.experiments.runner import run_seed
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import Engagement
+    from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw
 
     forecasts = []
     law_forecast = ForecastCentringLaw.forecast

@@ -4,20 +4,19 @@ References: numpy's own reductions (argmin/argmax with their tie and nan rules,
 min/max), shapely's convex hull of the box corners mapped at both ends of each
 node's closing-speed interval (the prior slice of seed 003 section 4's auxiliary
 model), brute-force sampling for the impulse's interval, and the public
-:func:`estim.kinematics.kinematic_interval_mps2` for the per-piece kinematic term.
+:func:`kalman_vs_infoset.estim.kinematics.kinematic_interval_mps2` for the per-piece kinematic term.
 """
 
 import numpy as np
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from estim import _kernels as _k
-from estim import _nodeset_geometry as _ng
-from estim import _nodeset_kernels as _nk
-from estim import polygons
-from estim.infoset import MAX_BEARING_RAD
-from estim.kinematics import kinematic_interval_mps2
+from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim import _nodeset_geometry as _ng
+from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from kalman_vs_infoset.estim import polygons
+from kalman_vs_infoset.estim.infoset import MAX_BEARING_RAD
+from kalman_vs_infoset.estim.kinematics import kinematic_interval_mps2
 
 E = 58e3
 
@@ -168,7 +167,7 @@ def test_log_appends_in_place_without_changing_any_earlier_log():
     step); a log is a value: appending to it, or branching from an older log (the
     lookahead adversary tries several measurements on one belief), never changes a
     log already made. Reference: the same logs built by concatenation."""
-    from estim.nodeset_bounds import OpLog
+    from kalman_vs_infoset.estim.nodeset_bounds import OpLog
 
     def one(i):
         return OpLog.one(i % 4, 2, pa=float(i), pb=-float(i), q_lo=[i, -i], q_hi=[2 * i, i])

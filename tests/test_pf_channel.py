@@ -6,13 +6,12 @@ randomness comes from its seed only."""
 
 import numpy as np
 import pytest
-
-from estim.base import Status
-from estim.costs import MissForecast
-from estim.filters.particle import ParticleSet
-from estim.model import Bearing, ChannelModel, ChannelPrior, Range
-from estim.pf_belief import ParticleBelief, particle_rows
-from estim.pf_channel import ParticleChannelEstimator
+from kalman_vs_infoset.estim.base import Status
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.filters.particle import ParticleSet
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Range
+from kalman_vs_infoset.estim.pf_belief import ParticleBelief, particle_rows
+from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
 
 MODEL = ChannelModel()
 E, NU, DT = MODEL.e, MODEL.nu_mps2, 0.5

@@ -1,7 +1,7 @@
 """Traces and figures (issue 13): what a trace holds, that recording only observes, and
 that every figure is fit for print (checked through matplotlib's objects, not pixels).
 
-Every figure the package saves goes through :func:`experiments.figstyle.save`; the
+Every figure the package saves goes through :func:`kalman_vs_infoset.experiments.figstyle.save`; the
 ``checked`` fixture wraps it so that each figure is inspected before it is written:
 every visible axis has x and y (and z) labels naming a unit after a comma, and every
 line and labelled patch collection has an entry in a legend of its figure.
@@ -17,19 +17,18 @@ import numpy as np
 import pandas as pd
 import pytest
 from harness_texts import TINY_RW
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.base import PointBelief
+from kalman_vs_infoset.estim.describe import FIELDS, describe_channel
+from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.experiments import figstyle
+from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+from kalman_vs_infoset.experiments.sim.trace import Recorder
+from kalman_vs_infoset.experiments.traces import intercept_trace
 from matplotlib.collections import QuadMesh
 from matplotlib.lines import Line2D
-
-from estim import registry
-from estim.base import PointBelief
-from estim.describe import FIELDS, describe_channel
-from estim.model import ChannelModel
-from experiments import figstyle
-from experiments.cli import main
-from experiments.scenario import load_scenario
-from experiments.sim.intercept import run_engagement
-from experiments.sim.trace import Recorder
-from experiments.traces import intercept_trace
 
 UNIT = re.compile(r", \S")
 STEP_FIELDS = {
@@ -220,7 +219,7 @@ def test_style_is_colour_blind_safe_and_consistent():
 
 def test_crowded_cdf_puts_one_legend_below_the_panels():
     """Eight estimators x four noises: the legend leaves the axes (it hid the curves)."""
-    from experiments import plots
+    from kalman_vs_infoset.experiments import plots
 
     rng = np.random.default_rng(0)
     rows = [{"estimator": e, "noise": n, "miss_m": m, "fuel_mps": 100 + m}
@@ -235,7 +234,7 @@ def test_crowded_cdf_puts_one_legend_below_the_panels():
 
 def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
     """Every paper figure (reduced count and coarser steps), PNG and SVG, checked."""
-    from experiments.cmd_paper_figures import FIGURES
+    from kalman_vs_infoset.experiments.cmd_paper_figures import FIGURES
 
     out = tmp_path / "fig"
     assert main(["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--json"]) == 0

@@ -5,8 +5,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.polygons import ConvexPolygons
 
 
 def _random_convex(rng, n_poly, kind="polygon"):
@@ -141,7 +140,7 @@ def test_all_sections_empty():
 def test_convex_hulls_kernel_equals_shapely_convex_hull(seed, n, scale, collinear):
     """The prediction's hull step (estim._kernels.convex_hulls) is shapely's convex hull
     of the vertices, counter-clockwise, also with (nearly) collinear points."""
-    from estim import _kernels as k
+    from kalman_vs_infoset.estim import _kernels as k
 
     rng = np.random.default_rng(seed)
     pts = rng.normal(size=(n, 2)) * scale

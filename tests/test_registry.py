@@ -14,10 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from harness_texts import RANGE_FINDER, SHORT, TINY_RW
-from pydantic import BaseModel, ConfigDict, Field
-
-from estim import registry
-from estim.attitude_model import (
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
@@ -25,9 +23,9 @@ from estim.attitude_model import (
     AttitudePrior,
     draw_measurement,
 )
-from estim.base import Belief, Estimator, Extremes, Status
-from estim.costs import MissForecast
-from estim.model import (
+from kalman_vs_infoset.estim.base import Belief, Estimator, Extremes, Status
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.model import (
     Bearing,
     ChannelModel,
     ChannelPrior,
@@ -36,8 +34,9 @@ from estim.model import (
     Range,
     impulse_parts,
 )
-from estim.rotations import qinv, qlog, qmul
-from experiments.cli import main
+from kalman_vs_infoset.estim.rotations import qinv, qlog, qmul
+from kalman_vs_infoset.experiments.cli import main
+from pydantic import BaseModel, ConfigDict, Field
 
 
 # -- a toy intercept estimator: an (alpha, omega, x) box, corners moved by the model ----

@@ -13,15 +13,21 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-
-from estim import registry
-from estim.costs import MissForecast, ZeroEffortMiss
-from estim.exact_reference import ExactChannelSet, History, Objective, PriorBox
-from estim.infoset import InformationSetEstimator
-from estim.model import Bearing, BearingBound, ChannelModel, ChannelPrior, ChannelSetting, Range
-from estim.sections_box import BoxSections
-from estim.sections_ellipsoid import EllipsoidSections
-from estim.sections_zonotope import ZonotopeSections
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.exact_reference import ExactChannelSet, History, Objective, PriorBox
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.model import (
+    Bearing,
+    BearingBound,
+    ChannelModel,
+    ChannelPrior,
+    ChannelSetting,
+    Range,
+)
+from kalman_vs_infoset.estim.sections_box import BoxSections
+from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidSections
+from kalman_vs_infoset.estim.sections_zonotope import ZonotopeSections
 
 FAMILIES = ("ellipsoid", "zonotope", "box")
 
@@ -161,7 +167,9 @@ def test_tightness_exact_interval_of_w_is_inside_each_familys(case):
         assert s.contains(ext.argmin) and s.contains(ext.argmax)
         widths[name] = (ext.max_value - ext.min_value) / (exact.inner_hi - exact.inner_lo)
     assert all(r >= 1.0 for r in widths.values())
-    assert widths["box"] > widths["zonotope"]  # a box never narrows w (estim.sections_box)
+    assert (
+        widths["box"] > widths["zonotope"]
+    )  # a box never narrows w (kalman_vs_infoset.estim.sections_box)
 
 
 @pytest.mark.parametrize("name", FAMILIES)
@@ -225,7 +233,7 @@ vertical = true
 
 @pytest.fixture(scope="module")
 def short_scenario(tmp_path_factory):
-    from experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.scenario import load_scenario
 
     p = tmp_path_factory.mktemp("sc") / "short_families.toml"
     p.write_text(SHORT)
@@ -240,7 +248,7 @@ def test_whole_engagement_never_loses_the_truth(short_scenario, name, noise, see
     margin at work), any closing speed in the interval, both channels guided, range
     measurements: the truth is in every family's set at every checked step and no
     measurement contradicts it."""
-    from experiments.sim.intercept import run_engagement
+    from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
     res = run_engagement(short_scenario, name, noise, np.random.default_rng(seed))
     assert res.checked_steps > 20
@@ -272,9 +280,9 @@ def test_tightness_command_measures_a_family_with_its_margin_off(capsys, tmp_pat
     the auxiliary model)."""
     import json
 
-    from experiments.cli import main
-    from experiments.cmd_tightness import auxiliary_model_options
-    from experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.cli import main
+    from kalman_vs_infoset.experiments.cmd_tightness import auxiliary_model_options
+    from kalman_vs_infoset.experiments.scenario import load_scenario
 
     fig5 = "data/scenarios/kp_fig5.toml"
     sc = auxiliary_model_options(load_scenario(fig5), False, names=("infoset", "zonotope"))

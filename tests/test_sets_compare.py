@@ -9,9 +9,8 @@ outer family must contain that polygon, and so the truth, at every step.
 import numpy as np
 import pytest
 import shapely
+from kalman_vs_infoset.estim.sets import Box, Ellipsoid, Zonotope
 from shapely import affinity
-
-from estim.sets import Box, Ellipsoid, Zonotope
 
 
 def _strip_polygon(a: np.ndarray, b: float, r: float, length: float = 1e4) -> shapely.Polygon:

@@ -6,8 +6,7 @@ import pytest
 import sets_sampling as S
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from estim.sets import Ellipsoid, EmptyIntersectionError
+from kalman_vs_infoset.estim.sets import Ellipsoid, EmptyIntersectionError
 
 SEEDS = st.integers(0, 2**32 - 1)
 DIMS = st.integers(1, 4)

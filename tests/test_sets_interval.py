@@ -6,9 +6,8 @@ import pytest
 import sets_sampling as S
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from kalman_vs_infoset.estim.sets import Box, EmptyIntersectionError
 from scipy.optimize import linprog
-
-from estim.sets import Box, EmptyIntersectionError
 
 SEEDS = st.integers(0, 2**32 - 1)
 DIMS = st.integers(1, 5)

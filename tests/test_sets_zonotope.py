@@ -9,8 +9,7 @@ import sets_sampling as S
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from estim.sets import EmptyIntersectionError, Zonotope
+from kalman_vs_infoset.estim.sets import EmptyIntersectionError, Zonotope
 
 SEEDS = st.integers(0, 2**32 - 1)
 DIMS = st.integers(1, 4)

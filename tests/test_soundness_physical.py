@@ -27,15 +27,14 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-
-from estim.costs import ZeroEffortMiss
-from estim.infoset import InformationSetEstimator
-from estim.model import Bearing, ChannelModel, ChannelPrior, Range
-from estim.nodeset import NodeSetEstimator
-from estim.sections_box import BoxFamily
-from estim.sections_ellipsoid import EllipsoidFamily
-from estim.sections_zonotope import ZonotopeFamily
-from guidance.intercept.law import ForecastCentringLaw
+from kalman_vs_infoset.estim.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Range
+from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
+from kalman_vs_infoset.estim.sections_box import BoxFamily
+from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidFamily
+from kalman_vs_infoset.estim.sections_zonotope import ZonotopeFamily
+from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw
 
 MODEL = ChannelModel()  # seed 003 section 6: e_nom = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 DT_S = 0.5

@@ -1,12 +1,11 @@
-"""``python -m experiments tightness`` (issue 12 item 2): a set's interval of the miss
+"""``kvi tightness`` (issue 12 item 2): a set's interval of the miss
 against the exact reference, on short runs."""
 
 import json
 from pathlib import Path
 
 import pytest
-
-from experiments.cli import main
+from kalman_vs_infoset.experiments.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = ROOT / "data" / "scenarios" / "kp_fig3.toml"

@@ -1,8 +1,13 @@
 """Stochastic and robust filters as pure functions on immutable values: the H-infinity
 filter (Simon 2006, ch. 11) and a bootstrap particle filter (Gordon et al. 1993)."""
 
-from estim.filters.hinf import HInfinityEstimate, HInfinityModel, hinf_filter, hinf_step
-from estim.filters.particle import (
+from kalman_vs_infoset.estim.filters.hinf import (
+    HInfinityEstimate,
+    HInfinityModel,
+    hinf_filter,
+    hinf_step,
+)
+from kalman_vs_infoset.estim.filters.particle import (
     ParticleSet,
     bootstrap_step,
     stratified_resample,

@@ -4,9 +4,9 @@ Pure numpy value types, independent of the estimator interface: each is immutabl
 and each operation returns a new set containing the exact result (an outer bound).
 """
 
-from estim.sets._common import EmptyIntersectionError
-from estim.sets.ellipsoid import Ellipsoid
-from estim.sets.interval import Box
-from estim.sets.zonotope import Zonotope
+from kalman_vs_infoset.estim.sets._common import EmptyIntersectionError
+from kalman_vs_infoset.estim.sets.ellipsoid import Ellipsoid
+from kalman_vs_infoset.estim.sets.interval import Box
+from kalman_vs_infoset.estim.sets.zonotope import Zonotope
 
 __all__ = ["Box", "Ellipsoid", "EmptyIntersectionError", "Zonotope"]

@@ -58,11 +58,7 @@ from functools import cached_property
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
-from scipy.linalg import eigh
-from scipy.optimize import brentq
-
-from estim.sets._common import (
+from kalman_vs_infoset.estim.sets._common import (
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
@@ -71,6 +67,9 @@ from estim.sets._common import (
     strip_bounds,
     vector,
 )
+from numpy.typing import ArrayLike
+from scipy.linalg import eigh
+from scipy.optimize import brentq
 
 __all__ = ["Ellipsoid", "EmptyIntersectionError"]
 

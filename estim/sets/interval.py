@@ -30,9 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
-
-from estim.sets._common import (
+from kalman_vs_infoset.estim.sets._common import (
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
@@ -41,6 +39,7 @@ from estim.sets._common import (
     strip_bounds,
     vector,
 )
+from numpy.typing import ArrayLike
 
 __all__ = ["Box", "EmptyIntersectionError"]
 

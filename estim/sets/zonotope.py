@@ -47,10 +47,7 @@ from math import comb
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
-from scipy.optimize import linprog
-
-from estim.sets._common import (
+from kalman_vs_infoset.estim.sets._common import (
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
@@ -59,6 +56,8 @@ from estim.sets._common import (
     strip_bounds,
     vector,
 )
+from numpy.typing import ArrayLike
+from scipy.optimize import linprog
 
 __all__ = ["EmptyIntersectionError", "Zonotope"]
 

@@ -3,7 +3,7 @@
 Imports only :mod:`estim`, :mod:`guidance` and the noise models
 (:mod:`experiments.noise`); raises ``ValueError`` (pydantic's ``ValidationError`` is
 one) and never reads files or command-line dicts. Above it: scenario files
-(:mod:`experiments.scenario`), the runner, the commands, provenance and plots.
+(:mod:`kalman_vs_infoset.experiments.scenario`), the runner, the commands, provenance and plots.
 
 * :mod:`.intercept` -- one engagement (setup / step / finish) of an
   :class:`.intercept_config.InterceptScenario`;

@@ -8,7 +8,7 @@ by :meth:`TurnSetup.from_config`);
 Closed loop, each step of ``dt``: the truth ``(q, w, h)`` is measured (noise
 ``random``/``game``: a body-frame error rotation and a rate error, uniform within
 ``+-sqrt(3)`` times the seed's standard deviations), passed through an estimator
-(any registered attitude estimator, :mod:`estim.registry`), the controller reads
+(any registered attitude estimator, :mod:`kalman_vs_infoset.estim.registry`), the controller reads
 ``X = (rotvec(R_target^-1 R), w)`` at the belief's centre and asks for a torque, the
 gyrodine cluster produces it (``cmg.CmgCluster.step``) and the common plant is advanced
 by a fixed-step RK4 with the delivered torque; the plant's ``h`` equals the cluster
@@ -26,26 +26,25 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
-
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from estim.rotations import qlog
-from experiments.sim.estimator_loop import EstimatorLoop
-from experiments.sim.turn_setup import SQRT3, TurnSetup
-from guidance.attitude.cmg import rk4_step
-from guidance.attitude.energy import (
+from kalman_vs_infoset.estim.rotations import qlog
+from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
+from kalman_vs_infoset.experiments.sim.turn_setup import SQRT3, TurnSetup
+from kalman_vs_infoset.guidance.attitude.cmg import rk4_step
+from kalman_vs_infoset.guidance.attitude.energy import (
     EnergySavingController,
     EnergySavingState,
     given_system,
 )
-from guidance.attitude.euler_turn import EulerTurnTracker
-from guidance.attitude.min_energy import min_energy_turn
+from kalman_vs_infoset.guidance.attitude.euler_turn import EulerTurnTracker
+from kalman_vs_infoset.guidance.attitude.min_energy import min_energy_turn
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 CONTROLLERS = ("energy", "euler")
 #: Seed 000, section 5: accumulated index Z (N^2 m^2 s) of the two turns.

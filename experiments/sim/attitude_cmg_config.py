@@ -8,17 +8,16 @@ baseline), ``[cmg]`` (the gyrodine cluster) and ``[noise]``; every one has defau
 name, one-line doc); unknown keys are refused and a bad value raises
 ``pydantic.ValidationError`` (a ``ValueError``), which :mod:`experiments.scenario` turns
 into one line naming the file and the field. The loop's input is the
-:class:`experiments.sim.turn_setup.TurnSetup` built from it.
+:class:`kalman_vs_infoset.experiments.sim.turn_setup.TurnSetup` built from it.
 """
 
 from __future__ import annotations
 
 from typing import Literal
 
+from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
+from kalman_vs_infoset.guidance.attitude.cmg import RESURS_P_BETA0_DEG
 from pydantic import model_validator
-
-from experiments.sim.fields import Table, field, integer, number, vector
-from guidance.attitude.cmg import RESURS_P_BETA0_DEG
 
 #: most steps a turn may take (the loop keeps its histories)
 MAX_STEPS = 100_000

@@ -1,7 +1,7 @@
 """Reaction-wheel attitude loops, controllers ``pd`` (SPEC 2.2) and ``lqr`` (SPEC 2.3).
 
 :func:`simulate_runs` simulates a batch of runs as one closed loop (the plant of
-:mod:`guidance.attitude.wheels`: the shared RK4, controller sampled every
+:mod:`kalman_vs_infoset.guidance.attitude.wheels`: the shared RK4, controller sampled every
 ``control_period_s`` with the torque held). The controller sees only an estimator's
 belief (any registered attitude estimator, :mod:`estim.registry`; one belief carries
 the batch), updated every sample with the measurement; the law is evaluated at
@@ -14,7 +14,7 @@ uniform in ``[-d, d]`` per axis; ``game`` = the same measurement errors and a bo
 disturbance ``-d sign(M_u)`` that opposes the control every sample. Random initial
 attitudes (``maneuver.random_attitude``) are drawn for every noise setting, from the
 run's own generator. ``config`` is the typed scenario
-(:class:`experiments.sim.attitude_rw_config.RwScenario`).
+(:class:`kalman_vs_infoset.experiments.sim.attitude_rw_config.RwScenario`).
 """
 
 from __future__ import annotations
@@ -22,21 +22,20 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
-
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from estim.base import PointBelief
-from experiments.sim.attitude_rw_config import RwScenario
-from experiments.sim.estimator_loop import EstimatorLoop
-from guidance.attitude.lqr import LQRController
-from guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
-from guidance.attitude.plant import RigidBody
-from guidance.attitude.wheels import ReactionWheels, simulate_closed_loop
+from kalman_vs_infoset.estim.base import PointBelief
+from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
+from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
+from kalman_vs_infoset.guidance.attitude.lqr import LQRController
+from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody
+from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, simulate_closed_loop
+from scipy.spatial.transform import Rotation
 
 
 def body_of(config: RwScenario) -> tuple[RigidBody, np.ndarray, np.ndarray]:

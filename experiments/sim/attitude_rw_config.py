@@ -1,5 +1,5 @@
 """The reaction-wheel scenarios as typed tables: controllers ``pd`` (SPEC 2.2) and ``lqr``
-(SPEC 2.3), run by :func:`experiments.sim.attitude_rw.simulate_runs`.
+(SPEC 2.3), run by :func:`kalman_vs_infoset.experiments.sim.attitude_rw.simulate_runs`.
 
 A scenario has the tables ``[body]`` and ``[simulation]`` (required), ``[wheels]``,
 ``[maneuver]``, ``[noise]`` (defaults) and the controller's own ``[pd]`` or ``[lqr]``
@@ -16,9 +16,8 @@ import math
 from typing import Literal
 
 import numpy as np
+from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
 from pydantic import model_validator
-
-from experiments.sim.fields import Table, field, integer, number, vector
 
 #: most control steps (and RK4 steps) a run may take: the loop keeps the trajectory
 MAX_STEPS = 100_000

@@ -5,7 +5,7 @@ Per control step: ``predict`` over the period with the known inputs held over it
 controller reads ``centre()`` = ``(q, w)`` per run; the loops count the (run, step)
 pairs where the truth is not in the belief (for ``perfect`` that is every noisy step: a
 point is not a set). Any estimator registered for the problem ``"attitude"``
-(:mod:`estim.registry`) runs here.
+(:mod:`kalman_vs_infoset.estim.registry`) runs here.
 """
 
 from __future__ import annotations
@@ -13,16 +13,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from estim import registry
-from estim.attitude_model import (
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
 )
-from estim.base import Estimator
+from kalman_vs_infoset.estim.base import Estimator
 
 #: noise of the attitude loops: none (exact measurements, no disturbance), random, game
 NOISES = ("none", "random", "game")

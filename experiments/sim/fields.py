@@ -3,7 +3,7 @@
 Every field is declared once: type, bounds, default, unit (in its name) and a one-line
 doc. Invalid values raise ``pydantic.ValidationError`` (a ``ValueError``); the command
 line turns the first error into one line naming the file and the field
-(:mod:`experiments.scenario`).
+(:mod:`kalman_vs_infoset.experiments.scenario`).
 """
 
 from __future__ import annotations

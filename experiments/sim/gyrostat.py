@@ -1,7 +1,7 @@
 """Gyrostat game law (seed 004, SPEC 2.4) closed through an attitude estimator (SPEC 2.5).
 
 The sampled loop of the seed: every control period ``h`` the law reads ``(q, x)`` from
-an estimator's belief (any registered attitude estimator, :mod:`estim.registry`:
+an estimator's belief (any registered attitude estimator, :mod:`kalman_vs_infoset.estim.registry`:
 ``perfect``, ``ukf``, ``box``, ...) and the rotor rates from their tachometers,
 computes the auxiliary controls ``u*`` (:class:`guidance.attitude.game.GameLaw`, exact
 discrete switching) and the rotor torques ``u`` of seed eq. (2.1); ``u`` and the
@@ -34,18 +34,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-
-from estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from estim.rotations import error_angle_rad, error_quaternion
-from experiments.sim.estimator_loop import EstimatorLoop
-from guidance.attitude.game import GameLaw, adversarial_disturbance_Nm
-from guidance.attitude.gyrostat import (
+from kalman_vs_infoset.estim.rotations import error_angle_rad, error_quaternion
+from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
+from kalman_vs_infoset.guidance.attitude.game import GameLaw, adversarial_disturbance_Nm
+from kalman_vs_infoset.guidance.attitude.gyrostat import (
     PHI,
     STATE_DIM,
     Gyrostat,
@@ -55,6 +53,7 @@ from guidance.attitude.gyrostat import (
     linearising_torque,
     rk4_step,
 )
+from numpy.typing import ArrayLike, NDArray
 
 Array = NDArray[np.float64]
 DISTURBANCES = ("none", "random", "constant", "adversarial")

@@ -1,5 +1,5 @@
 """The three-rotor gyrostat game turn (seed 004, SPEC 2.4) as typed tables, and the setup
-of its loop (:func:`experiments.sim.gyrostat.simulate_turn`).
+of its loop (:func:`kalman_vs_infoset.experiments.sim.gyrostat.simulate_turn`).
 
 A scenario has the tables ``[gyrostat]`` and ``[manoeuvre]`` (required) and
 ``[simulation]`` (defaults), plus the top-level ``name``, ``description``,
@@ -16,13 +16,12 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
+from kalman_vs_infoset.estim.rotations import error_quaternion, qmul
+from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
+from kalman_vs_infoset.experiments.sim.gyrostat import LoopConfig
+from kalman_vs_infoset.guidance.attitude.game import GameLaw, design_a_star
+from kalman_vs_infoset.guidance.attitude.gyrostat import Gyrostat
 from pydantic import model_validator
-
-from estim.rotations import error_quaternion, qmul
-from experiments.sim.fields import Table, field, integer, number, vector
-from experiments.sim.gyrostat import LoopConfig
-from guidance.attitude.game import GameLaw, design_a_star
-from guidance.attitude.gyrostat import Gyrostat
 
 #: most control steps a run may take
 MAX_STEPS = 100_000

@@ -7,7 +7,7 @@ flies to the closest approach and returns the :class:`EngagementResult`.
 :func:`run_engagement` runs the three.
 
 Per decision step ``t_i = i Delta``: show a white-box adversary the pursuer
-(:class:`experiments.adversary.PursuerView`: estimators, beliefs, law, fuel; other
+(:class:`kalman_vs_infoset.experiments.adversary.PursuerView`: estimators, beliefs, law, fuel; other
 noises are shown nothing), measure the bearings (and the range when the
 range finder is due, with the bound of its off-axis angle taken from the bearings of
 both axes: :func:`range_measurement`), update every channel's belief, count the steps
@@ -30,18 +30,22 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
-from estim import registry
-from estim.base import Belief, Estimator, Status
-from estim.infoset import InformationSetEstimator
-from estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
-from experiments.adversary import LookaheadNoise, PursuerView, TargetedNoise, WhiteBoxNoise
-from experiments.noise import BiasNoise, GameNoise, RandomNoise
-from experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
-from experiments.sim.pointing import PointingCoupling, PointingLoop
-from experiments.sim.trace import Recorder, channel_row
-from guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
-from guidance.intercept.truth import TwoBodyTruth
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.base import Belief, Estimator, Status
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.experiments.adversary import (
+    LookaheadNoise,
+    PursuerView,
+    TargetedNoise,
+    WhiteBoxNoise,
+)
+from kalman_vs_infoset.experiments.noise import BiasNoise, GameNoise, RandomNoise
+from kalman_vs_infoset.experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
+from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling, PointingLoop
+from kalman_vs_infoset.experiments.sim.trace import Recorder, channel_row
+from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from kalman_vs_infoset.guidance.intercept.truth import TwoBodyTruth
 
 AXIS = {"lateral": 1, "vertical": 2}
 
@@ -314,7 +318,7 @@ def run_engagement(
     record: Recorder | None = None,
 ) -> EngagementResult:
     """Simulate one engagement; ``rng`` draws the truth first, then the noise. With a
-    :class:`~experiments.sim.trace.Recorder` every step is recorded into it."""
+    :class:`~kalman_vs_infoset.experiments.sim.trace.Recorder` every step is recorded into it."""
     eng = Engagement(sc, estimator_name, noise_name, rng, record)
     while eng.step():
         pass

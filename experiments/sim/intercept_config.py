@@ -6,9 +6,9 @@ table of options per estimator, validated by the options model that estimator
 registered: :mod:`estim.registry`), ``[truth]`` (the boxes the true initial state is
 drawn from, uniformly; a degenerate interval fixes a value; default: the estimator's
 boxes), ``[range_finder]``, ``[guidance]``, ``[experiment]``, ``[adversary]`` (the white-box
-noises' search: :mod:`experiments.adversary`), an optional
+noises' search: :mod:`kalman_vs_infoset.experiments.adversary`), an optional
 ``[reference]`` of the paper's numbers and an optional ``[attitude]`` loop holding the
-spacecraft's axis (:class:`experiments.sim.pointing.PointingConfig`).
+spacecraft's axis (:class:`kalman_vs_infoset.experiments.sim.pointing.PointingConfig`).
 
 The flat option keys of earlier releases are still read: ``estimator.n_sections``,
 ``sections``, ``kinematic_margin``, ``split_ratio`` are ``[estimator.infoset]``'s,
@@ -23,12 +23,10 @@ import math
 import re
 from typing import Any, Literal
 
-from pydantic import BaseModel, ValidationError, model_validator
-
-from estim import registry
-from estim.model import BearingBound, ChannelModel, ChannelPrior, ChannelSetting
-from experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
-from experiments.sim.fields import (
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.model import BearingBound, ChannelModel, ChannelPrior, ChannelSetting
+from kalman_vs_infoset.experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
+from kalman_vs_infoset.experiments.sim.fields import (
     NONNEGATIVE,
     Table,
     field,
@@ -37,7 +35,8 @@ from experiments.sim.fields import (
     interval,
     number,
 )
-from experiments.sim.pointing import PointingConfig
+from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
+from pydantic import BaseModel, ValidationError, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
@@ -263,7 +262,9 @@ class InterceptScenario(Table):
         for name, table in e.options.items():
             _check_options(name, table)
         if g.min_impulse_mps > g.max_impulse_mps:
-            raise ValueError("field 'guidance.min_impulse_mps' must be <= max_impulse_mps")
+            raise ValueError(
+                "field 'kalman_vs_infoset.guidance.min_impulse_mps' must be <= max_impulse_mps"
+            )
         if not (g.lateral or g.vertical):
             raise ValueError("field 'guidance.lateral' or 'guidance.vertical' must be true")
         if m.bearing_bound_start_rad > m.bearing_bound_end_rad:

@@ -1,9 +1,9 @@
 """Attitude loop holding the longitudinal axis of the interceptor (SPEC 2.5, end-to-end).
 
-A simulation of the library layer (:mod:`experiments.sim`): it composes a whole
+A simulation of the library layer (:mod:`kalman_vs_infoset.experiments.sim`): it composes a whole
 simulated loop (plant, noise, estimator, controller); ``guidance`` keeps the
 controllers themselves. Also :class:`PointingCoupling`, the adapter the engagement
-uses (formerly ``experiments.pointing``).
+uses (formerly ``kalman_vs_infoset.experiments.pointing``).
 
 The spacecraft of Problem A carries reaction wheels; its attitude loop holds the body
 axes on the guidance frame (target attitude = identity). The controller (quaternion
@@ -33,26 +33,25 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import model_validator
-from scipy.spatial.transform import Rotation
-
-from estim import registry
-from estim.attitude_model import (
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.attitude_model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from estim.attitude_perfect import PerfectAttitudeEstimator
-from estim.base import PointBelief
-from estim.model import BearingBound, ChannelModel, Impulse
-from experiments.sim.estimator_loop import EstimatorLoop
-from experiments.sim.fields import Table, number, vector
-from experiments.sim.fields import field as declared
-from guidance.attitude.lqr import LQRController
-from guidance.attitude.pd import QuaternionPD
-from guidance.attitude.plant import RigidBody
-from guidance.attitude.wheels import ReactionWheels, rk4_step
+from kalman_vs_infoset.estim.attitude_perfect import PerfectAttitudeEstimator
+from kalman_vs_infoset.estim.base import PointBelief
+from kalman_vs_infoset.estim.model import BearingBound, ChannelModel, Impulse
+from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
+from kalman_vs_infoset.experiments.sim.fields import Table, number, vector
+from kalman_vs_infoset.experiments.sim.fields import field as declared
+from kalman_vs_infoset.guidance.attitude.lqr import LQRController
+from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody
+from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, rk4_step
+from pydantic import model_validator
+from scipy.spatial.transform import Rotation
 
 _POS = number(0.0, open_lo=True)
 _BOUND = number(0.0, 1.0, open_lo=True)

@@ -5,7 +5,7 @@ and per channel or axis, and, for the intercept, the sections of a polygon set b
 and after each step's measurements. The loops record only what they computed anyway,
 plus questions asked of immutable beliefs, so a recorded run gives the same results as
 an unrecorded one. Writing the records (Parquet) and drawing them is the harness's job
-(:mod:`experiments.traces`, :mod:`experiments.trace_plots`).
+(:mod:`kalman_vs_infoset.experiments.traces`, :mod:`kalman_vs_infoset.experiments.trace_plots`).
 """
 
 from __future__ import annotations
@@ -14,10 +14,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
-from estim.base import Belief
-from estim.describe import describe_channel, section_vertices
-from estim.model import ChannelModel
+from kalman_vs_infoset.estim.base import Belief
+from kalman_vs_infoset.estim.describe import describe_channel, section_vertices
+from kalman_vs_infoset.estim.model import ChannelModel
 
 
 @dataclass

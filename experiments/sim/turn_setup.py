@@ -7,12 +7,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario, EulerTable
+from kalman_vs_infoset.guidance.attitude.cmg import CmgCluster
+from kalman_vs_infoset.guidance.attitude.energy import EnergySavingConfig, resurs_p_inertia
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import NDArray
-
-from experiments.sim.attitude_cmg_config import CmgScenario, EulerTable
-from guidance.attitude.cmg import CmgCluster
-from guidance.attitude.energy import EnergySavingConfig, resurs_p_inertia
-from guidance.attitude.plant import RigidBody
 
 SQRT3 = float(np.sqrt(3.0))
 

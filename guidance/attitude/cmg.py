@@ -39,12 +39,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim.integrate import renormalised
+from kalman_vs_infoset.estim.integrate import rk4_step as rk4
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody, attitude_rhs
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
-
-from estim.integrate import renormalised
-from estim.integrate import rk4_step as rk4
-from guidance.attitude.plant import RigidBody, attitude_rhs
 
 #: Seed 000, section 4: initial precession angles of the six gyrodines, degrees.
 RESURS_P_BETA0_DEG = (315.0, 225.0, 315.0, 225.0, 315.0, 225.0)

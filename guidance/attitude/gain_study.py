@@ -33,10 +33,14 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+from kalman_vs_infoset.guidance.attitude.pd import (
+    ANGLE_TOL_DEG,
+    RATE_TOL_DEGPS,
+    QuaternionTerm,
+    term_scale,
+)
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import curve_fit, least_squares
-
-from guidance.attitude.pd import ANGLE_TOL_DEG, RATE_TOL_DEGPS, QuaternionTerm, term_scale
 
 FloatArray = NDArray[np.float64]
 

@@ -27,9 +27,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.guidance.attitude.gyrostat import Gyrostat, aux_disturbance_matrix
 from numpy.typing import ArrayLike, NDArray
-
-from guidance.attitude.gyrostat import Gyrostat, aux_disturbance_matrix
 
 Array = NDArray[np.float64]
 

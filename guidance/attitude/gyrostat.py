@@ -12,7 +12,7 @@ line reads ``(A - J) dx/dt = K x x - u + v`` (the OCR of (1.1) is garbled; this 
 reading that makes ``dK/dt + x x K = v``, checked in the tests).
 
 Kinematics (seed eq. 1.2), scalar-last quaternion ``eta = (eta_v, eta4)`` as in
-:func:`estim.rotations.quaternion_rate`::
+:func:`kalman_vs_infoset.estim.rotations.quaternion_rate`::
 
     2 deta_v/dt = eta4 x + eta_v x x,     2 deta4/dt = -eta_v . x
 
@@ -28,11 +28,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.estim import integrate
+from kalman_vs_infoset.estim.integrate import renormalised
+from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
 from numpy.typing import ArrayLike, NDArray
-
-from estim import integrate
-from estim.integrate import renormalised
-from estim.rotations import cross, quaternion_rate
 
 Array = NDArray[np.float64]
 

@@ -31,11 +31,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Belief
+from kalman_vs_infoset.guidance.attitude.pd import error_quaternion
+from kalman_vs_infoset.guidance.attitude.wheels import cross
 from numpy.typing import ArrayLike, NDArray
-
-from estim.base import Belief
-from guidance.attitude.pd import error_quaternion
-from guidance.attitude.wheels import cross
 
 FloatArray = NDArray[np.float64]
 

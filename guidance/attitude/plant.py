@@ -17,12 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.estim.base import frozen_array
+from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
-
-from estim.base import frozen_array
-from estim.rotations import cross, quaternion_rate
 
 
 def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:

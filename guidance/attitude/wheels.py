@@ -1,6 +1,6 @@
 """Reaction-wheel actuator and a batched fixed-step rigid-body plant (SPEC 2, 2.2).
 
-The plant is the common one of :mod:`guidance.attitude.plant`::
+The plant is the common one of :mod:`kalman_vs_infoset.guidance.attitude.plant`::
 
     J dw/dt + w x (J w + h) = M_ext + M_u,   dh/dt = -M_u,   dq/dt = 1/2 q (x) (w, 0)
 
@@ -26,12 +26,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.estim import integrate
+from kalman_vs_infoset.estim.integrate import renormalised
+from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import ArrayLike, NDArray
-
-from estim import integrate
-from estim.integrate import renormalised
-from estim.rotations import cross, quaternion_rate
-from guidance.attitude.plant import RigidBody
 
 FloatArray = NDArray[np.float64]
 

@@ -22,10 +22,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from estim.base import Belief, Extremes
-from estim.costs import MissForecast
-from estim.model import ChannelModel
+from kalman_vs_infoset.estim.base import Belief, Extremes
+from kalman_vs_infoset.estim.costs import MissForecast
+from kalman_vs_infoset.estim.model import ChannelModel
 
 
 @dataclass(frozen=True)
