@@ -15,8 +15,12 @@ noise realisation.
 A belief answers four questions:
 
 * ``centre()``: a point estimate (the centre of the set, or the mean);
-* ``extremes(fn)``: min and max of a scalar function over the belief, with the
-  points where they are attained (the set itself, or the k-sigma ellipsoid);
+* ``extremes(fn)``: min and max of a scalar function over the belief (the set
+  itself, or the k-sigma ellipsoid), with representative states; sound bounds, and a
+  belief that cannot bound a function over its whole body refuses it (``TypeError``)
+  rather than answer with inner values;
+* ``attained(fn)``: min and max of the function over states the belief holds, each at
+  its state (the witnesses: what an adversary can aim at);
 * ``contains(state)``: whether a state lies inside the belief;
 * ``is_empty``: whether the belief is empty (measurements contradicted the model);
 
@@ -69,6 +73,12 @@ class Extremes:
         if not self.min_value <= self.max_value:
             raise ValueError(f"min_value {self.min_value} exceeds max_value {self.max_value}")
 
+    def largest_abs(self) -> tuple[float, NDArray[np.float64]]:
+        """The end of larger magnitude and its argument (the maximum on a tie)."""
+        if abs(self.max_value) >= abs(self.min_value):
+            return self.max_value, self.argmax
+        return self.min_value, self.argmin
+
 
 class Status(enum.StrEnum):
     """What a belief reports about itself (a field of every belief, never parsed)."""
@@ -107,7 +117,23 @@ class Belief(ABC):
 
     @abstractmethod
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the belief, with their arguments."""
+        """Min and max of ``fn`` over the belief, with their arguments.
+
+        A belief that cannot bound ``fn`` over its whole body raises ``TypeError``
+        (values at some of its points are not extremes).
+        """
+
+    def attained(self, fn: StateFunction) -> Extremes:
+        """Min and max of ``fn`` over states the belief holds, each attained at its
+        argument (a state of the belief): witnesses, never wider than :meth:`extremes`.
+
+        The default is :meth:`extremes`, right for beliefs whose extremes are attained
+        at the states they return (a point, an ellipsoid, particles, sections at both
+        ends of their range intervals). A belief whose extremes are bounds between the
+        states it stores overrides it (the node set:
+        :meth:`kalman_vs_infoset.estim.nodeset_belief.NodeSet.attained`).
+        """
+        return self.extremes(fn)
 
     @abstractmethod
     def contains(self, state: ArrayLike) -> bool:

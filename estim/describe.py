@@ -6,8 +6,10 @@ estimator made it) through the generic interface only -- ``centre()``,
 ``extremes(ZeroEffortMiss)`` and the extremes of the bearing, rate and range
 coordinates -- and adds richer fields where the belief offers them:
 
-* sound bearing and range intervals (``alpha_range_rad()``, ``x_range_m()``: the node
-  and slab sets), used instead of the generic extremes;
+* sound bearing, rate and range intervals (``alpha_range_rad()``,
+  ``omega_range_radps()``, ``x_range_m()``: the node and slab sets where they have
+  them), used instead of the generic extremes (the node set bounds no plain function:
+  its ``extremes`` refuses one);
 * the set's size: ``n_sections``, ``n_vertices`` and the largest section's area
   (``polygons.areas()`` in the belief's scaled coordinates, converted to rad m);
 * a Kalman belief's ``n_sigma`` and ``innovation_outliers``.
@@ -131,7 +133,10 @@ def describe_channel(belief: Belief, model: ChannelModel) -> dict[str, Any]:
     out["alpha_lo_rad"], out["alpha_hi_rad"] = (
         alpha() if callable(alpha) else _interval(belief, _column(0))
     )
-    out["omega_lo_radps"], out["omega_hi_radps"] = _interval(belief, _column(1))
+    omega = getattr(belief, "omega_range_radps", None)
+    out["omega_lo_radps"], out["omega_hi_radps"] = (
+        omega() if callable(omega) else _interval(belief, _column(1))
+    )
     x_range = getattr(belief, "x_range_m", None)
     out["x_lo_m"], out["x_hi_m"] = x_range() if callable(x_range) else _interval(belief, _column(2))
     return out

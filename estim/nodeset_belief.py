@@ -170,22 +170,79 @@ class NodeSet(Belief):
         return np.array([alpha, float(self.model.omega_from_w(w, x)), x])
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the set.
+        """Sound min and max of ``fn`` over the whole set (nodes and cells between).
 
-        :class:`~estim.costs.MissForecast` and :class:`~estim.costs.ZeroEffortMiss`
-        (recognised by type) get sound bounds over the whole body (nodes and the
-        cells between them); the rows returned are representative states at the
-        range where each bound is attained (``x = e_nom tau``). Any other function
-        is evaluated at the node polygons' vertices (exact at the nodes only).
+        Only :class:`~estim.costs.MissForecast` and :class:`~estim.costs.ZeroEffortMiss`
+        (recognised by type) are bounded: the rows returned are representative states at
+        the range where each bound is attained (``x = e_nom tau``, the cell's middle
+        bearing). Between its nodes the set is known through bounds only, so any other
+        function is refused (``TypeError``): its values at the node vertices would be
+        inner values, not extremes. The coordinates have their own sound intervals
+        (:meth:`alpha_range_rad`, :meth:`omega_range_radps`, :meth:`x_range_m`);
+        :meth:`attained` gives the values of any function at the set's own points.
         """
         if self.is_empty:
             raise ValueError(f"extremes of an empty node set (status {self.status})")
         if isinstance(fn, MissForecast | ZeroEffortMiss):
             return self._forecast_extremes(isinstance(fn, MissForecast))
-        pts = self.vertices()
+        raise TypeError(
+            f"a node set bounds only MissForecast and ZeroEffortMiss over its whole body, "
+            f"not {fn!r}; use attained(fn) for values at its own points, or "
+            "alpha_range_rad / omega_range_radps / x_range_m for the coordinates"
+        )
+
+    def attained(self, fn: StateFunction) -> Extremes:
+        """Min and max of ``fn`` over the exact slices' vertices, each at its state.
+
+        The witnesses are vertices of the live node polygons (the exact slices, within
+        the piece's hard limits) at both ends and the middle of the piece's closing
+        speed (``x = tau / u``): states of the set. The forecast and zero-effort misses
+        are monotone in ``u`` at a vertex (``Pi = (zs + sign(zs) nu tau^2 / 2) / (u
+        e_nom)^2``), so for them the ends give the largest value a vertex takes. Between
+        nodes the body may reach further than its vertices: the values are inner, never
+        wider than :meth:`extremes` (which bounds them), and within the tightening
+        tolerance of it after an update (``tighten_rtol`` of the estimator).
+        """
+        if self.is_empty:
+            raise ValueError(f"attained values of an empty node set (status {self.status})")
+        own = self.polygons.owner()
+        piece, lab = self.piece[own], self.label_s[own]
+        tol = 1e-9 * np.abs(lab)
+        keep = (lab >= self.hard_lo_s[piece] - tol) & (lab <= self.hard_hi_s[piece] + tol)
+        if not keep.any():
+            raise ValueError("the node set has live nodes but none within its hard limits")
+        xy, piece, tau = self.polygons.xy[keep], piece[keep], self.tau_s[own[keep]]
+        pts = np.vstack([self._rows(xy, tau, u[piece]) for u in self._speeds()])
         vals = np.asarray(fn(pts), dtype=float)
         i_lo, i_hi = int(np.argmin(vals)), int(np.argmax(vals))
         return Extremes(float(vals[i_lo]), pts[i_lo], float(vals[i_hi]), pts[i_hi])
+
+    def _speeds(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``u`` per piece at the fast end, the middle and the slow end."""
+        return self.u_lo, 0.5 * (self.u_lo + self.u_hi), self.u_hi
+
+    def _rows(self, xy: FloatArray, tau: FloatArray, u: FloatArray) -> FloatArray:
+        """Points ``(a, zs)`` of slices at ``tau`` as rows ``(alpha, omega, x)`` at
+        ``u = 1/e`` (one per point): ``x = tau / u``, ``w = (e / e_nom)^2 zs``."""
+        x = tau / u
+        w = xy[:, 1] / (u * self.e_nom) ** 2
+        alpha = xy[:, 0] * self.alpha_scale_rad
+        return np.column_stack([alpha, self.model.omega_from_w(w, x), x])
+
+    def omega_range_radps(self) -> tuple[float, float]:
+        """A sound interval of the line-of-sight rate over the whole set (rad/s):
+        ``omega = w e_nom / x^2`` with each cell's bounds of ``w`` and of ``x`` (an
+        outer bound: the two are bounded apart)."""
+        s = self._summary
+        if len(s["w"]) == 0:
+            raise ValueError("the node set has live nodes but no cell within its hard limits")
+        x_lo = s["span"][:, 0] / self.u_hi[s["piece"]]
+        x_hi = s["span"][:, 1] / self.u_lo[s["piece"]]
+        w_lo, w_hi = s["w"][:, 0], s["w"][:, 1]
+        with np.errstate(divide="ignore"):
+            hi = np.where(w_hi > 0, w_hi / x_lo**2, w_hi / x_hi**2) * self.e_nom
+            lo = np.where(w_lo < 0, w_lo / x_lo**2, w_lo / x_hi**2) * self.e_nom
+        return float(lo.min()), float(hi.max())
 
     def _forecast_extremes(self, forecast: bool) -> Extremes:
         s = self._summary
@@ -213,12 +270,8 @@ class NodeSet(Belief):
         """Vertices of the live node polygons as rows ``(alpha, omega, x)`` at the
         piece's middle closing speed (``x = tau / u_mid``)."""
         own = self.polygons.owner()
-        u_mid = 0.5 * (self.u_lo + self.u_hi)[self.piece[own]]
-        x = self.tau_s[own] / u_mid
-        e = 1.0 / u_mid
-        w = self.polygons.xy[:, 1] * (e / self.e_nom) ** 2
-        alpha = self.polygons.xy[:, 0] * self.alpha_scale_rad
-        return np.column_stack([alpha, self.model.omega_from_w(w, x), x])
+        u_mid = self._speeds()[1][self.piece[own]]
+        return self._rows(self.polygons.xy, self.tau_s[own], u_mid)
 
     def contains(self, state: ArrayLike, tol: float = 1e-9) -> bool:
         """Whether ``(alpha, omega, x)`` lies in the set for some closing speed.

@@ -1,12 +1,13 @@
 """White-box adversaries of the intercept: noise that targets the pursuer's estimator.
 
-The seed's adversary (``game``, :class:`experiments.noise.GameNoise`) keeps its own
-information set and is the same whatever the pursuer runs. The generators here see the
+The seed's adversary (``game``, :class:`experiments.noise.GameNoise`) plays against the
+information set before the measurement, whatever the pursuer runs: the pursuer's own
+set when the pursuer runs it, a copy of its own otherwise. The generators here see the
 pursuer itself: before each measurement the engagement hands them a
 :class:`PursuerView` (the pursuer's estimators, its current beliefs, its guidance law
-and the fuel it has used) through :meth:`WhiteBoxNoise.observe_pursuer`; generators
-that are not :class:`WhiteBoxNoise` are never shown anything (``random``, ``bias`` and
-``game`` run exactly as before).
+and the fuel it has used) through :meth:`WhiteBoxNoise.observe_pursuer` (the game
+adversary is shown the same view when it reads the pursuer's set, and looks at the
+beliefs only); ``random`` and ``bias`` are never shown anything.
 
 Both rules choose among ``n`` candidate errors evenly spaced over the whole admissible
 interval, ``err_j = (-1 + 2 j/(n - 1)) b (1 - 1e-9)`` (``b`` the sensor's bound at the

@@ -1,23 +1,30 @@
-"""Measurement-noise generators of the intercept (SPEC 1.6).
+"""Measurement-noise generators of the intercept (docs/models.md §1.6).
 
 ``random``: every error uniform in its admissible interval.
 
 ``bias``: every error held at its bound (a hair inside) with a sign drawn once per
-run and channel (SPEC 1.6, "bias at the bound"): bounded, admissible, and as far
+run and channel (docs/models.md §1.6, "bias at the bound"): bounded, admissible, and as far
 from zero-mean white noise as an error can be -- the case a Kalman filter's
 ``R = a^2/3`` underestimates by a factor of three in variance and never averages out.
 
-``game``: the adversary of seed 003 section 6. It keeps its *own* information
-set ``I_-`` of every channel (built from the same a-priori boxes, independent of
-the pursuer's estimator, updated with the measurements it issues and the
-impulses it observes). Before each measurement it finds the point of ``I_-``
-with the worst forecast miss (largest ``|Pi|``) and issues the measurement
-whose uncertainty interval
+``game``: the adversary of seed 003 section 5 (its rule for the range, applied to the
+bearings as well). Its position is the pursuer's information set ``I_-`` before the
+measurement, of every channel: it reads the pursuer's own set when the pursuer runs the
+same information set (the engagement shows it the pursuer, :meth:`GameNoise.observe_pursuer`;
+one set per engagement), and otherwise keeps its *own* copy, built from the same
+a-priori boxes and updated with the measurements it issues and the impulses it
+observes (the pursuer then runs another estimator, or its bearings carry pointing
+errors the adversary does not issue). Before each measurement it finds the point of
+``I_-`` with the worst forecast miss (largest ``|Pi|``): a state the set holds, asked
+through :meth:`~kalman_vs_infoset.estim.base.Belief.attained` (on the node set, the
+extreme vertex of its exact slices, at the closing speed where its miss is worst), and
+issues the measurement whose uncertainty interval
 
 (a) contains the true value (always: the error stays admissible),
 (b) contains the worst point, so the pursuer cannot rule it out, and
-(c) among such choices keeps the widest part of ``I_-`` alive: the interval is
-    centred as close as (a) and (b) allow on the middle of ``I_-``'s extent.
+(c) among such choices keeps the widest part of ``I_-`` alive: the interval's overlap
+    with the set's bearing extent is largest, i.e. it is centred as close as (a) and
+    (b) allow on the middle of that extent.
 
 If (a) and (b) are incompatible the interval is put as close as possible to
 the worst point. The range measurement is chosen the same way on ``x``.
@@ -35,28 +42,39 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.estim.base import Belief
 from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.infoset import InformationSet, InformationSetEstimator
+from kalman_vs_infoset.estim.infoset import InformationSetEstimator
 from kalman_vs_infoset.estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
+from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
 
-#: noise kinds of the intercept (``random`` and ``game`` are SPEC 1.6's required two;
+#: noise kinds of the intercept (``random`` and ``game`` are the seed's two;
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
 NOISES = ("random", "game", "bias", "targeted", "lookahead")
 
 
-def game_bearing(alpha_true: float, bound_true: float, belief: InformationSet) -> float:
-    """The adversary's bearing for one channel (rules (a)-(c) of the module docstring)."""
+def worst_point(belief: Belief, model: ChannelModel) -> np.ndarray:
+    """The state of ``belief`` with the largest ``|Pi|`` (a state it holds:
+    :meth:`~kalman_vs_infoset.estim.base.Belief.attained` of the forecast miss)."""
+    return belief.attained(MissForecast(model)).largest_abs()[1]
+
+
+def game_bearing(alpha_true: float, bound_true: float, belief: Belief) -> float:
+    """The adversary's bearing for one channel (rules (a)-(c) of the module docstring);
+    ``belief`` is a set with ``alpha_range_rad()`` (the slab, point or node set)."""
     model = belief.model
     if belief.is_empty:
         return alpha_true + bound_true
-    ext = belief.extremes(MissForecast(model))
-    worst = ext.argmax if abs(ext.max_value) >= abs(ext.min_value) else ext.argmin
+    worst = worst_point(belief, model)
     a_w, x_w = float(worst[0]), float(worst[2])
     # a tiny inward margin keeps both points strictly inside after rounding
     b_t = bound_true * (1 - 1e-9)
     b_w = float(model.bearing_bound(x_w)) * (1 - 1e-9)
     lo, hi = max(alpha_true - b_t, a_w - b_w), min(alpha_true + b_t, a_w + b_w)
     if lo <= hi:
+        # the overlap of [a - B, a + B] with the extent is concave in a and symmetric
+        # about the extent's middle: its largest value on [lo, hi] is at the middle's
+        # projection
         a_lo, a_hi = belief.alpha_range_rad()
         return float(np.clip(0.5 * (a_lo + a_hi), lo, hi))
     return float(np.clip(a_w, alpha_true - b_t, alpha_true + b_t))
@@ -134,26 +152,57 @@ class BiasNoise(_Memoryless):
 
 
 class GameNoise:
-    """The adversary of seed 003 (module docstring); keeps its own sets per channel."""
+    """The adversary of seed 003 (module docstring).
+
+    Parameters
+    ----------
+    estimator : InformationSetEstimator or NodeSetEstimator
+        The information set of the pursuer's model (its ``model`` is the one the
+        adversary's rule uses).
+    sets : sequence of beliefs, or None
+        Its own initial sets, one per channel; ``None``: the pursuer runs this very
+        estimator on the same data, and the adversary reads the pursuer's sets when it
+        is shown them (:meth:`observe_pursuer`, before every measurement) instead of
+        recomputing them.
+    sensor_bound : BearingBound, optional
+        The sensor's own error bound (the pursuer's model may add pointing errors).
+    """
 
     def __init__(
         self,
-        estimator: InformationSetEstimator,
-        sets: Sequence[InformationSet],
+        estimator: InformationSetEstimator | NodeSetEstimator,
+        sets: Sequence[Belief] | None = None,
         sensor_bound: BearingBound | None = None,
     ):
         self.estimator = estimator
         self.model = estimator.model
-        self.sets = list(sets)
-        # the sensor's own error bound (the pursuer's model may add pointing errors)
+        self.shared = sets is None
+        self.sets: list[Belief] = [] if sets is None else list(sets)
         self.sensor_bound = sensor_bound or self.model.bearing_bound
+
+    def observe_pursuer(self, view) -> None:
+        """The pursuer before the next measurement
+        (:class:`~kalman_vs_infoset.experiments.adversary.PursuerView`): a shared set is
+        the pursuer's belief; an own copy ignores the view."""
+        if self.shared:
+            self.sets = list(view.beliefs)
+
+    def _position(self, n_channels: int) -> list[Belief]:
+        if len(self.sets) != n_channels:
+            raise RuntimeError(
+                "a game adversary sharing the pursuer's set must be shown the pursuer "
+                "(observe_pursuer) before each measurement, one belief per channel"
+            )
+        return self.sets
 
     def bearings(self, truth: Sequence[np.ndarray], range_true_m: float) -> list[float]:
         bound = float(self.sensor_bound(range_true_m))
+        sets = self._position(len(truth))
         out = []
         for i, t in enumerate(truth):
-            a = game_bearing(float(t[0]), bound, self.sets[i])
-            self.sets[i] = self.estimator.update(self.sets[i], Bearing(a))
+            a = game_bearing(float(t[0]), bound, sets[i])
+            if not self.shared:
+                sets[i] = self.estimator.update(sets[i], Bearing(a))
             out.append(a)
         return out
 
@@ -163,21 +212,24 @@ class GameNoise:
             return range_true_m
         worst, worst_val = None, -1.0
         for s in live:
-            ext = s.extremes(MissForecast(self.model))
-            for val, arg in ((ext.max_value, ext.argmax), (ext.min_value, ext.argmin)):
-                if abs(val) > worst_val:
-                    worst, worst_val = arg, abs(val)
+            val, arg = s.attained(MissForecast(self.model)).largest_abs()
+            if abs(val) > worst_val:
+                worst, worst_val = arg, abs(val)
         x_lo = min(s.x_range_m()[0] for s in live)
         x_hi = max(s.x_range_m()[1] for s in live)
         return game_range(range_true_m, self.model.range_rel_bound, float(worst[2]), x_lo, x_hi)
 
     def observe_range(self, measurement: Range) -> None:
         """The range measurement as the pursuer receives it (with its off-axis bound)."""
-        self.sets = [self.estimator.update(s, measurement) for s in self.sets]
+        if not self.shared:
+            self.sets = [self.estimator.update(s, measurement) for s in self.sets]
 
     def predict(self, dt_s: float, control: Sequence[float | Impulse] | None = None) -> None:
-        """Advance the sets over ``dt_s`` with the pursuer's impulses (one per channel:
-        numbers or :class:`Impulse` with uncertainty) acting at the step's start."""
+        """Advance the own sets over ``dt_s`` with the pursuer's impulses (one per
+        channel: numbers or :class:`Impulse` with uncertainty) acting at the step's
+        start (a shared set is the pursuer's: nothing to do)."""
+        if self.shared:
+            return
         controls = [None] * len(self.sets) if control is None else control
         self.sets = [
             self.estimator.predict(s, dt_s, k) for s, k in zip(self.sets, controls, strict=True)

@@ -1,4 +1,4 @@
-"""One intercept engagement: truth, noise, estimator and guidance law in a loop (SPEC 1).
+"""One intercept engagement: truth, noise, estimator and guidance law in a loop (docs/models.md §1).
 
 :class:`Engagement` is the loop in three parts: :meth:`Engagement.setup` draws the
 truth and builds the estimators (by registered name, :mod:`estim.registry`), the noise
@@ -7,8 +7,9 @@ flies to the closest approach and returns the :class:`EngagementResult`.
 :func:`run_engagement` runs the three.
 
 Per decision step ``t_i = i Delta``: show a white-box adversary the pursuer
-(:class:`kalman_vs_infoset.experiments.adversary.PursuerView`: estimators, beliefs, law, fuel; other
-noises are shown nothing), measure the bearings (and the range when the
+(:class:`kalman_vs_infoset.experiments.adversary.PursuerView`: estimators, beliefs, law, fuel),
+and the game adversary too when it reads the pursuer's information set (other noises
+are shown nothing), measure the bearings (and the range when the
 range finder is due, with the bound of its off-axis angle taken from the bearings of
 both axes: :func:`range_measurement`), update every channel's belief, count the steps
 where the truth lies outside it, compute the impulses and apply them to the truth,
@@ -66,16 +67,28 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
     return est, est.initial(sc.estimator.prior(channel))
 
 
-def build_noise(name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None):
+def build_noise(
+    name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None,
+    pursuer: str | None = None,
+):  # fmt: skip
     """Noise generator; ``sensor`` (default ``model``) bounds the sensor's own errors
-    while ``model`` is what the pursuer's estimators (and the adversary's set) use."""
+    while ``model`` is what the pursuer's estimators (and the adversary's set) use.
+
+    ``pursuer`` names the pursuer's estimator: when it is the information set (the
+    same registered estimator with the same options as the game adversary's) and the
+    sensor's errors are all the adversary issues (``sensor is model``: no pointing
+    errors added), the game adversary reads the pursuer's sets instead of keeping its
+    own copy (the engagement shows them to it before each measurement); ``None``
+    keeps the copy."""
     sensor = sensor or model
     if name == "random":
         return RandomNoise(sensor, rng)
     if name == "bias":
         return BiasNoise(sensor, rng, len(channels))
-    if name == "game":  # the adversary keeps its own information sets
+    if name == "game":
         est = make_estimator("infoset", sc, model)
+        if pursuer == "infoset" and sensor is model:  # one set per engagement
+            return GameNoise(est, None, sensor.bearing_bound)
         sets = [est.initial(sc.estimator.prior(ch)) for ch in channels]
         return GameNoise(est, sets, sensor.bearing_bound)
     adv = sc.adversary
@@ -127,11 +140,20 @@ class Engagement:
     """One engagement in progress (mutable simulator state; see the module docstring)."""
 
     def __init__(
-        self, sc: InterceptScenario, estimator: str, noise: str, rng, record: Recorder | None = None
+        self,
+        sc: InterceptScenario,
+        estimator: str,
+        noise: str,
+        rng,
+        record: Recorder | None = None,
+        share_adversary_set: bool = True,
     ):
         self.sc, self.rng = sc, rng
         #: with a :class:`Recorder`, every step records its channels (observing only)
         self.record = record
+        #: the game adversary reads the pursuer's information set when the pursuer runs
+        #: it (False: it keeps its own copy; the results are the same)
+        self.share_adversary_set = share_adversary_set
         self.setup(estimator, noise)
 
     def setup(self, estimator_name: str, noise_name: str) -> None:
@@ -157,7 +179,8 @@ class Engagement:
         built = [build_estimator(estimator_name, sc, model, c) for c in self.channels]
         self.estimators: list[Estimator] = [b[0] for b in built]
         self.beliefs: list[Belief] = [b[1] for b in built]
-        self.noise = build_noise(noise_name, sc, model, self.channels, rng, sensor)
+        pursuer = estimator_name if self.share_adversary_set else None
+        self.noise = build_noise(noise_name, sc, model, self.channels, rng, sensor, pursuer)
         # bearings of unguided axes (they bound the range finder's off-axis angle only):
         # an independent stream, so the runs' other draws do not depend on it
         self.axis_rng = rng.spawn(1)[0]
@@ -271,8 +294,11 @@ class Engagement:
                              phase="posterior")  # fmt: skip
 
     def _show_pursuer(self, beliefs: list[Belief]) -> None:
-        """Hand a white-box adversary the pursuer as it stands (others see nothing)."""
-        if isinstance(self.noise, WhiteBoxNoise):
+        """Hand a white-box adversary, or a game adversary reading the pursuer's set,
+        the pursuer as it stands (others see nothing)."""
+        if isinstance(self.noise, WhiteBoxNoise) or (
+            isinstance(self.noise, GameNoise) and self.noise.shared
+        ):
             view = PursuerView(tuple(self.estimators), tuple(beliefs), self.law, self.fuel)
             self.noise.observe_pursuer(view)
 
@@ -316,10 +342,13 @@ def run_engagement(
     noise_name: str,
     rng: np.random.Generator,
     record: Recorder | None = None,
+    share_adversary_set: bool = True,
 ) -> EngagementResult:
     """Simulate one engagement; ``rng`` draws the truth first, then the noise. With a
-    :class:`~kalman_vs_infoset.experiments.sim.trace.Recorder` every step is recorded into it."""
-    eng = Engagement(sc, estimator_name, noise_name, rng, record)
+    :class:`~kalman_vs_infoset.experiments.sim.trace.Recorder` every step is recorded into
+    it; ``share_adversary_set=False`` makes the game adversary keep its own copy of the
+    pursuer's information set (:class:`Engagement`)."""
+    eng = Engagement(sc, estimator_name, noise_name, rng, record, share_adversary_set)
     while eng.step():
         pass
     return eng.finish()
