@@ -98,7 +98,7 @@ def akimov(ctx) -> dict[str, Any]:
             (axes[0, 0], "momentum_Nms", "momentum_max_Nms", "wheel momentum L_z, N m s"),
             (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
         ):
-            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"perfect / none, {what}")
+            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"exact state, {what}")
             for s in (-1, 1):
                 ax.plot(z["t_s"], s * z[lim], color=fs.REFERENCE, lw=0.8, label="limit")
             ax.set_ylabel(lab)
@@ -141,7 +141,7 @@ def _history_axis(ctx, name, df, title) -> None:
         z["t_s"],
         z["error_deg"],
         **fs.line("perfect", "none"),
-        label="perfect / none: rotation about z from the target",
+        label="exact state: rotation about z from the target",
     )
     axes[0, 0].set_xlabel("time t, s")
     axes[0, 0].set_ylabel("turn angle, deg")
@@ -161,7 +161,7 @@ def _zoom(ctx, name, df, settle_s, title, log=False) -> None:
         d["t_s"],
         d["angle_deg"],
         **fs.line("perfect", "none"),
-        label=f"perfect / none: error angle, settles at {settle_s:.2f} s",
+        label=f"exact state: error angle, settles at {settle_s:.2f} s",
     )
     ax.axhline(0.01, color=fs.REFERENCE, lw=0.9, label="tolerance 0.01 deg")
     ax.axvline(

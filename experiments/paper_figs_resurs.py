@@ -40,7 +40,7 @@ def resurs(ctx) -> dict[str, Any]:
                 d["t_s"],
                 d[own],
                 **fs.line("perfect", "none"),
-                label=f"given system x_{k + 3 * col} (perfect / none)",
+                label=f"given system x_{k + 3 * col} (exact state)",
             )
             ax.plot(
                 d["t_s"],

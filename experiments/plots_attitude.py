@@ -34,7 +34,8 @@ ROWS = (
 def _label(df: pd.DataFrame, what: str = "") -> str:
     est, noise = str(df["estimator"].iloc[0]), str(df["noise"].iloc[0])
     run = int(df["run"].iloc[0]) if "run" in df else 0
-    return f"{est} / {noise}, run {run}" + (f": {what}" if what else "")
+    runs = f", run {run}" if run else ""
+    return f"{fs.words(est, noise)}{runs}" + (f": {what}" if what else "")
 
 
 def _style(df: pd.DataFrame) -> dict:
