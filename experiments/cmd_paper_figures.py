@@ -30,6 +30,7 @@ from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import paper_figs_attitude as att
 from kalman_vs_infoset.experiments import paper_figs_kp as kp
 from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
+from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
@@ -38,6 +39,7 @@ from kalman_vs_infoset.experiments.files import atomic_write
 FIGURES: dict[str, str] = {
     **{name: fn.__name__.replace("fig", "kp_fig") for name, fn in kp.FIGURES.items()},
     **resurs.FIGURES,
+    **resurs_more.FIGURES,
     **att.FIGURES,
 }
 GROUPS = {
@@ -45,7 +47,13 @@ GROUPS = {
     "kp_fig4": kp.fig4,
     "kp_fig5": kp.fig5,
     **resurs.GROUPS,
+    **resurs_more.GROUPS,
     **att.GROUPS,
+}
+#: names of --only that stand for several groups
+ALIASES = {
+    "kp": ["kp_fig3", "kp_fig4", "kp_fig5"],
+    "resurs": ["resurs", "resurs_more"],
 }
 
 
@@ -94,8 +102,8 @@ def _groups(only: str | None) -> list[str]:
     for w in wanted:
         if w in FIGURES:
             g = FIGURES[w]
-        elif w == "kp":
-            groups += ["kp_fig3", "kp_fig4", "kp_fig5"]
+        elif w in ALIASES:
+            groups += ALIASES[w]
             continue
         elif w in GROUPS:
             g = w
