@@ -283,8 +283,13 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
         if ctx.quick
         else (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
     )
-    f0 = {a: gs.f0_for_angle(a, settings) for a in angles}
+    curves = {a: gs.efficient_curve(gs.settle_time_map(a, settings)) for a in angles}
+    f0 = {
+        a: gs.fit_parabola(c[0], c[1], settings.fit_loss, settings.grid_step)
+        for a, c in curves.items()
+    }  # = gs.f0_for_angle, the curves kept for Fig. 13
     fit = gs.fit_f0_curve(list(f0), list(f0.values()), settings.quaternion_term)
+    _fig13(ctx, curves, f0, table)
     fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
     ax = axes[0, 0]
     ta = np.array(sorted(table))
@@ -324,6 +329,30 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
     diff = {a: 100.0 * (f0[a] / table[a] - 1.0) for a in f0 if a in table}
     faster = bool(np.all(times["fitted"] <= times["baseline"]))
     return {"akimov_fig14": {"f0_diff_pct": diff}, "akimov_fig15": {"fit_faster": faster}}
+
+
+def _fig13(ctx, curves, f0, table) -> None:
+    """The family of efficient-coefficient curves at small angles, no wheel limits."""
+    fig, axes = fs.figure(1, 1, size=(7.6, 6.4))
+    ax = axes[0, 0]
+    cmap = fs.plt.get_cmap("viridis")
+    for i, (a, (kw, kq, _)) in enumerate(curves.items()):
+        colour = cmap(i / max(1, len(curves) - 1))
+        ax.plot(kw, kq, ".", ms=3, color=colour, label=f"phi0 = {a:g} deg: efficient (ours)")
+        grid = np.linspace(0.1, 3.0, 100)
+        ax.plot(grid, f0[a] * grid**2, color=colour, lw=1.0,
+                label=f"phi0 = {a:g} deg: k_q = {f0[a]:.4f} k_w^2 (our fit)")  # fmt: skip
+        if a in table:
+            ax.plot(grid, table[a] * grid**2, color=colour, lw=0.8, ls=":",
+                    label=f"phi0 = {a:g} deg: paper's table, f0 = {table[a]:.4f}")  # fmt: skip
+    ax.set_xlim(0.1, 3.0)
+    ax.set_ylim(0.1, 3.0)
+    ax.set_xlabel("k_w, 1/s")
+    ax.set_ylabel("k_q, 1/s^2")
+    fs.figure_legend(fig, [ax], fontsize=6, ncol=3)
+    fig.suptitle("akimov_fig13: efficient-coefficient curves at small angles\n"
+                 "(J = 1.5 kg m^2, no wheel limits; dots: least settle time per k_w)")  # fmt: skip
+    ctx.save(fig, "akimov_fig13")
 
 
 # -- seed 004 --------------------------------------------------------------------------
@@ -375,6 +404,6 @@ def gyrostat(ctx) -> dict[str, Any]:
 
 GROUPS = {"akimov": akimov, "gyrostat": gyrostat}
 FIGURES = {
-    **{f"akimov_fig{i}": "akimov" for i in (3, 4, 5, 6, 7, 10, 11, 12, 14, 15)},
+    **{f"akimov_fig{i}": "akimov" for i in (3, 4, 5, 6, 7, 10, 11, 12, 13, 14, 15)},
     **{n: "gyrostat" for n in ("gyrostat_eta", "gyrostat_switching", "gyrostat_torques")},
 }
