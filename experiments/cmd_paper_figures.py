@@ -29,6 +29,7 @@ from typing import Any
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import paper_figs_attitude as att
 from kalman_vs_infoset.experiments import paper_figs_kp as kp
+from kalman_vs_infoset.experiments import paper_figs_more as more
 from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
 from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
@@ -41,6 +42,7 @@ FIGURES: dict[str, str] = {
     **resurs.FIGURES,
     **resurs_more.FIGURES,
     **att.FIGURES,
+    **more.FIGURES,
 }
 GROUPS = {
     "kp_fig3": kp.fig3,
@@ -49,11 +51,13 @@ GROUPS = {
     **resurs.GROUPS,
     **resurs_more.GROUPS,
     **att.GROUPS,
+    **more.GROUPS,
 }
 #: names of --only that stand for several groups
 ALIASES = {
     "kp": ["kp_fig3", "kp_fig4", "kp_fig5"],
     "resurs": ["resurs", "resurs_more"],
+    "akimov": ["akimov", "akimov_more"],
 }
 
 
@@ -84,7 +88,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--only",
         default=None,
-        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat)",
+        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat, lqr)",
     )
     p.add_argument(
         "--quick",
@@ -110,7 +114,7 @@ def _groups(only: str | None) -> list[str]:
         else:
             raise InputError(
                 f"--only: unknown figure or group '{w}' "
-                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, "
+                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, lqr, "
                 "gyrostat)"
             )
         groups.append(g)
