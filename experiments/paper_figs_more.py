@@ -108,8 +108,9 @@ def akimov_fig9(ctx) -> dict[str, Any]:
         (axes[0, 0], "momentum_Nms", "momentum_max_Nms", "wheel momentum L_z, N m s"),
         (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
     ):
+        limit = float(z[lim].iloc[0])
         ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"),
-                label=f"exact state (limit +-{float(z[lim].iloc[0]):g}, off the panel)")  # fmt: skip
+                label=f"exact state (limit +-{limit:g}, off the panel)")  # fmt: skip
         ax.set_ylabel(lab)
         ax.set_xlabel("time t, s")
         ax.set_xlim(0.0, 20.0)
