@@ -54,14 +54,14 @@ def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overr
 def _components(ctx, name, traces, column, ylabel, title, limit=None, marks=(), variants=None):
     """Three axis panels of ``column``; ``variants`` names each trace and gives its line
     width (traces of one estimator and noise that differ otherwise)."""
-    fig, axes = fs.figure(3, 1, size=(7.0, 7.0), sharex="col")
+    fig, axes = fs.figure(3, 1, size=(7.0, 7.6), sharex="col")
     for i, df in enumerate(traces):
         what, lw = variants[i] if variants else ("", None)
         pa.axis_panels(axes[:, 0], [df], column, ylabel, what=what, limit=limit, lw=lw)
     for ax in axes[:, 0]:
         for value, label in marks:
             ax.axvline(value, color=fs.PAPER, ls=":", lw=1.2, label=label)
-        fs.legend(ax, loc="best", fontsize=6.5)
+    fs.figure_legend(fig, axes[:, 0], fontsize=7, ncol=2)  # below the panels: covers no data
     fig.suptitle(title)
     ctx.save(fig, name)
 
