@@ -37,7 +37,7 @@ def _peaks(df) -> tuple[float, float]:
 
 
 def akimov_fig8(ctx) -> dict[str, Any]:
-    angles = (0.3, 0.63, 3.0, 20.0, 150.0) if ctx.quick else (
+    angles = (0.63, 3.0, 150.0) if ctx.quick else (
         0.2, 0.3, 0.63, 1.0, 1.4, 1.7, 2.5, 5.0, 10.0, 20.0, 40.0, 55.0, 60.0, 80.0, 110.0, 150.0
     )  # fmt: skip
     peaks = {}
