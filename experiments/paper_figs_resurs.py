@@ -18,6 +18,7 @@ import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
 from kalman_vs_infoset.experiments.paper_figs_attitude import _components, _history, trace
+from kalman_vs_infoset.experiments.sim.attitude_cmg import lower_bound_energy_N2m2s
 
 PAPER_Z = {"energy": 2150.0, "euler": 11200.0}
 
@@ -149,6 +150,11 @@ def resurs(ctx) -> dict[str, Any]:
         marks=mark,
     )
     k_end = energy.loc[energy["t_s"] <= turn + 1e-9].groupby("axis")["momentum_Nms"].last()
+    f1_0 = 2.65e-5  # what the paper's 300-s point would take (README, "Resurs-P")
+    f1_up, _ = trace(
+        ctx, "resurs_p.toml", "energy", "none", "perfect", [f"energy.f1=[{f1_0}, 5e-3]"]
+    )
+    up = _at_turn(f1_up, turn)
     end = energy[(energy["axis"] == 1) & (energy["t_s"] <= turn + 1e-9)].iloc[-1]
     return {
         "resurs": {
@@ -162,8 +168,36 @@ def resurs(ctx) -> dict[str, Any]:
                 np.all(np.diff(energy[energy["axis"] == 1]["trace_k_u_N2m2"].dropna()) < 0)
             ),
             "initial_swing_Nm": {"U0=0": _swing(energy), "U0 paper": _swing(u0)},
+            "Z_u0_paper": _at_turn(u0, turn)["Z"],
+            "within_tolerance_from_s": _within_from(energy, setup),
+            "lower_bound_N2m2s": lower_bound_energy_N2m2s(setup),
+            "f1_raised": {
+                "f1_0": f1_0,
+                **up,
+                "within_tolerance_from_s": _within_from(f1_up, setup),
+            },
         }
     }
+
+
+def _at_turn(df: pd.DataFrame, turn_s: float) -> dict[str, float]:
+    """Z, error angle and rate norm at the end of the turn."""
+    d = df[(df["axis"] == 1) & (df["t_s"] <= turn_s + 1e-9)].iloc[-1]
+    return {
+        "Z": float(d["energy_N2m2s"]),
+        "angle_deg": float(d["angle_deg"]),
+        "rate_degps": float(d["rate_norm_degps"]),
+    }
+
+
+def _within_from(df: pd.DataFrame, setup) -> float:
+    """First time from which the error angle and rate stay within the paper's tolerances."""
+    d = df[df["axis"] == 1]
+    ok = (d["angle_deg"] <= setup.angle_tol_deg) & (d["rate_norm_degps"] <= setup.rate_tol_degps)
+    bad = np.flatnonzero(~ok.to_numpy())
+    if not ok.iloc[-1]:
+        return float("nan")
+    return float(d["t_s"].iloc[bad[-1] + 1]) if bad.size else 0.0
 
 
 def _error_zoom(axes, energy: pd.DataFrame, turn_s: float, tol_deg: float, tol_degps: float):
