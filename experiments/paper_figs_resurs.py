@@ -155,6 +155,9 @@ def resurs(ctx) -> dict[str, Any]:
         ctx, "resurs_p.toml", "energy", "none", "perfect", [f"energy.f1=[{f1_0}, 5e-3]"]
     )
     up = _at_turn(f1_up, turn)
+    gentle, _ = trace(
+        ctx, "resurs_p.toml", "euler", "none", "perfect", ["euler.accel_time_s=100.0"]
+    )
     end = energy[(energy["axis"] == 1) & (energy["t_s"] <= turn + 1e-9)].iloc[-1]
     return {
         "resurs": {
@@ -171,6 +174,7 @@ def resurs(ctx) -> dict[str, Any]:
             "Z_u0_paper": _at_turn(u0, turn)["Z"],
             "within_tolerance_from_s": _within_from(energy, setup),
             "lower_bound_N2m2s": lower_bound_energy_N2m2s(setup),
+            "Z_euler_100s_phases": _at_turn(gentle, turn)["Z"],
             "f1_raised": {
                 "f1_0": f1_0,
                 **up,
