@@ -3,9 +3,12 @@
 Redraws every figure of the papers that our models cover, each file named after the
 paper's figure (PNG and SVG): seed 003 ``kp_fig3``, ``kp_fig4``, ``kp_fig5`` (and our
 ``kp_fig3_overlay``: the set, EKF and UKF on one realisation), seed 000
-``resurs_fig1``-``resurs_fig9``, seed 001 ``akimov_fig3``-``fig7``, ``fig10``-``fig12``,
-``fig14``, ``fig15``, and the gyrostat turn of seed 004 (``gyrostat_eta``,
-``gyrostat_switching``, ``gyrostat_torques``; its paper has no figures we can read). The
+``resurs_fig1``-``resurs_fig9`` with ``resurs_inertia_signs`` (the index under the
+readings of the lost signs of the products of inertia) and ``resurs_noisy`` (the turn
+under noisy measurements through an estimator), seed 001 ``akimov_fig3``-``fig15``,
+seed 002 ``lqr_lyapunov`` (its Lyapunov function along the LQR turn), and the gyrostat
+turn of seed 004 (``gyrostat_eta``, ``gyrostat_switching``, ``gyrostat_torques``; its
+paper has no figures we can read). The
 paper's printed numbers are marked on them (black stars and dotted lines, "paper: ...").
 ``--runs`` is the number of engagements per curve of ``kp_fig5`` (the paper: 50); the
 runs are kept in ``<out>/runs`` and reused (resumed) by the next call. ``--quick``
