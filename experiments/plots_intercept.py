@@ -102,7 +102,9 @@ def control_processes(
         )
         for a in ax:
             fs.legend(a, loc="best")
-    fig.suptitle(f"{steps['scenario'].iloc[0]}: control processes, {estimator}, run {run}")
+    fig.suptitle(
+        f"{steps['scenario'].iloc[0]}: control processes, {fs.words(estimator)}, run {run}"
+    )
     return fig
 
 

@@ -2,7 +2,8 @@
 
 ``CHECKS`` is a table: a document, a regular expression whose groups capture numbers as
 printed, the results file written by the command that produces them, and the key of
-each number in that file (``/``-separated path; list items by index). A printed number
+each number in that file (``/``-separated path; list items by index); the document's line
+breaks read as spaces. A printed number
 must equal the result rounded to the printed digits; every pattern must occur in its
 document (a rewritten sentence is re-pointed here, not silently skipped). To cover a new
 number, add a row.
@@ -76,7 +77,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # seed 001
     ("docs/figures.md", r"settles \(0.01 deg, 0.01 deg/s\) at ([\d.]+) s against the paper's",
      FIGS, (N + "akimov/akimov_fig12/settle_s",)),
-    ("docs/figures.md", r"taken twice settles at ([\d.]+) s", FIGS,
+    ("docs/figures.md", r"the same gains. turn settles at ([\d.]+) s", FIGS,
      (N + "akimov/akimov_fig12/settle_twice_s",)),
     ("docs/figures.md", r"transient \(([\d.]+) s against ([\d.]+) s\)", FIGS,
      (N + "akimov/akimov_fig6/settle_s", N + "akimov/akimov_fig3/settle_s")),
@@ -103,6 +104,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"reached at ([\d]+) s\)", FIGS,
      (N + "resurs/angle_at_300s_deg", N + "resurs/rate_at_300s_degps",
       N + "resurs/within_tolerance_from_s")),
+    ("README.md", r"\| initial torque swing, first 30 s, U0 = 0 vs seed U0 \| ([\d.]+) vs "
+     r"([\d.]+) N m", FIGS, (N + "resurs/initial_swing_Nm/U0=0",
+                             N + "resurs/initial_swing_Nm/U0 paper")),
+    ("README.md", r"with gentler 100-s phases an Euler-axis turn costs ([\d]+) N\^2", FIGS,
+     (N + "resurs/Z_euler_100s_phases",)),
     ("README.md", r"Z energy-saving under the sign readings: standard ([\d]+), entries ([\d]+), "
      r"\[\+, -, -\] ([\d]+), \[\+, -, \+\] ([\d]+)", FIGS,
      (SIGNS + "Z_energy/[-,-,-] standard", SIGNS + "Z_energy/[+,+,+] entries",
@@ -140,7 +146,7 @@ def mismatches(text: str, pattern: str, results: dict, keys: tuple[str, ...]) ->
     Each printed number must be the result rounded to the printed digits (half a unit of
     the last printed digit, plus a relative 1e-9 for the binary representation).
     """
-    found = re.findall(pattern, text)
+    found = re.findall(pattern, " ".join(text.split()))  # line breaks read as spaces
     if not found:
         return [f"pattern not in the document: {pattern!r}"]
     bad = []
