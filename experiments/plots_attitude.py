@@ -162,6 +162,12 @@ def mark_points(ax, points: dict[int, float], only=None) -> None:
     for k, t in points.items():
         if only is not None and k not in only:
             continue
-        ax.axvline(t, color=fs.REFERENCE, lw=0.7, ls=(0, (1, 2)), label="points 1-5 (paper's)")
+        ax.axvline(
+            t,
+            color=fs.REFERENCE,
+            lw=0.7,
+            ls=(0, (1, 2)),
+            label="points 1-5: the paper's segments, found in our run",
+        )
         ax.annotate(str(k), (t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
                     textcoords="offset points", fontsize=9, fontweight="bold")  # fmt: skip
