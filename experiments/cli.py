@@ -54,6 +54,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_tightness",
         "a set's interval of the miss vs the exact one",
     ),
+    "scenarios": (
+        "kalman_vs_infoset.experiments.cmd_scenarios",
+        "the bundled scenarios, one line each",
+    ),
     "plot": ("kalman_vs_infoset.experiments.cmd_plot", "figures of traces written by --trace"),
     "paper-figures": (
         "kalman_vs_infoset.experiments.cmd_paper_figures",
