@@ -7,10 +7,11 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from kalman_vs_infoset import data as bundled
 from kalman_vs_infoset.experiments.cli import main
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.guidance.attitude import gain_study
+
+from kalman_vs_infoset import data as bundled
 
 ROOT = Path(__file__).resolve().parents[1]
 
