@@ -46,6 +46,12 @@ def _run(args, cwd, env, timeout=600) -> subprocess.CompletedProcess:
     return r
 
 
+def _project_version() -> str:
+    import tomllib
+
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+
+
 def _seed_numba_cache(installed: Path) -> None:
     for layer in LAYERS:
         for src in (ROOT / layer).rglob("*.py"):
@@ -79,7 +85,12 @@ def built(tmp_path_factory):
 def venv(built, tmp_path_factory):
     """A fresh environment with the wheel installed; ``(bin folder, site-packages, env)``."""
     root = tmp_path_factory.mktemp("venv")
-    _run([sys.executable, "-m", "venv", "--without-pip", root], root, None)
+    # the environment sits inside a user's own git repository (with one commit)
+    git = ["git", "-c", "user.name=u", "-c", "user.email=u@example.org"]
+    _run([*git, "init", "-q", root], root, None)
+    _run([*git, "commit", "-q", "--allow-empty", "-m", "user's work"], root, None)
+    _run([sys.executable, "-m", "venv", "--without-pip", root / "venv"], root, None)
+    root = root / "venv"
     python = root / "bin" / "python"
     site = Path(
         subprocess.check_output(
@@ -139,6 +150,13 @@ def test_the_commands_work_from_an_empty_folder(venv, tmp_path):
     result = json.loads(out.strip().splitlines()[-1])
     assert result["runs"] == 2 and result["failures"] == 0
     assert (tmp_path / result["out"]).is_dir()
+    meta = (
+        "import json, sys, kalman_vs_infoset as k; print(json.dumps(k.read_metadata(sys.argv[1])))"
+    )
+    table = tmp_path / result["out"] / "kp_fig3-infoset-random-s3.parquet"
+    code = json.loads(_run([bin_dir / "python", "-c", meta, table], tmp_path, env).stdout)["code"]
+    assert code["version"] == _project_version()
+    assert code["git_commit"] is None  # the package's own commit is unknown, not the user's
     out = _run([kvi, "pd-gains", "--angles-deg", "1.0,5.0", "--grid-step", "0.2", "--json"],
                tmp_path, env).stdout  # fmt: skip
     assert json.loads(out.strip().splitlines()[-1])
