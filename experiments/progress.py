@@ -3,7 +3,8 @@
 :func:`progress_bar` is a ``tqdm.auto`` bar (a terminal's text bar, or a notebook's
 widget) when stderr is a terminal or the code runs in Jupyter; when stderr is a file or
 a pipe (a batch job's log), the bar is not drawn and the ``kalman_vs_infoset`` logger
-writes one INFO line every :data:`LOG_EVERY_S` seconds and one at the end instead.
+writes one INFO line every :data:`LOG_EVERY_S` seconds instead (and one at the end
+when it wrote any: a short loop stays silent).
 :func:`configure_logging` (called by the command line) sends that logger's lines to
 stderr; a library user configures :mod:`logging` as usual.
 """
@@ -42,13 +43,14 @@ class _LogProgress:
     def __init__(self, total: int, initial: int, desc: str, every_s: float) -> None:
         self.total, self.n, self.desc, self.every_s = total, initial, desc, every_s
         self.t0 = self.last = time.monotonic()
-        self.start = initial
+        self.start, self.lines = initial, 0
 
     def update(self, n: int = 1) -> None:
         self.n += n
         now = time.monotonic()
         if now - self.last >= self.every_s:
             self.last = now
+            self.lines += 1
             self._line(now)
 
     def _line(self, now: float, done: str = "") -> None:
@@ -58,7 +60,7 @@ class _LogProgress:
         LOG.info("%s: %d/%d runs%s%s", self.desc, self.n, self.total, eta, done)
 
     def close(self) -> None:
-        if self.n > self.start:
+        if self.lines:  # a closing line for a loop long enough to have logged
             self._line(time.monotonic(), f" ({time.monotonic() - self.t0:.1f} s)")
 
 
