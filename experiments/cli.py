@@ -126,9 +126,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
     module = importlib.import_module(args._module)
-    from kalman_vs_infoset.experiments.progress import configure_logging
+    from kalman_vs_infoset.experiments import progress
 
-    configure_logging()
+    progress.configure_logging()
     try:
         result = module.run(args)
     except InputError as exc:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 from tqdm.auto import tqdm
@@ -71,6 +72,7 @@ def progress_bar(
     terminal or in a notebook, periodic log lines otherwise, nothing when disabled."""
     if not enabled:
         return tqdm(total=total, initial=initial, disable=True)
+    announce_compile()
     if _isatty() or _in_notebook():
         return tqdm(total=total, initial=initial, desc=desc, file=sys.stderr, leave=False)
     return _LogProgress(total, initial, desc, LOG_EVERY_S if every_s is None else every_s)
@@ -93,3 +95,31 @@ def configure_logging(level: int = logging.INFO) -> None:
         handler.setFormatter(logging.Formatter("kvi: %(message)s"))
         LOG.addHandler(handler)
     LOG.setLevel(level)
+
+
+def compiled_kernels_cached() -> bool | None:
+    """Whether numba's on-disk cache holds the estimators' compiled kernels (``None``:
+    unknown, the cache is not beside the sources)."""
+    import os
+
+    from kalman_vs_infoset import estim
+
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if folder:
+        return any(Path(folder).rglob("_kernels.*.nbi"))
+    here = Path(estim.__file__).parent
+    if not os.access(here, os.W_OK):  # numba caches elsewhere (per user)
+        return None
+    return any((here / "__pycache__").glob("_kernels.*.nbi"))
+
+
+_announced = False
+
+
+def announce_compile() -> None:
+    """One line, once, when the runs will compile the kernels first (the first run after
+    an install: about a minute; the compiled code is cached for the next runs)."""
+    global _announced
+    if not _announced and compiled_kernels_cached() is False:
+        _announced = True
+        LOG.warning("first run: compiling the estimators' kernels (about a minute, once)")

@@ -29,9 +29,10 @@ def test_every_scenario_file_of_the_repository_is_bundled():
     files = sorted(p.stem for p in (ROOT / "data" / "scenarios").glob("*.toml"))
     assert files and bundled.scenario_names() == files
     for name in files:
-        assert bundled.scenario_file(name).read_bytes() == (
-            ROOT / "data" / "scenarios" / f"{name}.toml"
-        ).read_bytes()
+        assert (
+            bundled.scenario_file(name).read_bytes()
+            == (ROOT / "data" / "scenarios" / f"{name}.toml").read_bytes()
+        )
 
 
 def test_the_f0_table_is_read_from_the_package_not_the_working_folder(tmp_path, monkeypatch):

@@ -87,3 +87,18 @@ def test_the_cluster_hint_names_the_package(monkeypatch):
     with pytest.raises(InputError, match=r"pip install 'kalman-vs-infoset\[cluster\]'"):
         with executors.make_executor(scheduler="tcp://127.0.0.1:1"):
             pass
+
+
+def test_a_first_run_compile_is_announced_once(monkeypatch, tmp_path, caplog):
+    monkeypatch.setattr(progress, "_announced", False)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # an empty cache
+    assert progress.compiled_kernels_cached() is False
+    with caplog.at_level(logging.INFO, logger="kalman_vs_infoset"):
+        for _ in range(2):
+            progress.progress_bar(1, 0, "job").close()
+    assert [r.getMessage() for r in caplog.records if "compiling" in r.getMessage()] == [
+        "first run: compiling the estimators' kernels (about a minute, once)"
+    ]
+    (tmp_path / "x").mkdir()
+    (tmp_path / "x" / "_kernels.dedupe-255.py311.nbi").write_bytes(b"")
+    assert progress.compiled_kernels_cached() is True
