@@ -24,7 +24,16 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = ("estim", "guidance", "experiments")
 SOURCES = ("kalman_vs_infoset", "data", *LAYERS)
-IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "*.tmp", "*.egg-info")
+IGNORE = shutil.ignore_patterns(
+    "__pycache__",
+    "*.pyc",
+    "*.tmp",
+    "*.egg-info",
+    "_build",
+    "auto_examples",
+    "generated",
+    "sg_execution_times.rst",
+)
 
 
 def _copy_sources(dst: Path) -> Path:
