@@ -9,7 +9,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[dev,cluster]"
+	$(BIN)/python -m pip install -q -e ".[dev,cluster,docs]"
 	touch $(STAMP)
 
 # The main experiment: the paper's Fig. 5 (four variants, 50 runs each), CDF plots and table.
@@ -44,5 +44,4 @@ clean:
 # The documentation site (Sphinx, pydata theme, executed gallery), warnings as errors;
 # KVI_DOCS_QUICK=1 skips executing the gallery.
 docs: $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[docs]"
 	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
