@@ -102,6 +102,9 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
+    from kalman_vs_infoset import __version__
+
+    parser.add_argument("--version", action="version", version=f"kvi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():

@@ -102,3 +102,14 @@ def test_a_first_run_compile_is_announced_once(monkeypatch, tmp_path, caplog):
     (tmp_path / "x").mkdir()
     (tmp_path / "x" / "_kernels.dedupe-255.py311.nbi").write_bytes(b"")
     assert progress.compiled_kernels_cached() is True
+
+
+def test_kvi_version_names_the_installed_package(capsys):
+    from kalman_vs_infoset.experiments.cli import main
+
+    import kalman_vs_infoset
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"kvi {kalman_vs_infoset.__version__}"
