@@ -247,3 +247,14 @@ def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
     assert numbers["kp_fig3"]["paper_miss_fuel"]["random"] == [4.3, 244.7]
     assert numbers["resurs"]["Z_paper"] == {"energy": 2150.0, "euler": 11200.0}
     assert {f.rsplit("/", 1)[-1] for f in checked} == set(FIGURES)
+    # seed 001 eq. (24): the plant's turns reach each limit on the side the formula says
+    fig8 = numbers["akimov_fig8"]
+    for angle, (torque, momentum) in fig8["peaks"].items():
+        assert (torque >= 0.999) == (float(angle) >= fig8["phi10_deg"]), angle
+        assert (momentum >= 0.999) == (float(angle) >= fig8["phi20_deg"]), angle
+    assert numbers["akimov_fig9"]["peak_torque_ratio"] < 1.0  # seed Fig. 9: unconstrained
+    assert numbers["lqr_lyapunov"]["monotone"]  # seed 002: V never increases
+    signs = numbers["resurs_inertia_signs"]["Z_energy"]
+    assert {"[-,-,-] standard", "[+,+,+] entries"} <= set(signs)
+    assert numbers["resurs_noisy"]["truth_inside_bound"]
+    assert set(numbers["kp_fig5"]["fig3_engagement"]) == {"random", "game"}
