@@ -38,6 +38,7 @@ from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.scenario import scenario_folder
 
 #: figure name -> group that draws it (a group draws all its figures at once)
 FIGURES: dict[str, str] = {
@@ -98,7 +99,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="coarser gain study and attitude steps (previews, tests)",
     )
-    p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")
+    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
 
 
 def _groups(only: str | None) -> list[str]:
@@ -125,9 +126,7 @@ def _groups(only: str | None) -> list[str]:
 
 
 def run(args) -> dict[str, Any]:
-    scenarios = Path(args.scenarios)
-    if not scenarios.is_dir():
-        raise InputError(f"--scenarios {scenarios}: not a folder")
+    scenarios = scenario_folder(args.scenarios)
     ctx = Context(Path(args.out), args.runs, args.quick, scenarios)
     numbers: dict[str, Any] = {}
     t0 = time.perf_counter()

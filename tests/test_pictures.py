@@ -99,7 +99,7 @@ def test_intercept_trace_command(tmp_path, capsys, checked):
     assert main([*args, "--json", "--out", str(out), "--workers", "1", "--no-progress"]) == 0
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     table = pd.read_parquet(out / "kp_fig3-infoset-game-s3.parquet")
-    trace = pd.read_parquet(out / "kp_fig3-infoset-game-s3-trace.parquet")
+    trace = pd.read_parquet(out / "_traces" / "kp_fig3-infoset-game-s3-trace.parquet")
     assert STEP_FIELDS <= set(trace.columns)
     assert len(trace) == int(table["steps"].iloc[0]) and trace["step"].is_unique
     assert (trace["forecast_lo_m"] <= trace["forecast_true_m"]).all()
@@ -190,7 +190,7 @@ def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):
     assert any(f.endswith("-history.png") for f in files)
     assert not any(f.endswith("-cdf.png") for f in files)  # one run: no CDF
     table = pd.read_parquet(out / "tiny_rw-pd-box-random-s0.parquet")
-    trace = pd.read_parquet(out / "tiny_rw-pd-box-random-s0-trace.parquet")
+    trace = pd.read_parquet(out / "_traces" / "tiny_rw-pd-box-random-s0-trace.parquet")
     assert set(trace["axis"]) == {1, 2, 3} and len(trace) == 3 * 101
     last = trace[trace["step"] == trace["step"].max()]
     assert last["energy_N2m2s"].iloc[0] == pytest.approx(table["energy_N2m2s"].iloc[0])
