@@ -54,6 +54,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_tightness",
         "a set's interval of the miss vs the exact one",
     ),
+    "scenarios": (
+        "kalman_vs_infoset.experiments.cmd_scenarios",
+        "the bundled scenarios, one line each",
+    ),
     "plot": ("kalman_vs_infoset.experiments.cmd_plot", "figures of traces written by --trace"),
     "paper-figures": (
         "kalman_vs_infoset.experiments.cmd_paper_figures",
@@ -98,6 +102,9 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
+    from kalman_vs_infoset import __version__
+
+    parser.add_argument("--version", action="version", version=f"kvi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
@@ -122,6 +129,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
     module = importlib.import_module(args._module)
+    from kalman_vs_infoset.experiments import progress
+
+    progress.configure_logging()
     try:
         result = module.run(args)
     except InputError as exc:

@@ -45,7 +45,7 @@ from kalman_vs_infoset.experiments.cmd_intercept import seed_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.noise import RandomNoise
-from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 
@@ -53,7 +53,7 @@ NOISE_KINDS = ("random", "bias", "game", "switch")
 INSIDE_REL_TOL = 1e-6
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
-          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "reason")  # fmt: skip
+          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "n_simplified", "reason")  # fmt: skip
 
 
 def _times(text: str) -> list[float]:
@@ -79,7 +79,7 @@ def _positive(text: str) -> float:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    p.add_argument("scenario", help=SCENARIO_HELP)
     add = p.add_argument
     add("--noise", choices=NOISE_KINDS, default="random", help="bearing errors")
     add("--seed", type=seed_int, help="seed (default: the scenario's)")
@@ -214,6 +214,8 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
 
 def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     rec: dict[str, Any] = {"truth_w_m": truth_w, "reason": ""}
+    # slices the set outer-simplified so far (sound, slightly wider than exact)
+    rec["n_simplified"] = int(getattr(belief, "n_simplified", 0))
     if belief.is_empty:
         rec["reason"] = f"estimator's set {getattr(belief, 'status', 'empty')}"
         return rec
