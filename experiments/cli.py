@@ -5,6 +5,11 @@ Each command lives in its own module ``kalman_vs_infoset.experiments.cmd_<name>`
 as one JSON object on the last line of stdout with ``--json``, or as a readable
 table otherwise (``render(result) -> str`` when the module has one). Bad input
 (:class:`InputError`, argparse errors) exits with status 2 and one line on stderr.
+
+Command modules are imported lazily: the parser declares every command by name and
+one-line help, and imports (and asks for the arguments of) only the command named on
+the command line, so ``kvi --help`` imports no numerical library and ``kvi intercept``
+does not pay for the plotting or attitude commands.
 """
 
 from __future__ import annotations
@@ -12,11 +17,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-import numpy as np
 from kalman_vs_infoset.experiments.errors import InputError
 
 #: command name -> (module, one-line help)
@@ -70,6 +75,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _jsonable(obj: Any) -> Any:
+    import numpy as np  # here: the parser itself needs no numerical library
+
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -78,7 +85,7 @@ def _jsonable(obj: Any) -> Any:
         return obj.item()
     if isinstance(obj, np.ndarray):
         return _jsonable(obj.tolist())
-    if isinstance(obj, float) and not np.isfinite(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
 
@@ -96,13 +103,26 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command_named(argv: Sequence[str]) -> str | None:
+    """The command on a command line: its first word that is not an option (the top
+    level has no option taking a value), when it names a command."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of ``kvi``; only ``command``'s module is imported for its arguments
+    (None: no command module is imported, which is all ``kvi --help`` needs)."""
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(_module=module_name)
+        if name != command:
+            continue
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:
@@ -116,7 +136,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_named(argv))
     args = parser.parse_args(argv)
     if getattr(args, "_missing", False):
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
