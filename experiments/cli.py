@@ -24,6 +24,8 @@ from typing import Any, NoReturn
 
 from kalman_vs_infoset.experiments.errors import InputError
 
+from kalman_vs_infoset._numba_cache import CompileNotice
+
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "intercept": (
@@ -135,6 +137,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _compile_notice(prog: str) -> CompileNotice | None:
+    """A notice of numba compilations during the command, for the commands whose modules
+    use the compiled kernels (numba imported with them)."""
+    if "numba" not in sys.modules:
+        return None
+    return CompileNotice(prog).install()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(_command_named(argv))
@@ -143,6 +153,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
     module = importlib.import_module(args._module)
+    notice = _compile_notice(parser.prog)
     try:
         result = module.run(args)
     except InputError as exc:
@@ -162,6 +173,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"{parser.prog} {args.command}: {exc}", file=sys.stderr)
         return 1
+    finally:
+        if notice is not None:
+            notice.report()
+            notice.uninstall()
     if args.json:
         print(json.dumps(_jsonable(result)))
     else:
