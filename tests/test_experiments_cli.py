@@ -142,27 +142,24 @@ def test_same_results_with_one_and_two_workers_and_same_seed(short, tmp_path):
     assert not np.allclose(a["y0_km"], d["y0_km"])  # another seed, another realisation
 
 
-def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch):
-    distributed = pytest.importorskip("distributed")
+@pytest.mark.xdist_group("dask")
+def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch, dask_cluster):
     sc = load_scenario(short)
+    address = dask_cluster.scheduler_address
     a = run_experiment(sc, "infoset", "game", 3, 11, tmp_path / "a", workers=1, progress=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True) as cluster:
-        b = run_experiment(
-            sc, "infoset", "game", 3, 11, tmp_path / "b", scheduler=cluster.scheduler_address,
-            progress=False,
-        )  # fmt: skip
+    b = run_experiment(
+        sc, "infoset", "game", 3, 11, tmp_path / "b", scheduler=address, progress=False
+    )
     pd.testing.assert_frame_equal(_table(a), _table(b))
     # workers running other sources are refused before any run (one line, exit 2)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True) as cluster:
-        fake = {**runner.code_identity(), "sources_sha256": "f" * 64}
-        from kalman_vs_infoset.experiments import executors
+    fake = {**runner.code_identity(), "sources_sha256": "f" * 64}
+    from kalman_vs_infoset.experiments import executors
 
-        monkeypatch.setattr(executors, "code_identity", lambda: fake)  # this process only
-        with pytest.raises(runner.InputError, match="runs other code"):
-            run_experiment(
-                sc, "infoset", "game", 3, 11, tmp_path / "c", scheduler=cluster.scheduler_address,
-                progress=False,
-            )  # fmt: skip
+    monkeypatch.setattr(executors, "code_identity", lambda: fake)  # this process only
+    with pytest.raises(runner.InputError, match="runs other code"):
+        run_experiment(
+            sc, "infoset", "game", 3, 11, tmp_path / "c", scheduler=address, progress=False
+        )
     assert not (tmp_path / "c").exists() or not list((tmp_path / "c").glob("*.parquet"))
 
 
