@@ -49,12 +49,13 @@ def short(tmp_path):
     return p
 
 
-def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path):
+def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path, capsys):
     """Issue 3: Fig. 3 with random noise misses by <= 10 m with 150..400 m/s of fuel;
     game noise costs more fuel; the truth never leaves the set, no empty set."""
     out = {}
     for noise in ("random", "game"):
-        r = cli("intercept", FIG3, "--noise", noise, "--json", "--out", tmp_path, "--no-progress")
+        args = ("intercept", FIG3, "--noise", noise, "--json", "--out", tmp_path, "--no-progress")
+        r = cli_inproc(capsys, *args)
         assert r.returncode == 0, r.stderr
         out[noise] = json.loads(r.stdout.strip().splitlines()[-1])
         assert out[noise]["truth_outside"] == 0
@@ -316,7 +317,7 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
     containment violations for the set estimators, writes Parquet and PNG; run j has the
     same truth for every estimator; the same seed twice gives the same table."""
     names = ("infoset", "ekf", "ukf", "box")
-    args = ("compare", short, "--runs", "3", "--json", "--workers", "1", "--no-progress")
+    args = ("compare", short, "--runs", "2", "--json", "--workers", "1", "--no-progress")
     args += ("--estimators", ",".join(names))
     r = cli_inproc(capsys, *args, "--out", tmp_path / "a")
     assert r.returncode == 0, r.stderr
