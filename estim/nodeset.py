@@ -60,6 +60,7 @@ from kalman_vs_infoset.estim.model import (
     Range,
     impulse_parts,
 )
+from kalman_vs_infoset.estim.nodeset_bands import split_live_bands
 from kalman_vs_infoset.estim.nodeset_belief import NodeSet
 from kalman_vs_infoset.estim.nodeset_bounds import OpLog
 from kalman_vs_infoset.estim.nodeset_refine import NodeRefinement
@@ -109,6 +110,12 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         prediction adds up to four vertices to a slice that no bearing clips, so
         without a cap a slice grows with the number of steps; the count of
         simplified slices is the belief's ``n_simplified``.
+    split_bands : bool
+        When updates have emptied closing-speed bands, split the live ones in halves
+        until as many bands are live as at the start
+        (:func:`~kalman_vs_infoset.estim.nodeset_bands.split_live_bands`): with a range
+        finder the data pin the speed, and a band's width then dominates the
+        interval of the miss.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -123,6 +130,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = True
     max_vertices: int = 128
+    split_bands: bool = True
+    max_bands: int = 32
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:
@@ -213,6 +222,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         else:
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
         out = self.refine(self._record(belief, op), before=belief)
+        if not out.is_empty and self.split_bands:
+            out = split_live_bands(
+                self, out, len(self.bands()[0]), self.max_bands, self.tighten_rtol
+            )
         if not out.is_empty:
             out = self.tighten(out)
         if out.is_empty:

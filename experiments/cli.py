@@ -61,6 +61,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_tightness",
         "a set's interval of the miss vs the exact one",
     ),
+    "scenarios": (
+        "kalman_vs_infoset.experiments.cmd_scenarios",
+        "the bundled scenarios, one line each",
+    ),
     "plot": ("kalman_vs_infoset.experiments.cmd_plot", "figures of traces written by --trace"),
     "paper-figures": (
         "kalman_vs_infoset.experiments.cmd_paper_figures",
@@ -118,6 +122,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``kvi``; only ``command``'s module is imported for its arguments
     (None: no command module is imported, which is all ``kvi --help`` needs)."""
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
+    from kalman_vs_infoset import __version__
+
+    parser.add_argument("--version", action="version", version=f"kvi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
@@ -153,6 +160,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
     module = importlib.import_module(args._module)
+    from kalman_vs_infoset.experiments import progress
+
+    progress.configure_logging()
     notice = _compile_notice(parser.prog)
     try:
         result = module.run(args)

@@ -11,7 +11,8 @@ One runner for every problem (:class:`Job`: the intercept and the attitude loops
   several (its workers exit when the command dies), or a Dask cluster's
   ``Client.get_executor()`` with ``scheduler`` (same results either way).
 * Results: one Parquet file per (scenario, choices, seed) with one row per run, the
-  resolved scenario as JSON beside it; both written atomically (temporary file +
+  resolved scenario and the code's identity in its Parquet metadata and as JSON in
+  ``<out>/_meta/`` (:mod:`experiments.results`); both written atomically (temporary file +
   ``os.replace``). Rerunning the same command completes only the missing runs, and
   finished runs are never deleted; a failing run is recorded with its run id and error,
   reported on stderr, and does not stop the others. The JSON also records which code
@@ -42,11 +43,12 @@ import pandas as pd
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.progress import progress_bar
 from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
 from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
 from kalman_vs_infoset.experiments.stats import summary_stats
-from tqdm import tqdm
 
 SAVE_EVERY_S = 2.0
 
@@ -99,9 +101,9 @@ def check_seed(seed: int) -> int:
     return int(seed)
 
 
-def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
+def _write_rows(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
-    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+    write_table(path, df, meta)  # the description travels in the Parquet metadata too
 
 
 def _read_rows(path: Path) -> list[dict[str, Any]]:
@@ -194,35 +196,28 @@ def run_job(
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
     meta = {**job.meta, "code": code_identity()}
-    meta_path = path.with_suffix(".json")
+    meta_path = sidecar_path(path)
     rows: list[dict[str, Any]] = []
     if path.exists():
-        _check_resumable(path, meta_path, meta)
+        _check_resumable(path, existing_sidecar(path), meta)
         rows = _read_rows(path)
     atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
     done = {int(r["run"]) for r in rows}
     todo = [j for j in range(runs) if j not in done]
     if todo:
-        bar = tqdm(
-            total=runs,
-            initial=runs - len(todo),
-            desc=job.desc,
-            file=sys.stderr,
-            disable=not progress or None,
-            leave=False,
-        )
+        bar = progress_bar(runs, runs - len(todo), job.desc, progress)
         last_save = time.monotonic()
         try:
             for j, row in _results(job, todo, executor, workers, scheduler):
                 rows.append({**job.base, "run": j, **row})
                 bar.update(1)
                 if time.monotonic() - last_save > SAVE_EVERY_S:
-                    _write_rows(path, rows)
+                    _write_rows(path, rows, meta)
                     last_save = time.monotonic()
         finally:
             bar.close()
             if rows:
-                _write_rows(path, rows)  # also on Ctrl-C: finished runs are kept
+                _write_rows(path, rows, meta)  # also on Ctrl-C: finished runs are kept
     df = pd.DataFrame(rows)
     if len(df):
         df = df[df["run"] < runs].sort_values("run").reset_index(drop=True)
