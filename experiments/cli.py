@@ -149,6 +149,11 @@ def _compile_notice(prog: str) -> CompileNotice | None:
     use the compiled kernels (numba imported with them)."""
     if "numba" not in sys.modules:
         return None
+    from kalman_vs_infoset.experiments import progress
+
+    # this notice sees every compilation as it happens and says how long it took: the
+    # progress bars' own guess from the cache files (for library users) stays silent
+    progress._announced = True
     return CompileNotice(prog).install()
 
 
