@@ -4,7 +4,9 @@ Each command lives in its own module ``kalman_vs_infoset.experiments.cmd_<name>`
 ``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed
 as one JSON object on the last line of stdout with ``--json``, or as a readable
 table otherwise (``render(result) -> str`` when the module has one). Bad input
-(:class:`InputError`, argparse errors) exits with status 2 and one line on stderr.
+(:class:`InputError`, argparse errors) exits with status 2 and one line on stderr;
+failed or lost runs with status 1 and a last line on stderr saying how many; Ctrl-C
+and SIGTERM save what finished and exit with 130 and 143.
 """
 
 from __future__ import annotations
@@ -12,7 +14,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
@@ -115,35 +119,73 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``timeout``, SLURM, ``docker stop``), taken like Ctrl-C: what finished
+    is saved and the command says so."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the save
+    raise Terminated
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; the exit status: 0, 1 when runs failed or were lost (the last
+    line on stderr says how many), 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if getattr(args, "_missing", False):
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
+    out = getattr(args, "out", None)
+    if out is not None and not str(out).strip():  # Path("") is the current folder
+        print(f"{parser.prog} {args.command}: error: --out '': expected a folder name",
+              file=sys.stderr)  # fmt: skip
+        return 2
     module = importlib.import_module(args._module)
+    main_thread = threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
+    from kalman_vs_infoset.experiments import runner
+
+    runner.forget_failures()
+    try:
+        return _run(parser, module, args)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, before)
+
+
+def _run(parser, module, args) -> int:
+    from kalman_vs_infoset.experiments.runner import WorkerLost, failed_runs
+
+    where = f"{parser.prog} {args.command}"
     try:
         result = module.run(args)
     except InputError as exc:
-        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # an output or input path the system refuses
-        where = f" ({exc.filename})" if exc.filename else ""
-        print(f"{parser.prog} {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        at = f" ({exc.filename})" if exc.filename else ""
+        print(f"{where}: error: {exc.strerror or exc}{at}", file=sys.stderr)
         return 2
+    except Terminated:
+        print(f"{where}: terminated (SIGTERM); finished runs are saved; rerun to resume",
+              file=sys.stderr)  # fmt: skip
+        return 143
     except KeyboardInterrupt:
-        print(f"{parser.prog} {args.command}: interrupted; rerun to resume", file=sys.stderr)
+        print(f"{where}: interrupted; finished runs are saved; rerun to resume", file=sys.stderr)
         return 130
-    except RuntimeError as exc:
-        from kalman_vs_infoset.experiments.runner import WorkerLost
-
-        if not isinstance(exc, WorkerLost):
-            raise
-        print(f"{parser.prog} {args.command}: {exc}", file=sys.stderr)
+    except WorkerLost as exc:
+        print(f"{where}: {exc}", file=sys.stderr)
         return 1
     if args.json:
         print(json.dumps(_jsonable(result)))
     else:
         render = getattr(module, "render", None)
         print(render(result) if render else _render_default(result))
+    failed = failed_runs()
+    if failed:
+        print(f"{where}: {failed} runs failed (their errors are above and in the results "
+              "tables); rerun the same command to run them again", file=sys.stderr)  # fmt: skip
+        return 1
     return 0

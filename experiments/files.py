@@ -1,11 +1,19 @@
-"""Atomic file writes: a reader (or a resumed run) never sees a half-written file."""
+"""Atomic file writes (a reader, or a resumed run, never sees a half-written file) and
+one writer per results file (an advisory lock beside it)."""
 
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks
+    fcntl = None  # type: ignore[assignment]
 
 
 def _umask() -> int:
@@ -29,3 +37,54 @@ def atomic_write(path: Path, write: Callable[[str], None]) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+@contextmanager
+def exclusive(path: Path, what: str) -> Iterator[None]:
+    """Hold the advisory lock of ``path`` (``fcntl.flock`` on ``<path>.lock`` beside it)
+    while writing it: a second command on the same file waits for the first (one line
+    on stderr says so) and then reads what the first wrote, so no finished run is lost
+    to interleaved saves. The lock file is removed on release; a lock taken on a file
+    that its holder has just removed is taken again on the new one. Where ``fcntl`` does
+    not exist (Windows) nothing is locked."""
+    if fcntl is None:
+        yield
+        return
+    lock = path.with_name(path.name + ".lock")
+    told = False
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666 & ~_umask())
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                if not told:
+                    holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+                    print(
+                        f"{what}: {path.name} is being written by another command "
+                        f"(pid {holder}); waiting for it to finish",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                    told = True
+                fcntl.flock(fd, fcntl.LOCK_EX)  # Ctrl-C or SIGTERM interrupts the wait
+            try:
+                current = os.path.samestat(os.fstat(fd), os.stat(lock))
+            except FileNotFoundError:
+                current = False
+        except BaseException:
+            os.close(fd)
+            raise
+        if current:
+            break
+        os.close(fd)  # its holder removed it while we waited: lock the file there now
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        yield
+    finally:
+        try:
+            os.unlink(lock)
+        except OSError:
+            pass
+        os.close(fd)  # releases the lock

@@ -117,7 +117,8 @@ def test_e_a_failed_attitude_run_reports_its_error(tiny_rw, tmp_path, capsys, mo
     monkeypatch.setattr(pd_law.QuaternionPD, "torque", broken)
     out = tmp_path / "out"
     r = run(capsys, "attitude", tiny_rw, "--out", out, "--json")
-    assert r.returncode == 0, r.stderr
+    assert r.returncode == 1, r.stderr  # a command with failed runs exits 1
+    assert "1 runs failed" in r.stderr.strip().splitlines()[-1]
     assert json.loads(r.stdout.strip().splitlines()[-1])["failures"] == 1
     assert "broken law for the test" in r.stderr  # said, not swallowed
     df = pd.read_parquet(_parquet(out))
@@ -273,7 +274,7 @@ def test_m_failed_attitude_runs_keep_the_seed_indices(tiny_rw, tmp_path, capsys,
     monkeypatch.setattr(pd_law.QuaternionPD, "torque", fails_on_run_1)
     out = tmp_path / "out"
     r = run(capsys, "attitude", p, "--runs", 3, "--seed", 4, "--out", out, "--json")
-    assert r.returncode == 0, r.stderr
+    assert r.returncode == 1, r.stderr  # a command with failed runs exits 1
     df = pd.read_parquet(_parquet(out))
     assert sorted(df.loc[df["status"] == "ok", "run"]) == [0, 2]
     assert list(df.loc[df["status"] != "ok", "run"]) == [1]
