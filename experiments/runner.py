@@ -108,8 +108,27 @@ def check_runs(runs: int) -> int:
 
 
 def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
-    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    df = _typed(pd.DataFrame(rows), rows).sort_values("run").reset_index(drop=True)
     atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+
+
+def _typed(df: pd.DataFrame, rows: list[dict[str, Any]]) -> pd.DataFrame:
+    """Integer and boolean columns with gaps (a failed run has no results) as nullable
+    integers and booleans, not floats and objects: once the failed runs are run again,
+    the table has the dtypes of a table that never had a failure."""
+    for col in df.columns[df.isna().any()]:
+        values = [r.get(col) for r in rows]
+        given = [v for v in values if v is not None and not pd.isna(v)]
+        if not given:
+            continue
+        if all(isinstance(v, bool | np.bool_) for v in given):
+            dtype = "boolean"
+        elif all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in given):
+            dtype = "Int64"
+        else:
+            continue
+        df[col] = pd.array([None if v is None or pd.isna(v) else v for v in values], dtype)
+    return df
 
 
 def _read_table(path: Path) -> dict[int, dict[str, Any]]:
