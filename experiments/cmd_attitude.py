@@ -113,6 +113,14 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     traced = traces.check_runs(args.trace if args.trace is not None else
                                ([0] if args.runs == 1 else []), args.runs)  # fmt: skip
     module = resolve_module(controller)
+    given = data.get("controller")
+    if args.controller is not None and isinstance(given, str) and given in DISPATCH:
+        if DISPATCH[given] != DISPATCH[controller]:  # another simulation's scenario
+            others = ", ".join(k for k, v in DISPATCH.items() if v == DISPATCH[given])
+            raise InputError(
+                f"--controller {controller}: {args.scenario} is a scenario of controller "
+                f"'{given}' (it takes {others})"
+            )
     default_est = data.pop("estimator", None)
     if default_est is not None and not isinstance(default_est, str):
         raise InputError(f"{args.scenario}: field 'estimator' must be a string")
@@ -164,7 +172,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         result["rows"] = results
     table = pd.concat(frames, ignore_index=True)
     ok = table[table["status"] == "ok"] if len(table) else table
-    stem = f"{name}-{controller}-{args.noise}-s{seed}"
+    # the figures' names carry what distinguishes them: estimators, noise, seed
+    stem = f"{name}-{controller}-{','.join(estimators)}-{args.noise}-s{seed}"
     if len(ok) and args.runs > 1:
         files += write_figure(out_dir, stem, ok)
     if histories:

@@ -31,6 +31,15 @@ from kalman_vs_infoset.experiments.report import summary_markdown, write_text
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
 
+def _canonical(value: Any) -> Any:
+    """A value as the scenario sees it: numbers as floats (``0`` and ``0.0`` are one)."""
+    if isinstance(value, list):
+        return [_canonical(v) for v in value]
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
 def _toml_values(text: str) -> list[Any]:
     try:
         values = tomllib.loads(f"v = {text}")["v"]
@@ -40,8 +49,8 @@ def _toml_values(text: str) -> list[Any]:
         raise argparse.ArgumentTypeError(
             f'expected a non-empty TOML array, e.g. "[1, 3, 10]"; got {text!r}'
         )
-    seen = [json.dumps(v) for v in values]
-    twice = sorted({v for v in seen if seen.count(v) > 1})
+    seen = [json.dumps(_canonical(v)) for v in values]  # 0 and 0.0 are one value
+    twice = sorted({json.dumps(v) for v, s in zip(values, seen, strict=True) if seen.count(s) > 1})
     if twice:  # the same value would be run and tabled twice
         raise argparse.ArgumentTypeError(f"{', '.join(twice)} given twice in {text!r}")
     return values
@@ -68,6 +77,9 @@ def run(args) -> dict[str, Any]:
             f"--key {args.key!r}: expected TABLE.KEY or TABLE.SUBTABLE.KEY "
             "(e.g. model.nu_mps2, estimator.infoset.n_nodes)"
         )
+    given = [o.partition("=")[0].strip() for o in args.overrides]
+    if key in given:  # one of the two values would be silently ignored
+        raise InputError(f"--key {key} is also given with --set; give it only as --key")
     t0 = time.perf_counter()
     # compare's folder by default: the runs' files carry the +key=value suffix and the
     # tables the key, so nothing collides

@@ -28,7 +28,7 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     if not p.is_file():
         raise InputError(f"{p}: no such scenario file")
     try:
-        text = p.read_bytes().decode("utf-8")
+        text = p.read_bytes().decode("utf-8-sig")  # a byte-order mark is allowed
     except UnicodeDecodeError as exc:
         raise InputError(
             f"{p}: not UTF-8 text (byte {exc.start}); scenario files are UTF-8 TOML"
@@ -57,6 +57,10 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
         return {k: copy(x) for k, x in v.items()} if isinstance(v, dict) else v
 
     out = copy(data)
+    keys = [item.partition("=")[0].strip() for item in overrides]
+    twice = sorted({k for k in keys if keys.count(k) > 1})
+    if twice:  # the last one would silently win
+        raise InputError(f"--set {twice[0]} given twice; give each key once")
     for item in overrides:
         key, sep, text = item.partition("=")
         parts = key.strip().split(".")

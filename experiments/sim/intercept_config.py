@@ -127,7 +127,13 @@ class EstimatorTable(Table):
             if key in data:
                 value = data.pop(key)
                 for name, option in targets:
-                    options.setdefault(name, {}).setdefault(option, value)
+                    table = options.setdefault(name, {})
+                    if option in table:  # one of the two would be silently ignored
+                        raise ValueError(
+                            f"field 'estimator.{key}' and 'estimator.{name}.{option}' are "
+                            f"both given; give only 'estimator.{name}.{option}'"
+                        )
+                    table[option] = value
         data["options"] = options
         return data
 
@@ -181,10 +187,20 @@ class GuidanceTable(Table):
 
 
 class ExperimentTable(Table):
-    runs: integer(1, 10**7) = field(1, "runs of the Monte Carlo")
+    runs: integer(1, 10**6) = field(1, "runs of the Monte Carlo")
     seed: integer(0, 2**63 - 1) = field(1, "root seed")
     noise: Literal[NOISES] = field("random", "measurement noise")
     estimator: str = field("infoset", "estimator name (registered)")
+
+    @model_validator(mode="after")
+    def _registered(self) -> ExperimentTable:
+        names = registry.names("intercept")
+        if self.estimator not in names:
+            raise ValueError(
+                f"field 'experiment.estimator' must be one of {', '.join(names)} "
+                f"(got {self.estimator!r})"
+            )
+        return self
 
 
 #: most tree leaves the look-ahead adversary may search per decision step and channel
@@ -278,17 +294,22 @@ class InterceptScenario(Table):
             raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
         closing = sorted(-v for v in self.truth.vx_kmps)
         lo, hi = self.closing_speed_kmps
-        for kalman in ("ekf", "ukf"):
-            opt = e.options.get(kalman, {})
-            if opt.get("range_constraint") and (closing[0] < lo or closing[1] > hi):
-                # the constraint's interval moves at the closing-speed interval's speeds:
-                # it holds the truth only if every true closing speed lies in it
-                raise ValueError(
-                    f"field 'estimator.closing_speed_kmps' {[lo, hi]} must contain the "
-                    f"truth's closing speeds -truth.vx_kmps {closing} when "
-                    f"'estimator.{kalman}.range_constraint' is true (the interval must hold "
-                    "the truth)"
-                )
+        constrained = [k for k in ("ekf", "ukf") if e.options.get(k, {}).get("range_constraint")]
+        if (e.closing_speed_kmps is not None or constrained) and (
+            closing[0] < lo or closing[1] > hi
+        ):
+            # the estimators' ranges (the Kalman filters' range constraint) move at the
+            # interval's speeds: like the boxes, a given interval must hold the truth
+            when = (
+                f" when 'estimator.{constrained[0]}.range_constraint' is true"
+                if e.closing_speed_kmps is None
+                else ""
+            )
+            raise ValueError(
+                f"field 'estimator.closing_speed_kmps' {[lo, hi]} must contain the "
+                f"truth's closing speeds -truth.vx_kmps {closing}{when} (the a-priori "
+                "interval must contain the truth)"
+            )
         steps = self.max_steps
         if steps > MAX_STEPS:
             raise ValueError(
