@@ -238,23 +238,39 @@ def run_job(
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
             return _reported(job, path, table, runs)
+    made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
-    with exclusive(path, job.desc):
-        table = {}
-        if path.exists():  # read again: another command may have written it meanwhile
-            _check_resumable(path, meta_path, meta)
-            table = _read_table(path)
-        if not meta_path.exists() or _read_json(meta_path) != meta:
-            atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
-        todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
-        retried = sum(j in table for j in todo)
-        if retried:
-            print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
-        if todo:
-            _complete(job, runs, todo, table, path, progress, executor, workers, scheduler, limit_s)
+    new_meta = not meta_path.exists()
+    try:
+        with exclusive(path, job.desc):
+            table = {}
+            if path.exists():  # read again: another command may have written it meanwhile
+                _check_resumable(path, meta_path, meta)
+                table = _read_table(path)
+            if not meta_path.exists() or _read_json(meta_path) != meta:
+                text = json.dumps(meta, indent=2)
+                atomic_write(meta_path, lambda tmp: Path(tmp).write_text(text))
+            todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
+            retried = sum(j in table for j in todo)
+            if retried:
+                print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
+            if todo:
+                _complete(
+                    job, runs, todo, table, path, progress, executor, workers, scheduler, limit_s
+                )
+    except BaseException:
+        if not path.exists():  # refused or stopped before any run finished: no leftovers
+            if new_meta:
+                meta_path.unlink(missing_ok=True)
+            for d in made:
+                try:
+                    d.rmdir()
+                except OSError:
+                    break
+        raise
     return _reported(job, path, table, runs)
 
 
