@@ -116,10 +116,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     given = data.get("controller")
     if args.controller is not None and isinstance(given, str) and given in DISPATCH:
         if DISPATCH[given] != DISPATCH[controller]:  # another simulation's scenario
-            others = ", ".join(k for k, v in DISPATCH.items() if v == DISPATCH[given])
+
+            def takes(c: str) -> str:
+                return ", ".join(repr(k) for k, v in DISPATCH.items() if v == DISPATCH[c])
+
             raise InputError(
-                f"--controller {controller}: {args.scenario} is a scenario of controller "
-                f"'{given}' (it takes {others})"
+                f"{source}: field 'controller' {given!r} makes it a scenario of {takes(given)}; "
+                f"--controller {controller} runs scenarios of {takes(controller)}"
             )
     default_est = data.pop("estimator", None)
     if default_est is not None and not isinstance(default_est, str):
