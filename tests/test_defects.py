@@ -132,6 +132,8 @@ def test_f_intercept_with_too_many_steps_is_refused_at_load(tmp_path, capsys):
         .replace("x_km = [900.0, 1100.0]", "x_km = [9e5, 1e6]\nvx_kmps = [-2.0, -0.5]")
         .replace("x_km = [950.0, 1050.0]", "x_km = [9.5e5, 9.6e5]")
         .replace("vx_kmps = [-58.1, -57.9]", "vx_kmps = [-1.0, -1.0]")
+        # the a-priori interval must hold the truth's closing speed (1 km/s)
+        .replace("closing_speed_kmps = [57.9, 58.1]", "closing_speed_kmps = [0.5, 2.0]")
     )
     p = tmp_path / "slow.toml"
     p.write_text(text)
