@@ -243,7 +243,7 @@ def run_job(
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
-    new_meta = not meta_path.exists()
+    wrote_meta = False  # a description this command wrote where there was none
     try:
         with exclusive(path, job.desc):
             table = {}
@@ -251,6 +251,7 @@ def run_job(
                 _check_resumable(path, meta_path, meta)
                 table = _read_table(path)
             if not meta_path.exists() or _read_json(meta_path) != meta:
+                wrote_meta = not meta_path.exists()
                 text = json.dumps(meta, indent=2)
                 atomic_write(meta_path, lambda tmp: Path(tmp).write_text(text))
             todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
@@ -263,7 +264,7 @@ def run_job(
                 )
     except BaseException:
         if not path.exists():  # refused or stopped before any run finished: no leftovers
-            if new_meta:
+            if wrote_meta:
                 meta_path.unlink(missing_ok=True)
             for d in made:
                 try:
