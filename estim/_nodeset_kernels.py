@@ -85,10 +85,21 @@ def _clip1(src, m, nx, ny, bound, dst):
 
 @njit(cache=True)
 def _segment1(src, m, g0, g1, dst, scale, want_scale):
-    """One polygon plus the segment ``[-g, g]`` (as ``_kernels.minkowski_segment``);
-    ``scale`` is the largest coordinate of ``src`` (in magnitude; the callers have it
-    from their own pass). Returns the number of vertices and, if ``want_scale``, the
-    same for ``dst`` (else 0)."""
+    """One convex polygon plus the segment ``[-g, g]``: at most ``m + 2`` vertices,
+    convex and winding once (``scale`` is the largest coordinate of ``src`` in
+    magnitude; the callers have it from their own pass). Returns the number of
+    vertices and, if ``want_scale``, the same for ``dst`` (else 0).
+
+    Each vertex moves by ``+g`` or ``-g`` by the side of ``g`` its edges face: by the
+    sign of the cross product ``g x edge``. On a convex polygon those signs form one
+    run of ``+`` and one of ``-`` (cyclically), and the two vertices where the run
+    changes take both ends of the segment. Edges almost parallel to ``g`` may get
+    their sign from rounding; if that breaks the two runs (a polygon with many short
+    edges along ``g``), a zigzag output would wind several times around, so the runs
+    are then taken from the extremes of ``g x p`` over the vertices instead: the
+    ``+`` run from the vertex of least ``g x p`` to the one of greatest (the exact
+    Minkowski sum of the convex polygon, whatever the rounding).
+    """
     if m == 0:
         return 0, 0.0
     if g0 == 0.0 and g1 == 0.0:
@@ -102,6 +113,26 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
         if abs(g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])) > tol:
             flat = False
             break
+    # sign changes of the edges' cross products around the polygon
+    robust = False
+    if not flat:
+        prev = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0]) > 0.0
+        changes = 0
+        for j in range(m):
+            c = (j + 1) % m
+            cur = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0]) > 0.0
+            changes += cur != prev
+            prev = cur
+        robust = changes != 2
+    i_lo, i_hi = 0, 0
+    if robust:
+        s_lo, s_hi = np.inf, -np.inf
+        for j in range(m):
+            sj = g0 * src[j, 1] - g1 * src[j, 0]
+            if sj < s_lo:
+                s_lo, i_lo = sj, j
+            if sj > s_hi:
+                s_hi, i_hi = sj, j
     # the cross product of edge j-1 -> j (its sign: which end of the segment the
     # vertex takes before it); each edge's is computed once
     crc = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0])
@@ -110,6 +141,10 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
     for j in range(m):
         if flat:
             sp, sc = -1.0, 1.0
+        elif robust:
+            # edges i_lo .. i_hi - 1 (cyclically) rise in g x p: their vertices take +g
+            sp = 1.0 if (j - 1 - i_lo) % m < (i_hi - i_lo) % m else -1.0
+            sc = 1.0 if (j - i_lo) % m < (i_hi - i_lo) % m else -1.0
         else:
             c = (j + 1) % m
             crp = crc
@@ -126,6 +161,58 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
                 out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
             k += 1
     return k, out_scale
+
+
+@njit(cache=True)
+def _room(buf, m, need):
+    """``buf`` if it has ``need`` rows, else a larger buffer holding its first ``m``
+    rows: every write of the kernels below stays within a buffer sized from a bound
+    on its output (a clip writes at most ``2 m`` vertices, a segment sum ``m + 2``,
+    the hull pass ``m + 1``)."""
+    if need <= buf.shape[0]:
+        return buf
+    grown = np.empty((2 * need, 2))
+    grown[:m] = buf[:m]
+    return grown
+
+
+@njit(cache=True)
+def outer_simplify(p, m, cap):
+    """Remove vertices of the convex CCW polygon ``p[:m]`` (in place) until at most
+    ``cap`` remain, each time the edge whose removal adds the least area: its two
+    neighbouring edges are extended to their intersection, which replaces the
+    edge's two ends. The result contains the polygon (an outer simplification:
+    sound, and tight where many short edges turn a little). Returns the new count
+    (``m`` if no edge can go: neighbours that do not meet beyond it)."""
+    while m > max(cap, 3):
+        best, bi, bx, by = np.inf, -1, 0.0, 0.0
+        for i in range(m):
+            a, b = (i - 1) % m, i
+            c, d = (i + 1) % m, (i + 2) % m
+            ux, uy = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1]
+            wx, wy = p[d, 0] - p[c, 0], p[d, 1] - p[c, 1]
+            den = ux * wy - uy * wx
+            if not den > 0.0:  # the neighbours turn by pi or more: no apex outside
+                continue
+            ex, ey = p[c, 0] - p[b, 0], p[c, 1] - p[b, 1]
+            t = (ex * wy - ey * wx) / den
+            if not t >= 0.0:
+                continue
+            area = 0.5 * t * abs(ex * uy - ey * ux)  # the triangle b, apex, c
+            if area < best:
+                best, bi = area, i
+                bx, by = p[b, 0] + t * ux, p[b, 1] + t * uy
+        if bi < 0:
+            break
+        # the apex replaces vertices bi and bi + 1 (cyclically)
+        if bi == m - 1:
+            p[0, 0], p[0, 1] = bx, by
+        else:
+            p[bi, 0], p[bi, 1] = bx, by
+            for j in range(bi + 1, m - 1):
+                p[j, 0], p[j, 1] = p[j + 1, 0], p[j + 1, 1]
+        m -= 1
+    return m
 
 
 @njit(cache=True)
@@ -157,7 +244,7 @@ def _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps):
 def apply_ops(
     xy, off, label, piece, u_lo, u_hi, hard_lo, hard_hi, t,
     kinds, pa, pb, q_lo, q_hi,
-    scale, e_nom, eps, bb_end, bb_start, bb_ref, strip_margin,
+    scale, e_nom, eps, bb_end, bb_start, bb_ref, strip_margin, vcap,
 ):  # fmt: skip
     """Apply the operations ``kinds[o]`` in order to the node polygons.
 
@@ -167,8 +254,10 @@ def apply_ops(
     ``q_lo, q_hi`` = the interval of ``v u`` per piece. Nodes have labels ``label`` (time to go
     at ``t = 0``) and pieces ``piece``; ``hard_lo, hard_hi`` (per piece, labels) are
     narrowed by range intervals and the threshold. Each node runs through all the
-    operations in two scratch buffers (no allocation per operation). Returns the
-    polygons, the time and the hard limits.
+    operations in two scratch buffers (no allocation per operation). A polygon
+    that a prediction leaves with more than ``vcap`` vertices is outer-simplified to
+    ``vcap`` (:func:`outer_simplify`). Returns the polygons, the time, the hard limits
+    and the number of such simplifications.
     """
     n = off.shape[0] - 1
     n_ops = kinds.shape[0]
@@ -183,6 +272,7 @@ def apply_ops(
     out = np.empty((off[n] + 4 * n + 16, 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
     k_out = 0
+    n_simplified = 0
     for i in range(n):
         m = off[i + 1] - off[i]
         for j in range(m):
@@ -191,11 +281,8 @@ def apply_ops(
         for o in range(n_ops):
             if m == 0:
                 break
-            if 2 * m + 8 > a_buf.shape[0]:  # a segment sum at most doubles the vertices
-                a_new = np.empty((4 * m + 16, 2))
-                a_new[:m] = a_buf[:m]
-                a_buf = a_new
-                b_buf = np.empty((4 * m + 16, 2))
+            a_buf = _room(a_buf, m, 2 * m + 8)
+            b_buf = _room(b_buf, 0, 2 * m + 8)
             kind = kinds[o]
             tau = label[i] - times[o]
             if kind == BEARING:
@@ -221,6 +308,7 @@ def apply_ops(
                         m = _dedupe_tail(a_buf, 0, m, tol_lo)
                     continue
                 m = _clip1(a_buf, m, 1.0, 0.0, c + h, b_buf)
+                a_buf = _room(a_buf, 0, 2 * m + 8)
                 m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
             elif kind == IMPULSE:
                 zs = e_nom * tau
@@ -259,6 +347,9 @@ def apply_ops(
                 m, _ = _segment1(b_buf, m, 0.5 * ga, gz2, a_buf, big, False)
                 m = _hull_into(a_buf, m, b_buf, HULL_TURN_RAD)
                 a_buf, b_buf = b_buf, a_buf
+                if m > vcap:
+                    m = outer_simplify(a_buf, m, vcap)
+                    n_simplified += 1
         if k_out + m > out.shape[0]:
             grown = np.empty((2 * (k_out + m), 2))
             grown[:k_out] = out[:k_out]
@@ -267,7 +358,7 @@ def apply_ops(
             out[k_out, 0], out[k_out, 1] = a_buf[j, 0], a_buf[j, 1]
             k_out += 1
         new_off[i + 1] = k_out
-    return out[:k_out].copy(), new_off, times[n_ops], h_lo[n_ops], h_hi[n_ops]
+    return out[:k_out].copy(), new_off, times[n_ops], h_lo[n_ops], h_hi[n_ops], n_simplified
 
 
 @njit(cache=True)

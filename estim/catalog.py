@@ -68,6 +68,15 @@ class InfosetOptions(SlabOptions):
         float,
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
     ] = 0.01
+    max_vertices: Annotated[
+        int,
+        Field(
+            ge=8,
+            le=100_000,
+            description="nodes: a slice with more vertices after a prediction is "
+            "outer-simplified to this many (sound)",
+        ),
+    ] = 128
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
@@ -208,6 +217,7 @@ def _infoset(
             split_ratio=opt.node_split_ratio,
             max_pieces=opt.max_pieces,
             tighten_rtol=opt.tighten_rtol,
+            max_vertices=opt.max_vertices,
         )
     return InformationSetEstimator(
         setting.model,

@@ -53,6 +53,7 @@ FIELDS = (
     "n_sections",
     "n_vertices",
     "area_max_radm",
+    "n_simplified",
     "n_sigma",
     "innovation_outliers",
 )
@@ -74,7 +75,7 @@ def _size(belief: Belief) -> dict[str, float]:
     """Sections, vertices and the largest section's area (rad m) of a polygon set."""
     polys = getattr(belief, "polygons", None)
     if polys is None or not hasattr(polys, "areas"):
-        return {"n_sections": NAN, "n_vertices": NAN, "area_max_radm": NAN}
+        return {"n_sections": NAN, "n_vertices": NAN, "area_max_radm": NAN, "n_simplified": NAN}
     areas = np.asarray(polys.areas(), dtype=float)
     scale = float(getattr(belief, "alpha_scale_rad", 1.0)) * float(
         getattr(belief, "w_scale_m", 1.0)
@@ -84,6 +85,8 @@ def _size(belief: Belief) -> dict[str, float]:
         "n_sections": float(getattr(belief, "n_sections", live)),
         "n_vertices": float(np.sum(polys.counts)),
         "area_max_radm": float(areas.max() * scale) if areas.size else 0.0,
+        # slices outer-simplified so far past the vertex cap (the node set's)
+        "n_simplified": float(getattr(belief, "n_simplified", 0)),
     }
 
 

@@ -60,6 +60,7 @@ from kalman_vs_infoset.estim.model import (
     Range,
     impulse_parts,
 )
+from kalman_vs_infoset.estim.nodeset_bands import split_live_bands
 from kalman_vs_infoset.estim.nodeset_belief import NodeSet
 from kalman_vs_infoset.estim.nodeset_bounds import OpLog
 from kalman_vs_infoset.estim.nodeset_refine import NodeRefinement
@@ -103,6 +104,18 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         ``a = alpha / alpha_scale_rad`` in the stored polygons.
     kinematic_margin : bool
         Add the bound of the neglected kinematic term to ``nu`` (module docstring).
+    max_vertices : int
+        A slice that a prediction leaves with more vertices is outer-simplified to
+        this many (the edges whose removal adds the least area go; sound). Each
+        prediction adds up to four vertices to a slice that no bearing clips, so
+        without a cap a slice grows with the number of steps; the count of
+        simplified slices is the belief's ``n_simplified``.
+    split_bands : bool
+        When updates have emptied closing-speed bands, split the live ones in halves
+        until as many bands are live as at the start
+        (:func:`~kalman_vs_infoset.estim.nodeset_bands.split_live_bands`): with a range
+        finder the data pin the speed, and a band's width then dominates the
+        interval of the miss.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -116,6 +129,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = True
+    max_vertices: int = 128
+    split_bands: bool = True
+    max_bands: int = 32
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:
@@ -134,6 +150,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             raise ValueError("max_pieces must be >= 1")
         if not (self.tighten_rtol > 0 and self.max_inserts >= 0):
             raise ValueError("need tighten_rtol > 0 and max_inserts >= 0")
+        if self.max_vertices < 8:
+            raise ValueError("max_vertices must be >= 8")
 
     # -- construction ----------------------------------------------------------------
     def bands(self) -> tuple[FloatArray, FloatArray]:
@@ -204,6 +222,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         else:
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
         out = self.refine(self._record(belief, op), before=belief)
+        if not out.is_empty and self.split_bands:
+            out = split_live_bands(
+                self, out, len(self.bands()[0]), self.max_bands, self.tighten_rtol
+            )
         if not out.is_empty:
             out = self.tighten(out)
         if out.is_empty:
@@ -268,23 +290,27 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
 
     # -- the operations (applied to the set, and replayed on new nodes) -----------------
     def _record(self, s: NodeSet, op: OpLog) -> NodeSet:
-        polys, t, hard_lo, hard_hi = self._apply(s, s.piece, s.label_s, s.polygons, op, s.t_s)
+        polys, t, hard_lo, hard_hi, n_simpl = self._apply(
+            s, s.piece, s.label_s, s.polygons, op, s.t_s
+        )
         return replace(
             s, polygons=polys, t_s=t, log=s.log + op, hard_lo_s=hard_lo, hard_hi_s=hard_hi,
-            status=Status.OK,
+            status=Status.OK, n_simplified=s.n_simplified + n_simpl,
         )  # fmt: skip
 
     def _apply(self, s: NodeSet, piece, label, polys: ConvexPolygons, ops: OpLog, t: float):
         """Operations ``ops`` on the nodes ``(piece, label)`` from time ``t``; returns the
-        new polygons, time and hard label limits (compiled: :func:`_nk.apply_ops`)."""
+        new polygons, time, hard label limits and the number of slices outer-simplified
+        (compiled: :func:`_nk.apply_ops`)."""
         bb = self.model.bearing_bound
-        xy, off, t, hard_lo, hard_hi = _nk.apply_ops(
+        xy, off, t, hard_lo, hard_hi, n_simpl = _nk.apply_ops(
             polys.xy, polys.offsets, np.ascontiguousarray(label, dtype=float),
             np.ascontiguousarray(piece, dtype=np.int64), s.u_lo, s.u_hi, s.hard_lo_s,
             s.hard_hi_s, float(t), *ops.parts(), self.alpha_scale_rad, s.e_nom,
             self.model.eps_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
+            self.max_vertices,
         )  # fmt: skip
-        return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi
+        return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi, n_simpl
 
     # -- piece-wide quantities ----------------------------------------------------------
     def _kinematic(self, s: NodeSet, per: FloatArray, dt_s: float) -> tuple[FloatArray, ...]:

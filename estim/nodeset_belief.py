@@ -76,6 +76,9 @@ class NodeSet(Belief):
         was rejected), ``TERMINAL`` (every state passed under eps) or ``DIVERGED``.
     contradictions : int
         Number of rejected measurements so far.
+    n_simplified : int
+        Number of node slices outer-simplified so far (a prediction left them with
+        more than the estimator's ``max_vertices``; sound, slightly wider).
     """
 
     model: ChannelModel
@@ -92,6 +95,7 @@ class NodeSet(Belief):
     alpha_scale_rad: float = 1.0e-4
     status: Status = Status.OK
     contradictions: int = 0
+    n_simplified: int = 0
 
     def __post_init__(self) -> None:
         for name in ("u_lo", "u_hi", "label_s", "hard_lo_s", "hard_hi_s"):

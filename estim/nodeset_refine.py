@@ -123,7 +123,9 @@ class NodeRefinement:
             labels = np.linspace(lo, hi, self.n_nodes)
             if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
                 break
-            polys, t, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), head, 0.0)
+            polys, t, _, _, _ = self._apply(
+                s, piece, labels, self._prior(s, piece, labels), head, 0.0
+            )
             out = self._regrid(s, p, labels, polys_before_last=(polys, t))
             if (out.live & (out.piece == p)).any():
                 return self._refine_pieces(out)
@@ -156,13 +158,13 @@ class NodeRefinement:
             polys = self._exact_slices(s, piece, labels)
         else:
             last = OpLog(*(a[-1:] for a in s.log.parts()))
-            polys, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
+            polys, _, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
                                          polys_before_last[1])  # fmt: skip
         return _merge(s, s.piece != b, piece, labels, polys)
 
     def _exact_slices(self, s: NodeSet, piece: NDArray[np.int64], labels: FloatArray):
         """The slices at new nodes: the prior, then every recorded operation."""
-        polys, _, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), s.log, 0.0)
+        polys, _, _, _, _ = self._apply(s, piece, labels, self._prior(s, piece, labels), s.log, 0.0)
         return polys
 
     def tighten(self, s: NodeSet) -> NodeSet:

@@ -53,7 +53,7 @@ NOISE_KINDS = ("random", "bias", "game", "switch")
 INSIDE_REL_TOL = 1e-6
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
-          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "reason")  # fmt: skip
+          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "n_simplified", "reason")  # fmt: skip
 
 
 def _times(text: str) -> list[float]:
@@ -221,6 +221,8 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
 
 def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     rec: dict[str, Any] = {"truth_w_m": truth_w, "reason": ""}
+    # slices the set outer-simplified so far (sound, slightly wider than exact)
+    rec["n_simplified"] = int(getattr(belief, "n_simplified", 0))
     if belief.is_empty:
         rec["reason"] = f"estimator's set {getattr(belief, 'status', 'empty')}"
         return rec

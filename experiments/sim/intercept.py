@@ -114,6 +114,9 @@ class EngagementResult:
     min_impulse_mps: float
     truth0: tuple[float, ...]
     extras: tuple[tuple[str, float], ...] = ()
+    #: node slices outer-simplified past the set's vertex cap (sound; 0 if none or
+    #: if the estimator keeps no polygons)
+    simplified_slices: int = 0
 
     def as_row(self) -> dict[str, Any]:
         row = {k: v for k, v in self.__dict__.items() if k not in ("truth0", "extras")}
@@ -307,6 +310,7 @@ class Engagement:
             min_impulse_mps=float(min(self.issued, default=0.0)),
             truth0=tuple(float(v) for v in self.truth0),
             extras=extras,
+            simplified_slices=int(sum(getattr(b, "n_simplified", 0) for b in self.beliefs)),
         )
 
 

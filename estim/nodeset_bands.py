@@ -1,0 +1,135 @@
+"""Closing-speed bands of the node set that split as the data pin the speed.
+
+A band ``[u_lo, u_hi]`` of ``u = 1/e`` keeps, at each node, the slice over *every*
+``u`` of the band: the zero-effort miss ``w = zs / (u e_nom)^2`` is then bounded
+over the whole band, a relaxation of ``2 |w| (u_hi - u_lo) / u`` -- small while the
+set's interval of ``w`` is wide, but with a range finder the bearings and ranges
+pin ``w`` to tens of metres while ``|w|`` may be kilometres (without guidance), and
+the same ranges empty all but one band. :func:`split_live_bands` then splits the
+live bands in halves until there are as many live bands as the estimator started
+with, each half's slices recomputed exactly (the prior, then every recorded
+operation, with the half's ``u`` interval; the disturbance and impulse intervals of
+the parent band, recorded per piece, contain the half's).
+
+A half is dropped only when its hard label limits (the prior box and the recorded
+range intervals, for the half's ``u``) exclude the whole bracket of the parent's
+live nodes: a half with no live node but states left between two nodes cannot be
+told from an empty one, and then the band is not split (sound either way).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from kalman_vs_infoset.estim.nodeset_belief import NodeSet
+from kalman_vs_infoset.estim.nodeset_refine import _compact, _concat
+
+#: bands narrower than this (relative width in ``u``) are not split
+MIN_BAND_REL = 1e-6
+
+
+def live_bands(s: NodeSet) -> list[tuple[float, float]]:
+    """The distinct ``(u_lo, u_hi)`` of the pieces that have live nodes."""
+    live = np.unique(s.piece[s.live])
+    return sorted({(float(s.u_lo[p]), float(s.u_hi[p])) for p in live})
+
+
+def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float] | None:
+    """The live band to split next, or None.
+
+    A band's relaxation of the miss interval is about ``2 |w| (u_hi - u_lo) / u_hi``
+    (``|w|`` its largest miss); it is split while that exceeds ``rtol`` of the set's
+    width of ``w``, or while fewer than ``min_live`` bands are live (the widest
+    first)."""
+    bands = live_bands(s)
+    summ = s._summary
+    w, cell_piece = summ["w"], summ["piece"]
+    if len(w) == 0:
+        return None
+    width = float(np.nanmax(w[:, 1]) - np.nanmin(w[:, 0]))
+    best, pick = 0.0, None
+    for ua, ub in bands:
+        rel = (ub - ua) / ub
+        if not rel > MIN_BAND_REL:
+            continue
+        mine = (s.u_lo[cell_piece] == ua) & (s.u_hi[cell_piece] == ub)
+        w_abs = float(np.nanmax(np.abs(w[mine]))) if mine.any() else 0.0
+        loss = 2.0 * w_abs * rel
+        score = np.inf if len(bands) < min_live else loss
+        if (loss > rtol * width or len(bands) < min_live) and score * rel > best:
+            best, pick = score * rel, (ua, ub)
+    return pick
+
+
+def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float) -> NodeSet:
+    """Split live bands in halves (:func:`_loosest_band` chooses) while fewer than
+    ``max_bands`` are live and a split is sound; ``est`` is the
+    :class:`~kalman_vs_infoset.estim.nodeset.NodeSetEstimator` (its ``_apply``,
+    ``_prior`` and refinement)."""
+    if s.is_empty:
+        return s
+    for _ in range(2 * max_bands):
+        if len(live_bands(s)) >= max_bands:
+            break
+        band = _loosest_band(s, rtol, min_live)
+        if band is None:
+            break
+        out = _split_band(est, s, *band)
+        if out is None or out.is_empty:
+            break
+        s = out
+    return s
+
+
+def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
+    """Every piece of band ``[ua, ub]`` split at ``u``'s middle (None: not sound)."""
+    um = 0.5 * (ua + ub)
+    (_, _), (_, _), (xa, xb) = s.prior
+    for p in np.flatnonzero((s.u_lo == ua) & (s.u_hi == ub)):
+        idx = np.flatnonzero(s.piece == p)
+        if not s.live[idx].any():
+            continue
+        labels = s.label_s[idx]
+        q = len(s.u_lo)
+        # the lower half keeps index p, the upper one is the new piece q; both start
+        # from the parent's hard limits cut to their own u by the prior box
+        hard_lo = np.r_[s.hard_lo_s, max(s.hard_lo_s[p], xa * um)]
+        hard_hi = np.r_[s.hard_hi_s, s.hard_hi_s[p]]
+        hard_hi[p] = min(hard_hi[p], xb * um)
+        two = replace(
+            s, u_lo=np.r_[s.u_lo, um], u_hi=np.r_[np.where(np.arange(q) == p, um, s.u_hi), ub],
+            hard_lo_s=hard_lo, hard_hi_s=hard_hi, log=s.log.with_copied_column(p),
+        )  # fmt: skip
+        piece = np.r_[np.full(len(labels), p), np.full(len(labels), q)]
+        both = np.r_[labels, labels]
+        polys, _, h_lo, h_hi, _ = est._apply(
+            two, piece, both, est._prior(two, piece, both), two.log, 0.0
+        )
+        two = replace(two, hard_lo_s=np.maximum(two.hard_lo_s, h_lo),
+                      hard_hi_s=np.minimum(two.hard_hi_s, h_hi))  # fmt: skip
+        counts = polys.counts
+        # the parent's feasible labels: between its dead end nodes, or out to its
+        # hard limits where an end node is live
+        live = s.live[idx]
+        bracket = (
+            float(labels[0] if not live[0] else s.hard_lo_s[p]),
+            float(labels[-1] if not live[-1] else s.hard_hi_s[p]),
+        )
+        for half, rows in ((p, slice(0, len(labels))), (q, slice(len(labels), None))):
+            if (counts[rows] > 0).any():
+                continue
+            # no live node: sound to drop only if the hard limits exclude the bracket
+            if not (two.hard_lo_s[half] > bracket[1] or two.hard_hi_s[half] < bracket[0]):
+                return None
+        keep = two.piece != p
+        kept = two.polygons.select(keep)
+        all_piece = np.r_[two.piece[keep], piece]
+        all_label = np.r_[two.label_s[keep], both]
+        order = np.lexsort((all_label, all_piece))
+        s = replace(two, piece=all_piece[order], label_s=all_label[order],
+                    polygons=_concat(kept, polys).select(order))  # fmt: skip
+    return _compact(est._refine_pieces(s))
+
+
+__all__ = ["MIN_BAND_REL", "live_bands", "split_live_bands"]

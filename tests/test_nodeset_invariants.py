@@ -1,0 +1,197 @@
+"""The node set's slices stay convex polygons winding once, bounded in size, and the
+compiled kernel stays within its buffers (seed 003's auxiliary model, worst-case
+schedules from the corners of the a-priori box).
+
+References: the winding number and turns of every stored polygon computed here with
+numpy, shapely's convex hull for the segment sum and for containment of the outer
+simplification, brute force over the edges for the least-area removal, and numba's
+own bounds checking (``NUMBA_BOUNDSCHECK=1``) for the buffers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from nodeset_schedules import DENT_TOL, ROOT, run_schedule, winding_and_turn
+
+#: the corner runs of the outside check: (scenario, (Y, V, x, e) in m, m/s, m, m/s)
+CORNERS = {
+    "kp_fig5": (-10e3, -100.0, 5301.3e3, 57.9e3),
+    "kp_fig3": (-10e3, -100.0, 6301.3e3, 58.0e3),
+}
+
+
+@pytest.mark.parametrize("scenario", sorted(CORNERS))
+def test_corner_schedule_runs_to_the_threshold_convex_and_with_the_truth(scenario):
+    """Seed 003's set from the box corner, bearing error -a until 80 s then +a, the
+    disturbance -nu, +nu from 20 s, -nu from 90 s: this schedule once wrote past a
+    kernel buffer (the interpreter aborted after the update at 80 s) and wound the
+    slices 41 times around. Now every slice is convex and winds once after every
+    operation, the slices stay within the vertex cap, the run reaches the threshold
+    and the truth is never outside."""
+    r = run_schedule(scenario, CORNERS[scenario], [80.0], [20.0, 90.0])
+    x0, e = CORNERS[scenario][2], CORNERS[scenario][3]
+    assert r["steps"] >= int((x0 - 5e3) / e / 0.5) - 1
+    assert r["outside"] == 0
+    assert r["max_vertices"] <= 128
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    corner=st.tuples(*(st.booleans() for _ in range(4))),
+    error_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
+    disturbance_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
+    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+    scenario=st.sampled_from(["kp_fig3", "kp_fig5"]),
+)
+def test_slices_stay_convex_and_wind_once_after_every_operation(
+    corner, error_switch_s, disturbance_switch_s, signs, scenario
+):
+    """Errors and disturbances at their bounds switching at random times, from any
+    corner of a (shortened, ~15 s) a-priori box: after every update and prediction
+    every stored slice is convex and winds once, and the truth stays inside."""
+    x_box = (801.3e3, 951.3e3)
+    e_box = (57.9e3, 58.1e3) if scenario == "kp_fig5" else (58.0e3, 58.0e3)
+    y = 10e3 if corner[0] else -10e3
+    v = 100.0 if corner[1] else -100.0
+    x = x_box[int(corner[2])]
+    e = e_box[int(corner[3])]
+    r = run_schedule(
+        scenario, (y, v, x, e), error_switch_s, disturbance_switch_s, *signs,
+        overrides=["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]"],
+    )  # fmt: skip
+    assert r["outside"] == 0
+    assert r["steps"] >= 12
+
+
+def _convex_polygon(rng, n, flat):
+    pts = rng.normal(size=(n, 2)) * [1.0, flat]
+    hull = shapely.convex_hull(shapely.multipoints(pts))
+    return np.asarray(hull.exterior.coords)[:-1][::-1].copy()  # CCW, not closed
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 60),
+    subdivide=st.integers(1, 40),
+    flat=st.sampled_from([1.0, 1e-6, 1e-12]),
+)
+def test_segment_sum_is_the_convex_minkowski_sum_with_at_most_two_more_vertices(
+    seed, n, subdivide, flat
+):
+    """Polygon plus segment against shapely's hull of ``p +- g``: the same area, at
+    most ``m + 2`` vertices, winding once -- also when the edges along ``g`` are cut
+    into many short pieces whose cross products with ``g`` are rounding (the case
+    that once gave a zigzag winding twice)."""
+    rng = np.random.default_rng(seed)
+    poly = _convex_polygon(rng, n, flat)
+    if len(poly) < 3:
+        return
+    g = rng.normal(size=2)
+    if subdivide > 1:  # many collinear-to-rounding vertices on the edge most along g
+        d = np.roll(poly, -1, axis=0) - poly
+        j = int(np.argmin(np.abs(d[:, 0] * g[1] - d[:, 1] * g[0]) / np.hypot(*d.T)))
+        s = np.linspace(0, 1, subdivide + 1)[1:-1, None]
+        poly = np.insert(poly, j + 1, poly[j] + s * d[j], axis=0)
+    m = len(poly)
+    dst = np.empty((2 * m + 8, 2))
+    k, _ = _nk._segment1(poly, m, g[0], g[1], dst, float(np.abs(poly).max()), False)
+    out = dst[:k]
+    assert k <= m + 2
+    want = shapely.convex_hull(shapely.multipoints(np.vstack([poly + g, poly - g])))
+    got = shapely.Polygon(out)
+    assert got.area == pytest.approx(want.area, rel=1e-9, abs=1e-12 * want.length**2)
+    w, _ = winding_and_turn(out)
+    assert abs(w - 1.0) < 1e-9 or want.area < 1e-12 * want.length**2
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(20, 400), cap=st.integers(8, 64))
+def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):
+    """The simplified polygon contains the input (shapely), has at most ``cap``
+    vertices (when the input has more), stays convex and winds once; its first
+    removal adds the least area of all single-edge removals (brute force)."""
+    rng = np.random.default_rng(seed)
+    ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+    poly = np.column_stack([np.cos(ang), 0.3 * np.sin(ang)]) * rng.uniform(0.1, 10)
+    poly = _convex_polygon(np.random.default_rng(0), 3, 1.0) if len(poly) < 3 else poly
+    m = len(poly)
+    p = poly.copy()
+    k = _nk.outer_simplify(p, m, cap)
+    assert k <= max(cap, 3) or k == m
+    got, orig = shapely.Polygon(p[:k]), shapely.Polygon(poly)
+    assert got.buffer(1e-9 * np.abs(poly).max()).contains(orig)
+    w, turn = winding_and_turn(p[:k])
+    assert abs(w - 1.0) < 1e-9 and turn > -DENT_TOL
+    if m > cap:  # the first removal is the least-area one
+        one = poly.copy()
+        k1 = _nk.outer_simplify(one, m, m - 1)
+        added = shapely.Polygon(one[:k1]).area - orig.area
+        best = np.inf
+        for i in range(m):
+            a, b, c, d = poly[i - 1], poly[i], poly[(i + 1) % m], poly[(i + 2) % m]
+            u, v = b - a, d - c
+            den = u[0] * v[1] - u[1] * v[0]
+            if den > 0:
+                t = ((c - b)[0] * v[1] - (c - b)[1] * v[0]) / den
+                if t >= 0:
+                    best = min(best, shapely.Polygon([b, b + t * u, c]).area)
+        assert added == pytest.approx(best, rel=1e-6, abs=1e-12 * orig.area)
+
+
+_REPLAY = """
+import json, sys
+import numpy as np
+from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+calls = np.load(sys.argv[1], allow_pickle=False)
+n = int(calls["n"])
+for i in range(n):
+    args = [calls[f"{i}_{j}"] for j in range(int(calls[f"{i}_nargs"]))]
+    args = [a.item() if a.ndim == 0 else a for a in args]
+    xy, off, t, lo, hi, ns = _nk.apply_ops(*args)
+    assert np.array_equal(xy, calls[f"{i}_xy"]) and np.array_equal(off, calls[f"{i}_off"])
+print(json.dumps({"replayed": n}))
+"""
+
+
+def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, monkeypatch):
+    """The largest ``apply_ops`` calls of the corner schedule (kp_fig5), recorded here
+    and replayed in a fresh process compiled with ``NUMBA_BOUNDSCHECK=1`` (a write
+    past a buffer raises IndexError there), give the same polygons."""
+    calls = []
+    real = _nk.apply_ops
+
+    def record(*args):
+        out = real(*args)
+        calls.append((sum(int(np.size(a)) for a in args[:2]), args, out))
+        return out
+
+    monkeypatch.setattr(_nk, "apply_ops", record)
+    run_schedule("kp_fig5", CORNERS["kp_fig5"], [80.0], [20.0, 90.0], check=lambda b, w: None)
+    monkeypatch.undo()
+    calls.sort(key=lambda c: -c[0])
+    keep = calls[:6] + calls[len(calls) // 2 : len(calls) // 2 + 2]
+    arrays = {"n": np.array(len(keep))}
+    for i, (_, args, out) in enumerate(keep):
+        arrays[f"{i}_nargs"] = np.array(len(args))
+        arrays.update({f"{i}_{j}": np.asarray(a) for j, a in enumerate(args)})
+        arrays[f"{i}_xy"], arrays[f"{i}_off"] = out[0], out[1]
+    path = tmp_path / "calls.npz"
+    np.savez(path, **arrays)
+    env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
+    proc = subprocess.run(
+        [sys.executable, "-c", _REPLAY, str(path)], env=env, cwd=ROOT,
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert json.loads(proc.stdout.strip().splitlines()[-1]) == {"replayed": len(keep)}
