@@ -88,7 +88,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
         metavar="TABLE.KEY=VALUE",
         dest="overrides",
         help="override a scenario field with a TOML value, e.g. "
-        "estimator.kalman_noise_inflation=10 (repeatable; validated like the file; "
+        "estimator.ekf.noise_inflation=10 (repeatable; validated like the file; "
         "the scenario's name gets a +key=value suffix)",
     )
 

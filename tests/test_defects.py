@@ -91,7 +91,7 @@ def test_c_scheduler_that_is_not_an_address_is_one_line(short, tmp_path, capsys)
 # -- d ------------------------------------------------------------------------------
 def test_d_more_sections_than_the_set_may_hold_is_refused_at_load(short, tmp_path, capsys):
     out = tmp_path / "out"
-    r = _intercept(capsys, short, out, "--runs", 1, "--set", "estimator.n_sections=129")
+    r = _intercept(capsys, short, out, "--runs", 1, "--set", "estimator.infoset.n_sections=129")
     assert one_line_error(r), r.stderr
     assert "n_sections" in r.stderr
 

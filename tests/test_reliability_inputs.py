@@ -67,11 +67,27 @@ def test_the_same_set_key_twice_is_refused(short, tmp_path, capsys):
     assert "model.nu_mps2 given twice" in err
 
 
-def test_a_flat_option_key_beside_its_table_key_is_refused(short, tmp_path, capsys):
-    err = _refused(capsys, tmp_path / "out", "intercept", short,
-                   "--set", "estimator.kalman_noise_inflation=3",
-                   "--set", "estimator.ekf.noise_inflation=10")  # fmt: skip
-    assert "estimator.ekf.noise_inflation" in err and "both given" in err
+@pytest.mark.parametrize(
+    "flat,tables",
+    [
+        ("n_sections=9", ["'estimator.infoset.n_sections'"]),
+        ("kalman_noise_inflation=3", ["'estimator.ekf.noise_inflation'",
+                                      "'estimator.ukf.noise_inflation'"]),
+    ],
+)  # fmt: skip
+def test_a_flat_option_key_is_refused_naming_its_table_key(short, tmp_path, capsys, flat, tables):
+    """One spelling of each option: the flat keys of earlier releases (one of them used
+    to be silently ignored beside its table key) are refused, naming the table key."""
+    err = _refused(capsys, tmp_path / "out", "intercept", short, "--set", f"estimator.{flat}")
+    assert f"'estimator.{flat.split('=')[0]}'" in err and all(t in err for t in tables)
+
+
+def test_shipped_scenarios_use_only_table_keys():
+    from kalman_vs_infoset.experiments.scenario import load_toml
+    from kalman_vs_infoset.experiments.sim.intercept_config import LEGACY_OPTIONS
+
+    for path in sorted((ROOT / "data/scenarios").glob("kp_*.toml")):
+        assert not set(load_toml(path).get("estimator", {})) & set(LEGACY_OPTIONS), path
 
 
 def test_a_utf8_byte_order_mark_is_accepted(tmp_path, capsys):
@@ -97,12 +113,23 @@ def test_a_swept_key_also_given_with_set_is_refused(short, tmp_path, capsys):
     assert "--key model.nu_mps2" in err
 
 
-def test_a_swept_flat_key_beside_its_table_key_is_refused(short, tmp_path, capsys):
-    """The table key used to win silently: the swept value was never used."""
+def test_a_swept_flat_key_is_refused_naming_its_table_keys(short, tmp_path, capsys):
+    """Beside ``--set estimator.ekf.noise_inflation=10`` the table key used to win
+    silently: the swept value was never used."""
     err = _refused(capsys, tmp_path / "out", *SWEEP, short,
                    "--key", "estimator.kalman_noise_inflation", "--values", "[1, 3]",
                    "--set", "estimator.ekf.noise_inflation=10")  # fmt: skip
-    assert "both given" in err
+    assert "'estimator.ekf.noise_inflation'" in err
+
+
+def test_a_sweep_sets_a_comma_list_of_keys_to_each_value(short):
+    """Both filters' inflation swept together (what the flat key did), table keys."""
+    from kalman_vs_infoset.experiments.cmd_sweep import _keys
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    keys = _keys("estimator.ekf.noise_inflation, estimator.ukf.noise_inflation", [])
+    sc = load_scenario(short, [f"{k}=3" for k in keys])
+    assert [sc.estimator.options_for(n).noise_inflation for n in ("ekf", "ukf")] == [3.0, 3.0]
 
 
 # -- other commands ------------------------------------------------------------------

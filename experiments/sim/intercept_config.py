@@ -10,11 +10,9 @@ noises' search: :mod:`kalman_vs_infoset.experiments.adversary`), an optional
 ``[reference]`` of the paper's numbers and an optional ``[attitude]`` loop holding the
 spacecraft's axis (:class:`kalman_vs_infoset.experiments.sim.pointing.PointingConfig`).
 
-The flat option keys of earlier releases are still read: ``estimator.n_sections``,
-``sections``, ``kinematic_margin``, ``split_ratio`` are ``[estimator.infoset]``'s,
-``kalman_sigma``, ``kalman_range_constraint``, ``kalman_noise_inflation`` are
-``n_sigma``, ``range_constraint``, ``noise_inflation`` of ``[estimator.ekf]`` and
-``[estimator.ukf]`` (a table's own key wins).
+An option has one spelling, its table's: the flat keys of earlier releases
+(``estimator.n_sections``, ``kalman_noise_inflation``, ...: :data:`LEGACY_OPTIONS`) are
+refused with a message naming the table key(s) to use instead.
 """
 
 from __future__ import annotations
@@ -45,7 +43,8 @@ BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
 MAX_STEPS = 100_000
 #: a scenario's name names its result files: no path separators, no "..", no leading dot
 SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.,=+\-]*$")
-#: flat keys of earlier releases -> (estimator, option) of the [estimator.<name>] tables
+#: flat keys of earlier releases -> the (estimator, option) of the [estimator.<name>]
+#: tables that replace them (named in the refusal)
 LEGACY_OPTIONS = {
     "n_sections": (("infoset", "n_sections"),),
     "sections": (("infoset", "sections"),),
@@ -116,7 +115,8 @@ class EstimatorTable(Table):
     @model_validator(mode="before")
     @classmethod
     def _gather_options(cls, data: Any) -> Any:
-        """Sub-tables and the flat keys of earlier releases go to ``options``."""
+        """Sub-tables go to ``options``; a flat key of earlier releases is refused,
+        naming its table key(s)."""
         if not isinstance(data, dict):
             return data
         data = dict(data)
@@ -125,15 +125,11 @@ class EstimatorTable(Table):
             options.setdefault(key, {}).update(data.pop(key))
         for key, targets in LEGACY_OPTIONS.items():
             if key in data:
-                value = data.pop(key)
-                for name, option in targets:
-                    table = options.setdefault(name, {})
-                    if option in table:  # one of the two would be silently ignored
-                        raise ValueError(
-                            f"field 'estimator.{key}' and 'estimator.{name}.{option}' are "
-                            f"both given; give only 'estimator.{name}.{option}'"
-                        )
-                    table[option] = value
+                now = " and ".join(f"'estimator.{name}.{option}'" for name, option in targets)
+                raise ValueError(
+                    f"field 'estimator.{key}' is now {now} (options live in "
+                    "[estimator.<name>] tables)"
+                )
         data["options"] = options
         return data
 
