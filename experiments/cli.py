@@ -21,7 +21,12 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import numpy as np
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import (
+    InputError,
+    Terminated,
+    clear_stop,
+    request_stop,
+)
 
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -119,14 +124,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (``timeout``, SLURM, ``docker stop``), taken like Ctrl-C: what finished
-    is saved and the command says so."""
-
-
 def _on_sigterm(signum, frame) -> None:
+    """SIGTERM, taken like Ctrl-C: what finished is saved and the command says so."""
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the save
+    request_stop()  # checked between runs, should the exception below be swallowed
     raise Terminated
+
+
+def _on_sigint(signum, frame) -> None:
+    """Ctrl-C: ``KeyboardInterrupt``, also checked between runs."""
+    request_stop(KeyboardInterrupt)
+    raise KeyboardInterrupt
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -143,8 +151,12 @@ def main(argv: Sequence[str] | None = None) -> int:
               file=sys.stderr)  # fmt: skip
         return 2
     module = importlib.import_module(args._module)
+    clear_stop()
     main_thread = threading.current_thread() is threading.main_thread()
     before = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
+    interactive = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if interactive:  # not where Ctrl-C is ignored (a background job)
+        signal.signal(signal.SIGINT, _on_sigint)
     from kalman_vs_infoset.experiments import runner
 
     runner.forget_failures()
@@ -153,6 +165,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, before)
+        if interactive:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _run(parser, module, args) -> int:

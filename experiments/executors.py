@@ -28,7 +28,7 @@ from typing import Any
 
 from kalman_vs_infoset.estim import _kernels as _k
 from kalman_vs_infoset.experiments import provenance
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, check_stop
 from kalman_vs_infoset.experiments.limits import limited
 from kalman_vs_infoset.experiments.provenance import code_identity
 
@@ -162,6 +162,7 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
     lost = {"dead": 0, "memory": 0}
     if executor is None and scheduler is None and n == 1:
         for chunk in chunks:
+            check_stop()
             try:
                 pairs = task(chunk)
             except MemoryError:
@@ -198,6 +199,7 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
     refill()
     while pending:
         done, _ = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+        check_stop()
         if not done:
             if _live_workers(ex) == 0:
                 idle_since = idle_since or time.monotonic()

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, check_stop
 from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exported
     WorkerLost,
     executor_or,
@@ -293,6 +293,7 @@ def _complete(job, runs, todo, table, path, progress, executor, workers, schedul
             table[j] = {**job.base, "run": j, **row}
             changed = True
             bar.update(1)
+            check_stop()
             if time.monotonic() - last_save > SAVE_EVERY_S:
                 _write_rows(path, list(table.values()))
                 last_save, changed = time.monotonic(), False
