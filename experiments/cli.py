@@ -63,6 +63,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_tightness",
         "a set's interval of the miss vs the exact one",
     ),
+    "scenarios": (
+        "kalman_vs_infoset.experiments.cmd_scenarios",
+        "the bundled scenarios, one line each",
+    ),
     "plot": ("kalman_vs_infoset.experiments.cmd_plot", "figures of traces written by --trace"),
     "paper-figures": (
         "kalman_vs_infoset.experiments.cmd_paper_figures",
@@ -107,6 +111,9 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
+    from kalman_vs_infoset import __version__
+
+    parser.add_argument("--version", action="version", version=f"kvi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
@@ -160,6 +167,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from kalman_vs_infoset.experiments import runner
 
     runner.forget_failures()
+    from kalman_vs_infoset.experiments import progress
+
+    progress.configure_logging()
     try:
         return _run(parser, module, args)
     finally:

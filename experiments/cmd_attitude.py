@@ -40,7 +40,7 @@ from kalman_vs_infoset.experiments.runner import (
     run_job,
     run_seed,
 )
-from kalman_vs_infoset.experiments.scenario import read
+from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, read
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 from kalman_vs_infoset.experiments.sim.intercept_config import check_name
 
@@ -55,7 +55,7 @@ DISPATCH = {
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    parser.add_argument("scenario", help=SCENARIO_HELP)
     parser.add_argument("--controller", default=None, help="one of " + ", ".join(DISPATCH))
     parser.add_argument("--noise", default="none", help="none | random | game (default none)")
     parser.add_argument("--runs", type=runs_int, default=1, help="number of runs (default 1)")

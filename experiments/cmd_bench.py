@@ -43,12 +43,12 @@ from kalman_vs_infoset.estim.costs import MissForecast
 from kalman_vs_infoset.estim.model import Bearing
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.runner import run_experiment
-from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, run_engagement
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")
+    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--steps", type=positive_int, default=120, help="estimator steps timed")
     p.add_argument("--repeat", type=positive_int, default=3, help="repetitions (median)")
     p.add_argument("--mc-runs", type=positive_int, default=8, help="runs for the throughput")
@@ -124,7 +124,7 @@ def throughput(sc, runs: int, workers: int) -> float:
 
 
 def run(args) -> dict[str, Any]:
-    root = Path(args.scenarios)
+    root = scenario_folder(args.scenarios)
     fig3 = load_scenario(root / "kp_fig3.toml")
     fig5 = load_scenario(root / "kp_fig5.toml")
     # warm-up: imports, compiled kernels, filterpy

@@ -18,7 +18,7 @@ from kalman_vs_infoset.experiments import plots
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int, seed_int
 from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
 from kalman_vs_infoset.experiments.runner import run_experiment, summarise
-from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 
 VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + range"))
 
@@ -29,7 +29,7 @@ def add_arguments(p) -> None:
     p.add_argument("--estimator", choices=registry.names("intercept"), default="infoset")
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
     p.add_argument("--scheduler", help="Dask scheduler address")
-    p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")
+    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--out", default="results/fig5", help="output directory")
     p.add_argument("--no-progress", action="store_true")
 
@@ -46,7 +46,7 @@ def run(args) -> dict[str, Any]:
     frames, rows = [], []
     sc = None
     for fname, variant in VARIANTS:
-        sc = load_scenario(Path(args.scenarios) / fname)
+        sc = load_scenario(scenario_folder(args.scenarios) / fname)
         seed = sc.experiment.seed if args.seed is None else args.seed
         for noise in ("random", "game"):
             t1 = time.perf_counter()

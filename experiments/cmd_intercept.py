@@ -16,7 +16,7 @@ from kalman_vs_infoset.experiments.runner import (
     run_experiment,
     summarise,
 )
-from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
 from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
 
 
@@ -73,7 +73,7 @@ def seed_int(text: str) -> int:
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    p.add_argument("scenario", help=SCENARIO_HELP)
     p.add_argument("--runs", type=runs_int, help="number of runs (default: the scenario's)")
     p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")

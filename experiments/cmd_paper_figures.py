@@ -3,9 +3,12 @@
 Redraws every figure of the papers that our models cover, each file named after the
 paper's figure (PNG and SVG): seed 003 ``kp_fig3``, ``kp_fig4``, ``kp_fig5`` (and our
 ``kp_fig3_overlay``: the set, EKF and UKF on one realisation), seed 000
-``resurs_fig1``-``resurs_fig9``, seed 001 ``akimov_fig3``-``fig7``, ``fig10``-``fig12``,
-``fig14``, ``fig15``, and the gyrostat turn of seed 004 (``gyrostat_eta``,
-``gyrostat_switching``, ``gyrostat_torques``; its paper has no figures we can read). The
+``resurs_fig1``-``resurs_fig9`` with ``resurs_inertia_signs`` (the index under the
+readings of the lost signs of the products of inertia) and ``resurs_noisy`` (the turn
+under noisy measurements through an estimator), seed 001 ``akimov_fig3``-``fig15``,
+seed 002 ``lqr_lyapunov`` (its Lyapunov function along the LQR turn), and the gyrostat
+turn of seed 004 (``gyrostat_eta``, ``gyrostat_switching``, ``gyrostat_torques``; its
+paper has no figures we can read). The
 paper's printed numbers are marked on them (black stars and dotted lines, "paper: ...").
 ``--runs`` is the number of engagements per curve of ``kp_fig5`` (the paper: 50); the
 runs are kept in ``<out>/runs`` and reused (resumed) by the next call. ``--quick``
@@ -29,23 +32,36 @@ from typing import Any
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import paper_figs_attitude as att
 from kalman_vs_infoset.experiments import paper_figs_kp as kp
+from kalman_vs_infoset.experiments import paper_figs_more as more
 from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
+from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.scenario import scenario_folder
 
 #: figure name -> group that draws it (a group draws all its figures at once)
 FIGURES: dict[str, str] = {
     **{name: fn.__name__.replace("fig", "kp_fig") for name, fn in kp.FIGURES.items()},
     **resurs.FIGURES,
+    **resurs_more.FIGURES,
     **att.FIGURES,
+    **more.FIGURES,
 }
 GROUPS = {
     "kp_fig3": kp.fig3,
     "kp_fig4": kp.fig4,
     "kp_fig5": kp.fig5,
     **resurs.GROUPS,
+    **resurs_more.GROUPS,
     **att.GROUPS,
+    **more.GROUPS,
+}
+#: names of --only that stand for several groups
+ALIASES = {
+    "kp": ["kp_fig3", "kp_fig4", "kp_fig5"],
+    "resurs": ["resurs", "resurs_more"],
+    "akimov": ["akimov", "akimov_more"],
 }
 
 
@@ -76,14 +92,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--only",
         default=None,
-        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat)",
+        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat, lqr)",
     )
     p.add_argument(
         "--quick",
         action="store_true",
         help="coarser gain study and attitude steps (previews, tests)",
     )
-    p.add_argument("--scenarios", default="data/scenarios", help="folder of the scenario files")
+    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
 
 
 def _groups(only: str | None) -> list[str]:
@@ -96,15 +112,15 @@ def _groups(only: str | None) -> list[str]:
     for w in wanted:
         if w in FIGURES:
             g = FIGURES[w]
-        elif w == "kp":
-            groups += ["kp_fig3", "kp_fig4", "kp_fig5"]
+        elif w in ALIASES:
+            groups += ALIASES[w]
             continue
         elif w in GROUPS:
             g = w
         else:
             raise InputError(
                 f"--only: unknown figure or group '{w}' "
-                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, "
+                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, lqr, "
                 "gyrostat)"
             )
         groups.append(g)
@@ -112,9 +128,7 @@ def _groups(only: str | None) -> list[str]:
 
 
 def run(args) -> dict[str, Any]:
-    scenarios = Path(args.scenarios)
-    if not scenarios.is_dir():
-        raise InputError(f"--scenarios {scenarios}: not a folder")
+    scenarios = scenario_folder(args.scenarios)
     ctx = Context(Path(args.out), args.runs, args.quick, scenarios)
     numbers: dict[str, Any] = {}
     t0 = time.perf_counter()

@@ -22,7 +22,7 @@ import numpy as np
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
 from kalman_vs_infoset.guidance.attitude.pd import baseline_kq, term_scale
-from tqdm import tqdm
+from tqdm.auto import tqdm
 
 DEFAULT_FIT_ANGLES = (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
 

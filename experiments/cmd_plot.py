@@ -8,7 +8,7 @@ per noise; a trace with a sets file beside it (``-trace-sets.parquet``) also giv
 set in 3-D at ``t = 1 s`` before and after the measurements (the seed's Fig. 4), 2-D
 pictures at six times and an animation (GIF). Attitude traces give the time histories
 of :func:`kalman_vs_infoset.experiments.plots_attitude.time_histories`. The paper's printed miss and
-fuel are marked when the results' JSON beside the trace holds a ``[reference]``.
+fuel are marked when the results' description (``_meta/``) holds a ``[reference]``.
 Figures are PNG and SVG beside the first trace (or in ``--out``).
 """
 
@@ -22,6 +22,7 @@ from typing import Any
 import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.results import TRACE_DIR, existing_sidecar
 
 NOISE_ORDER = ("random", "game", "bias", "none")
 
@@ -43,9 +44,11 @@ def _read(path: Path) -> pd.DataFrame:
 
 
 def _paper_from_json(path: Path) -> dict[str, tuple[Any, Any]] | None:
-    meta = path.with_name(path.name.replace("-trace.parquet", ".json"))
+    table = path.with_name(path.name.replace("-trace.parquet", ".parquet"))
+    if path.parent.name == TRACE_DIR:  # the results table is in the folder above
+        table = path.parent.parent / table.name
     try:
-        ref = json.loads(meta.read_text())["scenario"]["reference"]
+        ref = json.loads(existing_sidecar(table).read_text())["scenario"]["reference"]
     except (OSError, ValueError, KeyError, TypeError):
         return None
     return {

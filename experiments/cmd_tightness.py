@@ -45,7 +45,7 @@ from kalman_vs_infoset.experiments.cmd_intercept import seed_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.noise import RandomNoise
-from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 
@@ -79,7 +79,7 @@ def _positive(text: str) -> float:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="scenario TOML file (data/scenarios/*.toml)")
+    p.add_argument("scenario", help=SCENARIO_HELP)
     add = p.add_argument
     add("--noise", choices=NOISE_KINDS, default="random", help="bearing errors")
     add("--seed", type=seed_int, help="seed (default: the scenario's)")

@@ -50,7 +50,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
             from distributed import Client
         except ImportError:
             raise InputError(
-                "--scheduler needs dask.distributed (pip install '.[cluster]')"
+                "--scheduler needs dask.distributed (pip install 'kalman-vs-infoset[cluster]')"
             ) from None
         try:
             client = Client(scheduler, timeout="10s")

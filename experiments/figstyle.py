@@ -82,6 +82,40 @@ def estimator_colour(name: str) -> str:
     return _SPARE[digest[0] % len(_SPARE)]
 
 
+#: legends in words: what an estimator and a noise kind are
+ESTIMATOR_WORDS = {
+    "infoset": "information set",
+    "box": "guaranteed box",
+    "ekf": "EKF",
+    "ukf": "UKF",
+    "perfect": "state as measured",
+    "ellipsoid": "ellipsoid",
+    "zonotope": "zonotope",
+    "hinf": "H-infinity filter",
+    "pf": "particle filter",
+}
+NOISE_WORDS = {
+    "random": "random errors",
+    "game": "game errors",
+    "bias": "biased errors",
+    "none": "exact measurements",
+    "targeted": "targeted adversary",
+    "lookahead": "look-ahead adversary",
+    "switch": "switching errors",
+}
+
+
+def words(estimator: str, noise: str | None = None) -> str:
+    """An estimator (and a noise kind) in words for a legend, e.g. ``"UKF, random errors"``.
+
+    Exact measurements read directly are ``"exact state"``.
+    """
+    if estimator == "perfect" and noise == "none":
+        return "exact state"
+    est = ESTIMATOR_WORDS.get(estimator, estimator)
+    return est if noise is None else f"{est}, {NOISE_WORDS.get(noise, noise)}"
+
+
 def noise_style(noise: str) -> str | tuple:
     """The line style of a noise kind (unknown kinds: a long dash)."""
     return NOISE_STYLES.get(noise, (0, (8, 2)))

@@ -41,7 +41,7 @@ def atomic_write(path: Path, write: Callable[[str], None]) -> None:
 
 @contextmanager
 def exclusive(path: Path, what: str) -> Iterator[None]:
-    """Hold the advisory lock of ``path`` (``fcntl.flock`` on ``<path>.lock`` beside it)
+    """Hold the advisory lock of ``path`` (``fcntl.flock`` on ``.<name>.lock`` beside it)
     while writing it: a second command on the same file waits for the first (one line
     on stderr says so) and then reads what the first wrote, so no finished run is lost
     to interleaved saves. The lock file is removed on release; a lock taken on a file
@@ -50,7 +50,7 @@ def exclusive(path: Path, what: str) -> Iterator[None]:
     if fcntl is None:
         yield
         return
-    lock = path.with_name(path.name + ".lock")
+    lock = path.with_name(f".{path.name}.lock")  # hidden: Parquet readers of the folder skip it
     told = False
     while True:
         fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666 & ~_umask())

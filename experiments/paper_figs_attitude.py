@@ -54,14 +54,14 @@ def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overr
 def _components(ctx, name, traces, column, ylabel, title, limit=None, marks=(), variants=None):
     """Three axis panels of ``column``; ``variants`` names each trace and gives its line
     width (traces of one estimator and noise that differ otherwise)."""
-    fig, axes = fs.figure(3, 1, size=(7.0, 7.0), sharex="col")
+    fig, axes = fs.figure(3, 1, size=(7.0, 7.6), sharex="col")
     for i, df in enumerate(traces):
         what, lw = variants[i] if variants else ("", None)
         pa.axis_panels(axes[:, 0], [df], column, ylabel, what=what, limit=limit, lw=lw)
     for ax in axes[:, 0]:
         for value, label in marks:
             ax.axvline(value, color=fs.PAPER, ls=":", lw=1.2, label=label)
-        fs.legend(ax, loc="best", fontsize=6.5)
+    fs.figure_legend(fig, axes[:, 0], fontsize=7, ncol=2)  # below the panels: covers no data
     fig.suptitle(title)
     ctx.save(fig, name)
 
@@ -88,9 +88,13 @@ def akimov(ctx) -> dict[str, Any]:
     kq9 = float(baseline_kq(k_w, "vector"))
     base, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect", [f"pd.k_q={kq9!r}"])
     out = {}
-    for name, df, what in (
-        ("akimov_fig3", eff, f"k_q = {config.pd.k_q}, k_w = {k_w}"),
-        ("akimov_fig6", base, f"rule (9): k_q = k_w^2/2 = {kq9:.3f}"),
+    points = {
+        "eff": pa.segment_points(eff, _settle(eff)),
+        "base": pa.segment_points(base, _settle(base)),
+    }
+    for name, df, what, pts in (
+        ("akimov_fig3", eff, f"k_q = {config.pd.k_q}, k_w = {k_w}", points["eff"]),
+        ("akimov_fig6", base, f"rule (9): k_q = k_w^2/2 = {kq9:.3f}", points["base"]),
     ):
         z = df[df["axis"] == 3]
         fig, axes = fs.figure(2, 1, size=(7.0, 5.6), sharex="col")
@@ -98,22 +102,28 @@ def akimov(ctx) -> dict[str, Any]:
             (axes[0, 0], "momentum_Nms", "momentum_max_Nms", "wheel momentum L_z, N m s"),
             (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
         ):
-            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"perfect / none, {what}")
+            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"exact state, {what}")
             for s in (-1, 1):
                 ax.plot(z["t_s"], s * z[lim], color=fs.REFERENCE, lw=0.8, label="limit")
             ax.set_ylabel(lab)
             ax.set_xlabel("time t, s")
-            fs.legend(ax, loc="best")
+            pa.mark_points(ax, pts)
+            fs.legend(ax, loc="center right", fontsize=6.5)
         fig.suptitle(f"{name}: 150 deg turn about z, wheels limited, {what}")
         ctx.save(fig, name)
-        out[name] = {"settle_s": _settle(df)}
-    for name, df, what in (
-        ("akimov_fig4", eff, "gains of the scenario"),
-        ("akimov_fig7", base, f"rule (9), k_q = {kq9:.3f}"),
+        out[name] = {"settle_s": _settle(df), "points_s": pts}
+    for name, df, what, pts in (
+        ("akimov_fig4", eff, "gains of the scenario", points["eff"]),
+        ("akimov_fig7", base, f"rule (9), k_q = {kq9:.3f}", points["base"]),
     ):
-        _history_axis(ctx, name, df, f"{name}: turn angle about z, {what}")
+        _history_axis(ctx, name, df, f"{name}: turn angle about z, {what}", pts)
     ts = _settle(eff)
-    _zoom(ctx, "akimov_fig5", eff, ts, "akimov_fig5: the final transient (segment 4-5)")
+    _zoom(ctx, "akimov_fig5", eff, ts, "akimov_fig5: the final transient (segment 4-5)",
+          points=points["eff"])  # fmt: skip
+    twice, _ = trace(
+        ctx, "smallsat_rw.toml", "pd", "none", "perfect", ['pd.quaternion_term="twice"']
+    )
+    t2 = _settle(twice)
     _zoom(
         ctx,
         "akimov_fig12",
@@ -121,8 +131,15 @@ def akimov(ctx) -> dict[str, Any]:
         ts,
         "akimov_fig12: angle with the efficient gains (k_q = 1.375, k_w = 2.625)",
         log=True,
+        note=f"ours: settles at {ts:.1f} s, entering the band without overshoot\n"
+        f"paper: {AKIMOV_SETTLE_S} s, its curve overshoots and stays inside the band\n"
+        f"quaternion term taken twice (the other convention): {t2:.1f} s",
     )
-    out["akimov_fig12"] = {"settle_s": ts, "paper_settle_s": AKIMOV_SETTLE_S}
+    out["akimov_fig12"] = {
+        "settle_s": ts,
+        "paper_settle_s": AKIMOV_SETTLE_S,
+        "settle_twice_s": t2,
+    }
     out.update(_gain_figures(ctx))
     return {"akimov": out}
 
@@ -134,36 +151,41 @@ def _settle(df: pd.DataFrame, tol_deg: float = 0.01, tol_rate: float = 0.01) -> 
     return float(d["t_s"].iloc[bad[-1] + 1]) if len(bad) and bad[-1] + 1 < len(d) else np.nan
 
 
-def _history_axis(ctx, name, df, title) -> None:
+def _history_axis(ctx, name, df, title, points) -> None:
     z = df[df["axis"] == 3]
     fig, axes = fs.figure(1, 1, size=(6.6, 4.0))
     axes[0, 0].plot(
         z["t_s"],
         z["error_deg"],
         **fs.line("perfect", "none"),
-        label="perfect / none: rotation about z from the target",
+        label="exact state: rotation about z from the target",
     )
     axes[0, 0].set_xlabel("time t, s")
     axes[0, 0].set_ylabel("turn angle, deg")
-    fs.legend(axes[0, 0])
+    pa.mark_points(axes[0, 0], points)
+    fs.legend(axes[0, 0], loc="center right")
     fig.suptitle(title)
     ctx.save(fig, name)
 
 
-def _zoom(ctx, name, df, settle_s, title, log=False) -> None:
+def _zoom(ctx, name, df, settle_s, title, log=False, points=None, note=None) -> None:
+    """The error angle near settling (linear) or over the turn (log); ``note`` (text)
+    adds the shaded 0.01-deg band and says how ours and the paper's differ."""
     d = df[df["axis"] == 1]
-    fig, axes = fs.figure(1, 1, size=(6.6, 4.0))
+    fig, axes = fs.figure(1, 1, size=(6.6, 4.6 if note else 4.0))
     ax = axes[0, 0]
     if not log:
         d = d[d["t_s"] >= max(settle_s - 15.0, 0.0)]
         d = d[d["t_s"] <= settle_s + 15.0]
+    if points is not None:
+        lo, hi = float(d["t_s"].min()), float(d["t_s"].max())
+        pa.mark_points(ax, {k: t for k, t in points.items() if lo <= t <= hi})
     ax.plot(
         d["t_s"],
         d["angle_deg"],
         **fs.line("perfect", "none"),
-        label=f"perfect / none: error angle, settles at {settle_s:.2f} s",
+        label=f"exact state: error angle, settles at {settle_s:.2f} s",
     )
-    ax.axhline(0.01, color=fs.REFERENCE, lw=0.9, label="tolerance 0.01 deg")
     ax.axvline(
         AKIMOV_SETTLE_S,
         color=fs.PAPER,
@@ -172,9 +194,18 @@ def _zoom(ctx, name, df, settle_s, title, log=False) -> None:
         label=f"paper: settles at {AKIMOV_SETTLE_S} s",
     )
     ax.set_yscale("log" if log else "linear")
+    if note:
+        bottom, top = ax.get_ylim()
+        ax.axhspan(bottom, 0.01, color=fs.OKABE_ITO["yellow"], alpha=0.4,
+                   label="settled band: within 0.01 deg")  # fmt: skip
+        ax.set_ylim(bottom, top)
+        ax.text(0.02, 0.03, note, transform=ax.transAxes, fontsize=7, va="bottom",
+                bbox={"facecolor": "white", "edgecolor": "0.6", "alpha": 0.9})  # fmt: skip
+    else:
+        ax.axhline(0.01, color=fs.REFERENCE, lw=0.9, label="tolerance 0.01 deg")
     ax.set_xlabel("time t, s")
     ax.set_ylabel("error angle, deg")
-    fs.legend(ax)
+    fs.legend(ax, loc="upper right")
     fig.suptitle(title)
     ctx.save(fig, name)
 
@@ -252,8 +283,13 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
         if ctx.quick
         else (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
     )
-    f0 = {a: gs.f0_for_angle(a, settings) for a in angles}
+    curves = {a: gs.efficient_curve(gs.settle_time_map(a, settings)) for a in angles}
+    f0 = {
+        a: gs.fit_parabola(c[0], c[1], settings.fit_loss, settings.grid_step)
+        for a, c in curves.items()
+    }  # = gs.f0_for_angle, the curves kept for Fig. 13
     fit = gs.fit_f0_curve(list(f0), list(f0.values()), settings.quaternion_term)
+    _fig13(ctx, curves, f0, table)
     fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
     ax = axes[0, 0]
     ta = np.array(sorted(table))
@@ -293,6 +329,30 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
     diff = {a: 100.0 * (f0[a] / table[a] - 1.0) for a in f0 if a in table}
     faster = bool(np.all(times["fitted"] <= times["baseline"]))
     return {"akimov_fig14": {"f0_diff_pct": diff}, "akimov_fig15": {"fit_faster": faster}}
+
+
+def _fig13(ctx, curves, f0, table) -> None:
+    """The family of efficient-coefficient curves at small angles, no wheel limits."""
+    fig, axes = fs.figure(1, 1, size=(7.6, 6.4))
+    ax = axes[0, 0]
+    cmap = fs.plt.get_cmap("viridis")
+    for i, (a, (kw, kq, _)) in enumerate(curves.items()):
+        colour = cmap(i / max(1, len(curves) - 1))
+        ax.plot(kw, kq, ".", ms=3, color=colour, label=f"phi0 = {a:g} deg: efficient (ours)")
+        grid = np.linspace(0.1, 3.0, 100)
+        ax.plot(grid, f0[a] * grid**2, color=colour, lw=1.0,
+                label=f"phi0 = {a:g} deg: k_q = {f0[a]:.4f} k_w^2 (our fit)")  # fmt: skip
+        if a in table:
+            ax.plot(grid, table[a] * grid**2, color=colour, lw=0.8, ls=":",
+                    label=f"phi0 = {a:g} deg: paper's table, f0 = {table[a]:.4f}")  # fmt: skip
+    ax.set_xlim(0.1, 3.0)
+    ax.set_ylim(0.1, 3.0)
+    ax.set_xlabel("k_w, 1/s")
+    ax.set_ylabel("k_q, 1/s^2")
+    fs.figure_legend(fig, [ax], fontsize=6, ncol=3)
+    fig.suptitle("akimov_fig13: efficient-coefficient curves at small angles\n"
+                 "(J = 1.5 kg m^2, no wheel limits; dots: least settle time per k_w)")  # fmt: skip
+    ctx.save(fig, "akimov_fig13")
 
 
 # -- seed 004 --------------------------------------------------------------------------
@@ -344,6 +404,6 @@ def gyrostat(ctx) -> dict[str, Any]:
 
 GROUPS = {"akimov": akimov, "gyrostat": gyrostat}
 FIGURES = {
-    **{f"akimov_fig{i}": "akimov" for i in (3, 4, 5, 6, 7, 10, 11, 12, 14, 15)},
+    **{f"akimov_fig{i}": "akimov" for i in (3, 4, 5, 6, 7, 10, 11, 12, 13, 14, 15)},
     **{n: "gyrostat" for n in ("gyrostat_eta", "gyrostat_switching", "gyrostat_torques")},
 }

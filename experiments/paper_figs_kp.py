@@ -89,7 +89,10 @@ def fig4(ctx) -> dict[str, Any]:
         step,
         steps,
         title="kp_fig4: the information set at t = 1 s, bearing and range measured "
-        "(node slices; between nodes the set is bounded, not drawn)",
+        "(node slices; between nodes the set is bounded, not drawn)\n"
+        "top: the paper's coordinates (alpha, omega, x); bottom: the same sets in "
+        "(alpha, zero-effort miss w = omega x^2 / e, x)",
+        closing_speed_mps=float(sc.model.closing_speed_kmps) * 1e3,
     )
     ctx.save(fig, "kp_fig4")
     at = sets[sets["step"] == step]
@@ -105,6 +108,7 @@ def fig4(ctx) -> dict[str, Any]:
 def fig5(ctx) -> dict[str, Any]:
     frames, means = [], {}
     sc = None
+    sc3 = load_scenario(ctx.scenarios / "kp_fig3.toml")
     for fname, variant in (
         ("kp_fig5.toml", "bearings only"),
         ("kp_fig5_range.toml", "bearings + range"),
@@ -128,31 +132,48 @@ def fig5(ctx) -> dict[str, Any]:
                 float(ok["fuel_mps"].mean()),
             )
     table = pd.concat(frames, ignore_index=True)
-    fig, axes = fs.figure(1, 2, size=(11.0, 4.4))
+    one = _fig3_engagement(ctx)
+    fig, axes = fs.figure(1, 2, size=(11.0, 4.8))
     panels = (("miss_m", "miss distance, m", 0), ("fuel_mps", "fuel (sum of |impulses|), m/s", 1))
     for col, xlabel, k in panels:
         ax = axes[0, k]
-        for (variant, noise), grp in table.groupby(["variant", "noise"], sort=True):
+        groups = table.groupby(["variant", "noise"], sort=True)
+        for (variant, noise), grp in sorted(groups, key=lambda g: CURVE_NUMBERS[g[0]]):
             v = np.sort(grp[col].to_numpy(dtype=float))
             p = np.arange(1, len(v) + 1) / len(v)
             lw = 1.3 if variant == "bearings only" else 2.8
+            number = CURVE_NUMBERS[variant, noise]
             ax.step(
                 np.r_[v[0], v],
                 np.r_[0.0, p],
                 where="post",
                 **{**fs.line("infoset", noise), "lw": lw},
-                label=f"infoset / {noise}, {variant} (n={len(v)})",
+                label=f"{number}: {variant}, {fs.NOISE_WORDS[noise]} (n={len(v)})",
             )
-        ref = _paper(sc)
-        for noise in NOISES:
-            value = ref[noise][k]
+            mid = min(len(v) - 1, len(v) // 2)
+            ax.annotate(
+                str(number),
+                (v[mid], p[mid]),
+                xytext=(4, -2 if number % 2 else 6),
+                textcoords="offset points",
+                fontsize=9,
+                fontweight="bold",
+                color=fs.estimator_colour("infoset"),
+            )
+        # the Fig. 3 engagement (one run, kp_fig3.toml), not the Fig. 5 box: above the CDF
+        ax.axhline(1.0, color=fs.REFERENCE, lw=0.6, label="CDF = 1; above: one engagement")
+        for noise, marker in (("random", "*"), ("game", "D")):
+            value = _paper(sc3)[noise][k]
             if value is not None:
                 ax.plot(
-                    [value],
-                    [0.5],
-                    **fs.PAPER_MARKER,
-                    label=f"paper, Fig. 3 single run, {noise}: {value:g}",
-                )
+                    [value], [1.07], marker=marker, ms=9, color=fs.PAPER, ls="none", clip_on=False,
+                    label=f"paper Fig. 3 (one engagement), {fs.NOISE_WORDS[noise]}: {value:g}",
+                )  # fmt: skip
+            ax.plot(
+                [one[noise][k]], [1.13], marker=marker, ms=8, mfc="none", ls="none", clip_on=False,
+                color=fs.estimator_colour("infoset"),
+                label=f"ours, the same engagement, {fs.NOISE_WORDS[noise]}: {one[noise][k]:.3g}",
+            )  # fmt: skip
         if col == "miss_m":
             ax.axvline(
                 miss_floor_m(sc),
@@ -173,16 +194,38 @@ def fig5(ctx) -> dict[str, Any]:
             )
         ax.set_xlabel(xlabel)
         ax.set_ylabel("fraction of runs (CDF), -")
-        ax.set_ylim(0, 1.02)
-        fs.legend(ax, loc="lower right", fontsize=6.5)
+        ax.set_ylim(0, 1.17)
+        fs.legend(ax, loc="lower right", fontsize=6.0)
     axes[0, 0].set_title("(a) miss")
     axes[0, 1].set_title("(b) fuel")
     fig.suptitle(
-        f"kp_fig5: {ctx.runs} runs per curve (line width: thin = bearings only, "
-        "thick = with the range finder)"
+        f"kp_fig5: {ctx.runs} runs per curve, numbered as in the paper\n(thin = bearings "
+        "only, thick = with the range finder; solid = random, dashed = game errors)"
     )
     ctx.save(fig, "kp_fig5")
-    return {"kp_fig5": {"runs": ctx.runs, "mean_miss_fuel": means}}
+    return {"kp_fig5": {"runs": ctx.runs, "mean_miss_fuel": means, "fig3_engagement": one}}
+
+
+#: the paper's numbering of the Fig. 5 curves (seed 003, section 6)
+CURVE_NUMBERS = {
+    ("bearings only", "random"): 1,
+    ("bearings + range", "random"): 2,
+    ("bearings only", "game"): 3,
+    ("bearings + range", "game"): 4,
+}
+
+
+def _fig3_engagement(ctx) -> dict[str, tuple[float, float]]:
+    """Our (miss, fuel) of the Fig. 3 engagement (``kp_fig3.toml``, run 0), per noise."""
+    sc3 = load_scenario(ctx.scenarios / "kp_fig3.toml")
+    out = {}
+    for noise in NOISES:
+        df = run_experiment(
+            sc3, "infoset", noise, 1, sc3.experiment.seed, ctx.out / "runs", workers=1,
+            progress=False,
+        )  # fmt: skip
+        out[noise] = (float(df["miss_m"].iloc[0]), float(df["fuel_mps"].iloc[0]))
+    return out
 
 
 FIGURES = {

@@ -34,7 +34,8 @@ ROWS = (
 def _label(df: pd.DataFrame, what: str = "") -> str:
     est, noise = str(df["estimator"].iloc[0]), str(df["noise"].iloc[0])
     run = int(df["run"].iloc[0]) if "run" in df else 0
-    return f"{est} / {noise}, run {run}" + (f": {what}" if what else "")
+    runs = f", run {run}" if run else ""
+    return f"{fs.words(est, noise)}{runs}" + (f": {what}" if what else "")
 
 
 def _style(df: pd.DataFrame) -> dict:
@@ -130,3 +131,43 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
         fs.legend(ax, loc="best", fontsize=6)
     fig.suptitle(title or f"{first['scenario'].iloc[0]}: time histories")
     return fig
+
+
+def segment_points(df: pd.DataFrame, settle_s: float, axis: int = 3) -> dict[int, float]:
+    """Times (s) of the points 1-5 that split a limited-wheel turn into the segments of
+    seed 001 (text of its Figs. 3-5): 1 the start (torque at its limit), 2 the wheel
+    reaches its momentum limit, 3 the coasting ends (the braking torque starts), 4 the
+    braking torque leaves its limit (the final transient begins), 5 settled. Points
+    whose event does not happen are left out."""
+    d = df[df["axis"] == axis]
+    t = d["t_s"].to_numpy(dtype=float)
+    h = np.abs(d["momentum_Nms"].to_numpy(dtype=float))
+    m = np.abs(d["torque_Nm"].to_numpy(dtype=float))
+    h_max = d["momentum_max_Nms"].to_numpy(dtype=float)
+    m_max = d["torque_max_Nm"].to_numpy(dtype=float)
+    out = {1: float(t[0])}
+    full = np.flatnonzero(h >= 0.999 * h_max)
+    if full.size:
+        out[2], out[3] = float(t[full[0]]), float(t[full[-1]])
+        braking = np.flatnonzero((m >= 0.999 * m_max) & (t > out[3]))
+        if braking.size:
+            out[4] = float(t[braking[-1]])
+    if np.isfinite(settle_s):
+        out[5] = float(settle_s)
+    return out
+
+
+def mark_points(ax, points: dict[int, float], only=None) -> None:
+    """Thin vertical lines at the points 1-5, numbered at the top of the panel."""
+    for k, t in points.items():
+        if only is not None and k not in only:
+            continue
+        ax.axvline(
+            t,
+            color=fs.REFERENCE,
+            lw=0.7,
+            ls=(0, (1, 2)),
+            label="points 1-5: the paper's segments, found in our run",
+        )
+        ax.annotate(str(k), (t, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -10),
+                    textcoords="offset points", fontsize=9, fontweight="bold")  # fmt: skip

@@ -67,10 +67,10 @@ def control_processes(
             color=style["color"],
             alpha=0.25,
             lw=0,
-            label=f"{estimator}: forecast-miss interval",
+            label=f"{fs.words(estimator)}: forecast-miss interval",
         )
         for end in (lo, hi):
-            ax[2].plot(t, end, **style, label=f"{estimator} / {noise}: interval ends")
+            ax[2].plot(t, end, **style, label=f"{fs.words(estimator, noise)}: interval ends")
         ax[2].plot(t, d["forecast_true_m"], color=fs.TRUTH, lw=1.0, label="truth's forecast miss")
         ax[2].set_yscale("symlog", linthresh=10.0)
         ax[2].set_ylabel("forecast miss Pi, m")
@@ -82,10 +82,10 @@ def control_processes(
             k[fired],
             color=style["color"],
             lw=1.0,
-            label=f"{estimator} / {noise}: impulses",
+            label=f"{fs.words(estimator, noise)}: impulses",
         )
         ax[3].set_ylabel("impulse, m/s")
-        ax[4].plot(t, d["fuel_mps"], **style, label=f"{estimator} / {noise}: fuel so far")
+        ax[4].plot(t, d["fuel_mps"], **style, label=f"{fs.words(estimator, noise)}: fuel so far")
         ax[4].set_ylabel("fuel spent, m/s")
         ax[4].set_xlabel("time t, s")
         miss = float(d["miss_m"].iloc[0]) if "miss_m" in d else float("nan")
@@ -102,7 +102,9 @@ def control_processes(
         )
         for a in ax:
             fs.legend(a, loc="best")
-    fig.suptitle(f"{steps['scenario'].iloc[0]}: control processes, {estimator}, run {run}")
+    fig.suptitle(
+        f"{steps['scenario'].iloc[0]}: control processes, {fs.words(estimator)}, run {run}"
+    )
     return fig
 
 
@@ -129,10 +131,10 @@ def estimator_overlay(
             color=style["color"],
             alpha=0.18,
             lw=0,
-            label=f"{est} / {noise}: interval - truth",
+            label=f"{fs.words(est, noise)}: interval - truth",
         )
         for end in (lo, hi):
-            ax[0].plot(t, end, **style, label=f"{est} / {noise}: interval ends - truth")
+            ax[0].plot(t, end, **style, label=f"{fs.words(est, noise)}: interval ends - truth")
         outside = ~d["truth_inside"].to_numpy(dtype=bool)
         if outside.any():
             ax[0].plot(
@@ -141,16 +143,18 @@ def estimator_overlay(
                 "|",
                 color=style["color"],
                 ms=8,
-                label=f"{est}: truth's state outside its belief",
+                label=f"{fs.words(est)}: truth's state outside its belief",
             )
         ax[1].plot(
             t,
             d["forecast_hi_m"] - d["forecast_lo_m"],
             **style,
-            label=f"{est} / {noise}: interval width",
+            label=f"{fs.words(est, noise)}: interval width",
         )
         miss = float(d["miss_m"].iloc[0])
-        ax[2].plot(t, d["fuel_mps"], **style, label=f"{est} / {noise}: fuel, miss {miss:.1f} m")
+        ax[2].plot(
+            t, d["fuel_mps"], **style, label=f"{fs.words(est, noise)}: fuel, miss {miss:.1f} m"
+        )
     ax[0].axhline(0.0, color=fs.TRUTH, lw=1.0, label="truth's forecast miss")
     ax[0].set_yscale("symlog", linthresh=10.0)
     ax[0].set_ylabel("interval end - truth's Pi, m")

@@ -26,14 +26,15 @@ from matplotlib.collections import PolyCollection
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 
-def _sections(d: pd.DataFrame):
-    """``(x_km, alpha_mrad, w_km)`` vertex arrays of each section of one snapshot."""
+def _sections(d: pd.DataFrame, closing_speed_mps: float | None = None):
+    """``(x_km, alpha_mrad, w_km)`` vertex arrays of each section of one snapshot; with
+    ``closing_speed_mps`` (``e``) the third is the line-of-sight rate ``omega = w e / x^2``
+    in microradians per second (the seed's coordinates ``(alpha, omega, x)``; linear in
+    ``w`` on each section, so a polygon maps to a polygon)."""
     for _, s in d.sort_values(["section", "vertex"]).groupby("section", sort=True):
-        yield (
-            s["x_m"].to_numpy() / 1e3,
-            s["alpha_rad"].to_numpy() * 1e3,
-            s["zem_m"].to_numpy() / 1e3,
-        )
+        x_m, w_m = s["x_m"].to_numpy(), s["zem_m"].to_numpy()
+        third = w_m / 1e3 if closing_speed_mps is None else w_m * closing_speed_mps / x_m**2 * 1e6
+        yield x_m / 1e3, s["alpha_rad"].to_numpy() * 1e3, third
 
 
 def _snapshot(sets: pd.DataFrame, run: int, step: int, phase: str, channel=None):
@@ -43,7 +44,7 @@ def _snapshot(sets: pd.DataFrame, run: int, step: int, phase: str, channel=None)
     return d
 
 
-def _truth(steps: pd.DataFrame | None, run: int, step: int, channel=None):
+def _truth(steps: pd.DataFrame | None, run: int, step: int, channel=None, closing_speed_mps=None):
     if steps is None:
         return None
     d = steps[(steps["run"] == run) & (steps["step"] == step)]
@@ -52,11 +53,13 @@ def _truth(steps: pd.DataFrame | None, run: int, step: int, channel=None):
     if not len(d):
         return None
     r = d.iloc[0]
-    return r["x_true_m"] / 1e3, r["alpha_true_rad"] * 1e3, r["zem_true_m"] / 1e3
+    third = r["zem_true_m"] / 1e3
+    if closing_speed_mps is not None:
+        third = r["zem_true_m"] * closing_speed_mps / r["x_true_m"] ** 2 * 1e6
+    return r["x_true_m"] / 1e3, r["alpha_true_rad"] * 1e3, third
 
 
-def _draw_3d(ax, d: pd.DataFrame, colour: str, shaded: bool, label: str) -> None:
-    polys = [np.column_stack(v) for v in _sections(d)]
+def _draw_3d(ax, polys: list, colour: str, shaded: bool, label: str) -> None:
     if not polys:
         return
     coll = Poly3DCollection(
@@ -70,6 +73,10 @@ def _draw_3d(ax, d: pd.DataFrame, colour: str, shaded: bool, label: str) -> None
     )
     ax.add_collection3d(coll)
     ax.plot([], [], color=colour, ls="-" if shaded else ":", label=label)  # legend handle
+
+
+def _limits_3d(ax, polys: list) -> None:
+    """Axis limits holding every drawn section (the set before the measurements too)."""
     allv = np.vstack(polys)
     for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
         lo, hi = allv[:, k].min(), allv[:, k].max()
@@ -77,40 +84,64 @@ def _draw_3d(ax, d: pd.DataFrame, colour: str, shaded: bool, label: str) -> None
         setter(lo - pad, hi + pad)
 
 
-def _labels_3d(ax) -> None:
+def _labels_3d(ax, rate: bool = False) -> None:
     ax.set_xlabel("range x, km")
     ax.set_ylabel("bearing alpha, mrad")
-    ax.set_zlabel("zero-effort miss w, km")
+    ax.set_zlabel("line-of-sight rate omega, urad/s" if rate else "zero-effort miss w, km")
 
 
-def stacked_3d(sets: pd.DataFrame, run: int, step: int, steps=None, channel=None, title=""):
-    """(a) the set before the step's measurements, (b) after (remaining part shaded)."""
+def stacked_3d(
+    sets: pd.DataFrame,
+    run: int,
+    step: int,
+    steps=None,
+    channel=None,
+    title="",
+    closing_speed_mps: float | None = None,
+):
+    """(a) the set before the step's measurements, (b) after (remaining part shaded).
+
+    With ``closing_speed_mps`` (``e``) a second row draws the same sets in the seed's
+    coordinates ``(alpha, omega, x)`` above the miss-coordinate view ``(alpha, w, x)``.
+    Both panels of a row share the limits of the set before the measurements.
+    """
     fs.setup()
-    fig = fs.plt.figure(figsize=(11.0, 5.0), constrained_layout=True)
+    views = [None] if closing_speed_mps is None else [closing_speed_mps, None]
+    fig = fs.plt.figure(figsize=(11.0, 5.0 * len(views)), constrained_layout=True)
     est = str(sets["estimator"].iloc[0])
     colour = fs.estimator_colour(est)
     prior = _snapshot(sets, run, step, "prior", channel)
     post = _snapshot(sets, run, step, "posterior", channel)
-    truth = _truth(steps, run, step, channel)
     t = float(post["t_s"].iloc[0]) if len(post) else float("nan")
-    for i, (name, parts) in enumerate(
-        (
-            ("(a) before the measurements", [(prior, False, "set before the measurements")]),
+    letters = iter("abcd")
+    for row, e in enumerate(views):
+        before = [np.column_stack(v) for v in _sections(prior, e)]
+        after = [np.column_stack(v) for v in _sections(post, e)]
+        truth = _truth(steps, run, step, channel, e)
+        where = "seed's coordinates" if e is not None else "miss coordinate"
+        for col, parts in enumerate(
             (
-                "(b) after the measurements",
-                [(prior, False, "set before the measurements"), (post, True, "part that remains")],
-            ),
-        )
-    ):
-        ax = fig.add_subplot(1, 2, i + 1, projection="3d")
-        for d, shaded, label in parts:
-            _draw_3d(ax, d, colour, shaded, f"{est}: {label}")
-        if truth is not None:
-            ax.plot(*[[v] for v in truth], "o", color=fs.TRUTH, ms=5, label="truth")
-        _labels_3d(ax)
-        ax.set_title(f"{name}, t = {t:g} s", fontsize=9)
-        ax.view_init(elev=18, azim=-58)
-        fs.legend(ax, loc="upper left")
+                [(before, False, "set before the measurements")],
+                [
+                    (before, False, "set before the measurements"),
+                    (after, True, "part that remains"),
+                ],
+            )
+        ):
+            ax = fig.add_subplot(len(views), 2, 2 * row + col + 1, projection="3d")
+            for polys, shaded, label in parts:
+                _draw_3d(ax, polys, colour, shaded, f"{fs.words(est)}: {label}")
+            if before or after:
+                _limits_3d(ax, before + after)
+            if truth is not None:
+                ax.plot(*[[v] for v in truth], "o", color=fs.TRUTH, ms=5, label="truth")
+            _labels_3d(ax, e is not None)
+            when = "before" if col == 0 else "after"
+            ax.set_title(
+                f"({next(letters)}) {when} the measurements, t = {t:g} s ({where})", fontsize=9
+            )
+            ax.view_init(elev=18, azim=-58)
+            fs.legend(ax, loc="upper left")
     if title:
         fig.suptitle(title)
     return fig

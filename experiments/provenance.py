@@ -9,6 +9,7 @@ written by other sources.
 from __future__ import annotations
 
 import hashlib
+import json
 import subprocess
 from functools import cache
 from importlib import metadata
@@ -25,7 +26,8 @@ PRESENTATION = ("cli.py", "__main__.py", "cmd_*.py", "plots.py", "report.py", "f
 @cache
 def code_identity() -> dict[str, str | None]:
     """Package version, SHA-256 over the sources of :data:`PACKAGES`, and the git
-    commit when the sources are a git checkout (informational: the hash decides).
+    commit of the package's own sources when known (:func:`_git_commit`; informational:
+    the hash decides).
 
     The hash covers every ``*.py`` file but the :data:`PRESENTATION` modules, by
     relative path and content, so it changes with uncommitted edits too, and needs
@@ -46,15 +48,34 @@ def code_identity() -> dict[str, str | None]:
 
 
 def _git_commit() -> str | None:
+    """The commit of the package's own sources: the git checkout they are the top of
+    (an editable install), else the commit pip recorded for an install from a git URL
+    (``direct_url.json``); never that of a repository the package merely sits in (a
+    virtual environment inside a user's project)."""
     try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, timeout=5
+        top = subprocess.run(
+            ["git", "rev-parse", "--show-toplevel", "HEAD"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=5,
         )
     except (OSError, subprocess.SubprocessError):
+        top = None
+    if top is not None and top.returncode == 0:
+        lines = top.stdout.split()
+        if len(lines) == 2 and Path(lines[0]).resolve() == ROOT:
+            return lines[1]
+    return _installed_commit()
+
+
+def _installed_commit() -> str | None:
+    try:
+        text = metadata.distribution("kalman-vs-infoset").read_text("direct_url.json")
+        commit = json.loads(text or "{}").get("vcs_info", {}).get("commit_id")
+    except (metadata.PackageNotFoundError, ValueError, AttributeError):
         return None
-    if out.returncode != 0:
-        return None
-    return out.stdout.strip() or None
+    return str(commit) if commit else None
 
 
 def sources_sha256() -> str:

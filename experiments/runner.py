@@ -11,7 +11,8 @@ One runner for every problem (:class:`Job`: the intercept and the attitude loops
   several (its workers exit when the command dies), or a Dask cluster's
   ``Client.get_executor()`` with ``scheduler`` (same results either way).
 * Results: one Parquet file per (scenario, choices, seed) with one row per run, the
-  resolved scenario as JSON beside it; both written atomically (temporary file +
+  resolved scenario and the code's identity in its Parquet metadata and as JSON in
+  ``<out>/_meta/`` (:mod:`experiments.results`); both written atomically (temporary file +
   ``os.replace``). Rerunning the same command completes only the missing runs, and
   finished runs are never deleted; a failing run is recorded with its run id and error,
   reported on stderr, and does not stop the others. The JSON also records which code
@@ -41,11 +42,12 @@ from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exporte
     results,
 )
 from kalman_vs_infoset.experiments.files import atomic_write, exclusive
+from kalman_vs_infoset.experiments.progress import progress_bar
 from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
 from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
 from kalman_vs_infoset.experiments.stats import summary_stats
-from tqdm import tqdm
 
 SAVE_EVERY_S = 2.0
 
@@ -107,9 +109,9 @@ def check_runs(runs: int) -> int:
     return int(runs)
 
 
-def _write_rows(path: Path, rows: list[dict[str, Any]]) -> None:
+def _write_rows(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:
     df = _typed(pd.DataFrame(rows), rows).sort_values("run").reset_index(drop=True)
-    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False))
+    write_table(path, df, meta)  # the description travels in the Parquet metadata too
 
 
 def _typed(df: pd.DataFrame, rows: list[dict[str, Any]]) -> pd.DataFrame:
@@ -232,9 +234,9 @@ def run_job(
     check_runs(runs)
     path = job_path(out_dir, job)
     meta = {**job.meta, "code": code_identity()}
-    meta_path = path.with_suffix(".json")
+    meta_path = sidecar_path(path)
     if path.exists():
-        _check_resumable(path, meta_path, meta)
+        _check_resumable(path, existing_sidecar(path), meta)
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
             return _reported(job, path, table, runs)
@@ -244,11 +246,12 @@ def run_job(
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
     wrote_meta = False  # a description this command wrote where there was none
+    made += [] if meta_path.parent.exists() else [meta_path.parent]
     try:
         with exclusive(path, job.desc):
             table = {}
             if path.exists():  # read again: another command may have written it meanwhile
-                _check_resumable(path, meta_path, meta)
+                _check_resumable(path, existing_sidecar(path), meta)
                 table = _read_table(path)
             if not meta_path.exists() or _read_json(meta_path) != meta:
                 wrote_meta = not meta_path.exists()
@@ -259,33 +262,26 @@ def run_job(
             if retried:
                 print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
             if todo:
-                _complete(
-                    job, runs, todo, table, path, progress, executor, workers, scheduler, limit_s
-                )
+                _complete(job, runs, todo, table, path, meta, progress,
+                          executor, workers, scheduler, limit_s)  # fmt: skip
     except BaseException:
         if not path.exists():  # refused or stopped before any run finished: no leftovers
             if wrote_meta:
                 meta_path.unlink(missing_ok=True)
-            for d in made:
+            for d in sorted(made, key=lambda d: -len(d.parts)):  # deepest first
                 try:
                     d.rmdir()
                 except OSError:
-                    break
+                    pass
         raise
     return _reported(job, path, table, runs)
 
 
-def _complete(job, runs, todo, table, path, progress, executor, workers, scheduler, limit_s):
+def _complete(job, runs, todo, table, path, meta, progress, executor, workers, scheduler,
+              limit_s):  # fmt: skip
     """Run ``todo`` into ``table``, saving it every :data:`SAVE_EVERY_S` and at the end,
     also on Ctrl-C or SIGTERM (finished runs are kept)."""
-    bar = tqdm(
-        total=runs,
-        initial=runs - len(todo),
-        desc=job.desc,
-        file=sys.stderr,
-        disable=not progress or None,
-        leave=False,
-    )
+    bar = progress_bar(runs, runs - len(todo), job.desc, progress)
     last_save = time.monotonic()
     changed = False
     try:
@@ -295,12 +291,12 @@ def _complete(job, runs, todo, table, path, progress, executor, workers, schedul
             bar.update(1)
             check_stop()
             if time.monotonic() - last_save > SAVE_EVERY_S:
-                _write_rows(path, list(table.values()))
+                _write_rows(path, list(table.values()), meta)
                 last_save, changed = time.monotonic(), False
     finally:
         bar.close()
         if changed:
-            _write_rows(path, list(table.values()))
+            _write_rows(path, list(table.values()), meta)
 
 
 def _reported(job: Job, path: Path, table: dict[int, dict], runs: int) -> pd.DataFrame:

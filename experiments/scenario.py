@@ -18,15 +18,46 @@ from kalman_vs_infoset.experiments.sim.fields import first_error
 from kalman_vs_infoset.experiments.sim.intercept_config import SAFE_NAME, InterceptScenario
 from pydantic import BaseModel, ValidationError
 
+from kalman_vs_infoset import data as bundled
+
 M = TypeVar("M", bound=BaseModel)
 
 
+#: the help of a command's scenario argument
+SCENARIO_HELP = "a bundled scenario's name (`kvi scenarios` lists them) or a scenario TOML file"
+
+
+def scenario_folder(folder: str | Path | None) -> Path:
+    """``--scenarios``: a folder of scenario files, the bundled one when ``None``."""
+    if folder is None:
+        return bundled.path("scenarios")
+    p = Path(folder)
+    if not p.is_dir():
+        raise InputError(f"--scenarios {p}: not a folder")
+    return p
+
+
+def resolve(name_or_path: str | Path) -> Path:
+    """The scenario file a command argument names: an existing file, else a bundled
+    scenario of that name (``kp_fig3`` or ``kp_fig3.toml``: :mod:`kalman_vs_infoset.data`);
+    neither is an InputError of one line."""
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    if p.parent == Path(".") and p.suffix in ("", ".toml"):
+        try:
+            return bundled.scenario_file(p.name)
+        except KeyError:
+            pass
+    raise InputError(
+        f"{p}: no such scenario file, nor a bundled scenario (`kvi scenarios` lists them)"
+    )
+
+
 def load_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing, unreadable, non-UTF-8, empty or bad file is an
-    InputError of one line."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: no such scenario file")
+    """Parse a TOML file (a path or a bundled scenario's name: :func:`resolve`); a
+    missing, unreadable, non-UTF-8, empty or bad file is an InputError of one line."""
+    p = resolve(path)
     try:
         text = p.read_bytes().decode("utf-8-sig")  # a byte-order mark is allowed
     except UnicodeDecodeError as exc:
@@ -122,8 +153,9 @@ def read(path: str | Path, overrides: Sequence[str] = ()) -> tuple[dict[str, Any
 
 
 def load_scenario(path: str | Path, overrides: Sequence[str] = ()) -> InterceptScenario:
-    """Read and validate an intercept scenario file, with optional ``TABLE.KEY=VALUE``
-    overrides (:func:`apply_overrides`; the name gets a ``+key=value`` suffix each)."""
+    """Read and validate an intercept scenario file (or a bundled scenario by name),
+    with optional ``TABLE.KEY=VALUE`` overrides (:func:`apply_overrides`; the name gets a
+    ``+key=value`` suffix each)."""
     data, source = read(path, overrides)
     return validate(InterceptScenario, data, source)
 

@@ -1,4 +1,4 @@
-"""Traces: the per-step history of chosen runs, as long-format Parquet beside the run table.
+"""Traces: the per-step history of chosen runs, as long-format Parquet in ``_traces/``.
 
 ``--trace RUNS`` (``intercept``, ``compare``, ``attitude``) replays the runs ``RUNS`` of
 a job with the simulation layer's recorder on (:mod:`experiments.sim.trace`): run ``j``
@@ -7,7 +7,7 @@ trace is the history of that table row (recording only observes; the tests check
 final fuel and miss against the row). The runs themselves go through the runner as
 before; a trace is rewritten whenever it is asked for.
 
-Files, beside ``<job>.parquet``:
+Files, in ``_traces/`` beside ``<job>.parquet`` (Parquet readers skip the folder):
 
 * ``<job>-trace.parquet``: intercept, one row per (run, step, channel) (the columns of
   :func:`kalman_vs_infoset.experiments.sim.trace.channel_row` plus ``step``, ``t_s``, ``channel``,
@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.results import TRACE_DIR
 from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 from kalman_vs_infoset.experiments.sim.trace import Recorder
 
@@ -83,12 +84,11 @@ def traceable(traced: list[int], df: pd.DataFrame, what: str) -> list[int]:
 
 
 def trace_paths(results: Path) -> tuple[Path, Path]:
-    """``(<stem>-trace.parquet, <stem>-trace-sets.parquet)`` beside a results table."""
+    """``(<stem>-trace.parquet, <stem>-trace-sets.parquet)`` of a results table, in the
+    ``_traces`` subfolder of its folder (so that the folder reads as one table)."""
     stem = results.name.removesuffix(".parquet")
-    return (
-        results.with_name(f"{stem}-trace.parquet"),
-        results.with_name(f"{stem}-trace-sets.parquet"),
-    )
+    folder = results.parent / TRACE_DIR
+    return folder / f"{stem}-trace.parquet", folder / f"{stem}-trace-sets.parquet"
 
 
 def write_parquet(df: pd.DataFrame, path: Path) -> Path:

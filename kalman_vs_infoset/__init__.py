@@ -7,7 +7,13 @@ The repository keeps its layers as top-level folders (``estim/``, ``guidance/``,
 - :mod:`kalman_vs_infoset.guidance`: the intercept law and the attitude loops;
 - :mod:`kalman_vs_infoset.experiments`: simulations, noise, runner, commands, plots.
 
-The command line is ``kvi`` (or ``python -m kalman_vs_infoset``).
+The command line is ``kvi`` (or ``python -m kalman_vs_infoset``). The Python front door
+is :mod:`kalman_vs_infoset.api`, whose names are also attributes of this package (loaded
+on first use, so that ``import kalman_vs_infoset`` stays light)::
+
+    import kalman_vs_infoset as kvi
+    sc = kvi.load_scenario("kp_fig3")
+    result = kvi.run_engagement(sc, "infoset", "random", run=0)   # = kvi intercept run 0
 """
 
 from importlib import metadata as _metadata
@@ -17,4 +23,34 @@ try:
 except _metadata.PackageNotFoundError:  # a source tree that is not installed
     __version__ = "0+unknown"
 
-__all__ = ["__version__"]
+#: the front door's names (:mod:`kalman_vs_infoset.api`), re-exported lazily
+_API = (
+    "NOISES",
+    "EngagementResult",
+    "InterceptScenario",
+    "Registration",
+    "estimators",
+    "get_estimator",
+    "load_results",
+    "load_scenario",
+    "read_metadata",
+    "register_estimator",
+    "run_engagement",
+    "run_experiment",
+    "scenarios",
+    "trace",
+)
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from kalman_vs_infoset import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'kalman_vs_infoset' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_API})

@@ -144,7 +144,7 @@ def test_scenario_file_loads_and_bad_input_is_one_line_input_error():
         ({"dt_s": -1.0}, "dt_s"),
         ({"energy": {"u0_Nm": [1, 2]}}, "energy.u0_Nm"),
         ({"euler": {"accel_time_s": 200.0}}, "euler.accel_time_s"),
-        ({"inertia_product_signs": [1, 0, 1]}, "inertia_product_signs"),
+        ({"inertia_products_sign": [1, 0, 1]}, "inertia_products_sign"),
     ]:
         with pytest.raises(InputError, match=field.replace(".", r"\.")) as exc:
             setup_from_scenario(path, {**scenario, **bad})

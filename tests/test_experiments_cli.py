@@ -13,6 +13,7 @@ from harness_texts import SHORT as SHORT_ENGAGEMENT
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import runner
 from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.results import read_metadata
 from kalman_vs_infoset.experiments.runner import run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
@@ -258,8 +259,9 @@ def test_results_are_written_atomically_with_the_resolved_scenario(short, tmp_pa
     sc = load_scenario(short)
     run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
     path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
-    meta = json.loads(path.with_suffix(".json").read_text())
+    meta = json.loads((tmp_path / "_meta" / f"{path.stem}.json").read_text())
     assert meta["scenario"]["name"] == "short" and meta["seed"] == 11
+    assert read_metadata(path) == meta  # the table carries its description too
     assert not list(tmp_path.glob("*.tmp"))
 
 
@@ -377,7 +379,7 @@ def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_pat
     sc = load_scenario(short)
     run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
     path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
-    meta_path = path.with_suffix(".json")
+    meta_path = tmp_path / "_meta" / f"{path.stem}.json"
     meta = json.loads(meta_path.read_text())
     assert meta["code"] == json.loads(json.dumps(code_identity()))
     assert len(meta["code"]["sources_sha256"]) == 64

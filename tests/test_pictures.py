@@ -99,7 +99,7 @@ def test_intercept_trace_command(tmp_path, capsys, checked):
     assert main([*args, "--json", "--out", str(out), "--workers", "1", "--no-progress"]) == 0
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     table = pd.read_parquet(out / "kp_fig3-infoset-game-s3.parquet")
-    trace = pd.read_parquet(out / "kp_fig3-infoset-game-s3-trace.parquet")
+    trace = pd.read_parquet(out / "_traces" / "kp_fig3-infoset-game-s3-trace.parquet")
     assert STEP_FIELDS <= set(trace.columns)
     assert len(trace) == int(table["steps"].iloc[0]) and trace["step"].is_unique
     assert (trace["forecast_lo_m"] <= trace["forecast_true_m"]).all()
@@ -190,7 +190,7 @@ def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):
     assert any(f.endswith("-history.png") for f in files)
     assert not any(f.endswith("-cdf.png") for f in files)  # one run: no CDF
     table = pd.read_parquet(out / "tiny_rw-pd-box-random-s0.parquet")
-    trace = pd.read_parquet(out / "tiny_rw-pd-box-random-s0-trace.parquet")
+    trace = pd.read_parquet(out / "_traces" / "tiny_rw-pd-box-random-s0-trace.parquet")
     assert set(trace["axis"]) == {1, 2, 3} and len(trace) == 3 * 101
     last = trace[trace["step"] == trace["step"].max()]
     assert last["energy_N2m2s"].iloc[0] == pytest.approx(table["energy_N2m2s"].iloc[0])
@@ -247,3 +247,14 @@ def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
     assert numbers["kp_fig3"]["paper_miss_fuel"]["random"] == [4.3, 244.7]
     assert numbers["resurs"]["Z_paper"] == {"energy": 2150.0, "euler": 11200.0}
     assert {f.rsplit("/", 1)[-1] for f in checked} == set(FIGURES)
+    # seed 001 eq. (24): the plant's turns reach each limit on the side the formula says
+    fig8 = numbers["akimov_fig8"]
+    for angle, (torque, momentum) in fig8["peaks"].items():
+        assert (torque >= 0.999) == (float(angle) >= fig8["phi10_deg"]), angle
+        assert (momentum >= 0.999) == (float(angle) >= fig8["phi20_deg"]), angle
+    assert numbers["akimov_fig9"]["peak_torque_ratio"] < 1.0  # seed Fig. 9: unconstrained
+    assert numbers["lqr_lyapunov"]["monotone"]  # seed 002: V never increases
+    signs = numbers["resurs_inertia_signs"]["Z_energy"]
+    assert {"[-,-,-] standard", "[+,+,+] entries"} <= set(signs)
+    assert numbers["resurs_noisy"]["truth_inside_bound"]
+    assert set(numbers["kp_fig5"]["fig3_engagement"]) == {"random", "game"}

@@ -13,11 +13,12 @@ into one line naming the file and the field. The loop's input is the
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Any, Literal
 
-from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
+from kalman_vs_infoset.experiments.sim.fields import Table, field, number, vector
 from kalman_vs_infoset.guidance.attitude.cmg import RESURS_P_BETA0_DEG
-from pydantic import model_validator
+from kalman_vs_infoset.guidance.attitude.energy import INERTIA_SIGN_READINGS
+from pydantic import BeforeValidator, model_validator
 
 #: most steps a turn may take (the loop keeps its histories)
 MAX_STEPS = 100_000
@@ -25,6 +26,21 @@ MAX_STEPS = 100_000
 _POS = number(0.0, open_lo=True)
 _VAR = vector(number(0.0, 1e6), 6)
 _GROWTH = vector(number(0.0, 1.0), 2)
+
+
+def _sign_reading(value: Any) -> Any:
+    """A named reading of the products' signs or three signs (one clear message else)."""
+    if isinstance(value, str) and value in INERTIA_SIGN_READINGS:
+        return value
+    if isinstance(value, list | tuple) and len(value) == 3:
+        if all(type(v) is int and v in (-1, 1) for v in value):
+            return tuple(value)
+    raise ValueError("or the signs [s12, s13, s23] of J12, J13, J23, each +1 or -1")
+
+
+_SIGN_READING = Annotated[
+    Literal["standard", "entries"] | tuple[int, int, int], BeforeValidator(_sign_reading)
+]
 
 
 class EnergyTable(Table):
@@ -45,9 +61,14 @@ class EnergyTable(Table):
 
 
 class EulerTable(Table):
-    """The Euler-axis flight turn (the baseline; the seed gives no phase durations)."""
+    """The Euler-axis flight turn (the baseline). The seed gives no phase durations and no
+    rule for them: the default durations are calibrated to the seed's index, not derived."""
 
-    accel_time_s: _POS = field(6.0, "each of the acceleration and deceleration phases, s")
+    accel_time_s: _POS = field(
+        5.7,
+        "each of the acceleration and deceleration phases, s; calibrated (the seed gives "
+        "none): chosen so that the turn's Z is near the seed's 11200 N^2 m^2 s",
+    )
     jerk_time_s: number(0.0) = field(2.0, "each linear ramp of the acceleration, s")
     natural_freq_radps: number(0.0, 10.0, open_lo=True) = field(
         0.1, "natural frequency of the PD tracking the reference, rad/s"
@@ -102,8 +123,11 @@ class CmgScenario(Table):
     initial_error_deg: vector(number(-179.0, 179.0), 3) = field(
         (110.0, 45.0, 45.0), "rotation vector of the body relative to the target, deg"
     )
-    inertia_product_signs: vector(integer(-1, 1), 3) = field(
-        (1, 1, 1), "signs (+1 or -1) of J12, J13, J23"
+    inertia_products_sign: _SIGN_READING = field(
+        "standard",
+        "signs of the products of inertia, lost in the print: 'standard' (J_jk = -I_jk, "
+        "all '-'), 'entries' (the printed numbers are the entries, all '+') or the signs "
+        "[s12, s13, s23] of the entries J12, J13, J23",
     )
     angle_tol_deg: _POS = field(0.2, "settled: attitude error below this, deg")
     rate_tol_degps: _POS = field(0.02, "settled: rate below this, deg/s")
@@ -122,8 +146,6 @@ class CmgScenario(Table):
         eu = self.euler
         if self.horizon_s < self.duration_s:
             raise ValueError("field 'horizon_s' must be >= duration_s")
-        if any(s == 0 for s in self.inertia_product_signs):
-            raise ValueError("field 'inertia_product_signs' must be +1 or -1 each")
         if not 0 < eu.accel_time_s <= self.duration_s / 2:
             raise ValueError("field 'euler.accel_time_s' must be in (0, duration_s/2]")
         if not eu.jerk_time_s <= eu.accel_time_s / 2:

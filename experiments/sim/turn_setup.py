@@ -78,7 +78,7 @@ class TurnSetup:
             cm.sr_damping,
         )
         return cls(
-            inertia_kgm2=resurs_p_inertia(config.inertia_product_signs),
+            inertia_kgm2=resurs_p_inertia(config.inertia_products_sign),
             initial_error_rad=np.radians(config.initial_error_deg),
             dt_s=config.dt_s,
             duration_s=config.duration_s,

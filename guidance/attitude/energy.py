@@ -40,21 +40,52 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-#: Seed 000, section 4, read as in SPEC 2.1: the printed "22 147 144 321 / 0 10 213 752 /
-#: 0 0 24 497" is the upper triangle with a space as thousands separator (N m s^2).
+#: Seed 000, section 4: the printed "22 147 144 321 / 0 10 213 752 / 0 0 24 497" is the
+#: upper triangle with a space as thousands separator (N m s^2).
 RESURS_P_INERTIA_DIAG = (22147.0, 10213.0, 24497.0)
 RESURS_P_INERTIA_PRODUCTS = (144.0, 321.0, 752.0)  # |J12|, |J13|, |J23|
+#: Named readings of the products' lost signs: the signs of the tensor entries
+#: ``(J12, J13, J23)``. ``standard``: the printed numbers are the products of inertia
+#: ``I_jk = integral x_j x_k dm`` and the tensor is ``J_jk = -I_jk`` off the diagonal (the
+#: usual convention of rigid-body mechanics); ``entries``: the printed numbers are the
+#: tensor's entries themselves (all "+").
+INERTIA_SIGN_READINGS: dict[str, tuple[int, int, int]] = {
+    "standard": (-1, -1, -1),
+    "entries": (1, 1, 1),
+}
 
 
-def resurs_p_inertia(product_signs: ArrayLike = (1, 1, 1)) -> NDArray[np.float64]:
-    """Resurs-P inertia tensor (N m s^2) with signs ``(s12, s13, s23)`` of the products.
+def inertia_product_signs(reading: str | ArrayLike = "standard") -> tuple[int, int, int]:
+    """Signs of the tensor entries ``(J12, J13, J23)`` of a reading.
 
-    The seed's OCR does not preserve the signs of the products of inertia, so they
-    are a parameter (each +1 or -1).
+    Parameters
+    ----------
+    reading : str or (3,) array_like
+        A name of :data:`INERTIA_SIGN_READINGS` or three signs, each +1 or -1.
+
+    Returns
+    -------
+    tuple of int
     """
-    signs = np.asarray(product_signs, dtype=float)
+    if isinstance(reading, str):
+        if reading not in INERTIA_SIGN_READINGS:
+            raise ValueError(f"inertia sign reading must be one of {list(INERTIA_SIGN_READINGS)}")
+        return INERTIA_SIGN_READINGS[reading]
+    signs = np.asarray(reading, dtype=float)
     if signs.shape != (3,) or not np.all(np.isin(signs, (-1.0, 1.0))):
-        raise ValueError("product_signs must be three values, each +1 or -1")
+        raise ValueError("product signs must be three values, each +1 or -1")
+    return tuple(int(v) for v in signs)  # type: ignore[return-value]
+
+
+def resurs_p_inertia(products_sign: str | ArrayLike = "standard") -> NDArray[np.float64]:
+    """Resurs-P inertia tensor (N m s^2) under a reading of the products' signs.
+
+    The seed's print does not preserve the signs of the products of inertia (section 4).
+    ``products_sign`` is ``"standard"`` (``J_jk = -I_jk``, all "-"), ``"entries"`` (the
+    printed numbers are the entries, all "+") or three signs ``(s12, s13, s23)`` of the
+    entries; see :func:`inertia_product_signs`.
+    """
+    signs = inertia_product_signs(products_sign)
     j = np.diag(RESURS_P_INERTIA_DIAG)
     for (r, c), p, s in zip(
         ((0, 1), (0, 2), (1, 2)), RESURS_P_INERTIA_PRODUCTS, signs, strict=True

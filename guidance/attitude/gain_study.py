@@ -42,6 +42,8 @@ from kalman_vs_infoset.guidance.attitude.pd import (
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import curve_fit, least_squares
 
+from kalman_vs_infoset import data as bundled
+
 FloatArray = NDArray[np.float64]
 
 #: Seed eq. (28), as printed: f0 = c1/phi0^p1 + c2/phi0^p2. It matches the seed's
@@ -49,12 +51,12 @@ FloatArray = NDArray[np.float64]
 #: "vector" convention): eq.(28)(1 deg = 0.01745 rad) = 0.684 = 2 x 0.342.
 SEED_FIT_EQ28 = {"c1": 0.003543, "p1": 0.755, "c2": 0.5466, "p2": 0.02672}
 
-#: The seed's f0 table (transcribed in data/reference/f0_table.csv).
-F0_TABLE_CSV = Path(__file__).resolve().parents[2] / "data" / "reference" / "f0_table.csv"
+#: The seed's f0 table (transcribed in the bundled ``reference/f0_table.csv``).
+F0_TABLE_CSV = bundled.path("reference", "f0_table.csv")
 
 
 def load_f0_table(path: str | Path = F0_TABLE_CSV) -> dict[float, float]:
-    """The seed's table ``{phi0_deg: f0}`` from ``data/reference/f0_table.csv``."""
+    """The seed's table ``{phi0_deg: f0}`` from the bundled ``reference/f0_table.csv``."""
     out: dict[float, float] = {}
     with Path(path).open(newline="") as fh:
         for row in csv.DictReader(line for line in fh if not line.startswith("#")):

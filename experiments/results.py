@@ -1,0 +1,133 @@
+"""Results folders that describe themselves.
+
+A results table (one Parquet file per scenario, choices and seed; one row per run) holds
+in its key-value metadata, under :data:`METADATA_KEY`, the JSON of the resolved scenario,
+the choices, the seed and the identity of the code that wrote it (package version, git
+commit of the package's own sources, SHA-256 of the sources). The same JSON is kept in
+``<folder>/_meta/<table>.json``, where a resumed run checks it, and the traces of
+``--trace`` in ``<folder>/_traces/``: folders whose names start with ``_`` are skipped
+by Parquet readers, so ``pandas.read_parquet(folder)`` reads every run of a folder of
+intercept results in one call. :func:`load_results` does so for any results folder
+(figures and tables beside the runs are skipped), with each table's metadata.
+
+The columns are described in ``docs/results.md``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.files import atomic_write
+
+#: the key of the results' description in a table's Parquet key-value metadata
+METADATA_KEY = b"kalman_vs_infoset"
+#: subfolders of a results folder: descriptions (JSON) and traces
+META_DIR, TRACE_DIR = "_meta", "_traces"
+#: file-name endings of traces (not results tables)
+TRACE_SUFFIXES = ("-trace.parquet", "-trace-sets.parquet")
+
+
+def sidecar_path(table: Path) -> Path:
+    """``<folder>/_meta/<stem>.json``: the description of the table ``table``."""
+    table = Path(table)
+    return table.parent / META_DIR / f"{table.stem}.json"
+
+
+def existing_sidecar(table: Path) -> Path:
+    """The description to check a table against: in ``_meta/``, or (results written by
+    earlier releases) beside the table."""
+    new = sidecar_path(table)
+    old = Path(table).with_suffix(".json")
+    return old if not new.exists() and old.exists() else new
+
+
+def write_table(path: Path, df: pd.DataFrame, meta: dict[str, Any]) -> None:
+    """Write ``df`` to ``path`` atomically with ``meta`` as JSON in its metadata."""
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    kv = dict(table.schema.metadata or {})
+    kv[METADATA_KEY] = json.dumps(meta, default=str).encode()
+    table = table.replace_schema_metadata(kv)
+    atomic_write(Path(path), lambda tmp: pq.write_table(table, tmp))
+
+
+def read_metadata(path: str | Path) -> dict[str, Any]:
+    """The description a results table carries (scenario, choices, seed, ``code``).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A results table (``*.parquet``) written by the runner.
+
+    Returns
+    -------
+    dict
+        Empty for a table written by an earlier release (its ``_meta`` JSON, or the
+        JSON beside it, holds the same).
+    """
+    try:
+        kv = pq.read_schema(path).metadata or {}
+    except (OSError, pa.ArrowInvalid) as exc:
+        raise InputError(f"{path}: not a readable Parquet file ({type(exc).__name__})") from None
+    raw = kv.get(METADATA_KEY)
+    return json.loads(raw) if raw else {}
+
+
+def _tables(folder: Path) -> list[Path]:
+    files = sorted(p for p in folder.glob("*.parquet") if not p.name.endswith(TRACE_SUFFIXES))
+    if not files and (folder / "runs").is_dir():  # compare, fig5: the runs in runs/
+        return _tables(folder / "runs")
+    return files
+
+
+def load_results(folder: str | Path) -> pd.DataFrame:
+    """Every run of a results folder (or one results table) in one DataFrame.
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        A folder written by ``kvi intercept``, ``kvi attitude``, ``kvi compare``,
+        ``kvi fig5`` (their ``runs/``), or :func:`kalman_vs_infoset.api.run_experiment`
+        with ``out``; or a single results table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of every results table (``docs/results.md``); ``df.attrs["metadata"]``
+        maps each table's file name to its description (:func:`read_metadata`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from kalman_vs_infoset.api import load_results, run_experiment
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     _ = run_experiment("kp_fig3", "ekf", "random", runs=2, out=out)
+    ...     df = load_results(out)
+    >>> len(df), next(iter(df.attrs["metadata"].values()))["scenario"]["name"]
+    (2, 'kp_fig3')
+    """
+    folder = Path(folder)
+    if folder.is_file():
+        files = [folder]
+    elif folder.is_dir():
+        files = _tables(folder)
+    else:
+        raise InputError(f"{folder}: no such results folder or table")
+    frames, meta = [], {}
+    for f in files:
+        try:
+            df = pd.read_parquet(f)
+        except Exception as exc:  # truncated or not Parquet
+            raise InputError(f"{f}: cannot read ({type(exc).__name__})") from None
+        if not {"run", "status"} <= set(df.columns):
+            continue  # a summary table beside the runs
+        frames.append(df)
+        meta[f.name] = read_metadata(f)
+    out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    out.attrs["metadata"] = meta
+    return out

@@ -1,0 +1,336 @@
+"""The Python front door: scenarios, one engagement, a Monte Carlo, traces, results.
+
+Everything the command line does for the intercept (``kvi intercept``), callable from
+Python and returning plain objects: a typed scenario, an engagement's result, a
+:class:`pandas.DataFrame` of runs. The same seeds give the same numbers as the command
+line: run ``j`` of a root seed ``s`` draws from ``SeedSequence(s, spawn_key=(j,))``
+(:func:`kalman_vs_infoset.experiments.runner.run_seed`), whatever the order, the worker
+count or the estimator (paired comparisons). The models are described in
+``docs/models.md``; the columns of the tables in ``docs/results.md``.
+
+Examples
+--------
+>>> import kalman_vs_infoset as kvi
+>>> sc = kvi.load_scenario("kp_fig3")
+>>> res = kvi.run_engagement(sc, "ukf", "random", run=0)
+>>> res.miss_m >= 0.0 and res.fuel_mps > 0.0
+True
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from concurrent.futures import Executor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.estim.registry import Registration
+from kalman_vs_infoset.experiments import runner
+from kalman_vs_infoset.experiments import scenario as _scenario
+from kalman_vs_infoset.experiments import traces as _traces
+from kalman_vs_infoset.experiments.progress import progress_bar
+from kalman_vs_infoset.experiments.results import load_results, read_metadata
+from kalman_vs_infoset.experiments.sim import intercept as _intercept
+from kalman_vs_infoset.experiments.sim.intercept import EngagementResult
+from kalman_vs_infoset.experiments.sim.intercept_config import NOISES, InterceptScenario
+
+__all__ = [
+    "NOISES",
+    "EngagementResult",
+    "InterceptScenario",
+    "Registration",
+    "estimators",
+    "get_estimator",
+    "load_results",
+    "load_scenario",
+    "read_metadata",
+    "register_estimator",
+    "run_engagement",
+    "run_experiment",
+    "scenarios",
+    "trace",
+]
+
+
+def scenarios() -> list[str]:
+    """The names of the bundled scenarios (``kvi scenarios`` describes them).
+
+    Returns
+    -------
+    list of str
+        Names accepted by :func:`load_scenario` (and by the commands).
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import scenarios
+    >>> "kp_fig5" in scenarios()
+    True
+    """
+    from kalman_vs_infoset import data
+
+    return data.scenario_names()
+
+
+def _flatten(prefix: str, value: Any) -> Iterable[tuple[str, Any]]:
+    if isinstance(value, Mapping):
+        for key, sub in value.items():
+            yield from _flatten(f"{prefix}.{key}" if prefix else str(key), sub)
+    else:
+        yield prefix, value
+
+
+def _toml(value: Any) -> str:
+    """A Python value as a TOML value (numbers, booleans, strings, lists of them)."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, tuple):
+        value = list(value)
+    if isinstance(value, float) and not np.isfinite(value):
+        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+    return json.dumps(value)
+
+
+def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenario:
+    """An intercept scenario, bundled (by name) or from a TOML file, with overrides.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A bundled scenario's name (:func:`scenarios`) or the path of a scenario file.
+    **overrides
+        Tables of fields to change, e.g. ``experiment={"runs": 10}`` or
+        ``estimator={"infoset": {"n_sections": 40}}``; validated like the file. As with
+        the command line's ``--set``, the name gets a ``+key=value`` suffix per field.
+
+    Returns
+    -------
+    InterceptScenario
+        The validated scenario (a frozen pydantic model).
+
+    Raises
+    ------
+    kalman_vs_infoset.experiments.errors.InputError
+        A missing file, an unknown name or field, a value out of bounds (one line).
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import load_scenario
+    >>> sc = load_scenario("kp_fig5", experiment={"runs": 4}, model={"nu_mps2": 0.0})
+    >>> sc.experiment.runs, sc.model.nu_mps2
+    (4, 0.0)
+    >>> sc.name
+    'kp_fig5+experiment.runs=4+model.nu_mps2=0.0'
+    """
+    sets = [f"{key}={_toml(v)}" for key, v in _flatten("", overrides)]
+    return _scenario.load_scenario(name_or_path, sets)
+
+
+def _resolve(scenario: InterceptScenario | str | Path) -> InterceptScenario:
+    return scenario if isinstance(scenario, InterceptScenario) else load_scenario(scenario)
+
+
+def run_engagement(
+    scenario: InterceptScenario | str | Path,
+    estimator: str | None = None,
+    noise: str | None = None,
+    *,
+    run: int = 0,
+    seed: int | None = None,
+) -> EngagementResult:
+    """One engagement: run ``run`` of the Monte Carlo with root seed ``seed``.
+
+    The realisation (truth and noise) is the command line's run ``run``: ``kvi intercept
+    SCENARIO --seed seed`` writes the same numbers in its row ``run``, to the last digit.
+
+    Parameters
+    ----------
+    scenario : InterceptScenario, str or pathlib.Path
+        A scenario (:func:`load_scenario`), or a bundled name or file path.
+    estimator : str, optional
+        A registered intercept estimator (:func:`estimators`); default: the scenario's.
+    noise : str, optional
+        One of :data:`NOISES`; default: the scenario's.
+    run : int, default 0
+        The run index ``j``: the seed is ``SeedSequence(seed, spawn_key=(j,))``.
+    seed : int, optional
+        The root seed; default: the scenario's ``experiment.seed``.
+
+    Returns
+    -------
+    EngagementResult
+        Miss, fuel, checks; ``.as_row()`` is the results table's row.
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import load_scenario, run_engagement
+    >>> sc = load_scenario("kp_fig3")
+    >>> a = run_engagement(sc, "infoset", "random", run=0)
+    >>> b = run_engagement(sc, "ukf", "random", run=0)   # the same truth and noise
+    >>> a.truth0 == b.truth0 and a.truth_outside == 0
+    True
+    """
+    sc = _resolve(scenario)
+    seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
+    if run < 0:
+        raise ValueError(f"run must be a non-negative index, got {run}")
+    rng = np.random.default_rng(runner.run_seed(seed, 0, run))
+    return _intercept.run_engagement(
+        sc, estimator or sc.experiment.estimator, noise or sc.experiment.noise, rng
+    )
+
+
+def run_experiment(
+    scenario: InterceptScenario | str | Path,
+    estimator: str | None = None,
+    noise: str | None = None,
+    *,
+    runs: int | None = None,
+    seed: int | None = None,
+    out: str | Path | None = None,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
+    progress: bool = False,
+) -> pd.DataFrame:
+    """A Monte Carlo of the intercept: one row per run (``docs/results.md``).
+
+    Parameters
+    ----------
+    scenario : InterceptScenario, str or pathlib.Path
+        A scenario, or a bundled name or file path.
+    estimator, noise : str, optional
+        Default: the scenario's.
+    runs : int, optional
+        Runs ``0 .. runs-1``; default: the scenario's ``experiment.runs``.
+    seed : int, optional
+        Root seed; default: the scenario's.
+    out : str or pathlib.Path, optional
+        A results folder: the runs are written (and resumed) there exactly as by
+        ``kvi intercept --out``. ``None`` (default): computed in memory, nothing written.
+    workers : int, optional
+        Local worker processes (default 1: in this process; ``None``: the CPUs).
+    scheduler : str, optional
+        A Dask scheduler's address (``pip install 'kalman-vs-infoset[cluster]'``).
+    executor : concurrent.futures.Executor, optional
+        An executor of one's own for the runs' chunks.
+    progress : bool, default False
+        A progress bar (``tqdm.auto``: terminal or notebook).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run, sorted by ``run``; a failed run has ``status == "failed"`` and
+        its ``error``.
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import run_experiment
+    >>> df = run_experiment("kp_fig3", "ekf", "random", runs=2)
+    >>> list(df["run"]), bool((df["status"] == "ok").all())
+    ([0, 1], True)
+    """
+    sc = _resolve(scenario)
+    estimator = estimator or sc.experiment.estimator
+    noise = noise or sc.experiment.noise
+    runs = sc.experiment.runs if runs is None else int(runs)
+    seed = sc.experiment.seed if seed is None else seed
+    if runs < 1:
+        raise ValueError(f"runs must be at least 1, got {runs}")
+    if out is not None:
+        return runner.run_experiment(
+            sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
+        )
+    job = runner.intercept_job(sc, estimator, noise, runner.check_seed(seed))
+    pairs = runner.results(job, list(range(runs)), executor, workers, scheduler)
+    bar = progress_bar(runs, 0, job.desc, progress)
+    rows = []
+    try:
+        for j, row in pairs:
+            rows.append({**job.base, "run": j, **row})
+            bar.update(1)
+    finally:
+        bar.close()
+    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    runner._report_failures(job, df)
+    return df
+
+
+def trace(
+    scenario: InterceptScenario | str | Path,
+    estimator: str | None = None,
+    noise: str | None = None,
+    *,
+    runs: Sequence[int] = (0,),
+    seed: int | None = None,
+    sets_every: int = 10,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The step-by-step history of runs: what ``--trace`` writes, as DataFrames.
+
+    Parameters
+    ----------
+    scenario, estimator, noise, seed
+        As for :func:`run_engagement`.
+    runs : sequence of int, default (0,)
+        The runs to replay with every step recorded.
+    sets_every : int, default 10
+        Record the belief's set (polygon estimators) every this many steps.
+
+    Returns
+    -------
+    steps : pandas.DataFrame
+        One row per (run, step, channel): truth, estimate, forecast-miss interval,
+        control (``docs/results.md``).
+    sets : pandas.DataFrame
+        One row per vertex of the recorded sets (empty for the Kalman filters).
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import trace
+    >>> steps, sets = trace("kp_fig3", "ekf", "random")
+    >>> int(steps["run"].max()), len(sets)
+    (0, 0)
+    """
+    sc = _resolve(scenario)
+    seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
+    steps, sets, _ = _traces.intercept_trace(
+        sc,
+        estimator or sc.experiment.estimator,
+        noise or sc.experiment.noise,
+        seed,
+        [int(j) for j in runs],
+        sets_every,
+    )
+    return steps, sets
+
+
+def estimators(problem: str = "intercept") -> tuple[str, ...]:
+    """The registered estimators of a problem (``"intercept"`` or ``"attitude"``).
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import estimators
+    >>> {"infoset", "ekf", "ukf"} <= set(estimators())
+    True
+    """
+    return registry.names(problem)
+
+
+def get_estimator(name: str, problem: str = "intercept") -> Registration:
+    """A registered estimator: its options model, factory and one-line doc.
+
+    Examples
+    --------
+    >>> from kalman_vs_infoset.api import get_estimator
+    >>> get_estimator("ukf").options.model_fields["n_sigma"].default
+    3.0
+    """
+    return registry.get(problem, name)
+
+
+#: :func:`kalman_vs_infoset.estim.registry.register`: add an estimator (a plug-in)
+register_estimator = registry.register

@@ -1,0 +1,125 @@
+"""The Python front door (kalman_vs_infoset.api): its examples run, and it reproduces
+the command line to the last digit (the same seeding function, the same rows)."""
+
+import doctest
+import importlib
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from kalman_vs_infoset.experiments import results as results_module
+from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.errors import InputError
+
+import kalman_vs_infoset
+from kalman_vs_infoset import api
+
+#: columns that differ between two computations of the same run (timing)
+TIMING = ["wall_s"]
+
+
+def test_the_package_root_re_exports_the_front_door_lazily():
+    assert set(api.__all__) == set(kalman_vs_infoset._API)
+    for name in api.__all__:
+        assert getattr(kalman_vs_infoset, name) is getattr(api, name), name
+    with pytest.raises(AttributeError):
+        kalman_vs_infoset.no_such_name  # noqa: B018
+    code = "import sys, kalman_vs_infoset; print('kalman_vs_infoset.api' in sys.modules)"
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.strip() == "False"  # importing the package does not load the API
+
+
+def test_every_public_name_has_a_numpydoc_docstring():
+    for name in api.__all__:
+        obj = getattr(api, name)
+        if callable(obj) and getattr(obj, "__module__", "").startswith("kalman_vs_infoset"):
+            assert obj.__doc__ and obj.__doc__.strip(), name
+    for name in ("load_scenario", "run_engagement", "run_experiment", "trace", "load_results"):
+        doc = getattr(api, name).__doc__
+        assert "Parameters\n    ----------" in doc and "Examples\n    --------" in doc, name
+
+
+@pytest.mark.parametrize("module", ["kalman_vs_infoset.api", "kalman_vs_infoset.data",
+                                    "kalman_vs_infoset.experiments.results"])  # fmt: skip
+def test_the_docstring_examples_run(module):
+    mod = importlib.import_module(module)
+    res = doctest.testmod(mod, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert res.attempted >= 2 and res.failed == 0
+
+
+def test_run_engagement_reproduces_cli_run_0_of_kp_fig3_to_the_last_digit(tmp_path, capsys):
+    """``kvi intercept kp_fig3`` run 0 (root seed: the scenario's) and
+    ``run_engagement(load_scenario("kp_fig3"), run=0)``: every column of the row is equal
+    (floats bit for bit)."""
+    assert main(["intercept", "kp_fig3", "--out", str(tmp_path), "--no-progress"]) == 0
+    capsys.readouterr()
+    cli = api.load_results(tmp_path)
+    assert list(cli["run"]) == [0] and (cli["status"] == "ok").all()
+    row = api.run_engagement(api.load_scenario("kp_fig3"), run=0).as_row()
+    for key, value in row.items():
+        assert cli[key].iloc[0] == value or (np.isnan(value) and np.isnan(cli[key].iloc[0])), key
+    # and a later run: run j is SeedSequence(seed, spawn_key=(j,)), not default_rng(seed)
+    other = api.run_engagement("kp_fig3", "ukf", "random", run=1, seed=7)
+    df = api.run_experiment("kp_fig3", "ukf", "random", runs=2, seed=7)
+    assert df["miss_m"].iloc[1] == other.miss_m and df["fuel_mps"].iloc[1] == other.fuel_mps
+    assert df["miss_m"].iloc[0] != other.miss_m
+
+
+def test_in_memory_run_experiment_equals_the_files_and_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    sc = api.load_scenario("kp_fig3", truth={"y_km": [-9.0, -7.0]})
+    mem = api.run_experiment(sc, "ekf", "game", runs=3, seed=5)
+    assert list(tmp_path.iterdir()) == []
+    disk = api.run_experiment(sc, "ekf", "game", runs=3, seed=5, out=tmp_path / "out")
+    pd.testing.assert_frame_equal(mem.drop(columns=TIMING), disk.drop(columns=TIMING))
+    assert mem["y0_km"].nunique() == 3  # three different truths
+
+
+def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path):
+    """``pd.read_parquet(folder)`` and ``load_results(folder)`` give every run of every
+    table of an intercept folder (traces and descriptions are in ``_`` folders); the
+    metadata holds the resolved scenario and the code identity."""
+    out = tmp_path / "out"
+    for est in ("ekf", "ukf"):
+        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out)
+    assert main(["intercept", "kp_fig3", "--estimator", "ekf", "--seed", "3", "--runs", "2",
+                 "--out", str(out), "--trace", "0", "--no-progress"]) == 0  # fmt: skip
+    assert (out / "_traces").is_dir() and (out / "_meta").is_dir()
+    both = pd.read_parquet(out)
+    assert len(both) == 4 and sorted(set(both["estimator"])) == ["ekf", "ukf"]
+    loaded = api.load_results(out)
+    assert len(loaded) == 4 and set(loaded.attrs["metadata"]) == {
+        "kp_fig3-ekf-random-s3.parquet",
+        "kp_fig3-ukf-random-s3.parquet",
+    }
+    meta = api.read_metadata(out / "kp_fig3-ekf-random-s3.parquet")
+    assert meta["scenario"] == api.load_scenario("kp_fig3").model_dump(mode="json")
+    assert meta["estimator"] == "ekf" and meta["seed"] == 3
+    assert meta["code"]["version"] == kalman_vs_infoset.__version__
+    assert len(meta["code"]["sources_sha256"]) == 64
+
+
+def test_results_of_an_earlier_release_resume(tmp_path):
+    """A table with its description beside it (the earlier layout) is resumed, and its
+    description moves to ``_meta/``."""
+    sc = api.load_scenario("kp_fig3")
+    api.run_experiment(sc, "ekf", "random", runs=1, out=tmp_path)
+    table = tmp_path / "kp_fig3-ekf-random-s3.parquet"
+    side = results_module.sidecar_path(table)
+    side.rename(table.with_suffix(".json"))
+    df = api.run_experiment(sc, "ekf", "random", runs=2, out=tmp_path)
+    assert list(df["run"]) == [0, 1] and side.exists()
+
+
+def test_bad_input_through_the_api_is_one_clear_error():
+    with pytest.raises(InputError, match="kvi scenarios"):
+        api.load_scenario("kp_fig33")
+    with pytest.raises(InputError, match="model.nu_mps2"):
+        api.load_scenario("kp_fig3", model={"nu_mps2": -1.0})
+    with pytest.raises(InputError, match="no such results folder"):
+        api.load_results("/nonexistent/folder")
+    with pytest.raises(ValueError):
+        api.run_engagement("kp_fig3", run=-1)

@@ -1,0 +1,22 @@
+"""The README's range-finder tightness rows against the results files written by the
+command that produced them (``kvi tightness data/scenarios/kp_fig5_range.toml --seed
+S --out docs/results/tightness``): a stale number fails here."""
+
+import json
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
+
+
+def test_readme_range_finder_tightness_rows_match_their_results_files():
+    rows = ROW.findall((ROOT / "README.md").read_text())
+    assert len(rows) == 5
+    for seed, cells in rows:
+        path = (
+            ROOT / f"docs/results/tightness/kp_fig5_range-tightness-infoset-random-seed{seed}.json"
+        )
+        res = json.loads(path.read_text())
+        assert [float(c) for c in cells.split("|")] == [round(r, 3) for r in res["ratio"]]
+        assert all(res["exact_inside"]) and res["times_s"] == [10.0, 30.0, 60.0, 90.0, 95.0]

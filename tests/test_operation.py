@@ -1,0 +1,115 @@
+"""Operation: progress where it can be seen (a bar, or log lines in a log), the install
+hint for the cluster extra, and the CDFs drawn by ``Axes.ecdf`` exactly as before."""
+
+import io
+import logging
+import sys
+
+import matplotlib
+import numpy as np
+import pytest
+from kalman_vs_infoset.experiments import executors, plots, progress
+from kalman_vs_infoset.experiments.errors import InputError
+
+matplotlib.use("Agg")
+
+
+def test_cdf_curve_is_the_empirical_cdf_of_the_finite_values():
+    """The curve steps from 0 at the smallest value up by 1/n at each value (an
+    independent construction: sorted values, ``k/n``), non-finite values left out."""
+    import matplotlib.pyplot as plt
+
+    rng = np.random.default_rng(0)
+    v = rng.lognormal(size=37)
+    v[3], v[5] = np.inf, v[6]  # an infinite miss and a tie
+    fig, ax = plt.subplots()
+    plots._cdf(ax, v, "a", color="k")
+    (line,) = ax.lines
+    finite = np.sort(v[np.isfinite(v)])
+    n = len(finite)
+    assert line.get_drawstyle() == "steps-post" and n == 36
+    np.testing.assert_array_equal(line.get_xdata(), np.concatenate([[finite[0]], finite]))
+    np.testing.assert_array_equal(line.get_ydata(), np.arange(n + 1) / n)
+    plt.close(fig)
+
+
+class _Pipe(io.StringIO):
+    def isatty(self) -> bool:
+        return False
+
+
+def test_progress_goes_to_log_lines_when_stderr_is_not_a_terminal(monkeypatch):
+    err = _Pipe()
+    monkeypatch.setattr(sys, "stderr", err)
+    progress.configure_logging()
+    progress.configure_logging()  # once: no second handler
+    assert sum(isinstance(h, progress._Stderr) for h in progress.LOG.handlers) == 1
+    bar = progress.progress_bar(4, 1, "kp_fig5 infoset-random", every_s=0.0)
+    assert not hasattr(bar, "disable")  # not a tqdm bar
+    for _ in range(3):
+        bar.update(1)
+    bar.close()
+    lines = err.getvalue().splitlines()
+    assert lines[0].startswith("kvi: kp_fig5 infoset-random: 2/4 runs, ~")
+    assert lines[2].startswith("kvi: kp_fig5 infoset-random: 4/4 runs")
+    assert lines[-1].endswith(" s)") and len(lines) == 4
+    err.truncate(0)
+    off = progress.progress_bar(4, 0, "x", enabled=False)
+    off.update(4)
+    off.close()
+    assert err.getvalue() == ""
+
+
+def test_progress_is_a_tqdm_auto_bar_on_a_terminal(monkeypatch):
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    monkeypatch.setattr(sys, "stderr", Tty())
+    bar = progress.progress_bar(3, 0, "d")
+    from tqdm.auto import tqdm
+
+    assert isinstance(bar, tqdm) and not bar.disable
+    bar.close()
+
+
+def test_library_use_logs_nothing_unless_logging_is_configured(monkeypatch, caplog):
+    monkeypatch.setattr(sys, "stderr", _Pipe())
+    with caplog.at_level(logging.INFO, logger="kalman_vs_infoset"):
+        bar = progress.progress_bar(2, 0, "job", every_s=0.0)
+        bar.update(2)
+        bar.close()
+    assert any("job: 2/2 runs" in r.getMessage() for r in caplog.records)
+
+
+def test_the_cluster_hint_names_the_package(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # not installed
+    with pytest.raises(InputError, match=r"pip install 'kalman-vs-infoset\[cluster\]'"):
+        with executors.make_executor(scheduler="tcp://127.0.0.1:1"):
+            pass
+
+
+def test_a_first_run_compile_is_announced_once(monkeypatch, tmp_path, caplog):
+    monkeypatch.setattr(progress, "_announced", False)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))  # an empty cache
+    assert progress.compiled_kernels_cached() is False
+    with caplog.at_level(logging.INFO, logger="kalman_vs_infoset"):
+        for _ in range(2):
+            progress.progress_bar(1, 0, "job").close()
+    assert [r.getMessage() for r in caplog.records if "compiling" in r.getMessage()] == [
+        "first run: compiling the estimators' kernels (about a minute, once)"
+    ]
+    (tmp_path / "x").mkdir()
+    (tmp_path / "x" / "_kernels.dedupe-255.py311.nbi").write_bytes(b"")
+    assert progress.compiled_kernels_cached() is True
+
+
+def test_kvi_version_names_the_installed_package(capsys):
+    from kalman_vs_infoset.experiments.cli import main
+
+    import kalman_vs_infoset
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"kvi {kalman_vs_infoset.__version__}"

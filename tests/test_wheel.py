@@ -1,0 +1,178 @@
+"""The package as a user installs it: a wheel built from these sources, installed (not
+editable) into a fresh virtual environment, run from an empty folder.
+
+The environment sees this project's environment's site-packages for the dependencies
+(a ``.pth`` file, no network), but the package itself only from the wheel. Numba's
+compiled kernels are the one thing carried over: the wheel installs the same source
+files, so their on-disk cache (``__pycache__/*.nbi, *.nbc``) is copied beside them with
+the sources' modification times, saving the ~45 CPU-s first-run compile (which this test
+does not measure); without a cache here the commands compile, slower but the same.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+LAYERS = ("estim", "guidance", "experiments")
+SOURCES = ("kalman_vs_infoset", "data", *LAYERS)
+IGNORE = shutil.ignore_patterns(
+    "__pycache__",
+    "*.pyc",
+    "*.tmp",
+    "*.egg-info",
+    "_build",
+    "auto_examples",
+    "generated",
+    "sg_execution_times.rst",
+)
+
+
+def _copy_sources(dst: Path) -> Path:
+    """What a build needs, copied from the working tree (so the build writes nothing
+    into the repository)."""
+    for name in ("pyproject.toml", "README.md", "LICENSE", "MANIFEST.in", "CHANGELOG.md",
+                 "CITATION.cff", "Makefile"):  # fmt: skip
+        shutil.copy2(ROOT / name, dst / name)
+    for name in (*SOURCES, "docs", "tests"):
+        shutil.copytree(ROOT / name, dst / name, ignore=IGNORE)
+    return dst
+
+
+def _run(args, cwd, env, timeout=600) -> subprocess.CompletedProcess:
+    r = subprocess.run(
+        [str(a) for a in args], cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout
+    )
+    assert r.returncode == 0, f"{args}: {r.stderr[-2000:]}"
+    return r
+
+
+def _project_version() -> str:
+    import tomllib
+
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+
+
+def _seed_numba_cache(installed: Path) -> None:
+    for layer in LAYERS:
+        for src in (ROOT / layer).rglob("*.py"):
+            st = src.stat()
+            os.utime(
+                installed / layer / src.relative_to(ROOT / layer),
+                ns=(st.st_atime_ns, st.st_mtime_ns),
+            )
+        for cached in (ROOT / layer).rglob("*.nb[ic]"):
+            target = installed / layer / cached.relative_to(ROOT / layer)
+            target.parent.mkdir(exist_ok=True)
+            shutil.copy2(cached, target)
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """``(wheel, sdist)`` built from a copy of the sources, without build isolation."""
+    src = _copy_sources(tmp_path_factory.mktemp("src"))
+    dist = tmp_path_factory.mktemp("dist")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
+          src, "-w", dist], src, env)  # fmt: skip
+    build_sdist = f"from setuptools import build_meta as b; print(b.build_sdist({str(dist)!r}))"
+    _run([sys.executable, "-c", build_sdist], src, env)
+    (wheel,) = dist.glob("*.whl")
+    (sdist,) = dist.glob("*.tar.gz")
+    return wheel, sdist
+
+
+@pytest.fixture(scope="module")
+def venv(built, tmp_path_factory):
+    """A fresh environment with the wheel installed; ``(bin folder, site-packages, env)``."""
+    root = tmp_path_factory.mktemp("venv")
+    # the environment sits inside a user's own git repository (with one commit)
+    git = ["git", "-c", "user.name=u", "-c", "user.email=u@example.org"]
+    _run([*git, "init", "-q", root], root, None)
+    _run([*git, "commit", "-q", "--allow-empty", "-m", "user's work"], root, None)
+    _run([sys.executable, "-m", "venv", "--without-pip", root / "venv"], root, None)
+    root = root / "venv"
+    python = root / "bin" / "python"
+    site = Path(
+        subprocess.check_output(
+            [python, "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"], text=True
+        ).strip()
+    )
+    (site / "_project_dependencies.pth").write_text(sysconfig.get_path("purelib") + "\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env["MPLBACKEND"] = "Agg"
+    _run([sys.executable, "-m", "pip", "--python", python, "install", "-q", "--no-deps",
+          built[0]], root, env)  # fmt: skip
+    _seed_numba_cache(site / "kalman_vs_infoset")
+    return root / "bin", site, env
+
+
+def test_the_wheel_installs_one_top_level_name_and_its_data(built):
+    with zipfile.ZipFile(built[0]) as whl:
+        names = whl.namelist()
+        (record,) = [n for n in names if n.endswith(".dist-info/RECORD")]
+        rows = whl.read(record).decode().splitlines()
+    tops = {row.split(",")[0].split("/")[0] for row in rows}
+    assert tops == {"kalman_vs_infoset", record.split("/")[0]}
+    assert not {"estim", "guidance", "experiments", "data", "tests"} & tops
+    data = {n.removeprefix("kalman_vs_infoset/data/") for n in names if "/data/" in n}
+    bundled = [p for p in (ROOT / "data").rglob("*") if p.suffix in (".toml", ".csv", ".py")]
+    expected = {p.relative_to(ROOT / "data").as_posix() for p in bundled}
+    assert data == expected and "reference/f0_table.csv" in data
+    assert "kalman_vs_infoset/py.typed" in names
+
+
+def test_the_sdist_carries_what_its_tests_need(built):
+    with tarfile.open(built[1]) as tar:
+        names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
+    needed = ["data/scenarios/kp_fig3.toml", "data/reference/f0_table.csv", "docs/models.md"]
+    needed += ["tests/conftest.py", "tests/harness_texts.py", "CHANGELOG.md", "CITATION.cff"]
+    for name in [*needed, "README.md", "kalman_vs_infoset/py.typed"]:
+        assert name in names, name
+    tests = {p.name for p in (ROOT / "tests").glob("*.py")}
+    assert tests <= {n.removeprefix("tests/") for n in names}
+
+
+def test_the_commands_work_from_an_empty_folder(venv, tmp_path):
+    """``kvi scenarios``, ``kvi intercept kp_fig3 --runs 2``, ``kvi pd-gains`` (quick
+    settings) and ``kvi paper-figures --quick`` (two groups: the intercept's, and Akimov's
+    that reads the f0 table) from the installed wheel, in a folder with no data."""
+    bin_dir, site, env = venv
+    kvi = bin_dir / "kvi"
+    where = _run([bin_dir / "python", "-c", "import kalman_vs_infoset as k; print(k.__file__)"],
+                 tmp_path, env).stdout  # fmt: skip
+    assert Path(where.strip()).parent == site / "kalman_vs_infoset"
+    listing = _run([kvi, "scenarios"], tmp_path, env).stdout.splitlines()
+    assert [line.split()[0] for line in listing] == sorted(
+        p.stem for p in (ROOT / "data" / "scenarios").glob("*.toml")
+    )
+    out = _run([kvi, "intercept", "kp_fig3", "--runs", "2", "--json", "--no-progress"],
+               tmp_path, env).stdout  # fmt: skip
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result["runs"] == 2 and result["failures"] == 0
+    assert (tmp_path / result["out"]).is_dir()
+    meta = (
+        "import json, sys, kalman_vs_infoset as k; print(json.dumps(k.read_metadata(sys.argv[1])))"
+    )
+    table = tmp_path / result["out"] / "kp_fig3-infoset-random-s3.parquet"
+    code = json.loads(_run([bin_dir / "python", "-c", meta, table], tmp_path, env).stdout)["code"]
+    assert code["version"] == _project_version()
+    assert code["git_commit"] is None  # the package's own commit is unknown, not the user's
+    out = _run([kvi, "pd-gains", "--angles-deg", "1.0,5.0", "--grid-step", "0.2", "--json"],
+               tmp_path, env).stdout  # fmt: skip
+    assert json.loads(out.strip().splitlines()[-1])
+    assert list((tmp_path / "results" / "pd_gains").glob("*.png"))
+    _run([kvi, "paper-figures", "--quick", "--runs", "2", "--only", "kp_fig3,akimov"],
+         tmp_path, env)  # fmt: skip
+    written = json.loads((tmp_path / "results" / "figures" / "paper_figures.json").read_text())
+    assert written["quick"] is True and written["numbers"]
+    figures = {p.stem for p in (tmp_path / "results" / "figures").glob("*.png")}
+    assert {"kp_fig3", "akimov_fig14", "akimov_fig15"} <= figures
