@@ -253,7 +253,7 @@ def test_trace_figures_of_two_seeds_do_not_replace_each_other(short, tmp_path, c
         r = run(capsys, "intercept", short, "--runs", 1, "--trace", 0, "--seed", seed,
                 "--estimator", "ukf", "--workers", 1, "--no-progress", "--out", out)  # fmt: skip
         assert r.returncode == 0, r.stderr
-    names = {p.name for p in out.glob("*-processes.png")}
+    names = {p.name for p in out.rglob("*-processes.png")}
     assert names == {f"short-ukf-random-s{s}-run0-processes.png" for s in (3, 4)}
 
 
@@ -263,5 +263,5 @@ def test_attitude_figures_of_two_estimators_do_not_replace_each_other(tiny_rw, t
         r = run(capsys, "attitude", tiny_rw, "--estimator", est, "--noise", "random",
                 "--out", out)  # fmt: skip
         assert r.returncode == 0, r.stderr
-    names = {p.name for p in out.glob("*-history.png")}
+    names = {p.name for p in out.rglob("*-history.png")}
     assert names == {f"tiny_rw-pd-{e}-random-s0-history.png" for e in ("perfect", "box")}
