@@ -3,6 +3,7 @@ one writer per results file (an advisory lock beside it)."""
 
 from __future__ import annotations
 
+import errno
 import os
 import sys
 import tempfile
@@ -72,19 +73,38 @@ def exclusive(path: Path, what: str) -> Iterator[None]:
                 current = os.path.samestat(os.fstat(fd), os.stat(lock))
             except FileNotFoundError:
                 current = False
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno not in _NO_LOCKS:
+                raise
+            fd = None  # a file system without locks (some NFS mounts): write unlocked
+            break
         except BaseException:
             os.close(fd)
             raise
         if current:
             break
         os.close(fd)  # its holder removed it while we waited: lock the file there now
+    if fd is None:
+        _unlink(lock)
+        print(f"{what}: {lock.parent} cannot lock files; writing unlocked", file=sys.stderr)
+        yield
+        return
     try:
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         yield
     finally:
-        try:
-            os.unlink(lock)
-        except OSError:
-            pass
+        _unlink(lock)
         os.close(fd)  # releases the lock
+
+
+#: errors of ``flock`` on a file system that has no locks
+_NO_LOCKS = (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS)
+
+
+def _unlink(path: Path) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass

@@ -300,3 +300,19 @@ def test_complete_results_are_read_not_written(short, tmp_path, capsys):
         os.chmod(out, 0o755)
     assert r.returncode == 0, r.stderr
     assert {p: p.stat().st_mtime_ns for p in out.iterdir()} == before
+
+
+def test_a_file_system_without_locks_is_written_unlocked(tmp_path, capsys, monkeypatch):
+    import errno
+
+    from kalman_vs_infoset.experiments import files
+
+    def no_locks(fd, op):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(files.fcntl, "flock", no_locks)
+    table = tmp_path / "t.parquet"
+    with exclusive(table, "test"):
+        table.write_text("x")
+    assert "cannot lock files" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.parquet"]
