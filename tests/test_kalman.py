@@ -512,8 +512,9 @@ def test_scenario_key_kalman_range_constraint_is_validated():
     with pytest.raises(InputError, match="unknown key 'truth.kalman_range_constraint'"):
         parse_scenario({"truth": {"kalman_range_constraint": True}})
     # the default truth's vx box [-59, -57] km/s is not covered by closing speed [58, 58]
-    with pytest.raises(InputError, match="must contain the truth's closing speeds"):
-        parse_scenario({"estimator": {"ekf": {"range_constraint": True}}})
+    for name in ("ekf", "ukf", "hinf"):  # every estimator with the option (hinf inherits it)
+        with pytest.raises(InputError, match=f"when 'estimator.{name}.range_constraint' is true"):
+            parse_scenario({"estimator": {name: {"range_constraint": True}}})
     # one spelling: the flat key of earlier releases names the tables' keys
     with pytest.raises(InputError, match="'estimator.ekf.range_constraint' and 'estimator.ukf"):
         parse_scenario({"estimator": {"kalman_range_constraint": True}})

@@ -290,7 +290,7 @@ class InterceptScenario(Table):
             raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
         closing = sorted(-v for v in self.truth.vx_kmps)
         lo, hi = self.closing_speed_kmps
-        constrained = [k for k in ("ekf", "ukf") if e.options.get(k, {}).get("range_constraint")]
+        constrained = _range_constrained(e.options)
         if (e.closing_speed_kmps is not None or constrained) and (
             closing[0] < lo or closing[1] > hi
         ):
@@ -351,3 +351,19 @@ def _check_options(name: str, table: dict[str, Any]) -> None:
         reg.options.model_validate(table)
     except ValidationError as exc:
         raise ValueError(first_error(exc, f"estimator.{name}.", reg.options)) from None
+
+
+def _range_constrained(options: dict) -> list[str]:
+    """The registered intercept estimators whose ``range_constraint`` option (given in
+    ``options`` or by default) is true: their ranges move at the closing-speed
+    interval's speeds, so the interval must hold the truth for every one of them."""
+    from kalman_vs_infoset.estim import registry
+
+    out = []
+    for name in registry.names("intercept"):
+        field = registry.get("intercept", name).options.model_fields.get("range_constraint")
+        if field is None:
+            continue
+        if options.get(name, {}).get("range_constraint", field.default):
+            out.append(name)
+    return out
