@@ -77,7 +77,7 @@ BAD = {
     "truth outside box": ("[truth]\ny_km = [-20.0, 0.0]\n", "must lie inside"),
     "bad toml": ("[model\n", "invalid TOML"),
     "no split": (
-        "[estimator]\nsplit_ratio = 1.0\n",
+        "[estimator.infoset]\nsplit_ratio = 1.0\n",
         "field 'estimator.infoset.split_ratio' must be",
     ),
     "bound shrinks as range closes": (
@@ -85,7 +85,7 @@ BAD = {
         "'model.bearing_bound_start_rad' must be <=",
     ),
     "margin not bool": (
-        "[estimator]\nkinematic_margin = 1\n",
+        "[estimator.infoset]\nkinematic_margin = 1\n",
         "'estimator.infoset.kinematic_margin'",
     ),
     "option table": ("[estimator.ekf]\nn_sigma = 0.1\n", "field 'estimator.ekf.n_sigma' must be"),
