@@ -35,6 +35,9 @@ from kalman_vs_infoset.experiments.errors import (
 
 from kalman_vs_infoset._numba_cache import CompileNotice
 
+#: the Monte Carlo runner, imported by the commands that run (not by the parser)
+_RUNNER = "kalman_vs_infoset.experiments.runner"
+
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "intercept": (
@@ -200,9 +203,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     interactive = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if interactive:  # not where Ctrl-C is ignored (a background job)
         signal.signal(signal.SIGINT, _on_sigint)
-    from kalman_vs_infoset.experiments import runner
-
-    runner.forget_failures()
+    runner = sys.modules.get(_RUNNER)  # not imported: no run was made, none failed
+    if runner is not None:
+        runner.forget_failures()
     from kalman_vs_infoset.experiments import progress
 
     progress.configure_logging()
@@ -220,8 +223,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(parser, module, args) -> int:
-    from kalman_vs_infoset.experiments.runner import WorkerLost, failed_runs
-
     where = f"{parser.prog} {args.command}"
     try:
         result = module.run(args)
@@ -239,7 +240,10 @@ def _run(parser, module, args) -> int:
     except KeyboardInterrupt:
         print(f"{where}: interrupted; finished runs are saved; rerun to resume", file=sys.stderr)
         return 130
-    except WorkerLost as exc:
+    except RuntimeError as exc:  # WorkerLost, when the command uses the runner
+        executors = sys.modules.get("kalman_vs_infoset.experiments.executors")
+        if executors is None or not isinstance(exc, executors.WorkerLost):
+            raise
         print(f"{where}: {exc}", file=sys.stderr)
         return 1
     if args.json:
@@ -247,7 +251,8 @@ def _run(parser, module, args) -> int:
     else:
         render = getattr(module, "render", None)
         print(render(result) if render else _render_default(result))
-    failed = failed_runs()
+    runner = sys.modules.get(_RUNNER)
+    failed = runner.failed_runs() if runner is not None else 0
     if failed:
         print(f"{where}: {failed} runs failed (their errors are above and in the results "
               "tables); rerun the same command to run them again", file=sys.stderr)  # fmt: skip

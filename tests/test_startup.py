@@ -76,3 +76,25 @@ def test_every_command_still_declares_its_arguments(capsys):
         code = exc.code
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and "--key" in err
+
+
+def test_a_light_command_runs_without_the_numerical_stack():
+    """``kvi scenarios`` (a listing) runs without importing the runner, numba or
+    matplotlib: the command line imports the runner only for the commands that run."""
+    code = (
+        "import json, sys\n"
+        "from kalman_vs_infoset.experiments import cli\n"
+        "assert cli.main(['scenarios']) == 0\n"
+        f"print(json.dumps(sorted(m for m in {HEAVY!r} if m in sys.modules)))\n"
+        "print('kalman_vs_infoset.experiments.runner' in sys.modules)\n"
+    )
+    out = (
+        subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+        )
+        .stdout.strip()
+        .splitlines()
+    )
+    loaded, runner = json.loads(out[-2]), out[-1]
+    assert not {"numba", "matplotlib", "filterpy", "pandas"} & set(loaded), loaded
+    assert runner == "False"
