@@ -16,10 +16,11 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/kvi fig5 --out results/fig5
 
+# two pytest-xdist workers (the Dask tests share one worker and its cluster: loadgroup)
 test: $(STAMP)
 	$(BIN)/ruff check --no-cache .
 	$(BIN)/ruff format --check --no-cache .
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n 2 --dist loadgroup
 
 # Random exploration of the property tests (the suite itself is derandomized):
 # FUZZ_ROUNDS rounds from seed FUZZ_SEED on; a failure names the seed to replay.

@@ -13,23 +13,28 @@ the options model below (one declaration per field: type, bounds, default, unit,
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
-from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_model import AttitudeModel
-from kalman_vs_infoset.estim.attitude_perfect import PerfectAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_ukf import UkfAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_zonotope import ZonotopeAttitudeEstimator
 from kalman_vs_infoset.estim.catalog_sets import SlabOptions
-from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
-from kalman_vs_infoset.estim.model import ChannelSetting
-from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
-from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
 from kalman_vs_infoset.estim.registry import register
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+# The estimator classes are imported by the factories, when an estimator is built: the
+# registry's names and options are known without importing every estimator (the
+# filters' filterpy and scipy.stats, the attitude estimators), which a command line
+# that runs the information set does not need.
+if TYPE_CHECKING:
+    from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
+    from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
+    from kalman_vs_infoset.estim.attitude_model import AttitudeModel
+    from kalman_vs_infoset.estim.attitude_ukf import UkfAttitudeEstimator
+    from kalman_vs_infoset.estim.attitude_zonotope import ZonotopeAttitudeEstimator
+    from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
+    from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+    from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+    from kalman_vs_infoset.estim.model import ChannelSetting
+    from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
+    from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
@@ -206,6 +211,9 @@ class UkfAttitudeOptions(BaseModel):
 def _infoset(
     opt: InfosetOptions, setting: ChannelSetting
 ) -> InformationSetEstimator | NodeSetEstimator:
+    from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+    from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
+
     if opt.sections == "nodes":
         return NodeSetEstimator(
             setting.model,
@@ -232,6 +240,8 @@ def _infoset(
 
 def _kalman(kind: str):
     def build(opt: KalmanOptions, setting: ChannelSetting) -> KalmanChannelEstimator:
+        from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
+
         return KalmanChannelEstimator(
             setting.model,
             kind=kind,
@@ -245,6 +255,8 @@ def _kalman(kind: str):
 
 
 def _hinf(opt: HinfOptions, setting: ChannelSetting) -> HInfinityChannelEstimator:
+    from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
+
     return HInfinityChannelEstimator(
         setting.model,
         theta=opt.theta,
@@ -257,18 +269,24 @@ def _hinf(opt: HinfOptions, setting: ChannelSetting) -> HInfinityChannelEstimato
 
 
 def _pf(opt: PfOptions, setting: ChannelSetting) -> ParticleChannelEstimator:
+    from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
+
     return ParticleChannelEstimator(
         setting.model, closing_speed_mps=setting.closing_speed_mps, **opt.model_dump()
     )
 
 
 def _box(opt: BoxOptions, model: AttitudeModel) -> BoxAttitudeEstimator:
+    from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
+
     return BoxAttitudeEstimator(model, abs_inflation_rad=opt.abs_inflation_rad)
 
 
 def _zonotope_attitude(
     opt: ZonotopeAttitudeOptions, model: AttitudeModel
 ) -> ZonotopeAttitudeEstimator:
+    from kalman_vs_infoset.estim.attitude_zonotope import ZonotopeAttitudeEstimator
+
     return ZonotopeAttitudeEstimator(
         model,
         abs_inflation_rad=opt.abs_inflation_rad,
@@ -280,12 +298,16 @@ def _zonotope_attitude(
 def _ellipsoid_attitude(
     opt: EllipsoidAttitudeOptions, model: AttitudeModel
 ) -> EllipsoidAttitudeEstimator:
+    from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
+
     return EllipsoidAttitudeEstimator(
         model, abs_inflation_rad=opt.abs_inflation_rad, criterion=opt.criterion
     )
 
 
 def _ukf_attitude(opt: UkfAttitudeOptions, model: AttitudeModel) -> UkfAttitudeEstimator:
+    from kalman_vs_infoset.estim.attitude_ukf import UkfAttitudeEstimator
+
     return UkfAttitudeEstimator(model, gate_prob=opt.gate_prob)
 
 
@@ -294,10 +316,15 @@ register("ekf", "intercept", KalmanOptions, _kalman("ekf"), "EKF read as its n-s
 register("ukf", "intercept", KalmanOptions, _kalman("ukf"), "UKF read as its n-sigma ellipsoid")
 register("hinf", "intercept", HinfOptions, _hinf, "H-infinity filter read as its n-sigma ellipsoid")
 register("pf", "intercept", PfOptions, _pf, "bootstrap particle filter, bounded likelihood")
-register(
-    "perfect", "attitude", NoOptions, lambda opt, model: PerfectAttitudeEstimator(),
-    "the measurement taken as the state",
-)  # fmt: skip
+
+
+def _perfect(opt: NoOptions, model: AttitudeModel):
+    from kalman_vs_infoset.estim.attitude_perfect import PerfectAttitudeEstimator
+
+    return PerfectAttitudeEstimator()
+
+
+register("perfect", "attitude", NoOptions, _perfect, "the measurement taken as the state")
 register("ukf", "attitude", UkfAttitudeOptions, _ukf_attitude, "UKF on the error state")
 register("box", "attitude", BoxOptions, _box, "guaranteed box on the error state")
 register(

@@ -67,8 +67,8 @@ def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float
     ``max_bands`` are live and a split is sound; ``est`` is the
     :class:`~kalman_vs_infoset.estim.nodeset.NodeSetEstimator` (its ``_apply``,
     ``_prior`` and refinement)."""
-    if s.is_empty:
-        return s
+    if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
+        return s  # a known closing speed (or bands already at their finest)
     for _ in range(2 * max_bands):
         if len(live_bands(s)) >= max_bands:
             break

@@ -4,7 +4,14 @@ Each command lives in its own module ``kalman_vs_infoset.experiments.cmd_<name>`
 ``add_arguments(parser)`` and ``run(args) -> dict``; the returned dict is printed
 as one JSON object on the last line of stdout with ``--json``, or as a readable
 table otherwise (``render(result) -> str`` when the module has one). Bad input
-(:class:`InputError`, argparse errors) exits with status 2 and one line on stderr.
+(:class:`InputError`, argparse errors) exits with status 2 and one line on stderr;
+failed or lost runs with status 1 and a last line on stderr saying how many; Ctrl-C
+and SIGTERM save what finished and exit with 130 and 143.
+
+Command modules are imported lazily: the parser declares every command by name and
+one-line help, and imports (and asks for the arguments of) only the command named on
+the command line, so ``kvi --help`` imports no numerical library and ``kvi intercept``
+does not pay for the plotting or attitude commands.
 """
 
 from __future__ import annotations
@@ -12,12 +19,24 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-import numpy as np
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import (
+    InputError,
+    Terminated,
+    clear_stop,
+    request_stop,
+)
+
+from kalman_vs_infoset._numba_cache import CompileNotice
+
+#: the Monte Carlo runner, imported by the commands that run (not by the parser)
+_RUNNER = "kalman_vs_infoset.experiments.runner"
 
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -74,6 +93,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _jsonable(obj: Any) -> Any:
+    import numpy as np  # here: the parser itself needs no numerical library
+
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -82,7 +103,7 @@ def _jsonable(obj: Any) -> Any:
         return obj.item()
     if isinstance(obj, np.ndarray):
         return _jsonable(obj.tolist())
-    if isinstance(obj, float) and not np.isfinite(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
 
@@ -100,7 +121,18 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command_named(argv: Sequence[str]) -> str | None:
+    """The command on a command line: its first word that is not an option (the top
+    level has no option taking a value), when it names a command."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of ``kvi``; only ``command``'s module is imported for its arguments
+    (None: no command module is imported, which is all ``kvi --help`` needs)."""
     parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
     from kalman_vs_infoset import __version__
 
@@ -110,6 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (module_name, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         p.set_defaults(_module=module_name)
+        if name != command:
+            continue
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:
@@ -122,38 +156,105 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _on_sigterm(signum, frame) -> None:
+    """SIGTERM, taken like Ctrl-C: what finished is saved and the command says so."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the save
+    request_stop()  # checked between runs, should the exception below be swallowed
+    raise Terminated
+
+
+def _on_sigint(signum, frame) -> None:
+    """Ctrl-C: ``KeyboardInterrupt``, also checked between runs."""
+    request_stop(KeyboardInterrupt)
+    raise KeyboardInterrupt
+
+
+def _compile_notice(prog: str) -> CompileNotice | None:
+    """A notice of numba compilations during the command, for the commands whose modules
+    use the compiled kernels (numba imported with them)."""
+    if "numba" not in sys.modules:
+        return None
+    from kalman_vs_infoset.experiments import progress
+
+    # this notice sees every compilation as it happens and says how long it took: the
+    # progress bars' own guess from the cache files (for library users) stays silent
+    progress._announced = True
+    return CompileNotice(prog).install()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    """Run one command; the exit status: 0, 1 when runs failed or were lost (the last
+    line on stderr says how many), 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_named(argv))
     args = parser.parse_args(argv)
     if getattr(args, "_missing", False):
         print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
         return 2
+    out = getattr(args, "out", None)
+    if out is not None and not str(out).strip():  # Path("") is the current folder
+        print(f"{parser.prog} {args.command}: error: --out '': expected a folder name",
+              file=sys.stderr)  # fmt: skip
+        return 2
     module = importlib.import_module(args._module)
+    clear_stop()
+    main_thread = threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
+    interactive = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if interactive:  # not where Ctrl-C is ignored (a background job)
+        signal.signal(signal.SIGINT, _on_sigint)
+    runner = sys.modules.get(_RUNNER)  # not imported: no run was made, none failed
+    if runner is not None:
+        runner.forget_failures()
     from kalman_vs_infoset.experiments import progress
 
     progress.configure_logging()
+    notice = _compile_notice(parser.prog)
+    try:
+        return _run(parser, module, args)
+    finally:
+        if notice is not None:
+            notice.report()
+            notice.uninstall()
+        if main_thread:
+            signal.signal(signal.SIGTERM, before)
+        if interactive:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _run(parser, module, args) -> int:
+    where = f"{parser.prog} {args.command}"
     try:
         result = module.run(args)
     except InputError as exc:
-        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # an output or input path the system refuses
-        where = f" ({exc.filename})" if exc.filename else ""
-        print(f"{parser.prog} {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        at = f" ({exc.filename})" if exc.filename else ""
+        print(f"{where}: error: {exc.strerror or exc}{at}", file=sys.stderr)
         return 2
+    except Terminated:
+        print(f"{where}: terminated (SIGTERM); finished runs are saved; rerun to resume",
+              file=sys.stderr)  # fmt: skip
+        return 143
     except KeyboardInterrupt:
-        print(f"{parser.prog} {args.command}: interrupted; rerun to resume", file=sys.stderr)
+        print(f"{where}: interrupted; finished runs are saved; rerun to resume", file=sys.stderr)
         return 130
-    except RuntimeError as exc:
-        from kalman_vs_infoset.experiments.runner import WorkerLost
-
-        if not isinstance(exc, WorkerLost):
+    except RuntimeError as exc:  # WorkerLost, when the command uses the runner
+        executors = sys.modules.get("kalman_vs_infoset.experiments.executors")
+        if executors is None or not isinstance(exc, executors.WorkerLost):
             raise
-        print(f"{parser.prog} {args.command}: {exc}", file=sys.stderr)
+        print(f"{where}: {exc}", file=sys.stderr)
         return 1
     if args.json:
         print(json.dumps(_jsonable(result)))
     else:
         render = getattr(module, "render", None)
         print(render(result) if render else _render_default(result))
+    runner = sys.modules.get(_RUNNER)
+    failed = runner.failed_runs() if runner is not None else 0
+    if failed:
+        print(f"{where}: {failed} runs failed (their errors are above and in the results "
+              "tables); rerun the same command to run them again", file=sys.stderr)  # fmt: skip
+        return 1
     return 0

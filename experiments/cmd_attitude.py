@@ -30,7 +30,7 @@ import pandas as pd
 from kalman_vs_infoset.experiments import traces
 from kalman_vs_infoset.experiments.attitude_est import resolve_estimators, write_figure
 from kalman_vs_infoset.experiments.attitude_traces import TRACERS
-from kalman_vs_infoset.experiments.cmd_intercept import positive_int, seed_int
+from kalman_vs_infoset.experiments.cmd_intercept import add_limit, positive_int, runs_int, seed_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.runner import (
     Job,
@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", help=SCENARIO_HELP)
     parser.add_argument("--controller", default=None, help="one of " + ", ".join(DISPATCH))
     parser.add_argument("--noise", default="none", help="none | random | game (default none)")
-    parser.add_argument("--runs", type=positive_int, default=1, help="number of runs (default 1)")
+    parser.add_argument("--runs", type=runs_int, default=1, help="number of runs (default 1)")
     parser.add_argument("--seed", type=seed_int, default=0, help="root seed (default 0)")
     parser.add_argument(
         "--estimator",
@@ -73,6 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=positive_int, help="local worker processes")
     parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_limit(parser)
     traces.add_argument(parser)
     parser.add_argument(
         "--set",
@@ -112,6 +113,17 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     traced = traces.check_runs(args.trace if args.trace is not None else
                                ([0] if args.runs == 1 else []), args.runs)  # fmt: skip
     module = resolve_module(controller)
+    given = data.get("controller")
+    if args.controller is not None and isinstance(given, str) and given in DISPATCH:
+        if DISPATCH[given] != DISPATCH[controller]:  # another simulation's scenario
+
+            def takes(c: str) -> str:
+                return ", ".join(repr(k) for k, v in DISPATCH.items() if v == DISPATCH[c])
+
+            raise InputError(
+                f"{source}: field 'controller' {given!r} makes it a scenario of {takes(given)}; "
+                f"--controller {controller} runs scenarios of {takes(controller)}"
+            )
     default_est = data.pop("estimator", None)
     if default_est is not None and not isinstance(default_est, str):
         raise InputError(f"{args.scenario}: field 'estimator' must be a string")
@@ -139,7 +151,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             task=partial(batched_task, simulate, seed),
             chunk=module.CHUNK,
         )
-        df = run_job(job, args.runs, out_dir, args.workers, args.scheduler, not args.no_progress)
+        df = run_job(
+            job, args.runs, out_dir, args.workers, args.scheduler, not args.no_progress,
+            limit_s=args.run_cpu_limit_s,
+        )  # fmt: skip
         ok = df[df["status"] == "ok"] if len(df) else df
         failures = int((df["status"] != "ok").sum()) if len(df) else 0
         res = module.summarise(setup, controller, args.noise, est, args.runs, seed, ok, failures)
@@ -160,7 +175,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         result["rows"] = results
     table = pd.concat(frames, ignore_index=True)
     ok = table[table["status"] == "ok"] if len(table) else table
-    stem = f"{name}-{controller}-{args.noise}-s{seed}"
+    # the figures' names carry what distinguishes them: estimators, noise, seed
+    stem = f"{name}-{controller}-{','.join(estimators)}-{args.noise}-s{seed}"
     if len(ok) and args.runs > 1:
         files += write_figure(out_dir, stem, ok)
     if histories:

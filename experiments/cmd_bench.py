@@ -1,7 +1,9 @@
-"""``kvi bench``: per-step costs side by side, in one process
+"""``kvi bench``: per-step costs side by side, in one process, in CPU time
 (docs/models.md §3.1).
 
-Measured on the same problem (seed 003's Fig. 3 boxes, one channel):
+Every cost is CPU time (``time.thread_time`` in this process; worker processes'
+through ``resource.getrusage``), so that the ratios hold on a busy host where wall
+clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one channel):
 
 * ``<name>_step_us`` for every registered intercept estimator (``infoset_step_us``,
   ``ekf_step_us``, ``ukf_step_us``, ``hinf_step_us``, ``pf_step_us``, ...): one
@@ -14,24 +16,41 @@ Measured on the same problem (seed 003's Fig. 3 boxes, one channel):
   set estimator's belief becomes empty);
 * ``whole_approach_step_us`` (and ``whole_approach_steps``, ``whole_approach_ratio``
   = information set / UKF): the same step for the information set and the UKF, mean
-  over the whole approach to the blind range whatever ``--steps`` is (the node set's
-  cost is back-loaded: its tightening replays the whole operation log on new nodes);
+  over the whole approach to the blind range whatever ``--steps`` is;
 * ``engagement_ms``: one full Fig. 3 engagement, both channels, game noise
-  (``engagement_random_ms``: random noise);
+  (``engagement_random_ms``: random noise); ``engagement_in_ukf_steps`` and
+  ``engagement_random_in_ukf_steps``: the same divided by ``ukf_step_us``;
+* ``cost_exponent``: the slope of log(CPU time of the information set over a whole
+  approach) against log(its number of steps), least squares over three approaches of
+  about 100, 200 and 400 steps (``cost_steps``, ``cost_ms``). The approach is the same
+  (from 5801.3 km to the blind range); the step count is varied through the time step,
+  ``dt`` = 1, 0.5 and 0.25 s (``--quick``: 4, 2 and 1 s, about 25, 50 and 100 steps).
+  1 means a cost linear in the approach length;
 * ``runs_per_s`` (1 worker) and ``runs_per_s_2`` (2 worker processes): Monte Carlo
-  throughput on Fig. 5's scenario, and their ratio ``speedup_2_workers``.
+  throughput on Fig. 5's scenario (wall clock) and their ratio ``speedup_2_workers``;
+  ``runs_per_cpu_s`` (``{"1": .., "2": ..}``): runs per CPU-second of this process and
+  its workers together, i.e. runs/s per core; ``worker_peak_rss_mb``: the largest peak
+  resident memory of a worker (Linux ``VmHWM``; else ``ru_maxrss`` of the workers);
+* ``first_run_compile_s``: CPU time numba spends compiling the kernels one Fig. 3
+  engagement uses, in a fresh process on an empty cache (a temporary
+  ``NUMBA_CACHE_DIR``), with ``first_run_cpu_s`` that process's whole CPU time
+  (null with ``--quick``, which skips this ~40 CPU-s measurement).
 
-Step and engagement timings are the median of ``--repeat`` repetitions (wall clock,
-``time.perf_counter``); throughputs are the best of ``--repeat`` interleaved
-measurements (the speed of a shared machine drifts between them). The machine and
-library versions are reported beside.
+Step and engagement timings are the median of ``--repeat`` repetitions; throughputs
+are the best of ``--repeat`` interleaved measurements. ``--quick`` (tests, previews)
+times a few steps once and uses short approaches. The machine and library versions
+are reported beside.
 """
 
 from __future__ import annotations
 
 import datetime
+import json
 import os
 import platform
+import resource
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -42,6 +61,7 @@ from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.costs import MissForecast
 from kalman_vs_infoset.estim.model import Bearing
 from kalman_vs_infoset.experiments.cmd_intercept import positive_int
+from kalman_vs_infoset.experiments.executors import make_executor
 from kalman_vs_infoset.experiments.runner import run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, run_engagement
@@ -52,15 +72,37 @@ def add_arguments(p) -> None:
     p.add_argument("--steps", type=positive_int, default=120, help="estimator steps timed")
     p.add_argument("--repeat", type=positive_int, default=3, help="repetitions (median)")
     p.add_argument("--mc-runs", type=positive_int, default=8, help="runs for the throughput")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a cheap preview: 5 steps, one repetition, short approaches, 2 Monte Carlo runs, "
+        "no first-run compilation measurement",
+    )
 
 
 #: the impulse every timed step applies (m/s)
 BENCH_IMPULSE_MPS = 0.5
-#: estimators also timed over the whole approach, to the blind range (the node set's
-#: cost is back-loaded: late in the approach its tightening replays the whole log)
+#: estimators also timed over the whole approach, to the blind range
 WHOLE_APPROACH = ("infoset", "ukf")
 #: more steps than any approach has (the bearings stop at the blind range)
 _ALL_STEPS = 100_000
+#: time steps (s) of the approaches of the cost exponent: about 100, 200 and 400 steps
+#: from 5801.3 km to the blind range (``--quick``: about 25, 50 and 100)
+COST_DT_S = (1.0, 0.5, 0.25)
+COST_DT_S_QUICK = (4.0, 2.0, 1.0)
+#: one Fig. 3 engagement in a fresh process, for the first-run compilation time
+_FIRST_RUN = """
+import json, resource, sys, time
+import numpy as np
+from kalman_vs_infoset._numba_cache import CompileNotice
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+notice = CompileNotice("bench", stream=sys.stderr).install()
+sc = load_scenario(sys.argv[1])
+run_engagement(sc, "infoset", "random", np.random.default_rng(1))
+r = resource.getrusage(resource.RUSAGE_SELF)
+print(json.dumps({"compile_s": notice.cpu_s, "cpu_s": r.ru_utime + r.ru_stime}))
+"""
 
 
 def _bearings(model, steps: int, dt: float, rng) -> list[float]:
@@ -81,75 +123,161 @@ def _bearings(model, steps: int, dt: float, rng) -> list[float]:
     return out
 
 
-def step_cost_us(name: str, sc, steps: int, repeat: int) -> tuple[float, int]:
-    """Median cost (us) of update + predict (with an impulse) + extremes for one channel,
-    and the number of steps timed: at most ``steps``, fewer when the approach reaches the
-    blind range or the belief becomes empty (a set estimator may diverge late in an
-    unguided approach: its status is reported, there is nothing left to time)."""
+def _approach_cpu_s(name: str, sc, steps: int, dt: float) -> tuple[float, int]:
+    """CPU time (s) of one pass of ``name`` over the approach, and the steps done."""
     model = sc.channel_model()
-    dt = sc.model.dt_s
-    est, b0 = build_estimator(name, sc, model, "lateral")
+    est, b = build_estimator(name, sc, model, "lateral")
     alphas = _bearings(model, steps, dt, np.random.default_rng(7))
+    done = 0
+    t0 = time.thread_time()
+    for a in alphas:
+        b = est.update(b, Bearing(a))
+        if b.is_empty:
+            break
+        b.extremes(MissForecast(model))
+        b = est.predict(b, dt, BENCH_IMPULSE_MPS)  # the impulse acts at the step's start
+        done += 1
+    return time.thread_time() - t0, done
+
+
+def step_cost_us(name: str, sc, steps: int, repeat: int) -> tuple[float, int]:
+    """Median CPU cost (us) of update + predict (with an impulse) + extremes for one
+    channel, and the number of steps timed: at most ``steps``, fewer when the approach
+    reaches the blind range or the belief becomes empty (a set estimator may diverge
+    late in an unguided approach: its status is reported, there is nothing left to
+    time)."""
     times, done = [], 0
     for _ in range(repeat):
-        b, done = b0, 0
-        t0 = time.perf_counter()
-        for a in alphas:
-            b = est.update(b, Bearing(a))
-            if b.is_empty:
-                break
-            b.extremes(MissForecast(model))
-            b = est.predict(b, dt, BENCH_IMPULSE_MPS)  # the impulse acts at the step's start
-            done += 1
-        times.append((time.perf_counter() - t0) / max(done, 1) * 1e6)
+        cpu_s, done = _approach_cpu_s(name, sc, steps, sc.model.dt_s)
+        times.append(cpu_s / max(done, 1) * 1e6)
     return float(np.median(times)), done
 
 
+def cost_exponent(sc, dts: tuple[float, ...]) -> dict[str, Any]:
+    """Slope of log(CPU of the information set over the whole approach) against
+    log(steps), the approach cut into as many steps as each ``dt`` gives."""
+    cost_ms, steps = [], []
+    for dt in dts:
+        cpu_s, done = _approach_cpu_s("infoset", sc, _ALL_STEPS, dt)
+        cost_ms.append(cpu_s * 1e3)
+        steps.append(done)
+    slope = float(np.polyfit(np.log(steps), np.log(cost_ms), 1)[0])
+    return {"cost_exponent": slope, "cost_steps": steps, "cost_ms": cost_ms, "cost_dt_s": dts}
+
+
 def engagement_ms(sc, noise: str, repeat: int) -> float:
+    """Median CPU time (ms) of one full engagement, both channels."""
     guidance = sc.guidance.model_copy(update={"lateral": True, "vertical": True})
     both = sc.model_copy(update={"guidance": guidance})
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         run_engagement(both, "infoset", noise, np.random.default_rng(1))
-        times.append((time.perf_counter() - t0) * 1e3)
+        times.append((time.thread_time() - t0) * 1e3)
     return float(np.median(times))
 
 
-def throughput(sc, runs: int, workers: int) -> float:
-    with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
-        run_experiment(sc, "infoset", "random", runs, 1, Path(tmp), workers=workers, progress=False)
-        return runs / (time.perf_counter() - t0)
+def _cpu_s() -> float:
+    """CPU time of this process and of its finished (waited-for) children."""
+    total = 0.0
+    for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN):
+        r = resource.getrusage(who)
+        total += r.ru_utime + r.ru_stime
+    return total
+
+
+def _peak_rss_mb(pids) -> float:
+    """The largest peak resident memory (MB) of live processes (Linux ``VmHWM``);
+    NaN where /proc is not there."""
+    peaks = []
+    for pid in pids:
+        try:
+            text = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        for line in text.splitlines():
+            if line.startswith("VmHWM:"):
+                peaks.append(float(line.split()[1]) / 1024.0)
+    return max(peaks) if peaks else float("nan")
+
+
+def throughput(sc, runs: int, workers: int) -> dict[str, float]:
+    """Monte Carlo runs of Fig. 5 on a pool of ``workers`` processes: runs per second
+    (wall), runs per CPU-second (this process and the workers, which are waited for
+    before the clock stops) and the workers' largest peak memory."""
+    with tempfile.TemporaryDirectory() as tmp, make_executor(workers) as pool:
+        wall0, cpu0 = time.perf_counter(), _cpu_s()
+        run_experiment(
+            sc, "infoset", "random", runs, 1, Path(tmp), workers=workers, progress=False,
+            executor=pool,
+        )  # fmt: skip
+        rss = _peak_rss_mb(getattr(pool, "_processes", {}) or {})
+        pool.shutdown(wait=True)  # the workers' CPU time counts once they are waited for
+        wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
+    if not np.isfinite(rss):
+        rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+    return {"runs_per_s": runs / wall, "runs_per_cpu_s": runs / cpu, "peak_rss_mb": rss}
+
+
+def first_run_compile(scenario: Path, code: str = _FIRST_RUN) -> dict[str, float]:
+    """Run ``code`` (by default one Fig. 3 engagement) in a fresh process on an empty
+    numba cache (a temporary ``NUMBA_CACHE_DIR``); its JSON line: ``compile_s`` (CPU
+    time of the compilations, from numba's compile events) and ``cpu_s`` (the whole
+    process)."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        out = subprocess.run(
+            [sys.executable, "-c", code, str(scenario)],
+            capture_output=True, text=True, env=env, check=True, timeout=3600,
+        )  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def run(args) -> dict[str, Any]:
     root = scenario_folder(args.scenarios)
     fig3 = load_scenario(root / "kp_fig3.toml")
     fig5 = load_scenario(root / "kp_fig5.toml")
+    quick = args.quick
+    n_steps, repeat = (5, 1) if quick else (args.steps, args.repeat)
+    mc_runs = 2 if quick else args.mc_runs
     # warm-up: imports, compiled kernels, filterpy
     step_cost_us("infoset", fig3, 5, 1)
     engagement_ms(fig3, "random", 1)
-    timed = {n: step_cost_us(n, fig3, args.steps, args.repeat) for n in registry.names("intercept")}
+    timed = {n: step_cost_us(n, fig3, n_steps, repeat) for n in registry.names("intercept")}
     steps = {n: us for n, (us, _) in timed.items()}
     result: dict[str, Any] = {f"{n}_step_us": us for n, us in steps.items()}
     result["step_us"] = steps
     result["steps_timed"] = {n: k for n, (_, k) in timed.items()}
-    result["engagement_ms"] = engagement_ms(fig3, "game", args.repeat)
-    result["engagement_random_ms"] = engagement_ms(fig3, "random", args.repeat)
+    result["engagement_ms"] = engagement_ms(fig3, "game", repeat)
+    result["engagement_random_ms"] = engagement_ms(fig3, "random", repeat)
+    ukf_ms = result["ukf_step_us"] / 1e3
+    result["engagement_in_ukf_steps"] = result["engagement_ms"] / ukf_ms
+    result["engagement_random_in_ukf_steps"] = result["engagement_random_ms"] / ukf_ms
     result["infoset_to_ukf_ratio"] = result["infoset_step_us"] / result["ukf_step_us"]
-    whole = {n: step_cost_us(n, fig3, _ALL_STEPS, args.repeat) for n in WHOLE_APPROACH}
+    if quick:  # the whole approach at a coarse step: a few dozen steps
+        whole = {n: _whole(n, fig3, COST_DT_S_QUICK[-1]) for n in WHOLE_APPROACH}
+    else:
+        whole = {n: step_cost_us(n, fig3, _ALL_STEPS, repeat) for n in WHOLE_APPROACH}
     result["whole_approach_step_us"] = {n: us for n, (us, _) in whole.items()}
     result["whole_approach_steps"] = {n: k for n, (_, k) in whole.items()}
     result["whole_approach_ratio"] = whole["infoset"][0] / whole["ukf"][0]
+    result.update(cost_exponent(fig3, COST_DT_S_QUICK if quick else COST_DT_S))
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
     # interleaved and best-of-repeat: the machine's speed drifts (shared host)
     one, two = [], []
-    for _ in range(args.repeat):
-        one.append(throughput(fig5, args.mc_runs, 1))
-        two.append(throughput(fig5, args.mc_runs, 2))
-    result["runs_per_s"], result["runs_per_s_2"] = max(one), max(two)
+    for _ in range(repeat):
+        one.append(throughput(fig5, mc_runs, 1))
+        two.append(throughput(fig5, mc_runs, 2))
+    best = {w: max(m, key=lambda t: t["runs_per_cpu_s"]) for w, m in (("1", one), ("2", two))}
+    result["runs_per_s"] = max(t["runs_per_s"] for t in one)
+    result["runs_per_s_2"] = max(t["runs_per_s"] for t in two)
     result["speedup_2_workers"] = result["runs_per_s_2"] / result["runs_per_s"]
+    result["runs_per_cpu_s"] = {w: t["runs_per_cpu_s"] for w, t in best.items()}
+    result["worker_peak_rss_mb"] = {w: max(t["peak_rss_mb"] for t in m) for w, m in
+                                    (("1", one), ("2", two))}  # fmt: skip
+    first = None if quick else first_run_compile(root / "kp_fig3.toml")
+    result["first_run_compile_s"] = first and first["compile_s"]
+    result["first_run_cpu_s"] = first and first["cpu_s"]
     result["machine"] = {
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "platform": platform.platform(),
@@ -158,8 +286,14 @@ def run(args) -> dict[str, Any]:
         "python": platform.python_version(),
         "numpy": np.__version__,
         "load_average": os.getloadavg()[0],
+        "clock": "CPU time (thread_time; workers: getrusage)",
     }
     return result
+
+
+def _whole(name: str, sc, dt: float) -> tuple[float, int]:
+    cpu_s, done = _approach_cpu_s(name, sc, _ALL_STEPS, dt)
+    return cpu_s / max(done, 1) * 1e6, done
 
 
 def render(result: dict[str, Any]) -> str:
@@ -172,9 +306,15 @@ def render(result: dict[str, Any]) -> str:
         + (f"   over {timed[name]} steps" if name in timed else "")
         for name, us in result["step_us"].items()
     ]
+    cost = ", ".join(
+        f"{n} steps {ms:.0f} ms"
+        for n, ms in zip(result["cost_steps"], result["cost_ms"], strict=True)
+    )
+    compile_s = result["first_run_compile_s"]
     return "\n".join(
         [
-            f"one estimator step (update + predict with impulse + extremes), {m['date']}:",
+            f"one estimator step (update + predict with impulse + extremes), CPU time, "
+            f"{m['date']}:",
             *steps,
             "the same over the whole approach (to the blind range): "
             + ", ".join(
@@ -182,10 +322,23 @@ def render(result: dict[str, Any]) -> str:
                 for n, us in result["whole_approach_step_us"].items()
             )
             + f" (ratio {result['whole_approach_ratio']:.2f})",
-            f"full Fig. 3 engagement, both channels: game {result['engagement_ms']:.0f} ms, "
-            f"random {result['engagement_random_ms']:.0f} ms",
+            f"full Fig. 3 engagement, both channels: game {result['engagement_ms']:.0f} ms "
+            f"({result['engagement_in_ukf_steps']:.0f} UKF steps), random "
+            f"{result['engagement_random_ms']:.0f} ms "
+            f"({result['engagement_random_in_ukf_steps']:.0f} UKF steps)",
+            f"cost in approach length: exponent {result['cost_exponent']:.2f} ({cost})",
             f"Monte Carlo: {result['runs_per_s']:.2f} runs/s (1 worker), "
-            f"{result['runs_per_s_2']:.2f} runs/s (2 workers), x{result['speedup_2_workers']:.2f}",
+            f"{result['runs_per_s_2']:.2f} runs/s (2 workers), x{result['speedup_2_workers']:.2f}; "
+            "per CPU-second: "
+            + ", ".join(f"{v:.2f} ({w} workers)" for w, v in result["runs_per_cpu_s"].items())
+            + "; worker peak memory "
+            + ", ".join(f"{v:.0f} MB" for v in result["worker_peak_rss_mb"].values()),
+            "first run on an empty numba cache: "
+            + (
+                f"{compile_s:.1f} CPU-s compiling, {result['first_run_cpu_s']:.1f} CPU-s in all"
+                if compile_s is not None
+                else "not measured (--quick)"
+            ),
             f"machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}, numpy "
             f"{m['numpy']}, load {m['load_average']:.2f}",
         ]

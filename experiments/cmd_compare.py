@@ -64,7 +64,7 @@ def run_grid(sc, args, runs: int, seed: int, out) -> tuple[list[dict], list[pd.D
             t1 = time.perf_counter()
             df = run_experiment(
                 sc, est, noise, runs, seed, out / "runs", args.workers, args.scheduler,
-                not args.no_progress,
+                not args.no_progress, limit_s=args.run_cpu_limit_s,
             )  # fmt: skip
             rows.append(summarise(df, sc, est, noise, seed, time.perf_counter() - t1))
             frames.append(df)

@@ -10,7 +10,12 @@ from typing import Any
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import traces
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.runner import results_path, run_experiment, summarise
+from kalman_vs_infoset.experiments.runner import (
+    MAX_RUNS,
+    results_path,
+    run_experiment,
+    summarise,
+)
 from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
 from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
 
@@ -31,6 +36,34 @@ def _int_at_least(lo: int, what: str):
 positive_int = _int_at_least(1, "positive")
 
 
+def runs_int(text: str) -> int:
+    """A run count: an integer in [1, 10^6] (the runner holds the run indices)."""
+    value = positive_int(text)
+    if value > MAX_RUNS:
+        raise argparse.ArgumentTypeError(f"expected an integer in [1, {MAX_RUNS}], got {text!r}")
+    return value
+
+
+def cpu_limit_s(text: str) -> float:
+    """A CPU-time limit of a run, in seconds: a number in (0, 1e6]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 < value <= 1e6:
+        raise argparse.ArgumentTypeError(f"expected seconds in (0, 1e6], got {text!r}")
+    return value
+
+
+def add_limit(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--run-cpu-limit-s",
+        type=cpu_limit_s,
+        help="CPU-time limit of one run, s (a run over it is recorded as failed, with the "
+        "reason; local runs only; default: none)",
+    )
+
+
 def seed_int(text: str) -> int:
     """A root seed: an integer in [0, 2^63 - 1] (the results tables hold it as int64)."""
     value = _int_at_least(0, "non-negative")(text)
@@ -41,12 +74,13 @@ def seed_int(text: str) -> int:
 
 def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help=SCENARIO_HELP)
-    p.add_argument("--runs", type=positive_int, help="number of runs (default: the scenario's)")
+    p.add_argument("--runs", type=runs_int, help="number of runs (default: the scenario's)")
     p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--out", help="output directory (default: results/<scenario name>)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_limit(p)
     p.add_argument(
         "--set",
         action="append",
@@ -54,7 +88,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
         metavar="TABLE.KEY=VALUE",
         dest="overrides",
         help="override a scenario field with a TOML value, e.g. "
-        "estimator.kalman_noise_inflation=10 (repeatable; validated like the file; "
+        "estimator.ekf.noise_inflation=10 (repeatable; validated like the file; "
         "the scenario's name gets a +key=value suffix)",
     )
 
@@ -84,8 +118,9 @@ def run(args) -> dict[str, Any]:
     traced = traces.check_runs(args.trace, runs)
     t0 = time.perf_counter()
     df = run_experiment(
-        sc, estimator, noise, runs, seed, out, args.workers, args.scheduler, not args.no_progress
-    )
+        sc, estimator, noise, runs, seed, out, args.workers, args.scheduler,
+        not args.no_progress, limit_s=args.run_cpu_limit_s,
+    )  # fmt: skip
     result = summarise(df, sc, estimator, noise, seed, time.perf_counter() - t0)
     result["out"] = str(out)
     traced = traces.traceable(traced, df, f"{sc.name} {estimator}-{noise}")

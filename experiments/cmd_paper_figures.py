@@ -106,6 +106,8 @@ def _groups(only: str | None) -> list[str]:
     if only is None:
         return list(GROUPS)
     wanted = [w.strip() for w in only.split(",") if w.strip()]
+    if not wanted:  # would draw nothing and say so with exit status 0
+        raise InputError(f"--only {only!r}: name at least one figure or group")
     groups = []
     for w in wanted:
         if w in FIGURES:

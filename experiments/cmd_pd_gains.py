@@ -76,7 +76,45 @@ def _angles(text: str | None, table: dict[float, float]) -> list[tuple[str, floa
     return out
 
 
+#: most control steps of one case (horizon / control period)
+MAX_STEPS = 10**6
+#: most gain values per axis of the (k_q, k_w) grid (the map is its square, one batch)
+MAX_GRID = 1000
+#: most case-steps of one angle's map (grid^2 x steps); the defaults need 8.2e7
+MAX_WORK = 10**10
+
+
+def _check_cost(args: argparse.Namespace) -> None:
+    """Refuse, before any work, options that make the study never end or not fit."""
+    for flag in ("angle_tol_deg", "rate_tol_degps", "grid_step", "control_period_s",
+                 "horizon_s", "map_angle_deg", "fig15_kw"):  # fmt: skip
+        value = getattr(args, flag)
+        if not (np.isfinite(value) and value > 0):
+            name = "--" + flag.replace("_", "-")
+            raise InputError(f"{name} {value:g}: must be a finite positive number")
+    steps = args.horizon_s / args.control_period_s
+    if steps < 1:
+        raise InputError(
+            f"--control-period-s {args.control_period_s:g} is longer than --horizon-s "
+            f"{args.horizon_s:g}: no control step"
+        )
+    if steps > MAX_STEPS:
+        raise InputError(
+            f"--horizon-s {args.horizon_s:g} / --control-period-s {args.control_period_s:g} "
+            f"= {steps:.3g} control steps a case; the limit is {MAX_STEPS}"
+        )
+    d = gs.StudySettings()
+    grid = (d.grid_hi - d.grid_lo) / args.grid_step + 1
+    if grid > MAX_GRID or grid * grid * steps > MAX_WORK:
+        raise InputError(
+            f"--grid-step {args.grid_step:g} gives {grid:.3g} gains an axis and "
+            f"{grid * grid * steps:.3g} case-steps an angle; the limits are {MAX_GRID} "
+            f"and {MAX_WORK:.0e}"
+        )
+
+
 def _settings(args: argparse.Namespace) -> gs.StudySettings:
+    _check_cost(args)
     try:
         return replace(
             gs.StudySettings(),

@@ -64,7 +64,7 @@ def _noises(df: pd.DataFrame) -> list[str]:
 
 def plot_files(paths, paper=None, out: Path | None = None, animation: bool = True) -> list[Path]:
     """Draw every figure of the traces ``paths``; returns the files written."""
-    from kalman_vs_infoset.experiments import plots_attitude, plots_intercept
+    from kalman_vs_infoset.experiments import plots_attitude
 
     paths = [Path(p) for p in paths]
     if not paths:
@@ -81,19 +81,33 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
         return files
     paper = paper if paper is not None else _paper_from_json(paths[0])
     df = pd.concat(steps, ignore_index=True)
-    name = str(df["scenario"].iloc[0])
+    if "seed" not in df:
+        df = df.assign(seed=None)
+    for seed, by_seed in df.groupby("seed", dropna=False, sort=True):
+        tag = "" if pd.isna(seed) else f"-s{int(seed)}"
+        files += _step_figures(by_seed, str(by_seed["scenario"].iloc[0]), tag, out, paper)
+    for path in paths:
+        files += _set_figures(path, out, animation)
+    return files
+
+
+def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> list[Path]:
+    """One seed's figures; their names carry what distinguishes the run (estimator,
+    noises, seed ``tag``, run), so drawing another seed never replaces them."""
+    from kalman_vs_infoset.experiments import plots_intercept
+
+    files: list[Path] = []
     for run in sorted(df["run"].unique()):
         for est in dict.fromkeys(df["estimator"]):
             d = df[df["estimator"] == est]
             noises = _noises(d)
             fig = plots_intercept.control_processes(d, int(run), str(est), noises, paper=paper)
-            files += fs.save(fig, out / f"{name}-{est}-{','.join(noises)}-run{run}-processes")
+            stem = f"{name}-{est}-{','.join(noises)}{tag}-run{run}-processes"
+            files += fs.save(fig, out / stem)
         if df["estimator"].nunique() > 1:
             for noise in _noises(df):
                 fig = plots_intercept.estimator_overlay(df, int(run), noise)
-                files += fs.save(fig, out / f"{name}-{noise}-run{run}-overlay")
-    for path in paths:
-        files += _set_figures(path, out, animation)
+                files += fs.save(fig, out / f"{name}-{noise}{tag}-run{run}-overlay")
     return files
 
 
@@ -122,10 +136,17 @@ def _set_figures(path: Path, out: Path, animation: bool) -> list[Path]:
 
 
 def run(args) -> dict[str, Any]:
-    paths = [Path(p) for p in args.traces]
-    for p in paths:
+    paths = []
+    for p in map(Path, args.traces):
+        if p.name.endswith("-trace-sets.parquet"):  # `plot *trace*` names both files
+            step = p.with_name(p.name.replace("-trace-sets.parquet", "-trace.parquet"))
+            if not step.is_file():
+                raise InputError(f"{p}: the sets of a trace; its {step.name} is missing")
+            p = step
         if not p.is_file():
             raise InputError(f"{p}: no such trace file")
+        if p not in paths:
+            paths.append(p)
     files = plot_files(paths, out=args.out, animation=not args.no_animation)
     return {"traces": [str(p) for p in paths], "files": [str(f) for f in files]}
 

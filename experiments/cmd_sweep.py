@@ -3,7 +3,7 @@
 A sensitivity study: the ``compare`` experiment (estimators x noises on paired runs)
 repeated for each value of one scenario field, e.g. the Kalman filters' noise
 inflation, the disturbance bound ``model.nu_mps2`` or the slab set's
-``estimator.split_ratio``. Each value is a ``--set KEY=VALUE`` override
+``estimator.infoset.split_ratio``. Each value is a ``--set KEY=VALUE`` override
 (:func:`experiments.scenario.apply_overrides`): validated like the file, its runs stored
 under the suffixed scenario name (so they resume, and never mix with the plain
 scenario's), and every value sees the same truths (same seed, paired).
@@ -31,6 +31,15 @@ from kalman_vs_infoset.experiments.report import summary_markdown, write_text
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
 
+def _canonical(value: Any) -> Any:
+    """A value as the scenario sees it: numbers as floats (``0`` and ``0.0`` are one)."""
+    if isinstance(value, list):
+        return [_canonical(v) for v in value]
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
 def _toml_values(text: str) -> list[Any]:
     try:
         values = tomllib.loads(f"v = {text}")["v"]
@@ -40,8 +49,8 @@ def _toml_values(text: str) -> list[Any]:
         raise argparse.ArgumentTypeError(
             f'expected a non-empty TOML array, e.g. "[1, 3, 10]"; got {text!r}'
         )
-    seen = [json.dumps(v) for v in values]
-    twice = sorted({v for v in seen if seen.count(v) > 1})
+    seen = [json.dumps(_canonical(v)) for v in values]  # 0 and 0.0 are one value
+    twice = sorted({json.dumps(v) for v, s in zip(values, seen, strict=True) if seen.count(s) > 1})
     if twice:  # the same value would be run and tabled twice
         raise argparse.ArgumentTypeError(f"{', '.join(twice)} given twice in {text!r}")
     return values
@@ -50,7 +59,10 @@ def _toml_values(text: str) -> list[Any]:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_compare_arguments(p)
     p.add_argument(
-        "--key", required=True, help="the field to vary, TABLE.KEY or TABLE.SUBTABLE.KEY"
+        "--key",
+        required=True,
+        help="the field to vary, TABLE.KEY or TABLE.SUBTABLE.KEY, or a comma list of fields "
+        "given the same value (e.g. estimator.ekf.noise_inflation,estimator.ukf.noise_inflation)",
     )
     p.add_argument(
         "--values",
@@ -60,21 +72,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _keys(text: str, overrides: list[str]) -> list[str]:
+    """The swept fields: one TABLE.KEY, or several set to the same value (a comma list,
+    e.g. both Kalman filters' ``noise_inflation``)."""
+    keys = [k.strip() for k in text.split(",")]
+    for key in keys:
+        parts = key.split(".")
+        if not 2 <= len(parts) <= 3 or not all(parts):  # the keys --set takes
+            raise InputError(
+                f"--key {text!r}: expected TABLE.KEY or TABLE.SUBTABLE.KEY, or a comma list "
+                "of them (e.g. model.nu_mps2, estimator.infoset.n_nodes)"
+            )
+    if len(set(keys)) < len(keys):
+        raise InputError(f"--key {text!r}: a key given twice")
+    given = {o.partition("=")[0].strip() for o in overrides}
+    for key in keys:
+        if key in given:  # one of the two values would be silently ignored
+            raise InputError(f"--key {key} is also given with --set; give it only as --key")
+    return keys
+
+
 def run(args) -> dict[str, Any]:
-    key = args.key.strip()
-    parts = key.split(".")
-    if not 2 <= len(parts) <= 3 or not all(parts):  # the keys --set takes
-        raise InputError(
-            f"--key {args.key!r}: expected TABLE.KEY or TABLE.SUBTABLE.KEY "
-            "(e.g. model.nu_mps2, estimator.infoset.n_nodes)"
-        )
+    keys = _keys(args.key, args.overrides)
+    key = ",".join(keys)
     t0 = time.perf_counter()
     # compare's folder by default: the runs' files carry the +key=value suffix and the
     # tables the key, so nothing collides
     base, runs, seed, out = resolve(args)
     # every value is validated before the first run starts
     scenarios = [
-        load_scenario(args.scenario, [*args.overrides, f"{key}={json.dumps(v)}"])
+        load_scenario(args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)])
         for v in args.values
     ]
     rows = []

@@ -170,6 +170,13 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
     off = [t for t, k in zip(args.times, steps, strict=True) if abs(k * dt - t) > 1e-9]
     if off:
         raise InputError(f"--times: {off[0]:g} s is not a multiple of the step {dt:g} s")
+    slowest_mps = -max(sc.truth.vx_kmps) * 1e3  # the truth closes at -vx
+    last_s = (sc.truth.x_km[1] * 1e3 - model.eps_m) / slowest_mps if slowest_mps > 0 else math.inf
+    if min(args.times) > last_s + dt:  # nothing to record: an empty table and figure
+        raise InputError(
+            f"--times: {min(args.times):g} s and later are after the end of every run (the "
+            f"range reaches model.eps_km by {last_s:.1f} s at the latest)"
+        )
     children = np.random.SeedSequence(seed).spawn(3)
     truth_rng, noise_rng, v_rng = (np.random.default_rng(c) for c in children)
     y, v, x, e = _draw_truth(sc, truth_rng)

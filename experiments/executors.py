@@ -14,16 +14,32 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    BrokenExecutor,
+    CancelledError,
+    Executor,
+    ProcessPoolExecutor,
+    wait,
+)
 from contextlib import contextmanager
+from functools import partial
+from typing import Any
 
 from kalman_vs_infoset.estim import _kernels as _k
 from kalman_vs_infoset.experiments import provenance
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, check_stop
+from kalman_vs_infoset.experiments.limits import limited
 from kalman_vs_infoset.experiments.provenance import code_identity
 
 #: how often a pool worker checks that its parent is alive (s)
 WATCHDOG_S = 1.0
+
+#: chunks queued per local worker (the others are submitted as these finish)
+IN_FLIGHT = 2
+
+#: how long runs on a Dask cluster wait with no live worker before giving up (s)
+NO_WORKER_TIMEOUT_S = 60.0
 
 
 @contextmanager
@@ -52,8 +68,21 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
     pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))
     try:
         yield pool
+    except BaseException:  # Ctrl-C, SIGTERM, an error: the running chunks are not waited for
+        _stop_workers(pool)
+        raise
     finally:
         pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """End a pool's worker processes now (the command is stopping: their chunks are
+    not finished, so nothing is lost that a rerun does not compute)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            proc.kill()
+        except (OSError, AttributeError):
+            pass
 
 
 def _worker_init(parent_pid: int) -> None:
@@ -70,6 +99,9 @@ def _worker_init(parent_pid: int) -> None:
             pass
     if os.getppid() != parent_pid:  # the parent died before the signal was armed
         os._exit(1)
+    # Ctrl-C and SIGTERM are the command's to handle (it saves and stops the workers)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
     def watch() -> None:
         while os.getppid() == parent_pid:
@@ -104,3 +136,107 @@ def executor_or(executor: Executor | None, workers, scheduler) -> Iterator[Execu
     else:
         with make_executor(workers, scheduler) as ex:
             yield ex
+
+
+class WorkerLost(RuntimeError):
+    """Runs neither finished nor failed: a worker process died, a run ran out of memory,
+    or a Dask cluster had no live worker. Finished runs are saved, the lost ones are
+    missing (a rerun computes them); the command exits with status 1."""
+
+
+def _chunks(todo: list[int], size: int) -> list[list[int]]:
+    chunks: dict[int, list[int]] = {}
+    for j in todo:
+        chunks.setdefault(j // size, []).append(j)
+    return list(chunks.values())
+
+
+def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
+    """Yield ``(run, row)`` as chunks finish: in order in this process for one local
+    worker (so Ctrl-C stops between chunks), else as completed on the executor. Local
+    workers are capped at the number of chunks; runs lost to a dead worker or to memory
+    are counted and raise :class:`WorkerLost` once the others are through."""
+    chunks = _chunks(todo, job.chunk)
+    task = job.task if limit_s is None else partial(limited, job.task, limit_s)
+    n = min(workers or os.cpu_count() or 1, len(chunks))
+    lost = {"dead": 0, "memory": 0}
+    if executor is None and scheduler is None and n == 1:
+        for chunk in chunks:
+            check_stop()
+            try:
+                pairs = task(chunk)
+            except MemoryError:
+                lost["memory"] += len(chunk)
+                continue
+            yield from pairs
+    else:
+        with executor_or(executor, n, scheduler) as ex:
+            window = len(chunks) if scheduler or executor else IN_FLIGHT * n
+            yield from _pooled(ex, task, chunks, window, lost)
+    why = [f"{lost['dead']} runs lost to a dead worker"] if lost["dead"] else []
+    why += [f"{lost['memory']} runs out of memory (try fewer --workers)"] if lost["memory"] else []
+    if why:
+        raise WorkerLost(f"{'; '.join(why)}; finished runs are saved; rerun the same command")
+
+
+def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict[str, int]):
+    """The rows of ``chunks`` on ``ex``, at most ``window`` chunks queued at a time."""
+    queue = iter(chunks)
+    pending: dict[Any, list[int]] = {}
+    idle_since = None
+
+    def refill() -> None:
+        while len(pending) < window:
+            chunk = next(queue, None)
+            if chunk is None:
+                return
+            try:
+                pending[ex.submit(task, chunk)] = chunk
+            except (BrokenExecutor, RuntimeError):  # the pool is broken: lost, not failed
+                lost["dead"] += len(chunk) + sum(map(len, queue))
+                return
+
+    refill()
+    while pending:
+        done, _ = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+        check_stop()
+        if not done:
+            if _live_workers(ex) == 0:
+                idle_since = idle_since or time.monotonic()
+                if time.monotonic() - idle_since > NO_WORKER_TIMEOUT_S:
+                    left = sum(map(len, pending.values())) + sum(map(len, queue))
+                    raise WorkerLost(
+                        f"no live Dask worker for {NO_WORKER_TIMEOUT_S:g} s ({left} runs not "
+                        "run); finished runs are saved; start workers and rerun the same command"
+                    )
+            else:
+                idle_since = None
+            continue
+        for fut in done:
+            chunk = pending.pop(fut)
+            try:
+                pairs = fut.result()
+            except InputError:
+                raise
+            except (BrokenExecutor, CancelledError):
+                lost["dead"] += len(chunk)  # a worker died: missing, not failed (resumable)
+                continue
+            except MemoryError:
+                lost["memory"] += len(chunk)
+                continue
+            except Exception as exc:  # the task itself raised outside the runs
+                row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+                pairs = [(j, dict(row)) for j in chunk]
+            yield from pairs
+        refill()
+
+
+def _live_workers(ex: Executor) -> int | None:
+    """Workers of a Dask executor's cluster (None for other executors)."""
+    client = getattr(ex, "_client", None)
+    if client is None:
+        return None
+    try:
+        return len(client.scheduler_info().get("workers", {}))
+    except Exception:  # noqa: BLE001 - the scheduler itself is gone
+        return 0

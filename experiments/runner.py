@@ -23,16 +23,10 @@ One runner for every problem (:class:`Job`: the intercept and the attitude loops
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import (
-    BrokenExecutor,
-    CancelledError,
-    Executor,
-    as_completed,
-)
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -40,9 +34,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.executors import executor_or, make_executor  # noqa: F401 - re-exported
-from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.errors import InputError, check_stop
+from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exported
+    WorkerLost,
+    executor_or,
+    make_executor,
+    results,
+)
+from kalman_vs_infoset.experiments.files import atomic_write, exclusive
 from kalman_vs_infoset.experiments.progress import progress_bar
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
@@ -60,6 +59,9 @@ def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
 
 #: largest root seed (Parquet's int64 column; --seed is validated before any run)
 MAX_SEED = 2**63 - 1
+
+#: most runs a command may ask for (their indices are held in memory)
+MAX_RUNS = 10**6
 
 
 @dataclass(frozen=True)
@@ -101,13 +103,38 @@ def check_seed(seed: int) -> int:
     return int(seed)
 
 
+def check_runs(runs: int) -> int:
+    if not 1 <= int(runs) <= MAX_RUNS:
+        raise InputError(f"--runs {runs}: must be an integer in [1, {MAX_RUNS}]")
+    return int(runs)
+
+
 def _write_rows(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:
-    df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
+    df = _typed(pd.DataFrame(rows), rows).sort_values("run").reset_index(drop=True)
     write_table(path, df, meta)  # the description travels in the Parquet metadata too
 
 
-def _read_rows(path: Path) -> list[dict[str, Any]]:
-    """The rows of a results table, or one line naming the file and the remedy."""
+def _typed(df: pd.DataFrame, rows: list[dict[str, Any]]) -> pd.DataFrame:
+    """Integer and boolean columns with gaps (a failed run has no results) as nullable
+    integers and booleans, not floats and objects: once the failed runs are run again,
+    the table has the dtypes of a table that never had a failure."""
+    for col in df.columns[df.isna().any()]:
+        values = [r.get(col) for r in rows]
+        given = [v for v in values if v is not None and not pd.isna(v)]
+        if not given:
+            continue
+        if all(isinstance(v, bool | np.bool_) for v in given):
+            dtype = "boolean"
+        elif all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in given):
+            dtype = "Int64"
+        else:
+            continue
+        df[col] = pd.array([None if v is None or pd.isna(v) else v for v in values], dtype)
+    return df
+
+
+def _read_table(path: Path) -> dict[int, dict[str, Any]]:
+    """The rows of a results table by run, or one line naming the file and the remedy."""
     try:
         df = pd.read_parquet(path)
     except Exception as exc:  # truncated, or not Parquet at all
@@ -120,7 +147,13 @@ def _read_rows(path: Path) -> list[dict[str, Any]]:
             f"{path}: not a results table (no 'run' and 'status' columns); use another "
             f"--out or delete {path}"
         )
-    return df.to_dict("records")
+    run = df["run"]
+    if not pd.api.types.is_integer_dtype(run) or (run < 0).any() or run.duplicated().any():
+        raise InputError(
+            f"{path}: not a results table (column 'run' does not hold distinct run "
+            f"indices); use another --out or delete {path}"
+        )
+    return {int(r["run"]): r for r in df.to_dict("records")}
 
 
 def intercept_job(sc: InterceptScenario, estimator: str, noise: str, seed: int) -> Job:
@@ -143,6 +176,8 @@ def batched_task(simulate, seed: int, runs: list[int]) -> list[tuple[int, dict[s
     t0 = time.perf_counter()
     try:
         rows = simulate([run_seed(seed, 0, j) for j in runs])
+    except MemoryError:
+        raise  # a resource, not the run: not recorded (the runner says so)
     except Exception as exc:
         if len(runs) > 1:
             return [pair for j in runs for pair in batched_task(simulate, seed, [j])]
@@ -169,10 +204,11 @@ def run_experiment(
     scheduler: str | None = None,
     progress: bool = True,
     executor: Executor | None = None,
+    limit_s: float | None = None,
 ) -> pd.DataFrame:
     """Run (or complete) an intercept experiment and return its per-run table."""
     job = intercept_job(sc, estimator, noise, check_seed(seed))
-    return run_job(job, runs, out_dir, workers, scheduler, progress, executor)
+    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limit_s)
 
 
 def run_job(
@@ -183,46 +219,115 @@ def run_job(
     scheduler: str | None = None,
     progress: bool = True,
     executor: Executor | None = None,
+    limit_s: float | None = None,
 ) -> pd.DataFrame:
     """Run (or complete) runs ``0..runs-1`` of ``job``; return their rows, by run.
 
     Finished runs are kept on disk whatever ``runs`` is (a smaller ``runs`` only
-    reports fewer); a file of another scenario or other sources is refused (one line).
+    reports fewer); failed runs are run again; a file of another scenario or other
+    sources is refused (one line). Complete results are only read (a read-only folder
+    can be summarised again); otherwise the table is written by one command at a time
+    (:func:`experiments.files.exclusive`). ``limit_s`` is a CPU-time limit per run
+    (:mod:`experiments.limits`).
     """
     check_seed(job.seed)
+    check_runs(runs)
     path = job_path(out_dir, job)
+    meta = {**job.meta, "code": code_identity()}
+    meta_path = sidecar_path(path)
+    if path.exists():
+        _check_resumable(path, existing_sidecar(path), meta)
+        table = _read_table(path)
+        if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
+            return _reported(job, path, table, runs)
+    made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") from None
-    meta = {**job.meta, "code": code_identity()}
-    meta_path = sidecar_path(path)
-    rows: list[dict[str, Any]] = []
-    if path.exists():
-        _check_resumable(path, existing_sidecar(path), meta)
-        rows = _read_rows(path)
-    atomic_write(meta_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=2)))
-    done = {int(r["run"]) for r in rows}
-    todo = [j for j in range(runs) if j not in done]
-    if todo:
-        bar = progress_bar(runs, runs - len(todo), job.desc, progress)
-        last_save = time.monotonic()
-        try:
-            for j, row in _results(job, todo, executor, workers, scheduler):
-                rows.append({**job.base, "run": j, **row})
-                bar.update(1)
-                if time.monotonic() - last_save > SAVE_EVERY_S:
-                    _write_rows(path, rows, meta)
-                    last_save = time.monotonic()
-        finally:
-            bar.close()
-            if rows:
-                _write_rows(path, rows, meta)  # also on Ctrl-C: finished runs are kept
-    df = pd.DataFrame(rows)
+    wrote_meta = False  # a description this command wrote where there was none
+    made += [] if meta_path.parent.exists() else [meta_path.parent]
+    try:
+        with exclusive(path, job.desc):
+            table = {}
+            if path.exists():  # read again: another command may have written it meanwhile
+                _check_resumable(path, existing_sidecar(path), meta)
+                table = _read_table(path)
+            if not meta_path.exists() or _read_json(meta_path) != meta:
+                wrote_meta = not meta_path.exists()
+                text = json.dumps(meta, indent=2)
+                atomic_write(meta_path, lambda tmp: Path(tmp).write_text(text))
+            todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
+            retried = sum(j in table for j in todo)
+            if retried:
+                print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
+            if todo:
+                _complete(job, runs, todo, table, path, meta, progress,
+                          executor, workers, scheduler, limit_s)  # fmt: skip
+    except BaseException:
+        if not path.exists():  # refused or stopped before any run finished: no leftovers
+            if wrote_meta:
+                meta_path.unlink(missing_ok=True)
+            for d in sorted(made, key=lambda d: -len(d.parts)):  # deepest first
+                try:
+                    d.rmdir()
+                except OSError:
+                    pass
+        raise
+    return _reported(job, path, table, runs)
+
+
+def _complete(job, runs, todo, table, path, meta, progress, executor, workers, scheduler,
+              limit_s):  # fmt: skip
+    """Run ``todo`` into ``table``, saving it every :data:`SAVE_EVERY_S` and at the end,
+    also on Ctrl-C or SIGTERM (finished runs are kept)."""
+    bar = progress_bar(runs, runs - len(todo), job.desc, progress)
+    last_save = time.monotonic()
+    changed = False
+    try:
+        for j, row in results(job, todo, executor, workers, scheduler, limit_s):
+            table[j] = {**job.base, "run": j, **row}
+            changed = True
+            bar.update(1)
+            check_stop()
+            if time.monotonic() - last_save > SAVE_EVERY_S:
+                _write_rows(path, list(table.values()), meta)
+                last_save, changed = time.monotonic(), False
+    finally:
+        bar.close()
+        if changed:
+            _write_rows(path, list(table.values()), meta)
+
+
+def _reported(job: Job, path: Path, table: dict[int, dict], runs: int) -> pd.DataFrame:
+    """Runs ``0..runs-1`` of ``table`` as a frame; their failures said on stderr and
+    counted for the command's last line (:func:`failed_runs`)."""
+    df = pd.DataFrame([r for j, r in table.items() if j < runs])
     if len(df):
-        df = df[df["run"] < runs].sort_values("run").reset_index(drop=True)
+        df = df.sort_values("run").reset_index(drop=True)
     _report_failures(job, df)
+    _FAILED[str(path)] = int((df["status"] != "ok").sum()) if len(df) else 0
     return df
+
+
+#: failed runs of the tables this process reported, by table (the command's last line)
+_FAILED: dict[str, int] = {}
+
+
+def failed_runs() -> int:
+    """Failed runs among those the tables reported since :func:`forget_failures`."""
+    return sum(_FAILED.values())
+
+
+def forget_failures() -> None:
+    _FAILED.clear()
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
 
 
 def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
@@ -238,8 +343,12 @@ def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
     here = json.loads(json.dumps({k: v for k, v in meta.items() if k != "code"}))
-    if {k: v for k, v in old.items() if k != "code"} != here:
-        raise InputError(f"{path}: results of a different scenario; {fix}")
+    there = {k: v for k, v in old.items() if k != "code"}
+    if there != here:
+        key, a, b = _first_difference(there, here)
+        raise InputError(
+            f"{path}: results of a different scenario ({key}: {a!r} in the file, {b!r} now); {fix}"
+        )
     before = (old.get("code") or {}).get("sources_sha256")
     if before != meta["code"]["sources_sha256"]:
         was = f"sources {before[:12]}" if before else "code that recorded no identity"
@@ -247,6 +356,23 @@ def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
             f"{path}: results written by other code ({was}, now "
             f"{meta['code']['sources_sha256'][:12]}); {fix}"
         )
+
+
+def _first_difference(a: Any, b: Any, key: str = "") -> tuple[str, Any, Any]:
+    """The first dotted key where two JSON values differ, with both values."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if a.get(k, _MISSING) != b.get(k, _MISSING):
+                return _first_difference(a.get(k, _MISSING), b.get(k, _MISSING), f"{key}.{k}")
+    return key.lstrip(".") or "(all)", a, b
+
+
+class _Missing:
+    def __repr__(self) -> str:
+        return "(not set)"
+
+
+_MISSING = _Missing()
 
 
 def _report_failures(job: Job, df: pd.DataFrame, shown: int = 3) -> None:
@@ -267,44 +393,12 @@ def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]
     try:
         res = run_engagement(sc, estimator_name, noise_name, rng).as_row()
         res.update(status="ok", error="")
+    except MemoryError:
+        raise  # a resource, not the run: not recorded (the runner says so)
     except Exception as exc:  # a failing run is recorded, not fatal
         res = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
     res["wall_s"] = time.perf_counter() - t0
     return res
-
-
-class WorkerLost(RuntimeError):
-    """A worker process died; finished runs are saved, the lost ones are missing."""
-
-
-def _results(job: Job, todo: list[int], executor, workers, scheduler):
-    """Yield ``(run, row)`` as chunks finish: in order in this process for one local
-    worker (so Ctrl-C stops between chunks), else as completed on the executor."""
-    chunks: dict[int, list[int]] = {}
-    for j in todo:
-        chunks.setdefault(j // job.chunk, []).append(j)
-    alone = (workers or os.cpu_count() or 1) == 1 or len(chunks) == 1
-    if executor is None and scheduler is None and alone:
-        for chunk in chunks.values():
-            yield from job.task(chunk)
-        return
-    with executor_or(executor, workers, scheduler) as ex:
-        futs = {ex.submit(job.task, chunk): chunk for chunk in chunks.values()}
-        lost = 0
-        for fut in as_completed(futs):
-            try:
-                pairs = fut.result()
-            except InputError:
-                raise
-            except (BrokenExecutor, CancelledError):
-                lost += len(futs[fut])  # a worker died: missing, not failed (resumable)
-                continue
-            except Exception as exc:  # the task itself raised outside the runs
-                row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
-                pairs = [(j, dict(row)) for j in futs[fut]]
-            yield from pairs
-        if lost:
-            raise WorkerLost(f"{lost} runs lost to a dead worker; rerun the same command")
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:

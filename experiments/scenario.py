@@ -59,7 +59,7 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     missing, unreadable, non-UTF-8, empty or bad file is an InputError of one line."""
     p = resolve(path)
     try:
-        text = p.read_bytes().decode("utf-8")
+        text = p.read_bytes().decode("utf-8-sig")  # a byte-order mark is allowed
     except UnicodeDecodeError as exc:
         raise InputError(
             f"{p}: not UTF-8 text (byte {exc.start}); scenario files are UTF-8 TOML"
@@ -88,6 +88,10 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
         return {k: copy(x) for k, x in v.items()} if isinstance(v, dict) else v
 
     out = copy(data)
+    keys = [item.partition("=")[0].strip() for item in overrides]
+    twice = sorted({k for k in keys if keys.count(k) > 1})
+    if twice:  # the last one would silently win
+        raise InputError(f"--set {twice[0]} given twice; give each key once")
     for item in overrides:
         key, sep, text = item.partition("=")
         parts = key.strip().split(".")

@@ -7,7 +7,8 @@ The repository keeps its layers as top-level folders (``estim/``, ``guidance/``,
 - :mod:`kalman_vs_infoset.guidance`: the intercept law and the attitude loops;
 - :mod:`kalman_vs_infoset.experiments`: simulations, noise, runner, commands, plots.
 
-The command line is ``kvi`` (or ``python -m kalman_vs_infoset``). The Python front door
+The command line is ``kvi`` (or ``python -m kalman_vs_infoset``). The compiled kernels
+are cached once per install (:mod:`kalman_vs_infoset._numba_cache`). The Python front door
 is :mod:`kalman_vs_infoset.api`, whose names are also attributes of this package (loaded
 on first use, so that ``import kalman_vs_infoset`` stays light)::
 
@@ -17,6 +18,11 @@ on first use, so that ``import kalman_vs_infoset`` stays light)::
 """
 
 from importlib import metadata as _metadata
+
+from kalman_vs_infoset import _numba_cache
+
+# before numba is imported: its cache goes to a user folder when the sources are read-only
+_numba_cache.configure()
 
 try:
     __version__ = _metadata.version("kalman-vs-infoset")

@@ -246,7 +246,7 @@ def run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
         )
     job = runner.intercept_job(sc, estimator, noise, runner.check_seed(seed))
-    pairs = runner._results(job, list(range(runs)), executor, workers, scheduler)
+    pairs = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
     rows = []
     try:

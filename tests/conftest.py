@@ -45,3 +45,21 @@ def _results_folder_untouched(request):
             f"{request.module.__name__} wrote into {_RESULTS}: {changed[:3]} "
             "(tests must write only to temporary folders)"
         )
+
+
+def pytest_configure(config):
+    # known without pytest-xdist too (the suite also runs in one process)
+    config.addinivalue_line("markers", "xdist_group(name): tests run by one xdist worker")
+
+
+@pytest.fixture(scope="session")
+def dask_cluster():
+    """One Dask LocalCluster (two single-threaded worker processes) for the session:
+    starting one costs seconds of CPU, and the tests only need a scheduler whose workers
+    run this package. Tests using it carry ``xdist_group("dask")`` so that under
+    ``pytest -n`` one worker starts it."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster:
+        yield cluster

@@ -19,8 +19,9 @@ name = "short"
 nominal_range_km = 1000.0
 [estimator]
 x_km = [900.0, 1100.0]
-n_sections = 9
 closing_speed_kmps = [57.9, 58.1]
+[estimator.infoset]
+n_sections = 9
 [truth]
 y_km = [-1.0, 1.0]
 z_km = [-1.0, 1.0]

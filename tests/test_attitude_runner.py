@@ -78,13 +78,12 @@ def test_interrupted_attitude_run_resumes_to_identical_results(
     assert _summary(fresh) == _summary(resumed)
 
 
-def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsys):
-    distributed = pytest.importorskip("distributed")
+@pytest.mark.xdist_group("dask")
+def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsys, dask_cluster):
     _, local = _attitude(capsys, scenario, tmp_path / "local", "--workers", "1")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True) as cluster:
-        code, dask = _attitude(
-            capsys, scenario, tmp_path / "dask", "--scheduler", cluster.scheduler_address
-        )
+    code, dask = _attitude(
+        capsys, scenario, tmp_path / "dask", "--scheduler", dask_cluster.scheduler_address
+    )
     assert code == 0
     pd.testing.assert_frame_equal(_table(tmp_path / "local"), _table(tmp_path / "dask"))
     assert _summary(local) == _summary(dask)

@@ -90,5 +90,5 @@ def test_the_scenarios_folder_defaults_to_the_bundled_one(command, tmp_path, cap
     assert r.returncode == 2 and "not a folder" in r.stderr
     from kalman_vs_infoset.experiments.cli import build_parser
 
-    args = build_parser().parse_args([command])
+    args = build_parser(command).parse_args([command])
     assert args.scenarios is None

@@ -91,7 +91,7 @@ def test_c_scheduler_that_is_not_an_address_is_one_line(short, tmp_path, capsys)
 # -- d ------------------------------------------------------------------------------
 def test_d_more_sections_than_the_set_may_hold_is_refused_at_load(short, tmp_path, capsys):
     out = tmp_path / "out"
-    r = _intercept(capsys, short, out, "--runs", 1, "--set", "estimator.n_sections=129")
+    r = _intercept(capsys, short, out, "--runs", 1, "--set", "estimator.infoset.n_sections=129")
     assert one_line_error(r), r.stderr
     assert "n_sections" in r.stderr
 
@@ -117,7 +117,8 @@ def test_e_a_failed_attitude_run_reports_its_error(tiny_rw, tmp_path, capsys, mo
     monkeypatch.setattr(pd_law.QuaternionPD, "torque", broken)
     out = tmp_path / "out"
     r = run(capsys, "attitude", tiny_rw, "--out", out, "--json")
-    assert r.returncode == 0, r.stderr
+    assert r.returncode == 1, r.stderr  # a command with failed runs exits 1
+    assert "1 runs failed" in r.stderr.strip().splitlines()[-1]
     assert json.loads(r.stdout.strip().splitlines()[-1])["failures"] == 1
     assert "broken law for the test" in r.stderr  # said, not swallowed
     df = pd.read_parquet(_parquet(out))
@@ -131,6 +132,8 @@ def test_f_intercept_with_too_many_steps_is_refused_at_load(tmp_path, capsys):
         .replace("x_km = [900.0, 1100.0]", "x_km = [9e5, 1e6]\nvx_kmps = [-2.0, -0.5]")
         .replace("x_km = [950.0, 1050.0]", "x_km = [9.5e5, 9.6e5]")
         .replace("vx_kmps = [-58.1, -57.9]", "vx_kmps = [-1.0, -1.0]")
+        # the a-priori interval must hold the truth's closing speed (1 km/s)
+        .replace("closing_speed_kmps = [57.9, 58.1]", "closing_speed_kmps = [0.5, 2.0]")
     )
     p = tmp_path / "slow.toml"
     p.write_text(text)
@@ -273,7 +276,7 @@ def test_m_failed_attitude_runs_keep_the_seed_indices(tiny_rw, tmp_path, capsys,
     monkeypatch.setattr(pd_law.QuaternionPD, "torque", fails_on_run_1)
     out = tmp_path / "out"
     r = run(capsys, "attitude", p, "--runs", 3, "--seed", 4, "--out", out, "--json")
-    assert r.returncode == 0, r.stderr
+    assert r.returncode == 1, r.stderr  # a command with failed runs exits 1
     df = pd.read_parquet(_parquet(out))
     assert sorted(df.loc[df["status"] == "ok", "run"]) == [0, 2]
     assert list(df.loc[df["status"] != "ok", "run"]) == [1]

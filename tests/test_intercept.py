@@ -161,8 +161,9 @@ name = "short_property"
 nominal_range_km = 800.0
 [estimator]
 x_km = [700.0, 900.0]
-n_sections = 9
 closing_speed_kmps = [57.5, 58.5]
+[estimator.infoset]
+n_sections = 9
 [truth]                    # within the guidance's authority: the small-angle regime
 x_km = [700.0, 900.0]
 y_km = [-1.0, 1.0]

@@ -505,14 +505,18 @@ def test_scenario_key_kalman_range_constraint_is_validated():
     from kalman_vs_infoset.experiments.scenario import parse_scenario
 
     assert parse_scenario({}).estimator.options_for("ekf").range_constraint is False
-    on = {"estimator": {"kalman_range_constraint": True, "closing_speed_kmps": [57.0, 59.0]}}
-    assert parse_scenario(on).estimator.options_for("ukf").range_constraint is True
+    on = {"ukf": {"range_constraint": True}, "closing_speed_kmps": [57.0, 59.0]}
+    assert parse_scenario({"estimator": on}).estimator.options_for("ukf").range_constraint
     with pytest.raises(InputError, match="estimator.ekf.range_constraint' must be true or"):
-        parse_scenario({"estimator": {"kalman_range_constraint": 1}})
+        parse_scenario({"estimator": {"ekf": {"range_constraint": 1}}})
     with pytest.raises(InputError, match="unknown key 'truth.kalman_range_constraint'"):
         parse_scenario({"truth": {"kalman_range_constraint": True}})
     # the default truth's vx box [-59, -57] km/s is not covered by closing speed [58, 58]
-    with pytest.raises(InputError, match="must contain the truth's closing speeds"):
+    for name in ("ekf", "ukf", "hinf"):  # every estimator with the option (hinf inherits it)
+        with pytest.raises(InputError, match=f"when 'estimator.{name}.range_constraint' is true"):
+            parse_scenario({"estimator": {name: {"range_constraint": True}}})
+    # one spelling: the flat key of earlier releases names the tables' keys
+    with pytest.raises(InputError, match="'estimator.ekf.range_constraint' and 'estimator.ukf"):
         parse_scenario({"estimator": {"kalman_range_constraint": True}})
 
 
@@ -534,8 +538,8 @@ def test_noise_inflation_is_validated_in_the_estimator_and_the_scenario():
         with pytest.raises(ValueError, match="noise_inflation"):
             KalmanChannelEstimator(MODEL, noise_inflation=bad)
     assert parse_scenario({}).estimator.options_for("ekf").noise_inflation == 1.0
-    with pytest.raises(InputError, match="estimator.ekf.noise_inflation"):
-        parse_scenario({"estimator": {"kalman_noise_inflation": 0.5}})
+    with pytest.raises(InputError, match="field 'estimator.ekf.noise_inflation' must be"):
+        parse_scenario({"estimator": {"ekf": {"noise_inflation": 0.5}}})
 
 
 @pytest.mark.parametrize(

@@ -110,7 +110,7 @@ def test_intercept_trace_command(tmp_path, capsys, checked):
     assert (trace["n_sections"] > 0).all() and (trace["area_max_radm"] > 0).all()
     assert any(f.endswith("-trace-sets.parquet") for f in result["files"])
     assert any(f.endswith(".gif") for f in result["files"])
-    assert {"kp_fig3-infoset-game-run0-processes", "kp_fig3-infoset-game-s3-run0-set3d"} <= {
+    assert {"kp_fig3-infoset-game-s3-run0-processes", "kp_fig3-infoset-game-s3-run0-set3d"} <= {
         s.rsplit("/", 1)[-1] for s in checked
     }
 
@@ -160,13 +160,13 @@ def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
                  "--no-progress", "--json"]) == 0  # fmt: skip
     files = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["files"]
     names = {f.rsplit("/", 1)[-1] for f in files}
-    assert {"kp_fig3-game-run0-overlay.png", "kp_fig3-game-run0-overlay.svg"} <= names
-    assert "kp_fig3-infoset-game-run0-processes.png" in names
+    assert {"kp_fig3-game-s3-run0-overlay.png", "kp_fig3-game-s3-run0-overlay.svg"} <= names
+    assert "kp_fig3-infoset-game-s3-run0-processes.png" in names
     traces = sorted(f for f in files if f.endswith("-trace.parquet"))
     assert len(traces) == 2
     # the plot command redraws a trace (the UKF's: no sets), marking the paper's numbers
     assert main(["plot", traces[1], "--out", str(tmp_path / "p")]) == 0
-    assert (tmp_path / "p" / "kp_fig3-ukf-game-run0-processes.svg").exists()
+    assert (tmp_path / "p" / "kp_fig3-ukf-game-s3-run0-processes.svg").exists()
 
 
 def test_trace_arguments_are_checked(tmp_path, capsys):

@@ -111,8 +111,9 @@ def _describe_schema(s: dict[str, Any]) -> str:
     if kind in ("number", "integer"):
         lo = s.get("minimum", s.get("exclusiveMinimum", -math.inf))
         hi = s.get("maximum", s.get("exclusiveMaximum", math.inf))
-        lb = "(" if "exclusiveMinimum" in s else "["
-        rb = ")" if "exclusiveMaximum" in s else "]"
+        # an unbounded end is open: infinities are not numbers a field takes
+        lb = "(" if "exclusiveMinimum" in s or math.isinf(lo) else "["
+        rb = ")" if "exclusiveMaximum" in s or math.isinf(hi) else "]"
         what = "an integer" if kind == "integer" else "a number"
         return f"{what} in {lb}{lo:g}, {hi:g}{rb}"
     if kind == "boolean":

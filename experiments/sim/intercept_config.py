@@ -10,11 +10,9 @@ noises' search: :mod:`kalman_vs_infoset.experiments.adversary`), an optional
 ``[reference]`` of the paper's numbers and an optional ``[attitude]`` loop holding the
 spacecraft's axis (:class:`kalman_vs_infoset.experiments.sim.pointing.PointingConfig`).
 
-The flat option keys of earlier releases are still read: ``estimator.n_sections``,
-``sections``, ``kinematic_margin``, ``split_ratio`` are ``[estimator.infoset]``'s,
-``kalman_sigma``, ``kalman_range_constraint``, ``kalman_noise_inflation`` are
-``n_sigma``, ``range_constraint``, ``noise_inflation`` of ``[estimator.ekf]`` and
-``[estimator.ukf]`` (a table's own key wins).
+An option has one spelling, its table's: the flat keys of earlier releases
+(``estimator.n_sections``, ``kalman_noise_inflation``, ...: :data:`LEGACY_OPTIONS`) are
+refused with a message naming the table key(s) to use instead.
 """
 
 from __future__ import annotations
@@ -45,7 +43,8 @@ BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
 MAX_STEPS = 100_000
 #: a scenario's name names its result files: no path separators, no "..", no leading dot
 SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.,=+\-]*$")
-#: flat keys of earlier releases -> (estimator, option) of the [estimator.<name>] tables
+#: flat keys of earlier releases -> the (estimator, option) of the [estimator.<name>]
+#: tables that replace them (named in the refusal)
 LEGACY_OPTIONS = {
     "n_sections": (("infoset", "n_sections"),),
     "sections": (("infoset", "sections"),),
@@ -116,7 +115,8 @@ class EstimatorTable(Table):
     @model_validator(mode="before")
     @classmethod
     def _gather_options(cls, data: Any) -> Any:
-        """Sub-tables and the flat keys of earlier releases go to ``options``."""
+        """Sub-tables go to ``options``; a flat key of earlier releases is refused,
+        naming its table key(s)."""
         if not isinstance(data, dict):
             return data
         data = dict(data)
@@ -125,9 +125,11 @@ class EstimatorTable(Table):
             options.setdefault(key, {}).update(data.pop(key))
         for key, targets in LEGACY_OPTIONS.items():
             if key in data:
-                value = data.pop(key)
-                for name, option in targets:
-                    options.setdefault(name, {}).setdefault(option, value)
+                now = " and ".join(f"'estimator.{name}.{option}'" for name, option in targets)
+                raise ValueError(
+                    f"field 'estimator.{key}' is now {now} (options live in "
+                    "[estimator.<name>] tables)"
+                )
         data["options"] = options
         return data
 
@@ -181,10 +183,20 @@ class GuidanceTable(Table):
 
 
 class ExperimentTable(Table):
-    runs: integer(1, 10**7) = field(1, "runs of the Monte Carlo")
+    runs: integer(1, 10**6) = field(1, "runs of the Monte Carlo")
     seed: integer(0, 2**63 - 1) = field(1, "root seed")
     noise: Literal[NOISES] = field("random", "measurement noise")
     estimator: str = field("infoset", "estimator name (registered)")
+
+    @model_validator(mode="after")
+    def _registered(self) -> ExperimentTable:
+        names = registry.names("intercept")
+        if self.estimator not in names:
+            raise ValueError(
+                f"field 'experiment.estimator' must be one of {', '.join(names)} "
+                f"(got {self.estimator!r})"
+            )
+        return self
 
 
 #: most tree leaves the look-ahead adversary may search per decision step and channel
@@ -278,17 +290,22 @@ class InterceptScenario(Table):
             raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
         closing = sorted(-v for v in self.truth.vx_kmps)
         lo, hi = self.closing_speed_kmps
-        for kalman in ("ekf", "ukf"):
-            opt = e.options.get(kalman, {})
-            if opt.get("range_constraint") and (closing[0] < lo or closing[1] > hi):
-                # the constraint's interval moves at the closing-speed interval's speeds:
-                # it holds the truth only if every true closing speed lies in it
-                raise ValueError(
-                    f"field 'estimator.closing_speed_kmps' {[lo, hi]} must contain the "
-                    f"truth's closing speeds -truth.vx_kmps {closing} when "
-                    f"'estimator.{kalman}.range_constraint' is true (the interval must hold "
-                    "the truth)"
-                )
+        constrained = _range_constrained(e.options)
+        if (e.closing_speed_kmps is not None or constrained) and (
+            closing[0] < lo or closing[1] > hi
+        ):
+            # the estimators' ranges (the Kalman filters' range constraint) move at the
+            # interval's speeds: like the boxes, a given interval must hold the truth
+            when = (
+                f" when 'estimator.{constrained[0]}.range_constraint' is true"
+                if e.closing_speed_kmps is None
+                else ""
+            )
+            raise ValueError(
+                f"field 'estimator.closing_speed_kmps' {[lo, hi]} must contain the "
+                f"truth's closing speeds -truth.vx_kmps {closing}{when} (the a-priori "
+                "interval must contain the truth)"
+            )
         steps = self.max_steps
         if steps > MAX_STEPS:
             raise ValueError(
@@ -334,3 +351,19 @@ def _check_options(name: str, table: dict[str, Any]) -> None:
         reg.options.model_validate(table)
     except ValidationError as exc:
         raise ValueError(first_error(exc, f"estimator.{name}.", reg.options)) from None
+
+
+def _range_constrained(options: dict) -> list[str]:
+    """The registered intercept estimators whose ``range_constraint`` option (given in
+    ``options`` or by default) is true: their ranges move at the closing-speed
+    interval's speeds, so the interval must hold the truth for every one of them."""
+    from kalman_vs_infoset.estim import registry
+
+    out = []
+    for name in registry.names("intercept"):
+        field = registry.get("intercept", name).options.model_fields.get("range_constraint")
+        if field is None:
+            continue
+        if options.get(name, {}).get("range_constraint", field.default):
+            out.append(name)
+    return out

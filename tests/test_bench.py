@@ -1,0 +1,105 @@
+"""``kvi bench`` (docs/models.md §3.1): every estimator's step, the engagement and the
+throughput side by side, in CPU time; its first-run compilation on an empty cache."""
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments.cli import main
+
+
+def cli_inproc(capsys, *args):
+    """``kvi ARGS`` through ``kalman_vs_infoset.experiments.cli.main`` in this process."""
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, out.out, out.err)
+
+
+def test_bench_reports_every_field_side_by_side(capsys):
+    """`bench --json` (issue 5): all costs measured in one process, in CPU time
+    (``--quick``: a few steps, short approaches, two Monte Carlo runs)."""
+    r = cli_inproc(capsys, "bench", "--json", "--quick")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in (
+        "infoset_step_us",
+        "ekf_step_us",
+        "ukf_step_us",
+        "engagement_ms",
+        "engagement_random_ms",
+        "engagement_in_ukf_steps",
+        "engagement_random_in_ukf_steps",
+        "runs_per_s",
+        "runs_per_s_2",
+        "speedup_2_workers",
+        "infoset_to_ukf_ratio",
+        "hinf_step_us",
+        "pf_step_us",
+    ):
+        assert out[key] > 0, key
+
+    names = registry.names("intercept")  # every registered estimator, side by side
+    assert set(out["step_us"]) == set(names)
+    assert all(out[f"{n}_step_us"] == out["step_us"][n] > 0 for n in names)
+    assert out["machine"]["cpus"] >= 1
+    # the whole approach (to the blind range) whatever --steps says
+    whole, n_steps = out["whole_approach_step_us"], out["whole_approach_steps"]
+    assert set(whole) == {"infoset", "ukf"} and all(whole[n] > 0 for n in whole)
+    assert n_steps["infoset"] == n_steps["ukf"] > 5
+    assert out["whole_approach_ratio"] == whole["infoset"] / whole["ukf"]
+    assert out["engagement_in_ukf_steps"] == pytest.approx(
+        out["engagement_ms"] * 1e3 / out["ukf_step_us"]
+    )
+    # the cost exponent: a least-squares slope over approaches twice and four times as long
+    steps, cost = np.array(out["cost_steps"]), np.array(out["cost_ms"])
+    assert np.allclose(steps[1:] / steps[:-1], 2.0, rtol=0.1) and (cost > 0).all()
+    slope = np.polyfit(np.log(steps), np.log(cost), 1)[0]
+    assert out["cost_exponent"] == pytest.approx(slope)
+    for workers in ("1", "2"):
+        assert out["runs_per_cpu_s"][workers] > 0
+        assert 10.0 < out["worker_peak_rss_mb"][workers] < 1e5
+    assert out["first_run_compile_s"] is None  # --quick skips the fresh-cache run
+
+
+def test_bench_first_run_compiles_on_an_empty_cache(tmp_path):
+    """The first-run measurement runs its code in a fresh process on an empty numba
+    cache: a tiny kernel's compilation is seen, though it was cached before."""
+    from kalman_vs_infoset.experiments.cmd_bench import first_run_compile
+
+    (tmp_path / "tiny_kernel.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef f(x):\n    return x + 1.0\n"
+    )
+    code = (
+        "import json, sys\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "from kalman_vs_infoset._numba_cache import CompileNotice\n"
+        "n = CompileNotice('t').install()\n"
+        "import tiny_kernel\n"
+        "tiny_kernel.f(1.0)\n"
+        "print(json.dumps({'compile_s': n.cpu_s, 'cpu_s': 1.0, 'kernels': n.kernels}))\n"
+    )
+    for _ in range(2):  # the second run finds no cache either
+        out = first_run_compile(Path("unused"), code)
+        assert out["kernels"] == 1 and out["compile_s"] > 0
+
+
+def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
+    """`bench --steps 190` raised a traceback: a slab-family set diverged late in the
+    unguided approach and its extremes were asked for. The timing stops there (and at
+    the blind range), and says over how many steps it ran."""
+    from kalman_vs_infoset.experiments.cmd_bench import step_cost_us
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    fig3 = load_scenario("data/scenarios/kp_fig3.toml")
+    model = fig3.channel_model()  # the bench's truth starts at 5801.3 km
+    approach = int((5801.3e3 - model.eps_m) / model.e / fig3.model.dt_s)
+    for name in registry.names("intercept"):
+        us, timed = step_cost_us(name, fig3, 10 * approach, 1)
+        assert np.isfinite(us) and us > 0, name
+        assert 0 < timed <= approach + 1, name

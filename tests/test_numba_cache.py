@@ -1,0 +1,85 @@
+"""The compiled kernels' cache: a user folder when the sources are read-only, and a
+notice on stderr when numba compiles (a first run), silent when it loads the cache."""
+
+import os
+import subprocess
+import sys
+
+from kalman_vs_infoset import _numba_cache as nc
+
+#: a tiny kernel module (compiles in a fraction of a second), imported in a subprocess
+#: after the cache is configured for a read-only source folder
+_TINY = """
+from numba import njit
+
+@njit(cache=True)
+def add_one(x):
+    return x + 1.0
+"""
+
+_RUN = """
+import sys
+from pathlib import Path
+from kalman_vs_infoset import _numba_cache as nc
+print("dir", nc.configure(source_dir=Path(sys.argv[1])))
+notice = nc.CompileNotice("tiny").install()
+sys.path.insert(0, sys.argv[2])
+import tiny_kernel
+assert tiny_kernel.add_one(1.0) == 2.0
+notice.report()
+"""
+
+
+def test_user_cache_folder_follows_xdg_cache_home(tmp_path):
+    assert nc.user_cache_dir({"XDG_CACHE_HOME": str(tmp_path)}) == (
+        tmp_path / "kalman_vs_infoset" / "numba"
+    )
+    assert nc.user_cache_dir({"XDG_CACHE_HOME": ""}).parts[-3:] == (
+        ".cache",
+        "kalman_vs_infoset",
+        "numba",
+    )
+
+
+def test_a_folder_numba_cannot_write_into_is_detected(tmp_path):
+    assert nc.writable(tmp_path)
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    assert not nc.writable(blocker / "package")  # its parent is a file: even root fails
+
+
+def test_read_only_sources_compile_once_into_the_user_cache_and_say_so(tmp_path):
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "tiny_kernel.py").write_text(_TINY)
+    blocker = tmp_path / "read_only"
+    blocker.write_text("")
+    env = {k: v for k, v in os.environ.items() if k != nc.ENV}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    cache = tmp_path / "cache" / "kalman_vs_infoset" / "numba"
+
+    def run():
+        return subprocess.run(
+            [sys.executable, "-c", _RUN, str(blocker / "pkg"), str(src)],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=300,
+            check=True,
+        )
+
+    first = run()
+    assert f"dir {cache}" in first.stdout
+    lines = first.stderr.strip().splitlines()
+    assert len(lines) == 2, first.stderr
+    assert lines[0].startswith("tiny: compiling numba kernels") and str(cache) in lines[0]
+    assert lines[1].startswith("tiny: compiled the numba kernels in ") and "CPU-s" in lines[1]
+    assert list(cache.rglob("*.nbi")), "no index in the user cache"
+    second = run()  # loaded from the cache: nothing compiled, nothing said
+    assert second.stderr == ""
+
+
+def test_a_user_numba_cache_dir_is_kept(monkeypatch, tmp_path):
+    monkeypatch.setenv(nc.ENV, str(tmp_path))
+    assert nc.configure(source_dir=tmp_path / "nowhere" / "x") is None
+    assert os.environ[nc.ENV] == str(tmp_path)

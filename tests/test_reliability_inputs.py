@@ -1,0 +1,267 @@
+"""The last bad inputs: each is refused in one line with exit status 2 before any work
+and leaves nothing behind, or is handled correctly (a byte-order mark, a sets file given
+to ``plot``, figure names that carry what distinguishes their run)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from harness_texts import SHORT, TINY_RW, experiment, one_line_error
+from harness_texts import run_cli as run
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def files_under(path: Path) -> list[Path]:
+    return sorted(p for p in Path(path).rglob("*") if p.is_file())
+
+
+@pytest.fixture
+def short(tmp_path) -> Path:
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT)
+    return p
+
+
+@pytest.fixture
+def tiny_rw(tmp_path) -> Path:
+    p = tmp_path / "tiny_rw.toml"
+    p.write_text(TINY_RW)
+    return p
+
+
+def _refused(capsys, out: Path, *args) -> str:
+    r = run(capsys, *args, "--out", out)
+    assert one_line_error(r), r.stderr
+    assert files_under(out) == []
+    return r.stderr
+
+
+# -- scenario values -----------------------------------------------------------------
+def test_an_unregistered_scenario_estimator_is_refused(short, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "intercept", short,
+                   "--set", 'experiment.estimator="foo"')  # fmt: skip
+    assert "experiment.estimator" in err and "infoset" in err
+
+
+def test_a_closing_speed_interval_without_the_truth_is_refused(short, tmp_path, capsys):
+    """The truth closes at 57.9..58.1 km/s: [59.5, 60] cannot contain it (the prior
+    must contain the truth, like the boxes)."""
+    err = _refused(capsys, tmp_path / "out", "intercept", short,
+                   "--set", "estimator.closing_speed_kmps=[59.5, 60.0]")  # fmt: skip
+    assert "estimator.closing_speed_kmps" in err and "truth" in err
+
+
+def test_a_closing_speed_interval_holding_the_truth_is_taken(short):
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    sc = load_scenario(short, ["estimator.closing_speed_kmps=[57.0, 59.0]"])
+    assert sc.closing_speed_kmps == (57.0, 59.0)
+
+
+def test_the_same_set_key_twice_is_refused(short, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "intercept", short,
+                   "--set", "model.nu_mps2=0.01", "--set", "model.nu_mps2=0.02")  # fmt: skip
+    assert "model.nu_mps2 given twice" in err
+
+
+@pytest.mark.parametrize(
+    "flat,tables",
+    [
+        ("n_sections=9", ["'estimator.infoset.n_sections'"]),
+        ("kalman_noise_inflation=3", ["'estimator.ekf.noise_inflation'",
+                                      "'estimator.ukf.noise_inflation'"]),
+    ],
+)  # fmt: skip
+def test_a_flat_option_key_is_refused_naming_its_table_key(short, tmp_path, capsys, flat, tables):
+    """One spelling of each option: the flat keys of earlier releases (one of them used
+    to be silently ignored beside its table key) are refused, naming the table key."""
+    err = _refused(capsys, tmp_path / "out", "intercept", short, "--set", f"estimator.{flat}")
+    assert f"'estimator.{flat.split('=')[0]}'" in err and all(t in err for t in tables)
+
+
+def test_shipped_scenarios_use_only_table_keys():
+    from kalman_vs_infoset.experiments.scenario import load_toml
+    from kalman_vs_infoset.experiments.sim.intercept_config import LEGACY_OPTIONS
+
+    for path in sorted((ROOT / "data/scenarios").glob("kp_*.toml")):
+        assert not set(load_toml(path).get("estimator", {})) & set(LEGACY_OPTIONS), path
+
+
+def test_a_utf8_byte_order_mark_is_accepted(tmp_path, capsys):
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + (SHORT + experiment(runs=1)).encode())
+    r = run(capsys, "intercept", p, "--workers", 1, "--no-progress", "--out", tmp_path / "o")
+    assert r.returncode == 0, r.stderr
+
+
+# -- sweep ---------------------------------------------------------------------------
+SWEEP = ["sweep", "--estimators", "infoset", "--noise", "random", "--runs", 1, "--no-progress"]
+
+
+def test_sweep_values_equal_as_numbers_are_refused(short, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", *SWEEP, short, "--key", "model.nu_mps2",
+                   "--values", "[0, 0.0]")  # fmt: skip
+    assert "twice" in err
+
+
+def test_a_swept_key_also_given_with_set_is_refused(short, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", *SWEEP, short, "--key", "model.nu_mps2",
+                   "--values", "[0.5, 1.0]", "--set", "model.nu_mps2=2")  # fmt: skip
+    assert "--key model.nu_mps2" in err
+
+
+def test_a_swept_flat_key_is_refused_naming_its_table_keys(short, tmp_path, capsys):
+    """Beside ``--set estimator.ekf.noise_inflation=10`` the table key used to win
+    silently: the swept value was never used."""
+    err = _refused(capsys, tmp_path / "out", *SWEEP, short,
+                   "--key", "estimator.kalman_noise_inflation", "--values", "[1, 3]",
+                   "--set", "estimator.ekf.noise_inflation=10")  # fmt: skip
+    assert "'estimator.ekf.noise_inflation'" in err
+
+
+def test_a_sweep_sets_a_comma_list_of_keys_to_each_value(short):
+    """Both filters' inflation swept together (what the flat key did), table keys."""
+    from kalman_vs_infoset.experiments.cmd_sweep import _keys
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    keys = _keys("estimator.ekf.noise_inflation, estimator.ukf.noise_inflation", [])
+    sc = load_scenario(short, [f"{k}=3" for k in keys])
+    assert [sc.estimator.options_for(n).noise_inflation for n in ("ekf", "ukf")] == [3.0, 3.0]
+
+
+# -- other commands ------------------------------------------------------------------
+def test_tightness_times_after_every_run_are_refused(short, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "tightness", short, "--times", "1000")
+    assert "--times" in err and "after the end" in err
+
+
+def test_paper_figures_only_empty_is_refused(tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "paper-figures", "--only", "",
+                   "--scenarios", ROOT / "data/scenarios")  # fmt: skip
+    assert "--only" in err
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        ["--horizon-s", "1e12"],
+        ["--horizon-s", "inf"],
+        ["--grid-step", "1e-9"],
+        ["--control-period-s", "1e9"],
+        ["--control-period-s", "nan"],
+    ],
+)
+def test_pd_gains_options_that_never_end_are_refused(tmp_path, capsys, option):
+    err = _refused(capsys, tmp_path / "out", "pd-gains", "--angles-deg", "1", *option)
+    assert option[0] in err
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["intercept", "SHORT", "--runs", "1"],
+        ["attitude", "TINY"],
+        ["fig5", "--runs", "1"],
+        ["pd-gains", "--angles-deg", "1"],
+        ["paper-figures", "--only", "kp_fig3"],
+    ],
+)
+def test_an_empty_out_is_refused(short, tiny_rw, tmp_path, capsys, monkeypatch, args):
+    """``Path("")`` is the current folder: an empty --out used to write there."""
+    monkeypatch.chdir(tmp_path)
+    before = files_under(tmp_path)
+    args = [{"SHORT": short, "TINY": tiny_rw}.get(a, a) for a in args]
+    r = run(capsys, *args, "--out", "")
+    assert one_line_error(r), r.stderr
+    assert "--out ''" in r.stderr and files_under(tmp_path) == before
+
+
+def test_attitude_controller_of_another_simulation_is_named(tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "attitude", ROOT / "data/scenarios/resurs_p.toml",
+                   "--controller", "pd")  # fmt: skip
+    assert "--controller pd" in err and "'energy'" in err and "got 'energy'" not in err
+
+
+def test_an_infinite_torque_limit_is_refused_with_an_open_bound(tiny_rw, tmp_path, capsys):
+    err = _refused(capsys, tmp_path / "out", "attitude", tiny_rw,
+                   "--set", "wheels.torque_max_Nm=inf")  # fmt: skip
+    assert "(0, inf)" in err and "inf]" not in err
+
+
+# -- results files -------------------------------------------------------------------
+@pytest.mark.parametrize("runs", [["a", "b"], [0.0, float("nan")], [-1, 0], [0, 0]])
+def test_a_foreign_table_with_a_bad_run_column_is_refused(short, tmp_path, capsys, runs):
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    (pq,) = out.glob("*.parquet")
+    pd.DataFrame({"run": runs, "status": ["ok", "ok"]}).to_parquet(pq, index=False)
+    r = run(capsys, *args, "--runs", 3)
+    assert one_line_error(r), r.stderr
+    assert pq.name in r.stderr and "'run'" in r.stderr
+
+
+def test_a_resume_refusal_names_the_changed_field(tmp_path, capsys):
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT.replace('name = "short"', 'name = "short"\ndescription = "one"'))
+    out = tmp_path / "out"
+    args = ["intercept", p, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    p.write_text(SHORT.replace('name = "short"', 'name = "short"\ndescription = "two"'))
+    r = run(capsys, *args)
+    assert one_line_error(r), r.stderr
+    assert "scenario.description" in r.stderr and "'one'" in r.stderr and "'two'" in r.stderr
+
+
+def test_a_refused_scheduler_leaves_nothing_behind(short, tmp_path, capsys, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+
+    def unreachable(address, timeout=None):
+        raise OSError(f"Timed out trying to connect to {address}")
+
+    monkeypatch.setattr(distributed, "Client", unreachable)
+    out = tmp_path / "out"
+    for command in (["intercept"], ["compare", "--estimators", "infoset", "--noise", "random"]):
+        r = run(capsys, *command, short, "--runs", 1, "--no-progress",
+                "--scheduler", "tcp://127.0.0.1:9", "--out", out)  # fmt: skip
+        assert one_line_error(r), r.stderr
+        assert not out.exists()
+
+
+def test_plot_takes_a_sets_file_for_its_trace(tmp_path, capsys, monkeypatch):
+    from kalman_vs_infoset.experiments import cmd_plot
+
+    steps, sets = tmp_path / "x-s1-trace.parquet", tmp_path / "x-s1-trace-sets.parquet"
+    for p in (steps, sets):
+        p.write_bytes(b"")
+    drawn = []
+    monkeypatch.setattr(cmd_plot, "plot_files", lambda paths, **kw: drawn.append(paths) or [])
+    assert run(capsys, "plot", steps, sets).returncode == 0
+    assert drawn == [[steps]]  # the `plot *trace*` glob: drawn once, from its trace
+    steps.unlink()
+    r = run(capsys, "plot", sets)
+    assert one_line_error(r) and steps.name in r.stderr, r.stderr
+
+
+# -- figure names --------------------------------------------------------------------
+def test_trace_figures_of_two_seeds_do_not_replace_each_other(short, tmp_path, capsys):
+    out = tmp_path / "out"
+    for seed in (3, 4):
+        r = run(capsys, "intercept", short, "--runs", 1, "--trace", 0, "--seed", seed,
+                "--estimator", "ukf", "--workers", 1, "--no-progress", "--out", out)  # fmt: skip
+        assert r.returncode == 0, r.stderr
+    names = {p.name for p in out.rglob("*-processes.png")}
+    assert names == {f"short-ukf-random-s{s}-run0-processes.png" for s in (3, 4)}
+
+
+def test_attitude_figures_of_two_estimators_do_not_replace_each_other(tiny_rw, tmp_path, capsys):
+    out = tmp_path / "out"
+    for est in ("perfect", "box"):
+        r = run(capsys, "attitude", tiny_rw, "--estimator", est, "--noise", "random",
+                "--out", out)  # fmt: skip
+        assert r.returncode == 0, r.stderr
+    names = {p.name for p in out.rglob("*-history.png")}
+    assert names == {f"tiny_rw-pd-{e}-random-s0-history.png" for e in ("perfect", "box")}

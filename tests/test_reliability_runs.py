@@ -1,0 +1,318 @@
+"""Nothing lost, nothing hangs: one writer per results table, SIGTERM and Ctrl-C save
+what finished, failed runs run again, resource errors are not failures, runs are bounded.
+
+Real processes where the behaviour is between processes (two writers, signals); the
+scenarios are the small ones of :mod:`harness_texts`.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from harness_texts import SHORT, TINY_RW, one_line_error
+from harness_texts import run_cli as run
+from kalman_vs_infoset.experiments import executors, runner
+from kalman_vs_infoset.experiments.files import exclusive
+from kalman_vs_infoset.experiments.limits import limited
+
+ROOT = Path(__file__).resolve().parents[1]
+KVI = [sys.executable, "-m", "kalman_vs_infoset"]
+linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals, flock")
+
+# a turn of 400 control steps: a chunk of 8 runs takes about a second
+SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 20.0")
+
+
+@pytest.fixture
+def short(tmp_path) -> Path:
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT)
+    return p
+
+
+def _table(out: Path) -> pd.DataFrame:
+    (pq,) = Path(out).rglob("*.parquet")
+    return pd.read_parquet(pq)
+
+
+def _same_runs(a: pd.DataFrame, b: pd.DataFrame) -> None:
+    """Two tables equal run by run (the run time aside)."""
+    a, b = (t.drop(columns="wall_s").sort_values("run").reset_index(drop=True) for t in (a, b))
+    pd.testing.assert_frame_equal(a, b)
+
+
+def _wait_for(predicate, timeout_s: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+
+
+def _intercept(scenario, out, runs, *extra):
+    return [*KVI, "intercept", scenario, "--runs", runs, "--workers", 1, "--no-progress",
+            "--out", out, *extra]  # fmt: skip
+
+
+def _popen(args) -> subprocess.Popen:
+    return subprocess.Popen([str(a) for a in args], cwd=ROOT, stderr=subprocess.PIPE, text=True)
+
+
+# -- one writer per table -------------------------------------------------------------
+@linux
+def test_two_writers_on_one_out_lose_no_run(short, tmp_path, capsys):
+    """A: 12 runs; B, started while A writes: 16 runs. Every run of the larger count is
+    in the table exactly once, as an uninterrupted run of 16 computes it."""
+    out = tmp_path / "out"
+    a = _popen(_intercept(short, out, 12))
+    try:
+        _wait_for(lambda: any(out.glob("*.lock")) or a.poll() is not None)
+        b = _popen(_intercept(short, out, 16))
+        _, b_err = b.communicate(timeout=300)
+        _, a_err = a.communicate(timeout=300)
+    finally:
+        for p in (a, locals().get("b")):
+            if p is not None and p.poll() is None:
+                p.kill()
+    assert a.returncode == 0 and b.returncode == 0, a_err + b_err
+    df = _table(out)
+    assert sorted(df["run"]) == list(range(16)) and (df["status"] == "ok").all()
+    assert list(out.glob("*.lock")) == []  # the lock goes with its holder
+    ref = tmp_path / "ref"
+    r = run(capsys, "intercept", short, "--runs", 16, "--workers", 1, "--no-progress",
+            "--out", ref)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    _same_runs(df, _table(ref))
+
+
+@linux
+def test_a_second_writer_waits_for_the_lock_and_says_so(short, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    table = out / "short-infoset-random-s1.parquet"
+    with exclusive(table, "test"):
+        b = _popen(_intercept(short, out, 1))
+        line = b.stderr.readline()  # blocks until B says it waits
+        assert "being written by another command" in line and str(os.getpid()) in line
+        time.sleep(0.5)
+        assert b.poll() is None and not table.exists()  # B writes nothing meanwhile
+    _, err = b.communicate(timeout=300)
+    assert b.returncode == 0, err
+    assert list(_table(out)["run"]) == [0]
+
+
+# -- signals -------------------------------------------------------------------------
+@linux
+def test_sigterm_saves_finished_runs_and_a_rerun_matches_an_uninterrupted_run(
+    short, tmp_path, capsys
+):
+    out = tmp_path / "out"
+    proc = _popen(_intercept(short, out, 10_000))
+    try:
+        _wait_for(lambda: any(out.glob("*.parquet")) or proc.poll() is not None)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, err
+    assert "terminated" in err.strip().splitlines()[-1] and "Traceback" not in err
+    saved = _table(out)
+    done = len(saved)
+    assert done >= 1 and sorted(saved["run"]) == list(range(done))  # in order, none lost
+    runs = done + 2
+    r = run(capsys, "intercept", short, "--runs", runs, "--workers", 1, "--no-progress",
+            "--out", out)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    ref = tmp_path / "ref"
+    r = run(capsys, "intercept", short, "--runs", runs, "--workers", 1, "--no-progress",
+            "--out", ref)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    _same_runs(_table(out), _table(ref))
+
+
+@linux
+def test_ctrl_c_of_attitude_saves_finished_chunks_and_returns_promptly(tmp_path, capsys):
+    scenario = tmp_path / "slow_rw.toml"
+    scenario.write_text(SLOW_RW)
+    out = tmp_path / "out"
+    args = ["attitude", scenario, "--noise", "random", "--workers", 2, "--no-progress",
+            "--out", out]  # fmt: skip
+    proc = _popen([*KVI, *args, "--runs", 800])
+    try:
+        _wait_for(lambda: any(out.glob("*.parquet")) or proc.poll() is not None)
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        latency_s = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert latency_s < 5.0, f"{latency_s:.1f} s to stop"  # workers are not waited for
+    saved = _table(out)
+    chunks = saved["run"] // 8
+    assert len(saved) >= 8 and (chunks.value_counts() == 8).all()  # whole chunks
+    runs = int(chunks.max() + 1) * 8 + 8
+    r = run(capsys, *args, "--runs", runs, "--json")
+    assert r.returncode == 0, r.stderr
+    ref = tmp_path / "ref"
+    r = run(capsys, *args[:-1], ref, "--runs", runs, "--json")
+    assert r.returncode == 0, r.stderr
+    _same_runs(_table(out), _table(ref))
+
+
+def test_dask_with_no_live_worker_fails_in_one_line(short, tmp_path, capsys, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(executors, "NO_WORKER_TIMEOUT_S", 1.0)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
+        r = run(capsys, "intercept", short, "--runs", 2, "--no-progress",
+                "--scheduler", c.scheduler_address, "--out", tmp_path / "out")  # fmt: skip
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "no live Dask worker" in r.stderr and "2 runs not run" in r.stderr
+
+
+# -- failures ------------------------------------------------------------------------
+def _fails_on_run_1(real, error):
+    def engagement(sc, est, noise, rng):
+        if rng.bit_generator.seed_seq.spawn_key == (1,):
+            raise error
+        return real(sc, est, noise, rng)
+
+    return engagement
+
+
+def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 3, "--workers", 1, "--no-progress", "--out", out]
+    real = runner.run_engagement
+    monkeypatch.setattr(runner, "run_engagement", _fails_on_run_1(real, ArithmeticError("x")))
+    r = run(capsys, *args)
+    assert r.returncode == 1
+    assert "1 runs failed" in r.stderr.strip().splitlines()[-1] and "rerun" in r.stderr
+    assert list(_table(out)["status"]) == ["ok", "failed", "ok"]
+    monkeypatch.setattr(runner, "run_engagement", real)
+    r = run(capsys, *args)
+    assert r.returncode == 0, r.stderr
+    assert "running 1 failed runs again" in r.stderr
+    ref = tmp_path / "ref"
+    assert run(capsys, *args[:-1], ref).returncode == 0
+    _same_runs(_table(out), _table(ref))
+
+
+def test_memory_error_is_not_recorded_as_a_failed_run(short, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 3, "--workers", 1, "--no-progress", "--out", out]
+    real = runner.run_engagement
+    monkeypatch.setattr(runner, "run_engagement", _fails_on_run_1(real, MemoryError()))
+    r = run(capsys, *args)
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "1 runs out of memory" in r.stderr
+    assert sorted(_table(out)["run"]) == [0, 2]  # missing, not failed
+    monkeypatch.setattr(runner, "run_engagement", real)
+    assert run(capsys, *args).returncode == 0
+    assert sorted(_table(out)["run"]) == [0, 1, 2] and (_table(out)["status"] == "ok").all()
+
+
+# -- bounded runs --------------------------------------------------------------------
+def _spin(*args, **kwargs):
+    while True:  # a run that never ends
+        pass
+
+
+@linux
+def test_a_run_over_the_cpu_limit_is_recorded_as_failed(short, tmp_path, capsys, monkeypatch):
+    real = runner.run_engagement
+
+    def spins_on_run_1(sc, est, noise, rng):
+        if rng.bit_generator.seed_seq.spawn_key == (1,):
+            _spin()
+        return real(sc, est, noise, rng)
+
+    monkeypatch.setattr(runner, "run_engagement", spins_on_run_1)
+    out = tmp_path / "out"
+    r = run(capsys, "intercept", short, "--runs", 3, "--workers", 1, "--no-progress",
+            "--out", out, "--run-cpu-limit-s", 0.3)  # fmt: skip
+    assert r.returncode == 1
+    df = _table(out)
+    assert list(df["status"]) == ["ok", "failed", "ok"]
+    assert "RunTimeout" in df.loc[1, "error"] and "--run-cpu-limit-s" in df.loc[1, "error"]
+
+
+@linux
+def test_a_chunk_over_its_limit_is_judged_run_by_run():
+    """The chunk (3 runs, 0.6 s) is over; alone, runs 0 and 2 are within 0.2 s."""
+
+    def task(runs):
+        if 1 in runs:
+            _spin()
+        return [(j, {"status": "ok", "error": ""}) for j in runs]
+
+    pairs = limited(task, 0.2, [0, 1, 2])
+    assert [j for j, _ in pairs] == [0, 1, 2]
+    assert [row["status"] for _, row in pairs] == ["ok", "failed", "ok"]
+
+
+@pytest.mark.parametrize("command", ["intercept", "attitude"])
+def test_absurd_run_counts_are_refused_in_one_line(tmp_path, capsys, command):
+    p = tmp_path / "s.toml"
+    p.write_text(SHORT if command == "intercept" else TINY_RW)
+    r = run(capsys, command, p, "--runs", 1_000_000_000, "--out", tmp_path / "out")
+    assert one_line_error(r), r.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_workers_are_capped_at_the_number_of_chunks(short, tmp_path, capsys, monkeypatch):
+    from concurrent.futures import ThreadPoolExecutor
+    from contextlib import contextmanager
+
+    asked = []
+
+    @contextmanager
+    def recording(workers=None, scheduler=None):
+        asked.append(workers)
+        with ThreadPoolExecutor(workers) as ex:
+            yield ex
+
+    monkeypatch.setattr(executors, "make_executor", recording)
+    r = run(capsys, "intercept", short, "--runs", 2, "--workers", 16, "--no-progress",
+            "--out", tmp_path / "out")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert asked == [2]
+
+
+def test_complete_results_are_read_not_written(short, tmp_path, capsys):
+    """A complete result set is summarised again without writing (a read-only folder)."""
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 2, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    before = {p: p.stat().st_mtime_ns for p in out.iterdir()}
+    os.chmod(out, 0o555)
+    try:
+        r = run(capsys, *args, "--runs", 1)
+    finally:
+        os.chmod(out, 0o755)
+    assert r.returncode == 0, r.stderr
+    assert {p: p.stat().st_mtime_ns for p in out.iterdir()} == before
+
+
+def test_a_file_system_without_locks_is_written_unlocked(tmp_path, capsys, monkeypatch):
+    import errno
+
+    from kalman_vs_infoset.experiments import files
+
+    def no_locks(fd, op):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(files.fcntl, "flock", no_locks)
+    table = tmp_path / "t.parquet"
+    with exclusive(table, "test"):
+        table.write_text("x")
+    assert "cannot lock files" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.parquet"]
