@@ -82,6 +82,13 @@ class InfosetOptions(SlabOptions):
             "outer-simplified to this many (sound)",
         ),
     ] = 128
+    split_bands: Annotated[
+        bool,
+        Field(description="nodes: split closing-speed bands where their width dominates"),
+    ] = True
+    max_bands: Annotated[
+        int, Field(ge=1, le=256, description="nodes: most live closing-speed bands")
+    ] = 32
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
@@ -226,6 +233,8 @@ def _infoset(
             max_pieces=opt.max_pieces,
             tighten_rtol=opt.tighten_rtol,
             max_vertices=opt.max_vertices,
+            split_bands=opt.split_bands,
+            max_bands=opt.max_bands,
         )
     return InformationSetEstimator(
         setting.model,

@@ -38,11 +38,16 @@ def live_bands(s: NodeSet) -> list[tuple[float, float]]:
 def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float] | None:
     """The live band to split next, or None.
 
-    A band's relaxation of the miss interval is about ``2 |w| (u_hi - u_lo) / u_hi``
-    (``|w|`` its largest miss); it is split while that exceeds ``rtol`` of the set's
-    width of ``w``, or while fewer than ``min_live`` bands are live (the widest
-    first)."""
+    While fewer than ``min_live`` bands are live, the widest. Otherwise one of the
+    (at most two) bands whose cells attain the set's extremes of ``w``, if its
+    relaxation of them, about ``2 |w| (u_hi - u_lo) / u_hi``, exceeds ``rtol`` of the
+    set's width: the splits go where the interval's ends are decided, as the
+    tightening's new nodes do (a band elsewhere gains nothing from a split but
+    cells between fewer nodes)."""
     bands = live_bands(s)
+    if len(bands) < min_live:
+        wide = max(bands, key=lambda b: (b[1] - b[0]) / b[1])
+        return wide if (wide[1] - wide[0]) > MIN_BAND_REL * wide[1] else None
     summ = s._summary
     w, cell_piece = summ["w"], summ["piece"]
     if len(w) == 0:
@@ -51,14 +56,12 @@ def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float]
     best, pick = 0.0, None
     for ua, ub in bands:
         rel = (ub - ua) / ub
-        if not rel > MIN_BAND_REL:
-            continue
         mine = (s.u_lo[cell_piece] == ua) & (s.u_hi[cell_piece] == ub)
-        w_abs = float(np.nanmax(np.abs(w[mine]))) if mine.any() else 0.0
-        loss = 2.0 * w_abs * rel
-        score = np.inf if len(bands) < min_live else loss
-        if (loss > rtol * width or len(bands) < min_live) and score * rel > best:
-            best, pick = score * rel, (ua, ub)
+        if not (rel > MIN_BAND_REL and mine.any()):
+            continue
+        loss = 2.0 * float(np.nanmax(np.abs(w[mine]))) * rel
+        if loss > rtol * width and loss > best:
+            best, pick = loss, (ua, ub)
     return pick
 
 
@@ -129,7 +132,17 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
         order = np.lexsort((all_label, all_piece))
         s = replace(two, piece=all_piece[order], label_s=all_label[order],
                     polygons=_concat(kept, polys).select(order))  # fmt: skip
-    return _compact(est._refine_pieces(s))
+    s = _compact(est._refine_pieces(s))
+    # each half's feasible labels are narrower than its parent's: a fresh grid of
+    # n_nodes over its bracket (its live labels kept, so none is lost) keeps the
+    # cells between its nodes as short as the parent's were
+    for half in np.unique(s.piece[s.live & (s.u_lo >= ua)[s.piece] & (s.u_hi <= ub)[s.piece]]):
+        lo, hi = est._bracket(s, int(half))
+        lo, hi = max(lo, float(s.hard_lo_s[half])), min(hi, float(s.hard_hi_s[half]))
+        mine = s.live & (s.piece == half)
+        labels = np.unique(np.r_[np.linspace(lo, hi, est.n_nodes), s.label_s[mine]])
+        s = est._regrid(s, int(half), labels)
+    return _compact(s)
 
 
 __all__ = ["MIN_BAND_REL", "live_bands", "split_live_bands"]
