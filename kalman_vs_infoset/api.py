@@ -28,33 +28,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from kalman_vs_infoset import _API
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.registry import Registration
 from kalman_vs_infoset.experiments import runner
 from kalman_vs_infoset.experiments import scenario as _scenario
 from kalman_vs_infoset.experiments import traces as _traces
 from kalman_vs_infoset.experiments.progress import progress_bar
-from kalman_vs_infoset.experiments.results import load_results, read_metadata
+from kalman_vs_infoset.experiments.results import load_results as load_results
+from kalman_vs_infoset.experiments.results import read_metadata as read_metadata
 from kalman_vs_infoset.experiments.sim import intercept as _intercept
 from kalman_vs_infoset.experiments.sim.intercept import EngagementResult
-from kalman_vs_infoset.experiments.sim.intercept_config import NOISES, InterceptScenario
+from kalman_vs_infoset.experiments.sim.intercept_config import NOISES as NOISES
+from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
 
-__all__ = [
-    "NOISES",
-    "EngagementResult",
-    "InterceptScenario",
-    "Registration",
-    "estimators",
-    "get_estimator",
-    "load_results",
-    "load_scenario",
-    "read_metadata",
-    "register_estimator",
-    "run_engagement",
-    "run_experiment",
-    "scenarios",
-    "trace",
-]
+__all__ = list(_API)  # the package root re-exports these lazily
 
 
 def scenarios() -> list[str]:

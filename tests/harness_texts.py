@@ -7,6 +7,7 @@ fast. Test modules add the sections they need (``SHORT + RANGE_FINDER``).
 
 from __future__ import annotations
 
+import subprocess
 import traceback
 from dataclasses import dataclass
 
@@ -86,3 +87,14 @@ def one_line_error(r: Result) -> bool:
     """Bad input: one line on stderr, exit status 2, no traceback."""
     lines = r.stderr.strip().splitlines()
     return r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr
+
+
+def cli_inproc(capsys, *args) -> subprocess.CompletedProcess:
+    """``kvi ARGS`` through ``kalman_vs_infoset.experiments.cli.main`` in this process
+    (fast; the real entry point keeps its own subprocess tests), as a CompletedProcess."""
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, out.out, out.err)

@@ -2,23 +2,12 @@
 throughput side by side, in CPU time; its first-run compilation on an empty cache."""
 
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
+from harness_texts import cli_inproc
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments.cli import main
-
-
-def cli_inproc(capsys, *args):
-    """``kvi ARGS`` through ``kalman_vs_infoset.experiments.cli.main`` in this process."""
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out = capsys.readouterr()
-    return subprocess.CompletedProcess(args, code, out.out, out.err)
 
 
 def test_bench_reports_every_field_side_by_side(capsys):

@@ -2,27 +2,17 @@
 importlib.resources, so that no command depends on the working folder."""
 
 import json
-import subprocess
 import tomllib
 from pathlib import Path
 
 import pytest
-from kalman_vs_infoset.experiments.cli import main
+from harness_texts import cli_inproc
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.guidance.attitude import gain_study
 
 from kalman_vs_infoset import data as bundled
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def cli_inproc(capsys, *args):
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out = capsys.readouterr()
-    return subprocess.CompletedProcess(args, code, out.out, out.err)
 
 
 def test_every_scenario_file_of_the_repository_is_bundled():

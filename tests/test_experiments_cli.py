@@ -8,10 +8,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from harness_texts import RANGE_FINDER, experiment
+from harness_texts import RANGE_FINDER, cli_inproc, experiment
 from harness_texts import SHORT as SHORT_ENGAGEMENT
 from kalman_vs_infoset.experiments import runner
-from kalman_vs_infoset.experiments.cli import main
 from kalman_vs_infoset.experiments.results import read_metadata
 from kalman_vs_infoset.experiments.runner import run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
@@ -30,16 +29,6 @@ def cli(*args, cwd=ROOT):
         cwd=cwd,
         timeout=600,
     )
-
-
-def cli_inproc(capsys, *args):
-    """The same through ``kalman_vs_infoset.experiments.cli.main`` in this process (fast)."""
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out = capsys.readouterr()
-    return subprocess.CompletedProcess(args, code, out.out, out.err)
 
 
 @pytest.fixture
