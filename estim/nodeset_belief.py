@@ -262,7 +262,10 @@ class NodeSet(Belief):
 
         def row(i: int, tau: float, w: float) -> FloatArray:
             x = self.e_nom * tau
-            a = 0.5 * (alpha[i, 0] + alpha[i, 1])
+            lo, hi = alpha[i, 0], alpha[i, 1]
+            # a cell unbounded in bearing both ways has no middle: nan (without the
+            # warning of inf - inf)
+            a = np.nan if np.isinf(lo) and np.isinf(hi) and lo != hi else 0.5 * (lo + hi)
             return np.array([a, float(self.model.omega_from_w(w, x)), x])
 
         return Extremes(
