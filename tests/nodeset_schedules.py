@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 from kalman_vs_infoset.estim.costs import ZeroEffortMiss
-from kalman_vs_infoset.estim.model import Bearing
+from kalman_vs_infoset.estim.model import Bearing, Range
+from kalman_vs_infoset.estim.nodeset_bands import live_bands
 from kalman_vs_infoset.experiments.cmd_tightness import auxiliary_model_options
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
@@ -112,7 +113,7 @@ def run_schedule(
     model, dt = sc.channel_model(), sc.model.dt_s
     est, belief = build_estimator("infoset", sc, model, "lateral")
     y, v, x, e = (float(c) for c in corner)
-    steps = outside = max_vertices = 0
+    steps = outside = max_vertices = bands = 0
     while x > model.eps_m:
         t = steps * dt
         a = float(model.bearing_bound(x)) * (1 - 1e-9)
@@ -121,6 +122,11 @@ def run_schedule(
         if belief.is_empty:
             break
         check(belief, f"update at {t:g} s")
+        if sc.range_finder.due(t):  # one channel: the range is x; its error follows a's sign
+            b = model.range_rel_bound * (1 - 1e-9)
+            belief = est.update(belief, Range(x * (1 + np.sign(err) * b), off_axis_rad=0.0))
+            check(belief, f"range update at {t:g} s")
+            bands = max(bands, len(live_bands(belief)))
         outside += not belief.contains(np.array([y / x, (v * x + e * y) / x**2, x]))
         belief.extremes(ZeroEffortMiss(model))
         sign = disturbance_sign * (-1) ** np.searchsorted(disturbance_switch_s, t, side="right")
@@ -137,4 +143,5 @@ def run_schedule(
         "max_vertices": max_vertices,
         "status": str(belief.status),
         "n_simplified": belief.n_simplified,
+        "max_live_bands": bands,
     }

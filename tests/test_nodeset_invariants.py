@@ -73,6 +73,40 @@ def test_slices_stay_convex_and_wind_once_after_every_operation(
     assert r["steps"] >= 12
 
 
+@settings(max_examples=25, deadline=None)
+@given(
+    corner=st.tuples(*(st.booleans() for _ in range(4))),
+    error_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
+    disturbance_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
+    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+)
+def test_range_finder_schedules_keep_the_truth_while_bands_split(
+    corner, error_switch_s, disturbance_switch_s, signs
+):
+    """With the range finder (Fig. 5's, 5 % at the bound, switching with the bearing
+    error): the slices stay convex, the truth stays inside after every update, also
+    when the closing-speed bands split (their halves are recomputed)."""
+    x_box, e_box = (801.3e3, 951.3e3), (57.9e3, 58.1e3)
+    y = 10e3 if corner[0] else -10e3
+    v = 100.0 if corner[1] else -100.0
+    r = run_schedule(
+        "kp_fig5_range", (y, v, x_box[int(corner[2])], e_box[int(corner[3])]),
+        error_switch_s, disturbance_switch_s, *signs,
+        overrides=["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]"],
+    )  # fmt: skip
+    assert r["outside"] == 0
+    assert r["steps"] >= 12
+
+
+def test_a_range_finder_corner_run_splits_bands_and_keeps_the_truth():
+    """The full Fig. 5 approach with the range finder from the box corner, errors at
+    their bounds: ranges empty bands, the live ones split (more than the four bands
+    the set starts with), and the truth is never outside."""
+    r = run_schedule("kp_fig5_range", (-10e3, -100.0, 5301.3e3, 57.9e3), [80.0], [20.0, 90.0])
+    assert r["outside"] == 0
+    assert r["max_live_bands"] > 4
+
+
 def _convex_polygon(rng, n, flat):
     pts = rng.normal(size=(n, 2)) * [1.0, flat]
     hull = shapely.convex_hull(shapely.multipoints(pts))
