@@ -199,51 +199,59 @@ def convex_hulls(xy, offsets):
 
 
 @njit(cache=True)
+def simplify_polygon(buf, m, rel_tol, max_vertices):
+    """Outer simplification of one convex CCW polygon ``buf[:m]``, in place: greedily
+    remove the edge whose removal (extending its two neighbours to their
+    intersection) adds the least area, while that area is below ``rel_tol`` x the
+    polygon's area or the polygon has more than ``max_vertices`` vertices (``rel_tol
+    < 0``: only the count). The result contains the polygon. Returns the new count."""
+    while m >= 4:
+        area = 0.0
+        for j in range(m):
+            c = (j + 1) % m
+            area += buf[j, 0] * buf[c, 1] - buf[c, 0] * buf[j, 1]
+        area = 0.5 * abs(area)
+        best, best_j, bx, by = np.inf, -1, 0.0, 0.0
+        for j in range(m):
+            p, c, d = (j - 1) % m, (j + 1) % m, (j + 2) % m
+            dpx, dpy = buf[j, 0] - buf[p, 0], buf[j, 1] - buf[p, 1]
+            dnx, dny = buf[d, 0] - buf[c, 0], buf[d, 1] - buf[c, 1]
+            den = dpx * dny - dpy * dnx
+            if den <= 0.0:
+                continue  # neighbours turn by pi or more: they never meet outside
+            ex, ey = buf[c, 0] - buf[j, 0], buf[c, 1] - buf[j, 1]
+            t = (ex * dny - ey * dnx) / den
+            if t < 0.0:
+                continue
+            x_pt, y_pt = buf[j, 0] + t * dpx, buf[j, 1] + t * dpy
+            added = 0.5 * abs(ex * (y_pt - buf[j, 1]) - ey * (x_pt - buf[j, 0]))
+            if added < best:
+                best, best_j, bx, by = added, j, x_pt, y_pt
+        if best_j < 0 or not (best <= rel_tol * area or m > max_vertices):
+            break
+        # v_j <- X, delete v_{j+1}
+        buf[best_j, 0] = bx
+        buf[best_j, 1] = by
+        drop = (best_j + 1) % m
+        for r in range(drop, m - 1):
+            buf[r, 0] = buf[r + 1, 0]
+            buf[r, 1] = buf[r + 1, 1]
+        m -= 1
+    return m
+
+
+@njit(cache=True)
 def simplify(xy, offsets, rel_tol, max_vertices):
-    """Outer simplification (see ConvexPolygons.simplify): greedily remove the edge
-    whose removal (extending its two neighbours to their intersection) adds the least
-    area, while that area is below ``rel_tol`` x the polygon's area or the polygon
-    has more than ``max_vertices`` vertices."""
+    """Outer simplification (see ConvexPolygons.simplify) of every polygon
+    (:func:`simplify_polygon`)."""
     n = offsets.shape[0] - 1
     out = np.empty((xy.shape[0], 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
     k = 0
     for i in range(n):
         s0 = offsets[i]
-        m = offsets[i + 1] - s0
-        buf = xy[s0 : s0 + m].copy()
-        while m >= 4:
-            area = 0.0
-            for j in range(m):
-                c = (j + 1) % m
-                area += buf[j, 0] * buf[c, 1] - buf[c, 0] * buf[j, 1]
-            area = 0.5 * abs(area)
-            best, best_j, bx, by = np.inf, -1, 0.0, 0.0
-            for j in range(m):
-                p, c, d = (j - 1) % m, (j + 1) % m, (j + 2) % m
-                dpx, dpy = buf[j, 0] - buf[p, 0], buf[j, 1] - buf[p, 1]
-                dnx, dny = buf[d, 0] - buf[c, 0], buf[d, 1] - buf[c, 1]
-                den = dpx * dny - dpy * dnx
-                if den <= 0.0:
-                    continue  # neighbours turn by pi or more: they never meet outside
-                ex, ey = buf[c, 0] - buf[j, 0], buf[c, 1] - buf[j, 1]
-                t = (ex * dny - ey * dnx) / den
-                if t < 0.0:
-                    continue
-                x_pt, y_pt = buf[j, 0] + t * dpx, buf[j, 1] + t * dpy
-                added = 0.5 * abs(ex * (y_pt - buf[j, 1]) - ey * (x_pt - buf[j, 0]))
-                if added < best:
-                    best, best_j, bx, by = added, j, x_pt, y_pt
-            if best_j < 0 or not (best <= rel_tol * area or m > max_vertices):
-                break
-            # v_j <- X, delete v_{j+1}
-            buf[best_j, 0] = bx
-            buf[best_j, 1] = by
-            drop = (best_j + 1) % m
-            for r in range(drop, m - 1):
-                buf[r, 0] = buf[r + 1, 0]
-                buf[r, 1] = buf[r + 1, 1]
-            m -= 1
+        buf = xy[s0 : offsets[i + 1]].copy()
+        m = simplify_polygon(buf, offsets[i + 1] - s0, rel_tol, max_vertices)
         for j in range(m):
             out[k, 0] = buf[j, 0]
             out[k, 1] = buf[j, 1]

@@ -10,7 +10,7 @@ in :mod:`kalman_vs_infoset.estim._nodeset_geometry`.
 from __future__ import annotations
 
 import numpy as np
-from kalman_vs_infoset.estim._kernels import _dedupe_tail
+from kalman_vs_infoset.estim._kernels import _dedupe_tail, simplify_polygon
 from numba import njit
 
 #: operation codes of the log
@@ -177,45 +177,6 @@ def _room(buf, m, need):
 
 
 @njit(cache=True)
-def outer_simplify(p, m, cap):
-    """Remove vertices of the convex CCW polygon ``p[:m]`` (in place) until at most
-    ``cap`` remain, each time the edge whose removal adds the least area: its two
-    neighbouring edges are extended to their intersection, which replaces the
-    edge's two ends. The result contains the polygon (an outer simplification:
-    sound, and tight where many short edges turn a little). Returns the new count
-    (``m`` if no edge can go: neighbours that do not meet beyond it)."""
-    while m > max(cap, 3):
-        best, bi, bx, by = np.inf, -1, 0.0, 0.0
-        for i in range(m):
-            a, b = (i - 1) % m, i
-            c, d = (i + 1) % m, (i + 2) % m
-            ux, uy = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1]
-            wx, wy = p[d, 0] - p[c, 0], p[d, 1] - p[c, 1]
-            den = ux * wy - uy * wx
-            if not den > 0.0:  # the neighbours turn by pi or more: no apex outside
-                continue
-            ex, ey = p[c, 0] - p[b, 0], p[c, 1] - p[b, 1]
-            t = (ex * wy - ey * wx) / den
-            if not t >= 0.0:
-                continue
-            area = 0.5 * t * abs(ex * uy - ey * ux)  # the triangle b, apex, c
-            if area < best:
-                best, bi = area, i
-                bx, by = p[b, 0] + t * ux, p[b, 1] + t * uy
-        if bi < 0:
-            break
-        # the apex replaces vertices bi and bi + 1 (cyclically)
-        if bi == m - 1:
-            p[0, 0], p[0, 1] = bx, by
-        else:
-            p[bi, 0], p[bi, 1] = bx, by
-            for j in range(bi + 1, m - 1):
-                p[j, 0], p[j, 1] = p[j + 1, 0], p[j + 1, 1]
-        m -= 1
-    return m
-
-
-@njit(cache=True)
 def _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps):
     """Time at the start of every operation and the hard label limits after it."""
     n_ops = kinds.shape[0]
@@ -256,8 +217,8 @@ def apply_ops(
     narrowed by range intervals and the threshold. Each node runs through all the
     operations in two scratch buffers (no allocation per operation). A polygon
     that a prediction leaves with more than ``vcap`` vertices is outer-simplified to
-    ``vcap`` (:func:`outer_simplify`). Returns the polygons, the time, the hard limits
-    and the number of such simplifications.
+    ``vcap`` (``_kernels.simplify_polygon``). Returns the polygons, the time, the
+    hard limits and the number of such simplifications.
     """
     n = off.shape[0] - 1
     n_ops = kinds.shape[0]
@@ -347,8 +308,8 @@ def apply_ops(
                 m, _ = _segment1(b_buf, m, 0.5 * ga, gz2, a_buf, big, False)
                 m = _hull_into(a_buf, m, b_buf, HULL_TURN_RAD)
                 a_buf, b_buf = b_buf, a_buf
-                if m > vcap:
-                    m = outer_simplify(a_buf, m, vcap)
+                if m > vcap:  # outer simplification to the cap (sound)
+                    m = simplify_polygon(a_buf, m, -1.0, vcap)
                     n_simplified += 1
         if k_out + m > out.shape[0]:
             grown = np.empty((2 * (k_out + m), 2))

@@ -20,6 +20,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from kalman_vs_infoset.estim import _kernels as _k
 from kalman_vs_infoset.estim import _nodeset_kernels as _nk
 from nodeset_schedules import DENT_TOL, ROOT, run_schedule, winding_and_turn
 
@@ -161,7 +162,7 @@ def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):
     poly = _convex_polygon(np.random.default_rng(0), 3, 1.0) if len(poly) < 3 else poly
     m = len(poly)
     p = poly.copy()
-    k = _nk.outer_simplify(p, m, cap)
+    k = _k.simplify_polygon(p, m, -1.0, cap)
     assert k <= max(cap, 3) or k == m
     got, orig = shapely.Polygon(p[:k]), shapely.Polygon(poly)
     assert got.buffer(1e-9 * np.abs(poly).max()).contains(orig)
@@ -169,7 +170,7 @@ def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):
     assert abs(w - 1.0) < 1e-9 and turn > -DENT_TOL
     if m > cap:  # the first removal is the least-area one
         one = poly.copy()
-        k1 = _nk.outer_simplify(one, m, m - 1)
+        k1 = _k.simplify_polygon(one, m, -1.0, m - 1)
         added = shapely.Polygon(one[:k1]).area - orig.area
         best = np.inf
         for i in range(m):
@@ -186,6 +187,7 @@ def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):
 _REPLAY = """
 import json, sys
 import numpy as np
+from kalman_vs_infoset.estim import _kernels as _k
 from kalman_vs_infoset.estim import _nodeset_kernels as _nk
 calls = np.load(sys.argv[1], allow_pickle=False)
 n = int(calls["n"])
