@@ -323,3 +323,23 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
             MAX_BEARING_RAD,
         )  # fmt: skip
+
+
+def warm_up() -> None:
+    """Load the node set's compiled kernels in this process (a few steps of a small
+    set with a closing-speed interval: bearings, ranges, an impulse, the extremes and
+    the containment test). Forked Monte Carlo workers then inherit them instead of
+    each loading or compiling them again."""
+    from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+
+    model = ChannelModel()
+    est = NodeSetEstimator(model, closing_speed_mps=(57.9e3, 58.1e3))
+    b = est.initial(lateral_m=(-1e3, 1e3), lateral_vel_mps=(-100.0, 100.0), x_m=(7e5, 9e5))
+    for k in range(3):
+        x = 8e5 - 58e3 * 0.5 * k
+        b = est.update(b, Bearing(1e-4))
+        b = est.update(b, Range(x, off_axis_rad=0.0))
+        b.extremes(MissForecast(model))
+        b.extremes(ZeroEffortMiss(model))
+        b.contains(np.array([1e-4, 0.0, x]))
+        b = est.predict(b, 0.5, 1.0)

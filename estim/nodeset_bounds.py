@@ -109,9 +109,12 @@ class OpLog:
     def with_copied_column(self, p: int) -> OpLog:
         """The log with piece ``p``'s parameters copied into a new last column (a
         piece split in two keeps its history in both halves)."""
+        # C order, as every other log (np.c_ gives Fortran order: another type for
+        # the compiled replay, compiled again in each worker)
         return OpLog(
-            self.kinds, self.pa, self.pb, np.c_[self.q_lo, self.q_lo[:, p]],
-            np.c_[self.q_hi, self.q_hi[:, p]],
+            self.kinds, self.pa, self.pb,
+            np.ascontiguousarray(np.c_[self.q_lo, self.q_lo[:, p]]),
+            np.ascontiguousarray(np.c_[self.q_hi, self.q_hi[:, p]]),
         )  # fmt: skip
 
     def parts(self) -> tuple:

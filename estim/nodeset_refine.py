@@ -282,7 +282,8 @@ def _drop_empty_pieces(s: NodeSet) -> NodeSet:
     return replace(
         s, piece=new_index[s.piece], u_lo=s.u_lo[used], u_hi=s.u_hi[used],
         hard_lo_s=s.hard_lo_s[used], hard_hi_s=s.hard_hi_s[used],
-        log=OpLog(log.kinds, log.pa, log.pb, log.q_lo[:, used], log.q_hi[:, used]),
+        log=OpLog(log.kinds, log.pa, log.pb, np.ascontiguousarray(log.q_lo[:, used]),
+                  np.ascontiguousarray(log.q_hi[:, used])),  # C order (one compiled type)
     )  # fmt: skip
 
 

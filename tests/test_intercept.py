@@ -239,15 +239,25 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
 
 
 def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
-    """Forked Monte Carlo workers inherit what the parent loaded: after warm_up an
-    engagement (random, game and bias noise) must not need a new compiled version of
-    any kernel (read-only polygon arrays are a type of their own for numba)."""
+    """Forked Monte Carlo workers inherit what the parent loaded: after the warm-ups
+    (the slab kernels' and the node set's) an engagement (random, game and bias noise)
+    must not need a new compiled version of any kernel, the node set's included
+    (read-only polygon arrays are a type of their own for numba)."""
     from kalman_vs_infoset.estim import _kernels as k
+    from kalman_vs_infoset.estim import _nodeset_geometry as ng
+    from kalman_vs_infoset.estim import _nodeset_kernels as nk
+    from kalman_vs_infoset.estim.nodeset import warm_up
     from kalman_vs_infoset.experiments.scenario import load_scenario
     from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
     k.warm_up()
-    kernels = {n: getattr(k, n) for n in dir(k) if hasattr(getattr(k, n), "signatures")}
+    warm_up()
+    kernels = {
+        f"{m.__name__}.{n}": getattr(m, n)
+        for m in (k, nk, ng)
+        for n in dir(m)
+        if hasattr(getattr(m, n), "signatures")
+    }
     before = {n: len(f.signatures) for n, f in kernels.items()}
     sc = load_scenario("data/scenarios/kp_fig5.toml")
     for noise in ("random", "game", "bias"):
