@@ -70,7 +70,8 @@ class NodeRefinement:
                         break
                     lo, hi = self._bracket(before, p)
                     if int(s.log.kinds[-1]) == _nk.BEARING:
-                        s = self._search(s, p, lo, hi)
+                        if not self._strip_misses(before, p, float(s.log.pa[-1])):
+                            s = self._search(s, p, lo, hi)
                         break
                     # a range interval or the threshold cut every node off: what is
                     # left lies where the feasible interval (inside the old bracket)
@@ -140,6 +141,22 @@ class NodeRefinement:
                 break
             lo, hi = labels[max(k - 1, 0)], labels[min(k + 1, self.n_nodes - 1)]
         return s
+
+    def _strip_misses(self, before: NodeSet, p: int, alpha_m: float) -> bool:
+        """Whether the bearing strip at ``alpha_m`` misses every cell of piece ``p`` of
+        the set ``before`` it: each cell's bounds of the bearing (sound, from the
+        bounds between nodes) lie outside the strip at its widest over the cell (the
+        bound at the cell's smallest range). Then the piece is empty, and the
+        search's replays (:meth:`_search`, which would find nothing) are skipped."""
+        sm = before._summary
+        cells = sm["piece"] == p
+        if not cells.any():
+            return False
+        tau_lo = np.maximum(sm["span"][cells, 0], 0.0)
+        half = self.model.bearing_bound(tau_lo / before.u_hi[p]) * (1.0 + STRIP_MARGIN)
+        half = half + STRIP_MARGIN * self.alpha_scale_rad
+        a = sm["alpha"][cells]
+        return bool(np.all((a[:, 0] > alpha_m + half) | (a[:, 1] < alpha_m - half)))
 
     @staticmethod
     def _bracket(s: NodeSet, b: int) -> tuple[float, float]:
