@@ -1,4 +1,4 @@
-"""Set-membership attitude estimator: a box on the multiplicative error state (SPEC 2.5).
+"""Set-membership attitude estimator: a box on the multiplicative error state (docs/models.md §2.5).
 
 The belief of each run is a reference attitude ``q_ref`` and a box
 

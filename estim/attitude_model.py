@@ -1,7 +1,7 @@
 """What the attitude estimators know: the rigid-body model, its inputs and measurements.
 
 Shared by :mod:`estim.attitude_box` (set-membership) and :mod:`estim.attitude_ukf`.
-The model is the common plant of SPEC 2 written for an estimator::
+The model is the common plant of docs/models.md §2 written for an estimator::
 
     J_b dw/dt = M_u + d - w x (J_g w + h),      dq/dt = 1/2 q (x) (w, 0)
 

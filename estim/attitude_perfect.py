@@ -1,4 +1,4 @@
-"""The zero-noise attitude "estimator": the measurement is taken as the state (SPEC 2.5).
+"""The zero-noise attitude "estimator": the measurement is taken as the state (docs/models.md §2.5).
 
 Behind the same interface as the box and the UKF (:class:`estim.attitude_model.AttitudeBelief`,
 batched over runs), so an attitude loop runs it like any other estimator. A point is

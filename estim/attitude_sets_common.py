@@ -1,4 +1,4 @@
-"""Shared machinery of the attitude zonotope and ellipsoid (SPEC 2.5, issue 14).
+"""Shared machinery of the attitude zonotope and ellipsoid (docs/models.md §2.5).
 
 A belief of :mod:`estim.attitude_zonotope` or :mod:`estim.attitude_ellipsoid` is the
 intersection ``S = Z ∩ B`` of a correlated set ``Z`` (zonotope or ellipsoid) and the

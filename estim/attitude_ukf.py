@@ -1,4 +1,5 @@
-"""Unscented Kalman filter of attitude and rate with a multiplicative error state (SPEC 2.5).
+"""Unscented Kalman filter of attitude and rate with a multiplicative error state (docs/models.md
+§2.5).
 
 State. The belief of each run is a reference quaternion ``q_ref`` and a Gaussian on the
 9-dimensional error state ``x = (a, w, d)``: ``a`` the body-frame rotation vector with

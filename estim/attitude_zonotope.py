@@ -1,4 +1,4 @@
-"""Guaranteed attitude zonotope on the error state, beside the box (SPEC 2.5, issue 14).
+"""Guaranteed attitude zonotope on the error state, beside the box (docs/models.md §2.5).
 
 The belief of each run is ``S = Z ∩ B``: the box ``B`` of
 :class:`kalman_vs_infoset.estim.attitude_box.BoxAttitudeEstimator` (run unchanged) and a zonotope

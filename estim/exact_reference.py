@@ -1,12 +1,12 @@
 """The exact information set of one channel of the auxiliary model, by linear programming.
 
 A slow diagnostic, not an estimator: the reference a set estimator's intervals are
-measured against (issue 12). It never forms the set; it answers "min and max of a
+measured against (`kvi tightness`). It never forms the set; it answers "min and max of a
 function of the state over *all* states consistent with the data" with a certified
 pair of intervals, ``inner`` (attained by consistent trajectories) inside the exact
 one inside ``outer``.
 
-Model (seed 003 section 4, SPEC 1.3, in physical coordinates of one channel).
+Model (seed 003 section 4, docs/models.md §1.3, in physical coordinates of one channel).
 With ``Y = alpha x`` and ``V = dY/dt`` the auxiliary model is exactly linear::
 
     x(t) = x0 - e (t - t0),   Y'' = v,   |v| <= nu,   impulse k:  V += k,
@@ -66,7 +66,7 @@ rel_tol * width)`` on each side, or the LP budget is spent. The gap ``outer - in
 solver's feasibility tolerance (HiGHS, 1e-7). On seed 003's channel it stays under
 2e-4 of the width at 0.1-2 s per time point.
 
-The feasible range interval (issue 12 quotes "feasible initial range") is found by
+The feasible range interval (the "feasible initial range") is found by
 Kelley's cutting planes (:meth:`kalman_vs_infoset.estim._exact_lp.ChannelLP.kelley`): minimise /
 maximise ``x0`` with tangents of ``g``, adding the tangents at the solution until it
 violates no bearing (outer end), then checked by the fixed-``(x0, e)`` LP (inner end).

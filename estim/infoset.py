@@ -1,4 +1,4 @@
-"""The convex-section information set of one guidance channel (SPEC 1.4, seed 003).
+"""The convex-section information set of one guidance channel (docs/models.md §1.4, seed 003).
 
 The information set is the set of all states ``(alpha, omega, x)`` compatible with
 the measurement and control history. It is stored as a stack of x-sections; each
@@ -275,7 +275,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         (alpha, w) = (y/x, (c y + Vy x)/e)`` is linear with determinant ``1/e > 0``;
         over ``c`` in the speed interval the image is the convex hull of the eight
         corners ``(y, Vy, c)`` (``w`` is bilinear in ``(y, c)``; taken at ``c = e``
-        alone it misses the box's corners, issue 12). A slab takes the hull at its
+        alone it misses the box's corners). A slab takes the hull at its
         middle range plus a box covering the change over the interval:
         ``|y| |1/x - 1/x_mid|`` in ``alpha`` and ``|Vy| |x - x_mid| / e`` in ``w``.
         """

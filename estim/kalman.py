@@ -1,8 +1,9 @@
-"""EKF and UKF of one intercept guidance channel, built on filterpy (SPEC 1.7).
+"""EKF and UKF of one intercept guidance channel, built on filterpy (docs/models.md §1.7).
 
 State choice. Per channel the state is ``(alpha, r, x)``: bearing (rad), a rate
 coordinate ``r`` and the range along the nominal axis (m), i.e. the coordinates
-of the auxiliary model (SPEC 1.3, :mod:`kalman_vs_infoset.estim.model`) and of the information set,
+of the auxiliary model (docs/models.md §1.3, :mod:`kalman_vs_infoset.estim.model`) and of the
+information set,
 whose polygons live in ``(alpha, w)`` at each ``x``. Two choices of ``r``:
 
 * ``coords="zem"`` (default): the zero-effort miss ``w = omega x^2 / e`` (m);
@@ -32,7 +33,8 @@ are kept (``coords``). As in the set, ``x`` drifts at the *nominal* closing spee
 ``v`` stands for). The belief answers in rows
 ``(alpha, omega, x)`` whatever ``r`` is (:mod:`kalman_vs_infoset.estim.kalman_belief`).
 
-Model (SPEC 1.3, :meth:`kalman_vs_infoset.estim.model.ChannelModel.step_coefficients`), one step
+Model (docs/models.md §1.3, :meth:`kalman_vs_infoset.estim.model.ChannelModel.step_coefficients`),
+one step
 ``Delta``, ``x1 = x0 - e Delta``, ``v`` constant over the step::
 
     alpha1 = alpha0 + w0 e Delta/(x0 x1) + g_alpha v      = alpha0 + omega0 x0 Delta/x1 + g_alpha v
@@ -55,7 +57,7 @@ angle neglected: a relative 1e-6) with a uniform error ``|beta| <= b d``,
 ``omega -> omega + k/x`` (rate: nonlinear in ``x``, linearised by the EKF and
 transformed by the UKF), i.e. ``w -> w + k x/e`` (zem: exactly linear).
 
-Threshold (the set's ``eps``, SPEC 1.4): before each prediction ``x`` is
+Threshold (the set's ``eps``, docs/models.md §1.4): before each prediction ``x`` is
 conditioned on ``x >= eps + e Delta`` (a truncated normal, :meth:`threshold`);
 when the whole ellipsoid is below, the belief is empty (status ``Status.TERMINAL``).
 
@@ -376,7 +378,7 @@ class KalmanChannelEstimator(Estimator[GaussianBelief, ChannelPrior]):
     def threshold(self, belief: GaussianBelief, dt_s: float) -> GaussianBelief:
         """Condition on ``x >= eps + e dt`` (states that pass under ``eps`` are dropped).
 
-        The Gaussian analogue of the set's threshold (SPEC 1.4): when the n-sigma
+        The Gaussian analogue of the set's threshold (docs/models.md §1.4): when the n-sigma
         ellipsoid reaches under ``x_lo = eps + e dt``, ``x`` is replaced by its normal
         distribution truncated at ``x_lo`` (moments ``m + s lambda``,
         ``s^2 (1 + b lambda - lambda^2)``, ``b = (x_lo - m)/s``,

@@ -1,4 +1,4 @@
-"""The auxiliary linear model of one guidance channel (SPEC 1.3, seed 003 section 4).
+"""The auxiliary linear model of one guidance channel (docs/models.md §1.3, seed 003 section 4).
 
 Per channel (lateral shown; the vertical channel is the same with theta, z) the
 state is the bearing ``alpha`` (rad), its rate ``omega`` (rad/s) and the range
@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 @dataclass(frozen=True)
 class BearingBound:
-    """Bearing error bound growing linearly as the range closes (SPEC 1.2).
+    """Bearing error bound growing linearly as the range closes (docs/models.md §1.2).
 
     ``bound(d) = end_rad + (start_rad - end_rad) * d / ref_range_m``: ``start_rad``
     at the nominal initial range, ``end_rad`` at zero range.

@@ -1,7 +1,9 @@
-"""``attitude`` command, controllers ``energy`` and ``euler``: Resurs-P (seed 000, SPEC 2.1).
+"""``attitude`` command, controllers ``energy`` and ``euler``: Resurs-P (seed 000, docs/models.md
+§2.1).
 
 The scenario (typed tables: :func:`prepare`), the runner's task (one turn a run:
-:func:`kalman_vs_infoset.experiments.sim.attitude_cmg.one_run`) and the JSON of SPEC 3.1 with
+:func:`kalman_vs_infoset.experiments.sim.attitude_cmg.one_run`) and the JSON of docs/models.md §3.1
+with
 ``lower_bound_energy_N2m2s`` and diagnostics from the runs' rows (:func:`summarise`).
 """
 
@@ -49,7 +51,7 @@ def summarise(
     setup: TurnSetup, controller: str, noise: str, estimator: str, runs: int, seed: int, ok,
     failures: int,
 ) -> dict[str, Any]:  # fmt: skip
-    """SPEC 3.1 ``attitude`` for the controllers ``energy`` and ``euler`` (seed 000)."""
+    """docs/models.md §3.1 ``attitude`` for the controllers ``energy`` and ``euler`` (seed 000)."""
 
     def col(key: str) -> list:
         return ok[key].tolist() if key in ok else []

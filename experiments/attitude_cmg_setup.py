@@ -1,4 +1,4 @@
-"""Resurs-P scenario (seed 000, SPEC 2.1): a scenario's tables read into the typed
+"""Resurs-P scenario (seed 000, docs/models.md §2.1): a scenario's tables read into the typed
 :class:`~kalman_vs_infoset.experiments.sim.attitude_cmg_config.CmgScenario` and the
 :class:`~kalman_vs_infoset.experiments.sim.turn_setup.TurnSetup` of the loop."""
 

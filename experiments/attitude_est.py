@@ -1,4 +1,4 @@
-"""Attitude loops as consumers of estimators (SPEC 2.5): the names and the outputs.
+"""Attitude loops as consumers of estimators (docs/models.md §2.5): the names and the outputs.
 
 The loops themselves run a registered estimator through
 :class:`kalman_vs_infoset.experiments.sim.estimator_loop.EstimatorLoop`; this module resolves the

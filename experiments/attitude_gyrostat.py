@@ -1,11 +1,12 @@
-"""``attitude`` command, controller ``game``: the three-rotor gyrostat of seed 004 (SPEC 2.4).
+"""``attitude`` command, controller ``game``: the three-rotor gyrostat of seed 004 (docs/models.md
+§2.4).
 
 :func:`prepare` reads the scenario's typed tables
 (:class:`kalman_vs_infoset.experiments.sim.gyrostat_config.GyrostatScenario`) and designs a* by the
 iteration of seed section 3
 (:meth:`kalman_vs_infoset.experiments.sim.gyrostat_config.GyrostatSetup.from_config`); :func:`task`
 simulates a chunk of turns batched (:func:`experiments.sim.gyrostat.simulate_turn`);
-:func:`summarise` gives the JSON of SPEC 3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
+:func:`summarise` gives the JSON of docs/models.md §3.1 plus ``guaranteed_time_s`` (seed eq. 2.8).
 
 The law reads ``(q, x)`` from an estimator (``perfect``, ``ukf``, ``box``;
 :mod:`kalman_vs_infoset.experiments.sim.gyrostat`). Noise mapping: ``none`` = perfect measurements,
@@ -84,7 +85,7 @@ def summarise(
     setup: GyrostatSetup, controller: str, noise: str, estimator: str, runs: int, seed: int, ok,
     failures: int,
 ) -> dict[str, Any]:  # fmt: skip
-    """Monte Carlo of the gyrostat game turn: the JSON object of SPEC 3.1."""
+    """Monte Carlo of the gyrostat game turn: the JSON object of docs/models.md §3.1."""
 
     def col(key: str) -> np.ndarray:
         return ok[key].to_numpy(dtype=float) if key in ok else np.empty((0,))

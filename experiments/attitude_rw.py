@@ -1,9 +1,10 @@
-"""``attitude`` command, controllers ``pd`` (SPEC 2.2) and ``lqr`` (SPEC 2.3) on reaction wheels.
+"""``attitude`` command, controllers ``pd`` (docs/models.md §2.2) and ``lqr`` (docs/models.md §2.3)
+on reaction wheels.
 
 The scenario's typed tables (:class:`experiments.sim.attitude_rw_config.RwScenario`,
 read by :func:`prepare`), the runner's task over a chunk of runs (:func:`task`, the
 loop itself is :func:`kalman_vs_infoset.experiments.sim.attitude_rw.simulate_runs`) and the JSON of
-SPEC 3.1 from the runs' rows (:func:`summarise`).
+docs/models.md §3.1 from the runs' rows (:func:`summarise`).
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ def summarise(
     ok,
     failures: int,
 ) -> dict[str, Any]:
-    """The ``attitude`` JSON of SPEC 3.1 for ``pd`` and ``lqr`` from the runs' rows."""
+    """The ``attitude`` JSON of docs/models.md §3.1 for ``pd`` and ``lqr`` from the runs' rows."""
 
     def col(key: str):
         return ok[key].to_numpy(dtype=float) if key in ok else np.zeros(0)

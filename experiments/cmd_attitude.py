@@ -1,4 +1,4 @@
-"""``kvi attitude SCENARIO.toml [--controller NAME] [--noise ...]`` (SPEC 3.1).
+"""``kvi attitude SCENARIO.toml [--controller NAME] [--noise ...]`` (docs/models.md §3.1).
 
 Loads the scenario (``--set`` overrides as for the intercept), takes the controller from
 ``--controller`` or the file's top-level ``controller`` key and dispatches by name to the

@@ -35,7 +35,7 @@ def add_arguments(p) -> None:
 
 
 def miss_floor_m(sc) -> float:
-    """Miss floor set by the last bearings: bound at eps times eps (SPEC 1.8)."""
+    """Miss floor set by the last bearings: bound at eps times eps (docs/models.md §1.8)."""
     m = sc.model
     return m.bearing_bound_end_rad * m.eps_km * 1e3
 

@@ -1,4 +1,4 @@
-"""``kvi intercept SCENARIO.toml``: Monte Carlo of the intercept (SPEC 3.1)."""
+"""``kvi intercept SCENARIO.toml``: Monte Carlo of the intercept (docs/models.md §3.1)."""
 
 from __future__ import annotations
 

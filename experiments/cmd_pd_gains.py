@@ -1,4 +1,4 @@
-"""``kvi pd-gains [--angles-deg LIST]``: quaternion-PD gain study (SPEC 2.2, 3.1).
+"""``kvi pd-gains [--angles-deg LIST]``: quaternion-PD gain study (docs/models.md §2.2, 3.1).
 
 For every requested angle: the settle-time map over ``(k_q, k_w)`` (one numpy batch),
 the efficient-coefficient curve and its parabola ``k_q = f0 k_w^2`` (seed eq. (27));

@@ -1,5 +1,5 @@
 """``kvi tightness SCENARIO.toml``: a set's interval of the miss
-against the exact one (issue 12).
+against the exact one.
 
 One lateral channel of the scenario, in the auxiliary model of seed 003 (the model
 the exact reference solves, :mod:`kalman_vs_infoset.estim.exact_reference`): the truth is drawn from
@@ -304,7 +304,7 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
         ax.set_yscale("symlog", linthresh=10.0)
         ax_r.plot(t, ratio, "o-", color="C0", label="estimator / exact width")
         ax_r.axhline(1.0, color="k", lw=0.8)
-        ax_r.axhline(1.1, color="C2", ls="--", lw=0.8, label="1.10 (issue 12 target)")
+        ax_r.axhline(1.1, color="C2", ls="--", lw=0.8, label="1.10")
     ax.set_xlabel("time, s")
     ax.set_ylabel("zero-effort miss w minus the truth's, m")
     ax_r.set_xlabel("time, s")

@@ -11,7 +11,7 @@ from kalman_vs_infoset.experiments.files import atomic_write
 
 
 def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:
-    """A markdown table with one line per summary object (SPEC 3.1 intercept JSON)."""
+    """A markdown table with one line per summary object (docs/models.md §3.1 intercept JSON)."""
     head = [
         *label_keys,
         "runs",

@@ -402,7 +402,7 @@ def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
-    """The intercept JSON object of SPEC 3.1 for one estimator x noise."""
+    """The intercept JSON object of docs/models.md §3.1 for one estimator x noise."""
     ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]
     return {
         "scenario": sc.name,

@@ -1,4 +1,5 @@
-"""Energy-saving discrete control of Resurs-P (seed 000, SPEC 2.1) and the min-energy bound.
+"""Energy-saving discrete control of Resurs-P (seed 000, docs/models.md §2.1) and the min-energy
+bound.
 
 The two full 300-s turns (energy law, Euler-axis baseline) are simulated once each
 (module fixtures) and shared by the tests that check them.

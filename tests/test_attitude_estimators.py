@@ -1,4 +1,5 @@
-"""Attitude estimators (SPEC 2.5): the box's guarantee, the UKF against filterpy, the loops.
+"""Attitude estimators (docs/models.md §2.5): the box's guarantee, the UKF against filterpy, the
+loops.
 
 Independent references: scipy's ``Rotation`` for the quaternion maps, scipy's DOP853
 (:func:`kalman_vs_infoset.guidance.attitude.plant.propagate`) for the truth, filterpy's

@@ -1,4 +1,4 @@
-"""Gyrostat game law (seed 004_75fdce96e51024ef.txt, SPEC 2.4).
+"""Gyrostat game law (seed 004_75fdce96e51024ef.txt, docs/models.md §2.4).
 
 Reference values come from the seed's equations re-derived independently here (momentum
 balance of 1.1, the printed form of 2.1, Cauchy-Schwarz 2.3, the double-integrator time

@@ -1,4 +1,4 @@
-"""LQR with the analytic Riccati solution (seed 002, SPEC 2.3), checked against scipy."""
+"""LQR with the analytic Riccati solution (seed 002, docs/models.md §2.3), checked against scipy."""
 
 import numpy as np
 import pytest
@@ -118,7 +118,7 @@ def test_constrained_lqr_converges_globally_and_V_decreases(j, q_w, q_l, seed):
 
 
 def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
-    """SPEC 3.1 attitude contract on data/scenarios/lqr_large_angle.toml."""
+    """docs/models.md §3.1 attitude contract on data/scenarios/lqr_large_angle.toml."""
     import json
 
     from kalman_vs_infoset.experiments.cli import main

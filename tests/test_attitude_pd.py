@@ -1,4 +1,4 @@
-"""Quaternion PD with reaction wheels and its gain study (seed 001, SPEC 2.2)."""
+"""Quaternion PD with reaction wheels and its gain study (seed 001, docs/models.md §2.2)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Command line, scenario validation and the Monte Carlo harness (SPEC 3, issue 5)."""
+"""Command line, scenario validation and the Monte Carlo harness (docs/models.md §3, issue 5)."""
 
 import json
 import subprocess
@@ -211,7 +211,7 @@ def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_pat
 
 
 def test_run_seed_is_the_spawned_child():
-    """run j's seed is SeedSequence(seed).spawn(runs)[j] (SPEC 3)."""
+    """run j's seed is SeedSequence(seed).spawn(runs)[j] (docs/models.md §3)."""
     children = np.random.SeedSequence(7).spawn(5)
     for j in range(5):
         a = np.random.default_rng(runner.run_seed(7, 5, j)).random(4)
@@ -286,7 +286,7 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
 
 
 def test_end_to_end_with_an_attitude_loop(tmp_path):
-    """SPEC 2.5 end-to-end: the pointing loop biases bearings and rotates impulses;
+    """docs/models.md §2.5 end-to-end: the pointing loop biases bearings and rotates impulses;
     the run completes, the truth stays in the set (the bearing bound is widened by
     the attitude estimator's guaranteed knowledge bound, which the residual never
     exceeds) and the attitude summary is reported."""

@@ -1,4 +1,4 @@
-"""The information set of seed 003 (SPEC 1.4): set operations and the guarantee."""
+"""The information set of seed 003 (docs/models.md §1.4): set operations and the guarantee."""
 
 import numpy as np
 import pytest
@@ -294,7 +294,7 @@ v_modes = st.sampled_from(["uniform", "bounds", "zero"])
 def test_slab_set_contains_truth_under_admissible_noise_seed003_guarantee(
     y, vy, x, e_true, dt, mode, v_mode, seed
 ):
-    """SPEC 1.4 guarantee: with admissible errors (uniform, at the bounds, biased),
+    """docs/models.md §1.4 guarantee: with admissible errors (uniform, at the bounds, biased),
     admissible disturbances and any closing speed in the estimator's interval, the
     true state (anywhere in B x D, not on a section) is inside the set after every
     update, range update, shift and prediction, for 200 steps or until the truth's

@@ -1,4 +1,4 @@
-"""Intercept of seed 003: truth model, forecast, guidance law, game noise (SPEC 1)."""
+"""Intercept of seed 003: truth model, forecast, guidance law, game noise (docs/models.md §1)."""
 
 import numpy as np
 import pytest
@@ -27,7 +27,7 @@ def test_kepler_truth_matches_an_independent_solve_ivp_propagation():
 
 
 def test_relative_gravity_is_included_and_of_the_expected_size():
-    """SPEC 1.1: the differential gravity (~1e-7 m/s^2) moves the target by about
+    """docs/models.md §1.1: the differential gravity (~1e-7 m/s^2) moves the target by about
     a t^2/2 ~ 1e-3 m over 100 s relative to straight-line motion."""
     r0, v0 = np.array([5801.3, -8.0, 0.0]), np.array([-58.0, 0.0, 0.0])
     s = TRUTH.initial(r0, v0)
@@ -109,7 +109,7 @@ def test_impulse_limits_and_fuel_reserve(k, used):
     x=st.floats(5301.3e3, 6301.3e3),
 )
 def test_game_bearing_always_contains_the_truth(y, vy, alpha_err, x):
-    """SPEC 1.6 (a): the adversary's bearing error never exceeds the bound, wherever
+    """docs/models.md §1.6 (a): the adversary's bearing error never exceeds the bound, wherever
     the truth is relative to the adversary's set; (b) when compatible, the strip at
     the worst point's range contains the worst point."""
     est = InformationSetEstimator(MODEL)
@@ -135,7 +135,7 @@ def test_game_range_always_contains_the_truth(d, xw):
 
 @given(seed=st.integers(0, 2**32 - 1), range_m=st.floats(6e3, 7e6))
 def test_bias_noise_sits_at_the_bound_with_one_sign_per_run_and_channel(seed, range_m):
-    """SPEC 1.6 "bias at the bound": every error is admissible, within 1e-9 of the bound,
+    """docs/models.md §1.6 "bias at the bound": every error is admissible, within 1e-9 of the bound,
     and keeps the sign drawn for its channel; the same generator seed gives the same signs."""
     truth = [np.array([1e-3, 0.0, range_m]), np.array([-2e-3, 0.0, range_m])]
     noise = BiasNoise(MODEL, np.random.default_rng(seed), 2)
@@ -206,7 +206,7 @@ def _assert_set_keeps_the_truth(tmp_path_factory, scenario_text, noise, seed):
 # rad) exceeded that assumed margin; the engagement now measures the bound (Range)
 @example(seed=74072, noise="game", range_on=True, vertical=False)
 def test_full_engagement_never_loses_the_truth(tmp_path_factory, seed, noise, range_on, vertical):
-    """The guarantee in the full simulation (SPEC 1.4): two-body truth off the section
+    """The guarantee in the full simulation (docs/models.md §1.4): two-body truth off the section
     grid with any closing speed in the interval, random or adversarial bearings (and
     ranges), guided impulses: the truth is inside the set at every checked step and the
     set never becomes empty. The truth box keeps the engagement within the impulses'

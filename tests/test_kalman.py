@@ -1,4 +1,4 @@
-"""EKF / UKF of one intercept channel (SPEC 1.7) behind the estimator interface.
+"""EKF / UKF of one intercept channel (docs/models.md §1.7) behind the estimator interface.
 
 Independent references: the closed-form Kalman filter written out in numpy below,
 Monte Carlo moments of the a-priori boxes, finite differences of the exact one-step
@@ -29,7 +29,7 @@ def _est(kind="ekf", coords="zem", n_sigma=3.0):
 
 def _closed_form_step(coords, x0):
     """Transition F, process-noise gain G and impulse gain of the model at a known
-    range x0 (SPEC 1.3: omega1 = omega0 x0^2/x1^2, alpha1 = alpha0 + omega0 x0 D/x1,
+    range x0 (docs/models.md §1.3: omega1 = omega0 x0^2/x1^2, alpha1 = alpha0 + omega0 x0 D/x1,
     w = omega x^2/e gives alpha1 = alpha0 + w0 e D/(x0 x1), w1 = w0; v adds
     (D^2/(2 x1), D (x0+x1)/(2 x1^2)) to (alpha, omega), D (x0+x1)/(2e) to w)."""
     x1 = x0 - E * DT

@@ -80,6 +80,24 @@ def test_no_tracked_file_points_to_the_internal_brief_or_paper_texts():
     assert not hits, "files a clone does not have are referenced:\n" + "\n".join(hits)
 
 
+#: a citation of the internal brief by section (its name, then a section number), built from
+#: pieces so that this file does not match its own check
+BRIEF_CITATION = re.compile("SP" + r"EC (?:section )?\d")
+
+
+def test_no_tracked_file_cites_the_internal_brief_by_section():
+    """Citations name docs/models.md (numbered as the brief was) or the paper."""
+    hits = []
+    for path in tracked_files():
+        text = text_of(path)
+        if text is None or path.suffix not in (".py", ".toml", ".md"):
+            continue
+        for number, line in enumerate(text.splitlines(), start=1):
+            if BRIEF_CITATION.search(line):
+                hits.append(f"{path}:{number}: {line.strip()[:120]}")
+    assert not hits, "citations of the internal brief:\n" + "\n".join(hits)
+
+
 def test_models_md_has_the_cited_numbering():
     missing = EXPECTED_SECTIONS - models_sections()
     assert not missing, f"docs/models.md lacks the sections {sorted(missing)}"
@@ -110,3 +128,4 @@ def test_the_checks_recognise_what_they_look_for():
     assert HEADING.match("### 2.4 Game-theoretic reorientation").group(1) == "2.4"
     assert HEADING.match("#### Numbers printed in the paper") is None
     assert all(f.startswith(("../", "shared/")) for f in FORBIDDEN) and len(FORBIDDEN) == 3
+    assert BRIEF_CITATION.search("(" + "SP" + "EC 2.5)") and not BRIEF_CITATION.search("SPECS")

@@ -1,6 +1,6 @@
 """Resurs-P turn with six gyrodines: the energy-saving law and the Euler-axis baseline.
 
-Seed 000 (SPEC 2.1). :func:`simulate_turn` runs one turn from a :class:`TurnSetup`
+Seed 000 (docs/models.md §2.1). :func:`simulate_turn` runs one turn from a :class:`TurnSetup`
 (built from the typed scenario :class:`experiments.sim.attitude_cmg_config.CmgScenario`
 by :meth:`TurnSetup.from_config`);
 :func:`one_run` is its row of the runner's table.

@@ -1,4 +1,4 @@
-"""The Resurs-P turn with six gyrodines (seed 000, SPEC 2.1) as typed tables: controllers
+"""The Resurs-P turn with six gyrodines (seed 000, docs/models.md §2.1) as typed tables: controllers
 ``energy`` and ``euler``, run by :func:`experiments.sim.attitude_cmg.simulate_turn`.
 
 A scenario has top-level keys (the turn: step, times, initial error, tolerances) and

@@ -1,4 +1,5 @@
-"""Reaction-wheel attitude loops, controllers ``pd`` (SPEC 2.2) and ``lqr`` (SPEC 2.3).
+"""Reaction-wheel attitude loops, controllers ``pd`` (docs/models.md §2.2) and ``lqr``
+(docs/models.md §2.3).
 
 :func:`simulate_runs` simulates a batch of runs as one closed loop (the plant of
 :mod:`kalman_vs_infoset.guidance.attitude.wheels`: the shared RK4, controller sampled every

@@ -1,5 +1,6 @@
-"""The reaction-wheel scenarios as typed tables: controllers ``pd`` (SPEC 2.2) and ``lqr``
-(SPEC 2.3), run by :func:`kalman_vs_infoset.experiments.sim.attitude_rw.simulate_runs`.
+"""The reaction-wheel scenarios as typed tables: controllers ``pd`` (docs/models.md §2.2) and
+``lqr``
+(docs/models.md §2.3), run by :func:`kalman_vs_infoset.experiments.sim.attitude_rw.simulate_runs`.
 
 A scenario has the tables ``[body]`` and ``[simulation]`` (required), ``[wheels]``,
 ``[maneuver]``, ``[noise]`` (defaults) and the controller's own ``[pd]`` or ``[lqr]``

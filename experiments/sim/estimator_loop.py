@@ -1,4 +1,5 @@
-"""An attitude estimator run over a batch of runs, as every attitude loop uses it (SPEC 2.5).
+"""An attitude estimator run over a batch of runs, as every attitude loop uses it (docs/models.md
+§2.5).
 
 Per control step: ``predict`` over the period with the known inputs held over it
 (delivered torque, momentum interval), then ``update`` with the new measurement; the

@@ -1,4 +1,5 @@
-"""Gyrostat game law (seed 004, SPEC 2.4) closed through an attitude estimator (SPEC 2.5).
+"""Gyrostat game law (seed 004, docs/models.md §2.4) closed through an attitude estimator
+(docs/models.md §2.5).
 
 The sampled loop of the seed: every control period ``h`` the law reads ``(q, x)`` from
 an estimator's belief (any registered attitude estimator, :mod:`kalman_vs_infoset.estim.registry`:

@@ -1,4 +1,4 @@
-"""The three-rotor gyrostat game turn (seed 004, SPEC 2.4) as typed tables, and the setup
+"""The three-rotor gyrostat game turn (seed 004, docs/models.md §2.4) as typed tables, and the setup
 of its loop (:func:`kalman_vs_infoset.experiments.sim.gyrostat.simulate_turn`).
 
 A scenario has the tables ``[gyrostat]`` and ``[manoeuvre]`` (required) and

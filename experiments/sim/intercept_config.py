@@ -1,4 +1,5 @@
-"""The intercept scenario as typed tables (SPEC 1.8 and 3): what an engagement is run with.
+"""The intercept scenario as typed tables (docs/models.md §1.8 and 3): what an engagement is run
+with.
 
 A scenario has the tables ``[model]``, ``[estimator]`` (the a-priori boxes B and D
 every estimator is given, the closing-speed interval, and one ``[estimator.<name>]``
@@ -38,7 +39,7 @@ from pydantic import BaseModel, ValidationError, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
-#: longest run an engagement may take, in decision steps (defect f: a scenario could
+#: longest run an engagement may take, in decision steps (a scenario could
 #: ask for 1e8 steps and run without limit)
 MAX_STEPS = 100_000
 #: a scenario's name names its result files: no path separators, no "..", no leading dot

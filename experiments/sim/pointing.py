@@ -1,4 +1,4 @@
-"""Attitude loop holding the longitudinal axis of the interceptor (SPEC 2.5, end-to-end).
+"""Attitude loop holding the longitudinal axis of the interceptor (docs/models.md §2.5, end-to-end).
 
 A simulation of the library layer (:mod:`kalman_vs_infoset.experiments.sim`): it composes a whole
 simulated loop (plant, noise, estimator, controller); ``guidance`` keeps the
@@ -7,7 +7,8 @@ uses (formerly ``kalman_vs_infoset.experiments.pointing``).
 
 The spacecraft of Problem A carries reaction wheels; its attitude loop holds the body
 axes on the guidance frame (target attitude = identity). The controller (quaternion
-PD, SPEC 2.2, or LQR, SPEC 2.3) reads ``(q, w)`` from an estimator (``box``, ``ukf``,
+PD, docs/models.md §2.2, or LQR, docs/models.md §2.3) reads ``(q, w)`` from an estimator (``box``,
+``ukf``,
 ``perfect`` or any registered attitude estimator, :mod:`estim.registry`) fed by bounded
 attitude and rate measurements; the wheel momentum is known on board. Disturbance torques within
 ``|d_i| <= D``: ``constant`` (drawn once), ``random`` (redrawn every control period)

@@ -1,4 +1,4 @@
-"""What one Resurs-P turn needs (seed 000, SPEC 2.1): the typed setup of
+"""What one Resurs-P turn needs (seed 000, docs/models.md §2.1): the typed setup of
 :func:`experiments.sim.attitude_cmg.simulate_turn`, in SI units and radians, built from
 a typed scenario by :meth:`TurnSetup.from_config`."""
 

@@ -1,1 +1,1 @@
-"""Spacecraft attitude loops: plants, actuators and controllers (SPEC section 2)."""
+"""Spacecraft attitude loops: plants, actuators and controllers (docs/models.md §2)."""

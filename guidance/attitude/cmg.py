@@ -1,6 +1,6 @@
 """Six gyrodines (control moment gyros) in three collinear pairs, Resurs-P layout.
 
-Seed 000 (Petrishchev 2017), section 4, SPEC 2.1.
+Seed 000 (Petrishchev 2017), section 4, docs/models.md §2.1.
 
 Geometry. The instrument frame of gyrodine k is reached from the body frame by two
 rotations: about body ``y`` by the pair azimuth ``psi_k`` (0, 120, 240 deg), then about

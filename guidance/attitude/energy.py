@@ -1,4 +1,4 @@
-"""Energy-saving discrete attitude control (seed 000, Petrishchev 2017; SPEC 2.1).
+"""Energy-saving discrete attitude control (seed 000, Petrishchev 2017; docs/models.md §2.1).
 
 Given system, seed eqs. (3.9)-(3.11), state ``X = (phi1, phi2, phi3, w1, w2, w3)``::
 
@@ -116,7 +116,7 @@ def given_system(
 
 @dataclass(frozen=True)
 class EnergySavingConfig:
-    """Parameters of the energy-saving law (seed 000, section 4; SPEC 2.1).
+    """Parameters of the energy-saving law (seed 000, section 4; docs/models.md §2.1).
 
     Covariances are given by their diagonals (radians, rad/s, N m).
     """

@@ -1,4 +1,5 @@
-"""The flight ("shtatny") baseline: rest-to-rest turn about the Euler axis (seed 000, SPEC 2.1).
+"""The flight ("shtatny") baseline: rest-to-rest turn about the Euler axis (seed 000,
+docs/models.md §2.1).
 
 Seed 000, introduction and section 5: the Resurs-P flight algorithm rotates about the
 fixed Euler axis in three stages -- acceleration, constant rate, deceleration -- and

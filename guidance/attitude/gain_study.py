@@ -1,4 +1,4 @@
-"""Gain study of the quaternion PD law (seed 001, Figs. 10-15, eqs. (24)-(29); SPEC 2.2).
+"""Gain study of the quaternion PD law (seed 001, Figs. 10-15, eqs. (24)-(29); docs/models.md §2.2).
 
 For a rest-to-rest turn about a principal axis with the gyroscopic compensation of
 law (6), the motion stays about that axis and (seed eq. (26)) the acceleration

@@ -1,4 +1,5 @@
-"""Game law of the auxiliary linear system ``eta_i'' = u*_i + v*_i`` (seed 004, SPEC 2.4).
+"""Game law of the auxiliary linear system ``eta_i'' = u*_i + v*_i`` (seed 004, docs/models.md
+§2.4).
 
 * Switching function (seed 2.7): ``psi_i = -eta_i - eta'_i |eta'_i| / (2 (1 - rho_i) a*_i)``,
   ``u*_i = a*_i sign psi_i`` off the curve, sliding along ``psi_i = 0`` to the origin.

@@ -1,4 +1,4 @@
-"""Three-rotor gyrostat plant and the linearising rotor torques (seed 004, SPEC 2.4).
+"""Three-rotor gyrostat plant and the linearising rotor torques (seed 004, docs/models.md §2.4).
 
 Plant (seed eq. 1.1), principal axes, cyclic ``(i, j, k) = (1, 2, 3), (2, 3, 1), (3, 1, 2)``::
 

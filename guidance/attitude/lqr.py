@@ -1,4 +1,5 @@
-"""LQR attitude control with the analytic Riccati solution (seed 002_97f9366df23bfd3c, SPEC 2.3).
+"""LQR attitude control with the analytic Riccati solution (seed 002_97f9366df23bfd3c,
+docs/models.md §2.3).
 
 Plant (seed eq. (1)): ``J dw/dt + w x J w = u``, ``dlam/dt = 1/2 (lam0 w + lam x w)``;
 linearised (eq. (2)) with ``x = (w, lam)``::
@@ -47,7 +48,7 @@ def _positive(a: ArrayLike, n: int, name: str) -> FloatArray:
 
 
 def riccati_blocks(J_diag: ArrayLike, q: ArrayLike, r: ArrayLike) -> tuple[FloatArray, ...]:
-    """Diagonals ``(p', p, p'')`` of ``P11, P12, P22`` (closed form of SPEC 2.3)."""
+    """Diagonals ``(p', p, p'')`` of ``P11, P12, P22`` (closed form of docs/models.md §2.3)."""
     j = _positive(J_diag, 3, "J_diag")
     q = _positive(q, 6, "q")
     r = _positive(r, 3, "r")

@@ -1,4 +1,4 @@
-"""Minimum-energy lower bound for a rest-to-rest turn of the linear model (SPEC 2.1).
+"""Minimum-energy lower bound for a rest-to-rest turn of the linear model (docs/models.md §2.1).
 
 For ``X_{i+1} = A X_i + B U_i`` (seed eqs. 3.9-3.11 with the momentum frozen at its
 initial value; for Resurs-P the total momentum is zero, so ``F = 0``), the

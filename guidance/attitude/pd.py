@@ -1,4 +1,4 @@
-"""Quaternion PD law with reaction wheels (seed 001_065e7380b52b75c9, SPEC 2.2).
+"""Quaternion PD law with reaction wheels (seed 001_065e7380b52b75c9, docs/models.md §2.2).
 
 Law (seed eq. (6) with ``K_w = K_q = J``, ``M_ext = 0``, rest target ``w_t = 0``)::
 

@@ -1,6 +1,6 @@
 """Common attitude plant: a rigid body carrying an angular-momentum actuator.
 
-Equations (SPEC section 2)::
+Equations (docs/models.md §2)::
 
     J dw/dt + w x (J w + h) = M_ext + M_u        (body rates w, rad/s)
     dh/dt = -M_u                                  (actuator momentum h, N m s)

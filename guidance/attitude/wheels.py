@@ -1,11 +1,11 @@
-"""Reaction-wheel actuator and a batched fixed-step rigid-body plant (SPEC 2, 2.2).
+"""Reaction-wheel actuator and a batched fixed-step rigid-body plant (docs/models.md §2, 2.2).
 
 The plant is the common one of :mod:`kalman_vs_infoset.guidance.attitude.plant`::
 
     J dw/dt + w x (J w + h) = M_ext + M_u,   dh/dt = -M_u,   dq/dt = 1/2 q (x) (w, 0)
 
 (seed 001 eqs. (1)-(3); ``h`` is the wheel momentum ``L`` of the seed). This module
-adds what the controllers of SPEC 2.2/2.3 need for speed:
+adds what the controllers of docs/models.md §2.2/2.3 need for speed:
 
 * :class:`ReactionWheels`: three wheels along the body axes with a per-axis torque
   limit ``|M_u,i| <= M_max`` and momentum limit ``|h_i| <= L_max``;

@@ -1,1 +1,1 @@
-"""Impulsive intercept of a small body (SPEC section 1, seed 003)."""
+"""Impulsive intercept of a small body (docs/models.md §1, seed 003)."""

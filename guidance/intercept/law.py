@@ -1,4 +1,4 @@
-"""Impulsive guidance law of seed 003 section 5 (SPEC 1.5).
+"""Impulsive guidance law of seed 003 section 5 (docs/models.md §1.5).
 
 For the current belief (after the measurements) take the extremes of the miss
 forecast ``Pi`` over it, ``Pi_min`` at range ``x*`` and ``Pi_max`` at ``x**``. An

@@ -1,4 +1,4 @@
-"""Truth model of the intercept: heliocentric two-body motion of both bodies (SPEC 1.1).
+"""Truth model of the intercept: heliocentric two-body motion of both bodies (docs/models.md §1.1).
 
 Both the spacecraft (SC) and the target move in the Sun's field,
 ``K = 1.324948e11 km^3/s^2``. The state integrated is the SC's heliocentric
