@@ -77,7 +77,7 @@ def cdf_figure(
         ax.set_ylabel(CDF_LABEL)
         ax.set_ylim(0, 1.02)
         if not crowded:
-            fs.legend(ax, fontsize=7, loc="lower right")
+            fs.legend(ax, fontsize=7, loc="best")  # where it covers the fewest points
     if crowded:  # one legend below both panels: inside an axis it would hide the curves
         fs.figure_legend(fig, axes[0], fontsize=7, ncol=4)
     fig.suptitle(title, fontsize=10)
