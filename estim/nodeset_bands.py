@@ -23,7 +23,7 @@ from dataclasses import replace
 
 import numpy as np
 from kalman_vs_infoset.estim.nodeset_belief import NodeSet
-from kalman_vs_infoset.estim.nodeset_refine import _compact, _concat
+from kalman_vs_infoset.estim.nodeset_refine import _compact, _merge
 
 #: bands narrower than this (relative width in ``u``) are not split
 MIN_BAND_REL = 1e-6
@@ -125,13 +125,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
             # no live node: sound to drop only if the hard limits exclude the bracket
             if not (two.hard_lo_s[half] > bracket[1] or two.hard_hi_s[half] < bracket[0]):
                 return None
-        keep = two.piece != p
-        kept = two.polygons.select(keep)
-        all_piece = np.r_[two.piece[keep], piece]
-        all_label = np.r_[two.label_s[keep], both]
-        order = np.lexsort((all_label, all_piece))
-        s = replace(two, piece=all_piece[order], label_s=all_label[order],
-                    polygons=_concat(kept, polys).select(order))  # fmt: skip
+        s = _merge(two, two.piece != p, piece, both, polys)
     s = _compact(est._refine_pieces(s))
     # each half's feasible labels are narrower than its parent's: a fresh grid of
     # n_nodes over its bracket (its live labels kept, so none is lost) keeps the
