@@ -32,6 +32,7 @@ from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import InputError, check_stop
 from kalman_vs_infoset.experiments.limits import limited
 from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.guidance.intercept._kepler import warm_up as kepler_warm_up
 
 #: how often a pool worker checks that its parent is alive (s)
 WATCHDOG_S = 1.0
@@ -67,6 +68,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
     n = workers or os.cpu_count() or 1
     _k.warm_up()  # forked workers inherit the loaded kernels
     nodeset_warm_up()
+    kepler_warm_up()
     pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))
     try:
         yield pool

@@ -240,8 +240,8 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
 
 def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     """Forked Monte Carlo workers inherit what the parent loaded: after the warm-ups
-    (the slab kernels' and the node set's) an engagement (random, game and bias noise)
-    must not need a new compiled version of any kernel, the node set's included
+    (the slab kernels', the node set's and the Kepler step's) an engagement (random,
+    game and bias noise) must not need a new compiled version of any kernel, the node set's included
     (read-only polygon arrays are a type of their own for numba)."""
     from kalman_vs_infoset.estim import _kernels as k
     from kalman_vs_infoset.estim import _nodeset_geometry as ng
@@ -249,12 +249,14 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     from kalman_vs_infoset.estim.nodeset import warm_up
     from kalman_vs_infoset.experiments.scenario import load_scenario
     from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+    from kalman_vs_infoset.guidance.intercept import _kepler
 
     k.warm_up()
     warm_up()
+    _kepler.warm_up()
     kernels = {
         f"{m.__name__}.{n}": getattr(m, n)
-        for m in (k, nk, ng)
+        for m in (k, nk, ng, _kepler)
         for n in dir(m)
         if hasattr(getattr(m, n), "signatures")
     }

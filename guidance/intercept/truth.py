@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from kalman_vs_infoset.guidance.intercept._kepler import kepler_step
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
@@ -129,31 +130,6 @@ class TwoBodyTruth:
         return best * 1e3, best_t
 
 
-def _stumpff(z: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Stumpff functions C(z), S(z); series for small |z| (no cancellation)."""
-    z = np.asarray(z, dtype=float)
-    small = np.abs(z) < 1e-3
-    if small.all():  # the usual case here: steps of seconds on year-long orbits
-        return (
-            1 / 2 - z / 24 + z**2 / 720 - z**3 / 40320,
-            1 / 6 - z / 120 + z**2 / 5040 - z**3 / 362880,
-        )
-    c = np.empty_like(z)
-    s = np.empty_like(z)
-    zs = z[small]
-    c[small] = 1 / 2 - zs / 24 + zs**2 / 720 - zs**3 / 40320
-    s[small] = 1 / 6 - zs / 120 + zs**2 / 5040 - zs**3 / 362880
-    pos = (~small) & (z > 0)
-    sq = np.sqrt(z[pos])
-    c[pos] = (1 - np.cos(sq)) / z[pos]
-    s[pos] = (sq - np.sin(sq)) / sq**3
-    neg = (~small) & (z < 0)
-    sq = np.sqrt(-z[neg])
-    c[neg] = (np.cosh(sq) - 1) / -z[neg]
-    s[neg] = (np.sinh(sq) - sq) / sq**3
-    return c, s
-
-
 def kepler_propagate(
     pos_km: ArrayLike, vel_kmps: ArrayLike, dt_s: float, mu_km3ps2: float
 ) -> tuple[FloatArray, FloatArray]:
@@ -167,29 +143,7 @@ def kepler_propagate(
     v0v = np.atleast_2d(np.asarray(vel_kmps, dtype=float))
     if dt_s == 0:
         return r0v.copy(), v0v.copy()
-    sqmu = np.sqrt(mu_km3ps2)
-    r0 = np.linalg.norm(r0v, axis=1)
-    vr0 = np.einsum("ij,ij->i", r0v, v0v) / r0
-    alpha = 2.0 / r0 - np.einsum("ij,ij->i", v0v, v0v) / mu_km3ps2
-    chi = sqmu * dt_s / r0  # exact to first order in dt; Newton converges in 2-3 steps
-    for _ in range(20):
-        z = alpha * chi**2
-        c, s = _stumpff(z)
-        f_val = r0 * vr0 / sqmu * chi**2 * c + (1 - alpha * r0) * chi**3 * s + r0 * chi
-        f_val -= sqmu * dt_s
-        df = r0 * vr0 / sqmu * chi * (1 - z * s) + (1 - alpha * r0) * chi**2 * c + r0
-        step = f_val / df
-        chi = chi - step
-        # stop at round-off level (a tighter test could cycle on the last bit)
-        if np.all(np.abs(step) <= 4e-16 * np.abs(chi)):
-            break
-    z = alpha * chi**2
-    c, s = _stumpff(z)
-    f = 1 - chi**2 / r0 * c
-    g = dt_s - chi**3 * s / sqmu
-    r1v = f[:, None] * r0v + g[:, None] * v0v
-    r1 = np.linalg.norm(r1v, axis=1)
-    fdot = sqmu / (r1 * r0) * (alpha * chi**3 * s - chi)
-    gdot = 1 - chi**2 / r1 * c
-    v1v = fdot[:, None] * r0v + gdot[:, None] * v0v
-    return r1v, v1v
+    # compiled (:mod:`._kepler`): every decision step and the closest-approach search
+    return kepler_step(
+        np.ascontiguousarray(r0v), np.ascontiguousarray(v0v), float(dt_s), float(mu_km3ps2)
+    )
