@@ -443,7 +443,7 @@ def kinematic_interval(w_lo, w_hi, a_lo, a_hi, x_min, x_max, dt, e, nu, max_bear
 def piece_kinematic(per, u_lo, u_hi, dt, eps, e, nu, max_bearing):
     """The kinematic interval of every piece of a node set from its per-piece bounds
     ``per`` (``w``, ``alpha``, ``tau``), as
-    :meth:`estim.nodeset.NodeSetEstimator._kinematic` describes; a piece without cells
+    the node set estimator's ``_kinematic`` describes; a piece without cells
     (``tau_lo = inf``) gets zero."""
     n = u_lo.shape[0]
     lo, hi = np.zeros(n), np.zeros(n)

@@ -131,7 +131,7 @@ class Belief(ABC):
         at the states they return (a point, an ellipsoid, particles, sections at both
         ends of their range intervals). A belief whose extremes are bounds between the
         states it stores overrides it (the node set:
-        :meth:`kalman_vs_infoset.estim.nodeset_belief.NodeSet.attained`).
+        :meth:`kalman_vs_infoset.estim.intercept.nodeset.belief.NodeSet.attained`).
         """
         return self.extremes(fn)
 

@@ -1,6 +1,6 @@
 """The package's own estimators and their options, registered by name (:mod:`estim.registry`).
 
-Intercept (one guidance channel): ``infoset`` (:mod:`estim.nodeset` by default, the
+Intercept (one guidance channel): ``infoset`` (the node set by default, the
 slab and point discretisations of :mod:`kalman_vs_infoset.estim.infoset` as options), ``ekf`` and
 ``ukf`` (:mod:`estim.kalman`), ``hinf`` (:mod:`estim.hinf_channel`) and ``pf``
 (:mod:`estim.pf_channel`); the set-membership families ``ellipsoid``, ``zonotope`` and
@@ -31,9 +31,9 @@ if TYPE_CHECKING:
     from kalman_vs_infoset.estim.attitude_zonotope import ZonotopeAttitudeEstimator
     from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
     from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+    from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
     from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
     from kalman_vs_infoset.estim.model import ChannelSetting
-    from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
     from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -41,7 +41,7 @@ _STRICT = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 class InfosetOptions(SlabOptions):
     """Options of the information set: the node set's (``sections="nodes"``,
-    :class:`estim.nodeset.NodeSetEstimator`) and, inherited, those of the slabs and point
+    the node set estimator) and, inherited, those of the slabs and point
     sections (:class:`kalman_vs_infoset.estim.infoset.InformationSetEstimator`)."""
 
     sections: Annotated[
@@ -219,7 +219,7 @@ def _infoset(
     opt: InfosetOptions, setting: ChannelSetting
 ) -> InformationSetEstimator | NodeSetEstimator:
     from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-    from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
+    from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
 
     if opt.sections == "nodes":
         return NodeSetEstimator(

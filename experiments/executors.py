@@ -27,7 +27,7 @@ from functools import partial
 from typing import Any
 
 from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim.nodeset import warm_up as nodeset_warm_up
+from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import InputError, check_stop
 from kalman_vs_infoset.experiments.limits import limited

@@ -45,8 +45,8 @@ import numpy as np
 from kalman_vs_infoset.estim.base import Belief
 from kalman_vs_infoset.estim.costs import MissForecast
 from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
 from kalman_vs_infoset.estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
-from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
 
 #: noise kinds of the intercept (``random`` and ``game`` are the seed's two;
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)

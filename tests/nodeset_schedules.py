@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 from kalman_vs_infoset.estim.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.nodeset.bands import live_bands
 from kalman_vs_infoset.estim.model import Bearing, Range
-from kalman_vs_infoset.estim.nodeset_bands import live_bands
 from kalman_vs_infoset.experiments.cmd_tightness import auxiliary_model_options
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator

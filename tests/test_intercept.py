@@ -244,9 +244,9 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     game and bias noise) must not need a new compiled version of any kernel, the node set's included
     (read-only polygon arrays are a type of their own for numba)."""
     from kalman_vs_infoset.estim import _kernels as k
-    from kalman_vs_infoset.estim import _nodeset_geometry as ng
-    from kalman_vs_infoset.estim import _nodeset_kernels as nk
-    from kalman_vs_infoset.estim.nodeset import warm_up
+    from kalman_vs_infoset.estim.intercept.nodeset import _geometry as ng
+    from kalman_vs_infoset.estim.intercept.nodeset import _kernels as nk
+    from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up
     from kalman_vs_infoset.experiments.scenario import load_scenario
     from kalman_vs_infoset.experiments.sim.intercept import run_engagement
     from kalman_vs_infoset.guidance.intercept import _kepler

@@ -21,7 +21,7 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from nodeset_schedules import DENT_TOL, ROOT, run_schedule, winding_and_turn
 
 #: the corner runs of the outside check: (scenario, (Y, V, x, e) in m, m/s, m, m/s)
@@ -188,7 +188,7 @@ _REPLAY = """
 import json, sys
 import numpy as np
 from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim import _nodeset_kernels as _nk
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 calls = np.load(sys.argv[1], allow_pickle=False)
 n = int(calls["n"])
 for i in range(n):

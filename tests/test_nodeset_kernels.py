@@ -12,10 +12,10 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim import _nodeset_geometry as _ng
-from kalman_vs_infoset.estim import _nodeset_kernels as _nk
 from kalman_vs_infoset.estim import polygons
 from kalman_vs_infoset.estim.infoset import MAX_BEARING_RAD
+from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from kalman_vs_infoset.estim.kinematics import kinematic_interval_mps2
 
 E = 58e3
@@ -167,7 +167,7 @@ def test_log_appends_in_place_without_changing_any_earlier_log():
     step); a log is a value: appending to it, or branching from an older log (the
     lookahead adversary tries several measurements on one belief), never changes a
     log already made. Reference: the same logs built by concatenation."""
-    from kalman_vs_infoset.estim.nodeset_bounds import OpLog
+    from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
 
     def one(i):
         return OpLog.one(i % 4, 2, pa=float(i), pb=-float(i), q_lo=[i, -i], q_hi=[2 * i, i])

@@ -29,8 +29,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.costs import ZeroEffortMiss
 from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
 from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Range
-from kalman_vs_infoset.estim.nodeset import NodeSetEstimator
 from kalman_vs_infoset.estim.sections_box import BoxFamily
 from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidFamily
 from kalman_vs_infoset.estim.sections_zonotope import ZonotopeFamily

@@ -1,10 +1,10 @@
 """The node set as a value: exact slices of the information set and what lies between.
 
-The estimator (:mod:`kalman_vs_infoset.estim.nodeset`) explains the model; this module holds the
+The estimator (:mod:`.estimator`) explains the model; this module holds the
 immutable belief and answers the questions guidance and the harness ask of it. Per
 closing-speed piece ``b`` (``u = 1/e`` in ``[u_lo, u_hi]``) the information set is a
 convex body in ``(Y~, V~, tau)``; the belief stores its slices at the nodes'
-times to go ``tau_j`` as polygons in ``(a, zs)`` (:mod:`estim.nodeset_bounds`), and
+times to go ``tau_j`` as polygons in ``(a, zs)`` (:mod:`.bounds`), and
 bounds the body between nodes through the concavity of support functions.
 
 Quantities in the package's coordinates, for a state of piece ``b`` at ``tau``::
@@ -21,10 +21,10 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from kalman_vs_infoset.estim import _nodeset_geometry as _ng
-from kalman_vs_infoset.estim import nodeset_bounds as nb
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
 from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
+from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
 from kalman_vs_infoset.estim.model import ChannelModel
 from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import ArrayLike, NDArray
@@ -133,7 +133,7 @@ class NodeSet(Belief):
     # -- bounds between nodes --------------------------------------------------------
     @cached_property
     def _summary(self) -> dict[str, Any]:
-        """Cells and their bounds (compiled: :func:`estim._nodeset_geometry.summarise`)."""
+        """Cells and their bounds (compiled: :func:`._geometry.summarise`)."""
         names = ("table", "tau4", "span", "piece", "zs", "w", "alpha", "per_piece")
         out = _ng.summarise(
             self.polygons.xy, self.polygons.offsets, self.label_s,

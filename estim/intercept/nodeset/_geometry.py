@@ -1,6 +1,6 @@
 """Compiled (numba) geometry of the node set: bounds between nodes.
 
-The derivation is in :mod:`estim.nodeset_bounds`: for a fixed direction the support
+The derivation is in :mod:`.bounds`: for a fixed direction the support
 function of the body's slices is concave along the body, so the secants of its
 values at the nodes around a cell bound it there. :func:`summarise` answers, in one
 pass over the cells, everything the node set is asked (the zero-effort miss, the
@@ -32,7 +32,7 @@ def _support(xy, off, j, tau, p, q, scale, e_nom):
 @njit(cache=True)
 def _secant(t4, f4, lo_s, hi_s, rtol):
     """Max over ``[lo_s, hi_s]`` of the concave bound from four samples (see
-    :func:`estim.nodeset_bounds.secant_bound`); returns the bound and its argument."""
+    :func:`.bounds.secant_bound`); returns the bound and its argument."""
     f0, f1, f2, f3 = f4[0], f4[1], f4[2], f4[3]
     t0, t1, t2, t3 = t4[0], t4[1], t4[2], t4[3]
     if not np.isfinite(f1) and not np.isfinite(f2):
@@ -480,7 +480,7 @@ def _cell_admits(xy, off, tau, p, q, nd, table, tau4, alpha, omega, x, lo_u, hi_
 @njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
 def contains_state(xy, off, tau, live, cpiece, span, table, tau4, u_lo, u_hi, alpha, omega,
                    x, tol, scale, e_nom):  # fmt: skip
-    """The containment test of :meth:`estim.nodeset_belief.NodeSet.contains` over the
+    """The containment test of :meth:`.belief.NodeSet.contains` over the
     cells of a summary (see there)."""
     vmax = 1
     for j in range(off.shape[0] - 1):

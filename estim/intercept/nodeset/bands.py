@@ -22,8 +22,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from kalman_vs_infoset.estim.nodeset_belief import NodeSet
-from kalman_vs_infoset.estim.nodeset_refine import _compact, _merge
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.refine import _compact, _merge
 
 #: bands narrower than this (relative width in ``u``) are not split
 MIN_BAND_REL = 1e-6
@@ -68,7 +68,7 @@ def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float]
 def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float) -> NodeSet:
     """Split live bands in halves (:func:`_loosest_band` chooses) while fewer than
     ``max_bands`` are live and a split is sound; ``est`` is the
-    :class:`~kalman_vs_infoset.estim.nodeset.NodeSetEstimator` (its ``_apply``,
+    :class:`~.estimator.NodeSetEstimator` (its ``_apply``,
     ``_prior`` and refinement)."""
     if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
         return s  # a known closing speed (or bands already at their finest)

@@ -23,7 +23,7 @@ The estimator keeps the slices of ``K`` at nodes ``tau_j = label_j - t`` exactly
 (each slice is a polygon moved by the seed's own exact operations: bearing strip,
 shear, Minkowski sum with the disturbance segment, shift by the impulse), and
 bounds ``K`` between nodes by the concavity of its support functions
-(:mod:`kalman_vs_infoset.estim.nodeset_bounds`): no state is lost between nodes, and the bound is
+(:mod:`.bounds`): no state is lost between nodes, and the bound is
 tight where the nodes are dense. As bearings pin the range, nodes whose slice
 becomes empty are dropped; when fewer than ``min_live_nodes`` remain in a piece, the
 piece is re-gridded with ``n_nodes`` new nodes over the surviving interval and the
@@ -49,9 +49,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim import _nodeset_kernels as _nk
 from kalman_vs_infoset.estim.base import Estimator, Status
 from kalman_vs_infoset.estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
+from kalman_vs_infoset.estim.intercept.nodeset.bands import split_live_bands
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
+from kalman_vs_infoset.estim.intercept.nodeset.refine import NodeRefinement
 from kalman_vs_infoset.estim.model import (
     Bearing,
     ChannelModel,
@@ -60,10 +64,6 @@ from kalman_vs_infoset.estim.model import (
     Range,
     impulse_parts,
 )
-from kalman_vs_infoset.estim.nodeset_bands import split_live_bands
-from kalman_vs_infoset.estim.nodeset_belief import NodeSet
-from kalman_vs_infoset.estim.nodeset_bounds import OpLog
-from kalman_vs_infoset.estim.nodeset_refine import NodeRefinement
 from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import NDArray
 
@@ -113,7 +113,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     split_bands : bool
         When updates have emptied closing-speed bands, split the live ones in halves
         until as many bands are live as at the start
-        (:func:`~kalman_vs_infoset.estim.nodeset_bands.split_live_bands`): with a range
+        (:func:`~.bands.split_live_bands`): with a range
         finder the data pin the speed, and a band's width then dominates the
         interval of the miss.
     """

@@ -1,10 +1,10 @@
-"""Compiled (numba) operations of the node set (:mod:`kalman_vs_infoset.estim.nodeset`).
+"""Compiled (numba) operations of the node set (:mod:`.estimator`).
 
 :func:`apply_ops` runs a sequence of recorded operations (bearing strip, impulse,
 range interval, prediction with threshold) on a batch of node polygons, each node
 through all of them in two scratch buffers: one step's operations on the live nodes,
 or the whole log on new nodes when a piece is refined. The bounds between nodes are
-in :mod:`kalman_vs_infoset.estim._nodeset_geometry`.
+in :mod:`._geometry`.
 """
 
 from __future__ import annotations
@@ -326,7 +326,7 @@ def apply_ops(
 def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
     """Interval of the ``V~`` increment of an impulse ``k +- dk`` per piece, and (in
     place) the per-piece bounds of ``w`` in ``per`` moved by it (the formulas are
-    :meth:`kalman_vs_infoset.estim.nodeset.NodeSetEstimator._impulse`'s). A piece without cells
+    :meth:`.estimator.NodeSetEstimator._impulse`'s). A piece without cells
     (``inf`` bounds) gets ``nan`` bounds of ``w``: it is skipped downstream."""
     n = u_lo.shape[0]
     lo, hi = np.empty(n), np.empty(n)
@@ -357,7 +357,7 @@ def prior_points(label, u_lo, u_hi, y0, y1, v0, v1, xa, xb, scale, e_nom):
     """The box's corners ``(y, Vy)`` scaled by both ends of each node's ``u`` interval
     ``[max(tau / x_hi, u_lo), min(tau / x_lo, u_hi)]``, in ``(a, zs)`` at ``tau =
     label`` (8 points a node; none where the interval is empty): their hull is the
-    node's prior slice (:meth:`kalman_vs_infoset.estim.nodeset.NodeSetEstimator.initial`)."""
+    node's prior slice (:meth:`.estimator.NodeSetEstimator.initial`)."""
     n = label.shape[0]
     xy = np.empty((8 * n, 2))
     off = np.zeros(n + 1, dtype=np.int64)

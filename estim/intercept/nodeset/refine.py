@@ -1,4 +1,4 @@
-"""Refinement of the node set: where nodes are added, and how (:mod:`estim.nodeset`).
+"""Refinement of the node set: where nodes are added, and how (:mod:`.estimator`).
 
 New nodes get exact slices by replaying the recorded operations on the prior
 (:meth:`NodeRefinement._exact_slices`). Nodes are added
@@ -17,11 +17,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from kalman_vs_infoset.estim import _nodeset_geometry as _ng
-from kalman_vs_infoset.estim import _nodeset_kernels as _nk
 from kalman_vs_infoset.estim.infoset import STRIP_MARGIN
-from kalman_vs_infoset.estim.nodeset_belief import NodeSet
-from kalman_vs_infoset.estim.nodeset_bounds import OpLog
+from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
 from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import NDArray
 
@@ -32,7 +32,7 @@ MIN_SPACING_REL = 1e-12
 
 
 class NodeRefinement:
-    """The refinement half of :class:`estim.nodeset.NodeSetEstimator` (a mixin: it uses
+    """The refinement half of :class:`.estimator.NodeSetEstimator` (a mixin: it uses
     the estimator's options and its ``_apply`` and ``_prior``)."""
 
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:

@@ -1,6 +1,6 @@
 """Sound bounds of a convex body between its exact slices (the node set's geometry).
 
-The node set (:mod:`kalman_vs_infoset.estim.nodeset`) keeps, per closing-speed piece, exact slices
+The node set (:mod:`.estimator`) keeps, per closing-speed piece, exact slices
 ``P(tau_j)`` of a convex body ``K`` in ``(Y~, V~, tau)`` (scaled lateral position and
 velocity, time to go) at a few values ``tau_j`` (the nodes). Between nodes nothing is
 stored; what the body can hold there follows from convexity alone:
@@ -31,7 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from kalman_vs_infoset.estim._nodeset_kernels import BEARING, IMPULSE, PREDICT, RANGE
+from kalman_vs_infoset.estim.intercept.nodeset._kernels import BEARING, IMPULSE, PREDICT, RANGE
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
@@ -44,7 +44,7 @@ BOUND_RTOL = 1.0e-8
 @dataclass(frozen=True, eq=False)
 class OpLog:
     """The operations applied to a node set since its initial set, as arrays (the
-    compiled :func:`~kalman_vs_infoset.estim._nodeset_kernels.apply_ops` replays them on new nodes).
+    compiled :func:`~._kernels.apply_ops` replays them on new nodes).
 
     ``kinds[o]`` is ``BEARING`` (``pa`` = measured bearing, rad), ``IMPULSE``
     (``q_lo, q_hi`` = interval of the ``V~`` increment per piece), ``RANGE`` (``pa, pb``

@@ -1,0 +1,1 @@
+"""Intercept estimators (one guidance channel), one folder per family."""
