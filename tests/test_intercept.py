@@ -244,6 +244,7 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     game and bias noise) must not need a new compiled version of any kernel, the node set's included
     (read-only polygon arrays are a type of their own for numba)."""
     from kalman_vs_infoset.estim import _kernels as k
+    from kalman_vs_infoset.estim.intercept.nodeset import _contains
     from kalman_vs_infoset.estim.intercept.nodeset import _geometry as ng
     from kalman_vs_infoset.estim.intercept.nodeset import _kernels as nk
     from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up
@@ -256,7 +257,7 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     _kepler.warm_up()
     kernels = {
         f"{m.__name__}.{n}": getattr(m, n)
-        for m in (k, nk, ng, _kepler)
+        for m in (k, nk, ng, _contains, _kepler)
         for n in dir(m)
         if hasattr(getattr(m, n), "signatures")
     }

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
 from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.nodeset import _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
 from kalman_vs_infoset.estim.model import ChannelModel
@@ -298,7 +299,7 @@ class NodeSet(Belief):
             return False  # (no bound would exclude a nan)
         s = self._summary
         return bool(
-            _ng.contains_state(
+            _contains.contains_state(
                 self.polygons.xy,
                 self.polygons.offsets,
                 np.ascontiguousarray(self.tau_s),
