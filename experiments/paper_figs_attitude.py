@@ -21,10 +21,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.experiments import cmd_attitude
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
-from kalman_vs_infoset.experiments.attitude_traces import TRACERS
+from kalman_vs_infoset.experiments.attitude_loops import loop_of
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.scenario import read
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
@@ -46,8 +45,9 @@ def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overr
     quick = QUICK.get(scenario, []) if ctx.quick else []
     data, src = read(ctx.scenarios / scenario, [*overrides, *quick])
     data.pop("estimator", None)
-    setup = cmd_attitude.resolve_module(controller).prepare(src, data, controller, noise)
-    df = TRACERS[controller](setup, controller, noise, estimator, run_seed(0, 0, 0))
+    loop = loop_of(controller)
+    setup = loop.prepare(src, data, controller, noise)
+    df = loop.trace(setup, controller, noise, estimator, run_seed(0, 0))
     return df.assign(scenario=data["name"], estimator=estimator, noise=noise, run=0), setup
 
 

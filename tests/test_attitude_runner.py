@@ -28,7 +28,7 @@ def scenario(tmp_path):
 
 def _attitude(capsys, scenario, out, *extra) -> tuple[int, dict | None]:
     code = main(
-        ["attitude", str(scenario), "--noise", "random", "--estimator", "box", "--runs",
+        ["attitude", str(scenario), "--noise", "random", "--estimators", "box", "--runs",
          str(RUNS), "--seed", "3", "--out", str(out), "--json", "--no-progress", *extra]
     )  # fmt: skip
     text = capsys.readouterr().out.strip().splitlines()
