@@ -49,12 +49,14 @@ def _intercept_chunk(sc, estimator: str, noise: str, seed: int, runs: list[int])
 
 
 def run_engagement(
-    sc: InterceptScenario, estimator: str, noise: str, rng: np.random.Generator, desc: str = ""
+    sc: InterceptScenario, estimator: str, noise: str, rng: np.random.Generator
 ) -> EngagementResult:
     """One engagement (the loop of :func:`experiments.sim.intercept.run_engagement`),
-    its steps shown when it takes long (``desc`` names it)."""
+    its steps shown when it takes long."""
     eng = Engagement(sc, estimator, noise, rng)
-    with step_progress(eng.max_steps, desc or f"{sc.name} {estimator}-{noise}") as shown:
+    key = getattr(rng.bit_generator.seed_seq, "spawn_key", ())
+    run = f" run {key[-1]}" if key else ""  # the runner's run index
+    with step_progress(eng.max_steps, f"{sc.name} {estimator}-{noise}{run}") as shown:
         while eng.step():
             shown(eng.step_index)
     return eng.finish()
@@ -65,10 +67,8 @@ def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]
     but for ``MemoryError``: a resource, not the run, which the runner reports)."""
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed_seq)
-    run = f" run {seed_seq.spawn_key[-1]}" if seed_seq.spawn_key else ""  # the runner's j
-    desc = f"{sc.name} {estimator_name}-{noise_name}{run}"
     try:
-        res = run_engagement(sc, estimator_name, noise_name, rng, desc).as_row()
+        res = run_engagement(sc, estimator_name, noise_name, rng).as_row()
         res.update(status="ok", error="")
     except MemoryError:
         raise
