@@ -269,3 +269,12 @@ def test_a_fast_run_or_no_progress_shows_no_steps(short, tmp_path, capsys, monke
 def test_step_progress_is_silent_outside_the_runner():
     with progress.step_progress(10, "x", after_s=0.0, every_s=0.0) as shown:
         assert shown(3) is None  # no bar, no line: not inside steps_shown
+
+
+def test_on_a_terminal_a_slow_run_draws_a_bar_of_its_steps(monkeypatch, capsys):
+    monkeypatch.setattr(progress, "_isatty", lambda: True)
+    with progress.steps_shown(), progress.step_progress(50, "slow run", after_s=0.0) as shown:
+        for k in range(1, 51):
+            shown(k)
+    err = capsys.readouterr().err
+    assert "slow run:" in err and "/50 [" in err and "step" in err
