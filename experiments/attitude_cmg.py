@@ -9,11 +9,12 @@ with
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 from kalman_vs_infoset.experiments.attitude_cmg_setup import TurnSetup, setup_from_scenario
 from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
+from kalman_vs_infoset.experiments.attitude_traces import trace_cmg
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     CONTROLLERS,
@@ -91,6 +92,15 @@ def summarise(
 
 def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
     """The attitude JSON of these controllers, computed in this process without files."""
-    return run_here(
-        sys.modules[__name__], source, scenario, controller, noise, runs, seed, estimator
-    )
+    return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
+
+
+LOOP = AttitudeLoop(
+    name="gyrodines (Resurs-P)",
+    controllers=tuple(CONTROLLERS),
+    chunk=CHUNK,
+    prepare=prepare,
+    task=task,
+    summarise=summarise,
+    trace=trace_cmg,
+)

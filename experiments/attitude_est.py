@@ -1,9 +1,9 @@
 """Attitude loops as consumers of estimators (docs/models.md §2.5): the names and the outputs.
 
 The loops themselves run a registered estimator through
-:class:`kalman_vs_infoset.experiments.sim.estimator_loop.EstimatorLoop`; this module resolves the
-``--estimator`` names and draws the CDF figures (settle time, energy index and final
-error, one curve per controller x estimator x noise) of the per-run tables.
+:class:`kalman_vs_infoset.experiments.sim.estimator_loop.EstimatorLoop`; this module draws
+the CDF figures (settle time, energy index and final error, one curve per controller x
+estimator x noise) of the per-run tables.
 """
 
 from __future__ import annotations
@@ -15,24 +15,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments.errors import InputError
-
-
-def resolve_estimators(arg: str | None, scenario_default: str | None, noise: str) -> list[str]:
-    """``--estimator`` (comma list) or the scenario's, else ``perfect`` (noise none) / ``box``."""
-    if arg is None:
-        arg = scenario_default or ("perfect" if noise == "none" else "box")
-    names = [s.strip() for s in str(arg).split(",") if s.strip()]
-    allowed = registry.names("attitude")
-    bad = [n for n in names if n not in allowed]
-    if not names or bad:
-        raise InputError(f"--estimator must be one or more of {', '.join(allowed)}, got '{arg}'")
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:  # each would be run and tabled twice
-        raise InputError(f"--estimator {arg!r}: {', '.join(twice)} given twice")
-    return names
-
 
 PANELS = (
     ("settle_time_s", "settle time, s"),
@@ -99,20 +81,21 @@ def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Pat
     return plots.save(fig, out_stem)
 
 
-def run_here(module, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
-    """A module's attitude runs in this process, without files (tests, notebooks): the
-    same chunks, retries and summary as the command (:mod:`experiments.runner`)."""
+def run_here(loop, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
+    """A loop's attitude runs (:class:`experiments.attitude_loops.AttitudeLoop`) in this
+    process, without files (tests, notebooks): the same chunks, retries and summary as
+    the command (:mod:`experiments.runner`)."""
     from kalman_vs_infoset.experiments.runner import batched_task
 
     t0 = time.perf_counter()
-    setup = module.prepare(source, dict(scenario), controller, noise)
-    simulate = partial(module.task, setup, controller, noise, estimator)
+    setup = loop.prepare(source, dict(scenario), controller, noise)
+    simulate = partial(loop.task, setup, controller, noise, estimator)
     pairs = []
-    for start in range(0, runs, module.CHUNK):
-        pairs += batched_task(simulate, seed, list(range(start, min(start + module.CHUNK, runs))))
+    for start in range(0, runs, loop.chunk):
+        pairs += batched_task(simulate, seed, list(range(start, min(start + loop.chunk, runs))))
     df = pd.DataFrame([{"run": j, **row} for j, row in pairs])
     ok = df[df["status"] == "ok"]
     failures = int((df["status"] != "ok").sum())
-    result = module.summarise(setup, controller, noise, estimator, runs, seed, ok, failures)
+    result = loop.summarise(setup, controller, noise, estimator, runs, seed, ok, failures)
     result["wall_s"] = time.perf_counter() - t0
     return result

@@ -18,12 +18,13 @@ disturbance kind (``"constant"`` = a vertex of the box held all run).
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
+from kalman_vs_infoset.experiments.attitude_traces import trace_gyrostat
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
@@ -126,6 +127,15 @@ def summarise(
 
 def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
     """The attitude JSON of these controllers, computed in this process without files."""
-    return run_here(
-        sys.modules[__name__], source, scenario, controller, noise, runs, seed, estimator
-    )
+    return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
+
+
+LOOP = AttitudeLoop(
+    name="three-rotor gyrostat",
+    controllers=("game",),
+    chunk=CHUNK,
+    prepare=prepare,
+    task=task,
+    summarise=summarise,
+    trace=trace_gyrostat,
+)

@@ -9,12 +9,13 @@ docs/models.md §3.1 from the runs' rows (:func:`summarise`).
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
+from kalman_vs_infoset.experiments.attitude_traces import trace_rw
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
@@ -127,6 +128,15 @@ def summarise(
 
 def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
     """The attitude JSON of these controllers, computed in this process without files."""
-    return run_here(
-        sys.modules[__name__], source, scenario, controller, noise, runs, seed, estimator
-    )
+    return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
+
+
+LOOP = AttitudeLoop(
+    name="reaction wheels",
+    controllers=CONTROLLERS,
+    chunk=CHUNK,
+    prepare=prepare,
+    task=task,
+    summarise=summarise,
+    trace=trace_rw,
+)

@@ -1,6 +1,7 @@
 """Traces of the attitude loops: one run replayed with recording, as long-format rows.
 
-``TRACERS[controller](setup, controller, noise, estimator, seed_seq)`` returns one row
+Each loop's ``trace(setup, controller, noise, estimator, seed_seq)`` (its
+:class:`experiments.attitude_loops.AttitudeLoop`) returns one row
 per (step, axis) (:func:`kalman_vs_infoset.experiments.traces.long_rows`) for the run seeded by
 ``seed_seq`` (the runner's seed of that run id: the same realisation as its row).
 Columns common to every loop (units in the names):
@@ -155,12 +156,3 @@ def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq)
         },
         guaranteed_time_s=float(s.design.tau_s),
     )
-
-
-TRACERS = {
-    "pd": trace_rw,
-    "lqr": trace_rw,
-    "energy": trace_cmg,
-    "euler": trace_cmg,
-    "game": trace_gyrostat,
-}

@@ -23,26 +23,19 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments import plots
-from kalman_vs_infoset.experiments.cmd_compare import _list_of, run_grid
-from kalman_vs_infoset.experiments.cmd_intercept import add_common, positive_int, resolve
+from kalman_vs_infoset.experiments import options, plots
+from kalman_vs_infoset.experiments.intercept_runs import run_grid
 from kalman_vs_infoset.experiments.report import write_tables, write_text
 
 RULES = ("game", "targeted", "lookahead")
 
 
 def add_arguments(p) -> None:
-    add_common(p)
-    p.add_argument(
-        "--estimators",
-        type=_list_of(registry.names("intercept")),
-        default=["infoset"],
-        help="comma-separated pursuer estimators (default: infoset, the seed's)",
-    )
+    options.add_common(p)
+    options.add_estimators(p, "intercept", ["infoset"], "infoset, the seed's")
     p.add_argument(
         "--lookahead",
-        type=positive_int,
+        type=options.positive_int,
         help="depth k of the look-ahead search, decision steps (default: the scenario's "
         "adversary.lookahead_steps; given, it names the results like --set does)",
     )
@@ -59,10 +52,9 @@ def seed_fuel_share(fuel: np.ndarray, seed_fuel: float | None) -> float:
 def run(args) -> dict[str, Any]:
     if args.lookahead is not None:
         args.overrides = [*args.overrides, f"adversary.lookahead_steps={args.lookahead}"]
-    sc, runs, seed, out = resolve(args)
-    args.noise = list(RULES)
+    sc, runs, seed, out = options.resolve(args)
     t0 = time.perf_counter()
-    rows, frames = run_grid(sc, args, runs, seed, out)
+    rows, frames = run_grid(sc, args, runs, seed, out, args.estimators, RULES)
     ref = sc.reference
     for row, df in zip(rows, frames, strict=True):
         ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]

@@ -60,9 +60,9 @@ import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.costs import MissForecast
 from kalman_vs_infoset.estim.model import Bearing
-from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.executors import make_executor
-from kalman_vs_infoset.experiments.runner import run_experiment
+from kalman_vs_infoset.experiments.intercept_runs import run_experiment
+from kalman_vs_infoset.experiments.options import positive_int
 from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, run_engagement
 

@@ -13,69 +13,20 @@ import time
 from typing import Any
 
 import pandas as pd
-from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments import plots, traces
-from kalman_vs_infoset.experiments.cmd_fig5 import miss_floor_m
-from kalman_vs_infoset.experiments.cmd_intercept import add_common, draw_traces, resolve
+from kalman_vs_infoset.experiments import options, plots, traces
+from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid, write_traces
 from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
-from kalman_vs_infoset.experiments.runner import results_path, run_experiment, summarise
-from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
 
 
-def _list_of(allowed):
-    def parse(text: str) -> list[str]:
-        items = [t.strip() for t in text.split(",") if t.strip()]
-        bad = [t for t in items if t not in allowed]
-        if not items or bad:
-            raise argparse.ArgumentTypeError(
-                f"expected a comma-separated list of {', '.join(allowed)}; got {text!r}"
-            )
-        twice = sorted({t for t in items if items.count(t) > 1})
-        if twice:  # each would be run and tabled twice
-            raise argparse.ArgumentTypeError(f"{', '.join(twice)} given twice in {text!r}")
-        return items
-
-    return parse
-
-
-def add_arguments(p) -> None:
-    add_common(p)
-    traces.add_argument(p)
-    estimators = registry.names("intercept")
-    p.add_argument(
-        "--estimators",
-        type=_list_of(estimators),
-        default=list(estimators),
-        help=f"comma-separated, from {','.join(estimators)} (default: all)",
-    )
-    p.add_argument(
-        "--noise",
-        type=_list_of(NOISES),
-        default=["random", "game"],
-        help=f"comma-separated, from {','.join(NOISES)} (default: random,game)",
-    )
-
-
-def run_grid(sc, args, runs: int, seed: int, out) -> tuple[list[dict], list[pd.DataFrame]]:
-    """Every estimator x noise of ``args`` on the same seeds: summaries and run tables."""
-    rows, frames = [], []
-    for est in args.estimators:
-        for noise in args.noise:
-            t1 = time.perf_counter()
-            df = run_experiment(
-                sc, est, noise, runs, seed, out / "runs", args.workers, args.scheduler,
-                not args.no_progress, limit_s=args.run_cpu_limit_s,
-            )  # fmt: skip
-            rows.append(summarise(df, sc, est, noise, seed, time.perf_counter() - t1))
-            frames.append(df)
-    return rows, frames
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    options.add_grid(p)
 
 
 def run(args) -> dict[str, Any]:
-    sc, runs, seed, out = resolve(args)
-    traced = traces.check_runs(getattr(args, "trace", None), runs)
+    sc, runs, seed, out = options.resolve(args)
+    traced = traces.check_runs(args.trace, runs)
     t0 = time.perf_counter()
-    rows, frames = run_grid(sc, args, runs, seed, out)
+    rows, frames = run_grid(sc, args, runs, seed, out / "runs", args.estimators, args.noise)
     table = pd.concat(frames, ignore_index=True)
     stem = out / f"{sc.name}-compare"
     files = write_tables(table, stem)
@@ -91,15 +42,8 @@ def run(args) -> dict[str, Any]:
         write_text(out / f"{sc.name}-compare.md", summary_markdown(rows, ["estimator", "noise"]))
     )
     if traced:  # one trace per estimator x noise, drawn together
-        written = []
-        for (est, noise), df in zip(
-            [(e, n) for e in args.estimators for n in args.noise], frames, strict=True
-        ):
-            ok = traces.traceable(traced, df, f"{sc.name} {est}-{noise}")
-            path = results_path(out / "runs", sc, est, noise, seed)
-            if ok:
-                written += traces.write_intercept_trace(sc, est, noise, seed, ok, path)
-        files += written + draw_traces(written, sc)
+        pairs = [(e, n) for e in args.estimators for n in args.noise]
+        files += write_traces(sc, traced, pairs, frames, seed, out / "runs")
     return {
         "scenario": sc.name,
         "runs": runs,

@@ -13,53 +13,51 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments import plots
-from kalman_vs_infoset.experiments.cmd_intercept import positive_int, seed_int
+from kalman_vs_infoset.experiments import options, plots
+from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid
 from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
-from kalman_vs_infoset.experiments.runner import run_experiment, summarise
 from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 
 VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + range"))
+#: the seed's estimator: its files keep the plain names (fig5_runs, fig5_cdf, ...)
+SEED_ESTIMATORS = ["infoset"]
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--runs", type=positive_int, default=50, help="runs per variant (default 50)")
-    p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
-    p.add_argument("--estimator", choices=registry.names("intercept"), default="infoset")
-    p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
-    p.add_argument("--scheduler", help="Dask scheduler address")
+    p.add_argument("--runs", type=options.runs_int, default=50,
+                   help="runs per variant (default 50)")  # fmt: skip
+    p.add_argument("--seed", type=options.seed_int, help="root seed (default: the scenario's)")
+    options.add_estimators(p, "intercept", SEED_ESTIMATORS, "infoset, the seed's")
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--out", default="results/fig5", help="output directory")
-    p.add_argument("--no-progress", action="store_true")
+    options.add_runner(p)
 
 
-def miss_floor_m(sc) -> float:
-    """Miss floor set by the last bearings: bound at eps times eps (docs/models.md §1.8)."""
-    m = sc.model
-    return m.bearing_bound_end_rad * m.eps_km * 1e3
+def _stem(args) -> str:
+    """The files' stem: ``fig5``, with the estimators and seed when not the seed's, so
+    another choice never replaces the seed's figure."""
+    ests = "" if args.estimators == SEED_ESTIMATORS else "-" + ",".join(args.estimators)
+    return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}")
 
 
 def run(args) -> dict[str, Any]:
     t0 = time.perf_counter()
-    out = Path(args.out)
+    out = options.out_folder(args.out, Path("results/fig5"))
     frames, rows = [], []
     sc = None
     for fname, variant in VARIANTS:
         sc = load_scenario(scenario_folder(args.scenarios) / fname)
         seed = sc.experiment.seed if args.seed is None else args.seed
-        for noise in ("random", "game"):
-            t1 = time.perf_counter()
-            df = run_experiment(
-                sc, args.estimator, noise, args.runs, seed, out / "runs",
-                args.workers, args.scheduler, not args.no_progress,
-            )  # fmt: skip
-            summary = summarise(df, sc, args.estimator, noise, seed, time.perf_counter() - t1)
+        summaries, dfs = run_grid(
+            sc, args, args.runs, seed, out / "runs", args.estimators, ("random", "game")
+        )
+        for summary, df in zip(summaries, dfs, strict=True):
             summary["variant"] = variant
             rows.append(summary)
             frames.append(df.assign(variant=variant))
+    stem = _stem(args)
     table = pd.concat(frames, ignore_index=True)
-    files = write_tables(table, out / "fig5_runs")
+    files = write_tables(table, out / f"{stem}_runs")
     ref = sc.reference
     floor = float(table["fuel_perfect_info_mps"].mean())
     marks = {
@@ -75,17 +73,18 @@ def run(args) -> dict[str, Any]:
         ],
     }
     marks = {k: [(v, lab) for v, lab in vals if v is not None] for k, vals in marks.items()}
+    by = ["variant", "noise"] + (["estimator"] if len(args.estimators) > 1 else [])
     fig = plots.cdf_figure(
         table,
-        ["variant", "noise"],
-        f"Seed 003 Fig. 5: {args.estimator}, {args.runs} runs per variant",
+        by,
+        f"Seed 003 Fig. 5: {','.join(args.estimators)}, {args.runs} runs per variant",
         marks,
     )
-    files += plots.save(fig, out / "fig5_cdf")
+    files += plots.save(fig, out / f"{stem}_cdf")
     md = summary_markdown(rows, ["variant", "noise", "estimator"])
     md += f"\nLower bounds: perfect-information fuel {floor:.1f} m/s (mean over runs), "
     md += f"bearing-limited miss floor {miss_floor_m(sc):.2f} m.\n"
-    files.append(write_text(out / "fig5_summary.md", md))
+    files.append(write_text(out / f"{stem}_summary.md", md))
     return {
         "runs": args.runs,
         "variants": rows,

@@ -35,9 +35,9 @@ from kalman_vs_infoset.experiments import paper_figs_kp as kp
 from kalman_vs_infoset.experiments import paper_figs_more as more
 from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
 from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
-from kalman_vs_infoset.experiments.cmd_intercept import positive_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.options import positive_int
 from kalman_vs_infoset.experiments.scenario import scenario_folder
 
 #: figure name -> group that draws it (a group draws all its figures at once)

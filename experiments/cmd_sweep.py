@@ -21,12 +21,10 @@ import tomllib
 from typing import Any
 
 import pandas as pd
-from kalman_vs_infoset.experiments import plots
-from kalman_vs_infoset.experiments.cmd_compare import add_arguments as add_compare_arguments
-from kalman_vs_infoset.experiments.cmd_compare import run_grid
-from kalman_vs_infoset.experiments.cmd_intercept import resolve
+from kalman_vs_infoset.experiments import options, plots
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.intercept_runs import run_grid
 from kalman_vs_infoset.experiments.report import summary_markdown, write_text
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
@@ -57,7 +55,7 @@ def _toml_values(text: str) -> list[Any]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_compare_arguments(p)
+    options.add_grid(p, trace=False)  # a sweep draws no run's trace
     p.add_argument(
         "--key",
         required=True,
@@ -98,7 +96,7 @@ def run(args) -> dict[str, Any]:
     t0 = time.perf_counter()
     # compare's folder by default: the runs' files carry the +key=value suffix and the
     # tables the key, so nothing collides
-    base, runs, seed, out = resolve(args)
+    base, runs, seed, out = options.resolve(args)
     # every value is validated before the first run starts
     scenarios = [
         load_scenario(args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)])
@@ -106,7 +104,7 @@ def run(args) -> dict[str, Any]:
     ]
     rows = []
     for value, sc in zip(args.values, scenarios, strict=True):
-        summaries, _ = run_grid(sc, args, runs, seed, out)
+        summaries, _ = run_grid(sc, args, runs, seed, out, args.estimators, args.noise)
         rows += [{"value": json.dumps(value), **row} for row in summaries]
     stem = f"{base.name}-sweep-{key}"
     flat = pd.json_normalize(rows, sep="_")

@@ -41,10 +41,10 @@ from kalman_vs_infoset.estim.exact_reference import (
     PriorBox,
 )
 from kalman_vs_infoset.estim.model import Bearing, Range
-from kalman_vs_infoset.experiments.cmd_intercept import seed_int
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.noise import RandomNoise
+from kalman_vs_infoset.experiments.options import add_estimators, seed_int
 from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
@@ -86,8 +86,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
     add("--guided", action="store_true", help="the seed's law issues impulses")
-    add("--estimator", choices=registry.names("intercept"), default="infoset",
-        help="estimator under test (default: infoset)")  # fmt: skip
+    add_estimators(p, "intercept", ["infoset"], "infoset; one estimator under test", most=1)
     add("--switch-s", type=_positive, default=50.0,
         help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
     add("--kinematic-margin", action="store_true",
@@ -180,7 +179,7 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
     children = np.random.SeedSequence(seed).spawn(3)
     truth_rng, noise_rng, v_rng = (np.random.default_rng(c) for c in children)
     y, v, x, e = _draw_truth(sc, truth_rng)
-    est, belief = set_under_test(args.estimator, sc, model)
+    est, belief = set_under_test(args.estimators[0], sc, model)
     errors = _Errors(args.noise, sc, model, noise_rng, args.switch_s)
     g = sc.guidance
     law = ForecastCentringLaw(
@@ -259,7 +258,7 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 def run(args) -> dict[str, Any]:
     sc = auxiliary_model_options(
         load_scenario(args.scenario, args.overrides), args.kinematic_margin,
-        names=sorted({"infoset", args.estimator}),
+        names=sorted({"infoset", args.estimators[0]}),
     )  # fmt: skip
     seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / "tightness"
@@ -272,7 +271,7 @@ def run(args) -> dict[str, Any]:
         "scenario": sc.name,
         "noise": args.noise,
         "seed": seed,
-        "estimator": args.estimator,
+        "estimator": args.estimators[0],
         "guided": bool(args.guided),
         "kinematic_margin": bool(args.kinematic_margin),
         "times_s": [r["time_s"] for r in recs],
@@ -281,7 +280,7 @@ def run(args) -> dict[str, Any]:
         "fuel_mps": fuel,
     }
     stem = out / (
-        f"{sc.name}-tightness-{args.estimator}-{args.noise}-seed{seed}"
+        f"{sc.name}-tightness-{args.estimators[0]}-{args.noise}-seed{seed}"
         + ("-guided" if args.guided else "")
     )
     result["files"] = [str(p) for p in _write(result, stem)]

@@ -21,10 +21,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.experiments import cmd_attitude
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
-from kalman_vs_infoset.experiments.attitude_traces import TRACERS
+from kalman_vs_infoset.experiments.attitude_loops import loop_of
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.scenario import read
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
@@ -46,12 +45,15 @@ def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overr
     quick = QUICK.get(scenario, []) if ctx.quick else []
     data, src = read(ctx.scenarios / scenario, [*overrides, *quick])
     data.pop("estimator", None)
-    setup = cmd_attitude.resolve_module(controller).prepare(src, data, controller, noise)
-    df = TRACERS[controller](setup, controller, noise, estimator, run_seed(0, 0, 0))
+    loop = loop_of(controller)
+    setup = loop.prepare(src, data, controller, noise)
+    df = loop.trace(setup, controller, noise, estimator, run_seed(0, 0))
     return df.assign(scenario=data["name"], estimator=estimator, noise=noise, run=0), setup
 
 
-def _components(ctx, name, traces, column, ylabel, title, limit=None, marks=(), variants=None):
+def components_figure(
+    ctx, name, traces, column, ylabel, title, limit=None, marks=(), variants=None
+):
     """Three axis panels of ``column``; ``variants`` names each trace and gives its line
     width (traces of one estimator and noise that differ otherwise)."""
     fig, axes = fs.figure(3, 1, size=(7.0, 7.6), sharex="col")
@@ -66,7 +68,9 @@ def _components(ctx, name, traces, column, ylabel, title, limit=None, marks=(), 
     ctx.save(fig, name)
 
 
-def _history(ctx, name, traces, column, ylabel, title, log=False, paper=None, tol=None):
+def history_figure(ctx, name, traces, column, ylabel, title, log=False, paper=None, tol=None):
+    """One panel of ``column`` over time for every trace (log scale with ``log``), the
+    paper's value ``paper = (value, label)`` and a tolerance line ``tol`` marked."""
     fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
     ax = axes[0, 0]
     pa.step_panel(ax, traces, column, ylabel)
@@ -362,7 +366,7 @@ def gyrostat(ctx) -> dict[str, Any]:
     tau = float(setup.design.tau_s)
     mark = [(tau, f"guaranteed time tau = {tau:.1f} s (eq. 2.8)")]
     both = [quiet, game]
-    _components(
+    components_figure(
         ctx,
         "gyrostat_eta",
         both,
@@ -371,7 +375,7 @@ def gyrostat(ctx) -> dict[str, Any]:
         "gyrostat_eta: the error quaternion's vector part",
         marks=mark,
     )
-    _components(
+    components_figure(
         ctx,
         "gyrostat_switching",
         both,
@@ -380,7 +384,7 @@ def gyrostat(ctx) -> dict[str, Any]:
         "gyrostat_switching: psi_i = -eta_i - eta_i' |eta_i'| / (2 (1 - rho_i) a*_i)",
         marks=mark,
     )
-    _components(
+    components_figure(
         ctx,
         "gyrostat_torques",
         both,

@@ -19,8 +19,7 @@ import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_intercept, plots_sets
-from kalman_vs_infoset.experiments.cmd_fig5 import miss_floor_m
-from kalman_vs_infoset.experiments.runner import run_experiment
+from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.traces import intercept_trace
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from kalman_vs_infoset.experiments import cmd_attitude
 from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments.attitude_loops import loop_of
 from kalman_vs_infoset.experiments.paper_figs_attitude import QUICK, trace
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.scenario import read
@@ -129,9 +129,9 @@ def lqr_lyapunov(ctx) -> dict[str, Any]:
     quick = QUICK.get(name, []) if ctx.quick else []
     data, src = read(ctx.scenarios / name, quick)
     data.pop("estimator", None)
-    config = cmd_attitude.resolve_module("lqr").prepare(src, data, "lqr", "none")
+    config = loop_of("lqr").prepare(src, data, "lqr", "none")
     rec: dict = {}
-    rng = np.random.default_rng(run_seed(0, 0, 0))
+    rng = np.random.default_rng(run_seed(0, 0))
     simulate_runs(config, "lqr", "none", [rng], "perfect", rec)
     law = make_controller("lqr", config)
     x = rec["states"][:, 0]

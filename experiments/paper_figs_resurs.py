@@ -17,7 +17,11 @@ import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
-from kalman_vs_infoset.experiments.paper_figs_attitude import _components, _history, trace
+from kalman_vs_infoset.experiments.paper_figs_attitude import (
+    components_figure,
+    history_figure,
+    trace,
+)
 from kalman_vs_infoset.experiments.sim.attitude_cmg import lower_bound_energy_N2m2s
 
 PAPER_Z = {"energy": 2150.0, "euler": 11200.0}
@@ -62,7 +66,7 @@ def resurs(ctx) -> dict[str, Any]:
     )
     ctx.save(fig, "resurs_fig1")
     lbl = "torque M on the body, N m"
-    _components(
+    components_figure(
         ctx,
         "resurs_fig2",
         [energy],
@@ -76,7 +80,7 @@ def resurs(ctx) -> dict[str, Any]:
         for c, t in (("energy", energy), ("euler", euler))
     }
     zl = "index Z(i) = sum M^T M dt, N^2 m^2 s"
-    _history(
+    history_figure(
         ctx,
         "resurs_fig3",
         [energy],
@@ -85,7 +89,7 @@ def resurs(ctx) -> dict[str, Any]:
         f"resurs_fig3: Z of the energy-saving turn, ours {z['energy']:.0f} at 300 s",
         paper=(PAPER_Z["energy"], "Z = 2150 N^2 m^2 s"),
     )
-    _components(
+    components_figure(
         ctx,
         "resurs_fig4",
         [euler],
@@ -95,7 +99,7 @@ def resurs(ctx) -> dict[str, Any]:
         f"{setup.euler.accel_time_s:g}-s phases chosen to land near the paper's Z; it gives none)",
         marks=mark,
     )
-    _history(
+    history_figure(
         ctx,
         "resurs_fig5",
         [euler],
@@ -105,7 +109,7 @@ def resurs(ctx) -> dict[str, Any]:
         "(CALIBRATED: the phase durations were chosen for the paper's 11200)",
         paper=(PAPER_Z["euler"], "Z = 11200 N^2 m^2 s"),
     )
-    _history(
+    history_figure(
         ctx,
         "resurs_fig6",
         [energy],
@@ -130,7 +134,7 @@ def resurs(ctx) -> dict[str, Any]:
     fs.legend(axes[0, 0])
     fig.suptitle("resurs_fig7: Lyapunov function of the unforced auxiliary system")
     ctx.save(fig, "resurs_fig7")
-    _components(
+    components_figure(
         ctx,
         "resurs_fig8",
         [energy, u0],
@@ -140,7 +144,7 @@ def resurs(ctx) -> dict[str, Any]:
         marks=mark,
         variants=[("U0 = 0", 0.8), ("U0 = (-5.4, -1.1, -2.4) N m", 2.2)],
     )
-    _components(
+    components_figure(
         ctx,
         "resurs_fig9",
         [energy],

@@ -4,7 +4,8 @@
 widget) when stderr is a terminal or the code runs in Jupyter; when stderr is a file or
 a pipe (a batch job's log), the bar is not drawn and the ``kalman_vs_infoset`` logger
 writes one INFO line every :data:`LOG_EVERY_S` seconds instead (and one at the end
-when it wrote any: a short loop stays silent).
+when it wrote any: a short loop stays silent). A single run that takes long shows its
+steps the same way (:func:`step_progress`, within :func:`steps_shown`).
 :func:`configure_logging` (called by the command line) sends that logger's lines to
 stderr; a library user configures :mod:`logging` as usual.
 """
@@ -12,8 +13,11 @@ stderr; a library user configures :mod:`logging` as usual.
 from __future__ import annotations
 
 import logging
+import os
 import sys
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -41,8 +45,11 @@ def _isatty() -> bool:
 class _LogProgress:
     """A bar's interface (``update``, ``close``) writing log lines instead."""
 
-    def __init__(self, total: int, initial: int, desc: str, every_s: float) -> None:
+    def __init__(
+        self, total: int, initial: int, desc: str, every_s: float, unit: str = "runs"
+    ) -> None:
         self.total, self.n, self.desc, self.every_s = total, initial, desc, every_s
+        self.unit = unit
         self.t0 = self.last = time.monotonic()
         self.start, self.lines = initial, 0
 
@@ -58,7 +65,7 @@ class _LogProgress:
         rate = (self.n - self.start) / max(now - self.t0, 1e-9)
         left = (self.total - self.n) / rate if rate > 0 else float("inf")
         eta = f", ~{left:.0f} s left" if self.n < self.total and rate > 0 else ""
-        LOG.info("%s: %d/%d runs%s%s", self.desc, self.n, self.total, eta, done)
+        LOG.info("%s: %d/%d %s%s%s", self.desc, self.n, self.total, self.unit, eta, done)
 
     def close(self) -> None:
         if self.lines:  # a closing line for a loop long enough to have logged
@@ -76,6 +83,73 @@ def progress_bar(
     if _isatty() or _in_notebook():
         return tqdm(total=total, initial=initial, desc=desc, file=sys.stderr, leave=False)
     return _LogProgress(total, initial, desc, LOG_EVERY_S if every_s is None else every_s)
+
+
+#: a single run shows its steps once it has taken this long (wall clock, s)
+SLOW_RUN_S = 10.0
+#: the process whose runs show their steps (:func:`steps_shown`), or None
+_steps_pid: int | None = None
+
+
+@contextmanager
+def steps_shown(enabled: bool = True) -> Iterator[None]:
+    """In the block, a slow run in this process shows its steps (:func:`step_progress`).
+    Only this process: runs on pool workers are shown by the runs' bar alone."""
+    global _steps_pid
+    before = _steps_pid
+    _steps_pid = os.getpid() if enabled else None
+    try:
+        yield
+    finally:
+        _steps_pid = before
+
+
+class _SlowRun:
+    """Silent for :data:`SLOW_RUN_S`, then a bar of the run's steps (terminal, notebook)
+    or a log line every ``every_s``."""
+
+    def __init__(self, total: int, desc: str, after_s: float, every_s: float) -> None:
+        self.total, self.desc, self.after_s, self.every_s = total, desc, after_s, every_s
+        self.t0 = time.monotonic()
+        self.bar: Any = None
+
+    def __call__(self, done: int) -> None:
+        if self.bar is None:
+            if time.monotonic() - self.t0 < self.after_s:
+                return
+            if _isatty() or _in_notebook():
+                self.bar = tqdm(total=self.total, initial=done, desc=self.desc, unit="step",
+                                file=sys.stderr, leave=False)  # fmt: skip
+            else:
+                self.bar = _LogProgress(self.total, 0, self.desc, self.every_s, "steps (at most)")
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+@contextmanager
+def step_progress(
+    total: int, desc: str, after_s: float | None = None, every_s: float | None = None
+) -> Iterator[Callable[[int], None]]:
+    """A callable ``shown(done)`` taking the steps done of one run: nothing for a run
+    faster than ``after_s`` (default :data:`SLOW_RUN_S`) or outside :func:`steps_shown`,
+    else a bar of the steps, or a log line every ``every_s`` (default
+    :data:`LOG_EVERY_S`) where no bar can be drawn. ``total`` is the run's step bound."""
+    if _steps_pid != os.getpid():
+        yield lambda done: None
+        return
+    run = _SlowRun(
+        total,
+        desc,
+        SLOW_RUN_S if after_s is None else after_s,
+        LOG_EVERY_S if every_s is None else every_s,
+    )
+    try:
+        yield run
+    finally:
+        run.close()
 
 
 class _Stderr(logging.Handler):

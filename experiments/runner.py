@@ -1,6 +1,8 @@
 """Monte Carlo runner: tasks on an Executor, paired seeding, atomic resumable Parquet.
 
-One runner for every problem (:class:`Job`: the intercept and the attitude loops):
+One runner for every problem: it knows none. A problem hands it a :class:`Job` whose
+``task`` runs a chunk of run indices (the intercept's in :mod:`experiments.intercept_runs`,
+the attitude loops' in :mod:`experiments.cmd_attitude`).
 
 * Tasks: chunks of run indices (one run per task for the intercept, larger chunks for
   the vectorised attitude loops), fixed by the indices, not by the worker count.
@@ -28,7 +30,6 @@ import time
 from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -42,18 +43,15 @@ from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exporte
     results,
 )
 from kalman_vs_infoset.experiments.files import atomic_write, exclusive
-from kalman_vs_infoset.experiments.progress import progress_bar
+from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
-from kalman_vs_infoset.experiments.sim.intercept import run_engagement
-from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
-from kalman_vs_infoset.experiments.stats import summary_stats
 
 SAVE_EVERY_S = 2.0
 
 
-def run_seed(seed: int, runs: int, j: int) -> np.random.SeedSequence:
-    """The seed of run ``j``: ``SeedSequence(seed).spawn(runs)[j]`` (independent of ``runs``)."""
+def run_seed(seed: int, j: int) -> np.random.SeedSequence:
+    """The seed of run ``j``: ``SeedSequence(seed).spawn(n)[j]`` for any ``n > j``."""
     return np.random.SeedSequence(seed, spawn_key=(j,))
 
 
@@ -91,10 +89,6 @@ class Job:
 
 def job_path(out_dir: Path, job: Job) -> Path:
     return Path(out_dir) / f"{job.name}-{job.label}-s{job.seed}.parquet"
-
-
-def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
-    return Path(out_dir) / f"{sc.name}-{estimator}-{noise}-s{seed}.parquet"
 
 
 def check_seed(seed: int) -> int:
@@ -156,26 +150,13 @@ def _read_table(path: Path) -> dict[int, dict[str, Any]]:
     return {int(r["run"]): r for r in df.to_dict("records")}
 
 
-def intercept_job(sc: InterceptScenario, estimator: str, noise: str, seed: int) -> Job:
-    """The runs of an intercept scenario with one estimator and one noise (1 run a task)."""
-    choice = {"estimator": estimator, "noise": noise}
-    return Job(
-        name=sc.name,
-        label=f"{estimator}-{noise}",
-        seed=seed,
-        meta={"scenario": sc.model_dump(mode="json"), **choice, "seed": seed},
-        base={"scenario": sc.name, **choice, "seed": seed},
-        task=partial(_intercept_chunk, sc, estimator, noise, seed),
-    )
-
-
 def batched_task(simulate, seed: int, runs: list[int]) -> list[tuple[int, dict[str, Any]]]:
     """A chunk of a vectorised loop: ``simulate(seeds)`` returns one row per seed; when
     the batch raises, each run is retried alone, so a failing run is recorded with its
     own run id and error and the others keep theirs."""
     t0 = time.perf_counter()
     try:
-        rows = simulate([run_seed(seed, 0, j) for j in runs])
+        rows = simulate([run_seed(seed, j) for j in runs])
     except MemoryError:
         raise  # a resource, not the run: not recorded (the runner says so)
     except Exception as exc:
@@ -186,29 +167,6 @@ def batched_task(simulate, seed: int, runs: list[int]) -> list[tuple[int, dict[s
     wall = (time.perf_counter() - t0) / len(runs)
     ok = {"status": "ok", "error": "", "wall_s": wall}
     return [(j, {**r, **ok}) for j, r in zip(runs, rows, strict=True)]
-
-
-def _intercept_chunk(sc, estimator: str, noise: str, seed: int, runs: list[int]):
-    # looked up at call time: tests replace it
-    return [(j, timed_engagement(sc, estimator, noise, run_seed(seed, 0, j))) for j in runs]
-
-
-def run_experiment(
-    sc: InterceptScenario,
-    estimator: str,
-    noise: str,
-    runs: int,
-    seed: int,
-    out_dir: Path,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    progress: bool = True,
-    executor: Executor | None = None,
-    limit_s: float | None = None,
-) -> pd.DataFrame:
-    """Run (or complete) an intercept experiment and return its per-run table."""
-    job = intercept_job(sc, estimator, noise, check_seed(seed))
-    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limit_s)
 
 
 def run_job(
@@ -285,14 +243,15 @@ def _complete(job, runs, todo, table, path, meta, progress, executor, workers, s
     last_save = time.monotonic()
     changed = False
     try:
-        for j, row in results(job, todo, executor, workers, scheduler, limit_s):
-            table[j] = {**job.base, "run": j, **row}
-            changed = True
-            bar.update(1)
-            check_stop()
-            if time.monotonic() - last_save > SAVE_EVERY_S:
-                _write_rows(path, list(table.values()), meta)
-                last_save, changed = time.monotonic(), False
+        with steps_shown(progress):  # a slow run in this process shows its steps
+            for j, row in results(job, todo, executor, workers, scheduler, limit_s):
+                table[j] = {**job.base, "run": j, **row}
+                changed = True
+                bar.update(1)
+                check_stop()
+                if time.monotonic() - last_save > SAVE_EVERY_S:
+                    _write_rows(path, list(table.values()), meta)
+                    last_save, changed = time.monotonic(), False
     finally:
         bar.close()
         if changed:
@@ -305,7 +264,7 @@ def _reported(job: Job, path: Path, table: dict[int, dict], runs: int) -> pd.Dat
     df = pd.DataFrame([r for j, r in table.items() if j < runs])
     if len(df):
         df = df.sort_values("run").reset_index(drop=True)
-    _report_failures(job, df)
+    report_failures(job, df)
     _FAILED[str(path)] = int((df["status"] != "ok").sum()) if len(df) else 0
     return df
 
@@ -375,7 +334,7 @@ class _Missing:
 _MISSING = _Missing()
 
 
-def _report_failures(job: Job, df: pd.DataFrame, shown: int = 3) -> None:
+def report_failures(job: Job, df: pd.DataFrame, shown: int = 3) -> None:
     """A failed run always says why (stderr, one line each; the rows keep the error)."""
     if not len(df) or "status" not in df:
         return
@@ -384,38 +343,3 @@ def _report_failures(job: Job, df: pd.DataFrame, shown: int = 3) -> None:
         print(f"{job.desc}: run {int(r['run'])} failed: {r.get('error', '')}", file=sys.stderr)
     if len(failed) > shown:
         print(f"{job.desc}: {len(failed) - shown} more runs failed", file=sys.stderr)
-
-
-def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]:
-    """Run one engagement from a ``SeedSequence``; returns a result row (never raises)."""
-    t0 = time.perf_counter()
-    rng = np.random.default_rng(seed_seq)
-    try:
-        res = run_engagement(sc, estimator_name, noise_name, rng).as_row()
-        res.update(status="ok", error="")
-    except MemoryError:
-        raise  # a resource, not the run: not recorded (the runner says so)
-    except Exception as exc:  # a failing run is recorded, not fatal
-        res = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
-    res["wall_s"] = time.perf_counter() - t0
-    return res
-
-
-def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
-    """The intercept JSON object of docs/models.md §3.1 for one estimator x noise."""
-    ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]
-    return {
-        "scenario": sc.name,
-        "estimator": estimator,
-        "noise": noise,
-        "runs": int(len(df)),
-        "seed": int(seed),
-        "miss_m": summary_stats(ok["miss_m"].to_numpy(dtype=float) if len(ok) else []),
-        "fuel_mps": summary_stats(ok["fuel_mps"].to_numpy(dtype=float) if len(ok) else []),
-        "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
-        "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
-        # beliefs reported Status.DIVERGED: emptied, so guidance stopped early
-        "diverged": int(ok["diverged"].sum()) if len(ok) else 0,
-        "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
-        "wall_s": float(wall_s),
-    }

@@ -106,7 +106,7 @@ def intercept_trace(sc, estimator: str, noise: str, seed: int, runs: list[int], 
     base = {"scenario": sc.name, "estimator": estimator, "noise": noise, "seed": seed}
     for j in runs:
         rec = Recorder(sets_every=sets_every)
-        rng = np.random.default_rng(run_seed(seed, 0, j))
+        rng = np.random.default_rng(run_seed(seed, j))
         res = results[j] = run_engagement(sc, estimator, noise, rng, rec)
         final = {"miss_m": res.miss_m, "final_fuel_mps": res.fuel_mps}  # the run's outcome
         frames.append(pd.DataFrame(rec.rows).assign(**base, run=j, **final))

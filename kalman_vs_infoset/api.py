@@ -31,7 +31,7 @@ import pandas as pd
 from kalman_vs_infoset import _API
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.registry import Registration
-from kalman_vs_infoset.experiments import runner
+from kalman_vs_infoset.experiments import intercept_runs, runner
 from kalman_vs_infoset.experiments import scenario as _scenario
 from kalman_vs_infoset.experiments import traces as _traces
 from kalman_vs_infoset.experiments.progress import progress_bar
@@ -166,7 +166,7 @@ def run_engagement(
     seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
     if run < 0:
         raise ValueError(f"run must be a non-negative index, got {run}")
-    rng = np.random.default_rng(runner.run_seed(seed, 0, run))
+    rng = np.random.default_rng(runner.run_seed(seed, run))
     return _intercept.run_engagement(
         sc, estimator or sc.experiment.estimator, noise or sc.experiment.noise, rng
     )
@@ -230,10 +230,10 @@ def run_experiment(
     if runs < 1:
         raise ValueError(f"runs must be at least 1, got {runs}")
     if out is not None:
-        return runner.run_experiment(
+        return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
         )
-    job = runner.intercept_job(sc, estimator, noise, runner.check_seed(seed))
+    job = intercept_runs.intercept_job(sc, estimator, noise, runner.check_seed(seed))
     pairs = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
     rows = []
@@ -244,7 +244,7 @@ def run_experiment(
     finally:
         bar.close()
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
-    runner._report_failures(job, df)
+    runner.report_failures(job, df)
     return df
 
 

@@ -85,7 +85,7 @@ def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path):
     out = tmp_path / "out"
     for est in ("ekf", "ukf"):
         api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out)
-    assert main(["intercept", "kp_fig3", "--estimator", "ekf", "--seed", "3", "--runs", "2",
+    assert main(["intercept", "kp_fig3", "--estimators", "ekf", "--seed", "3", "--runs", "2",
                  "--out", str(out), "--trace", "0", "--no-progress"]) == 0  # fmt: skip
     assert (out / "_traces").is_dir() and (out / "_meta").is_dir()
     both = pd.read_parquet(out)

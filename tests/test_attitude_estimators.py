@@ -232,7 +232,7 @@ def test_attitude_command_estimators_paired_and_counted(tmp_path):
     scen.write_text(text)
     out = tmp_path / "out"
     args = ["attitude", str(scen), "--noise", "random", "--runs", "3", "--seed", "4",
-            "--estimator", "perfect,ukf,box", "--out", str(out), "--json"]  # fmt: skip
+            "--estimators", "perfect,ukf,box", "--out", str(out), "--json"]  # fmt: skip
     res = _run_cli(main, args)
     assert res["failures"] == 0 and res["estimator"] == "perfect"
     rows = {r["estimator"]: r for r in res["rows"]}

@@ -135,16 +135,18 @@ def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
 
 
 def test_attitude_dispatcher_reports_unavailable_and_bad_input(monkeypatch, capsys):
-    from kalman_vs_infoset.experiments import cmd_attitude
+    from kalman_vs_infoset.experiments import attitude_loops
     from kalman_vs_infoset.experiments.cli import main
     from kalman_vs_infoset.experiments.errors import InputError
 
     monkeypatch.setitem(
-        cmd_attitude.DISPATCH, "game", "kalman_vs_infoset.experiments.no_such_module_xyz"
+        attitude_loops.LOOPS, "game", "kalman_vs_infoset.experiments.no_such_module_xyz"
     )
     with pytest.raises(InputError, match="controller game is not available"):
-        cmd_attitude.resolve_module("game")
+        attitude_loops.loop_of("game")
     assert main(["attitude", "data/scenarios/lqr_large_angle.toml", "--controller", "zzz"]) == 2
-    assert main(["attitude", "data/scenarios/lqr_large_angle.toml", "--noise", "loud"]) == 2
+    with pytest.raises(SystemExit) as refused:  # the noises are parsed before any work
+        main(["attitude", "data/scenarios/lqr_large_angle.toml", "--noise", "loud"])
+    assert refused.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "zzz" in err[0] and "loud" in err[1]

@@ -4,6 +4,7 @@ count or the scheduler, and an interrupted run resumes to identical results."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pandas as pd
 import pytest
@@ -28,7 +29,7 @@ def scenario(tmp_path):
 
 def _attitude(capsys, scenario, out, *extra) -> tuple[int, dict | None]:
     code = main(
-        ["attitude", str(scenario), "--noise", "random", "--estimator", "box", "--runs",
+        ["attitude", str(scenario), "--noise", "random", "--estimators", "box", "--runs",
          str(RUNS), "--seed", "3", "--out", str(out), "--json", "--no-progress", *extra]
     )  # fmt: skip
     text = capsys.readouterr().out.strip().splitlines()
@@ -67,11 +68,11 @@ def test_interrupted_attitude_run_resumes_to_identical_results(
             raise KeyboardInterrupt
         return real(*args, **kw)
 
-    monkeypatch.setattr(attitude_rw, "task", interrupted)
+    monkeypatch.setattr(attitude_rw, "LOOP", replace(attitude_rw.LOOP, task=interrupted))
     code, _ = _attitude(capsys, scenario, tmp_path / "resumed", "--workers", "1")
     assert code == 130
     assert len(_table(tmp_path / "resumed")) == attitude_rw.CHUNK  # the first chunk kept
-    monkeypatch.setattr(attitude_rw, "task", real)
+    monkeypatch.setattr(attitude_rw, "LOOP", replace(attitude_rw.LOOP, task=real))
     code, resumed = _attitude(capsys, scenario, tmp_path / "resumed", "--workers", "1")
     assert code == 0
     pd.testing.assert_frame_equal(_table(tmp_path / "fresh"), _table(tmp_path / "resumed"))

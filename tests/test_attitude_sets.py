@@ -456,7 +456,7 @@ def test_attitude_command_runs_the_sets(tmp_path, capsys):
     scenario = tmp_path / "tiny_rw.toml"
     scenario.write_text(TINY_RW)
     names = ",".join(["box", *sorted(ESTIMATORS)])
-    res = run_cli(capsys, "attitude", scenario, "--estimator", names, "--noise", "random",
+    res = run_cli(capsys, "attitude", scenario, "--estimators", names, "--noise", "random",
                   "--runs", 2, "--seed", 4, "--out", tmp_path, "--json")  # fmt: skip
     assert res.returncode in (0, None), res.stderr
     out = json.loads(res.stdout.strip().splitlines()[-1])

@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 from harness_texts import RANGE_FINDER, cli_inproc, experiment
 from harness_texts import SHORT as SHORT_ENGAGEMENT
-from kalman_vs_infoset.experiments import runner
+from kalman_vs_infoset.experiments import intercept_runs, runner
+from kalman_vs_infoset.experiments.intercept_runs import run_experiment
 from kalman_vs_infoset.experiments.results import read_metadata
-from kalman_vs_infoset.experiments.runner import run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -96,7 +96,7 @@ def test_bad_scenario_input_exits_2_with_one_line(tmp_path, capsys, case):
     "args",
     [
         ["intercept", "missing.toml"],
-        ["intercept", str(FIG3), "--estimator", "kalman9"],
+        ["intercept", str(FIG3), "--estimators", "kalman9"],
         ["intercept", str(FIG3), "--runs", "0"],
         ["compare", str(FIG3), "--estimators", "infoset,foo"],
         ["intercept", str(FIG3), "--out", "/proc/no/such/folder"],
@@ -158,7 +158,7 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
 ):
     sc = load_scenario(short)
     calls = []
-    real = runner.timed_engagement
+    real = intercept_runs.timed_engagement
 
     def flaky(sc_, est, noise, ss):
         if len(calls) == 2:
@@ -166,13 +166,13 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
         calls.append(ss.spawn_key)
         return real(sc_, est, noise, ss)
 
-    monkeypatch.setattr(runner, "timed_engagement", flaky)
+    monkeypatch.setattr(intercept_runs, "timed_engagement", flaky)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
-    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
     first = pd.read_parquet(path)
     assert sorted(first["run"]) == [0, 1]  # finished runs were written
-    monkeypatch.setattr(runner, "timed_engagement", real)
+    monkeypatch.setattr(intercept_runs, "timed_engagement", real)
     calls.clear()
     done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
     assert sorted(done["run"]) == [0, 1, 2, 3]
@@ -182,7 +182,7 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
     pd.testing.assert_frame_equal(_table(done), _table(fresh))
 
 
-_REAL_ENGAGEMENT = runner.timed_engagement
+_REAL_ENGAGEMENT = intercept_runs.timed_engagement
 
 
 def _dies_on_run_3(sc_, est, noise, ss):
@@ -198,14 +198,14 @@ def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_pat
     """A worker process killed mid-run (os._exit): finished runs are saved, the lost
     ones are missing (not failed), and rerunning completes exactly those."""
     sc = load_scenario(short)
-    real = runner.timed_engagement
-    monkeypatch.setattr(runner, "timed_engagement", _dies_on_run_3)
+    real = intercept_runs.timed_engagement
+    monkeypatch.setattr(intercept_runs, "timed_engagement", _dies_on_run_3)
     with pytest.raises(runner.WorkerLost):
         run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=2, progress=False)
-    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
     saved = pd.read_parquet(path) if path.exists() else pd.DataFrame({"run": []})
     assert 3 not in set(saved["run"]) and (saved.get("status", pd.Series()) == "ok").all()
-    monkeypatch.setattr(runner, "timed_engagement", real)
+    monkeypatch.setattr(intercept_runs, "timed_engagement", real)
     done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
     assert sorted(done["run"]) == [0, 1, 2, 3] and (done["status"] == "ok").all()
 
@@ -214,20 +214,20 @@ def test_run_seed_is_the_spawned_child():
     """run j's seed is SeedSequence(seed).spawn(runs)[j] (docs/models.md §3)."""
     children = np.random.SeedSequence(7).spawn(5)
     for j in range(5):
-        a = np.random.default_rng(runner.run_seed(7, 5, j)).random(4)
+        a = np.random.default_rng(runner.run_seed(7, j)).random(4)
         np.testing.assert_array_equal(a, np.random.default_rng(children[j]).random(4))
 
 
 def test_a_failing_run_is_recorded_and_does_not_stop_the_others(short, tmp_path, monkeypatch):
     sc = load_scenario(short)
-    real = runner.timed_engagement
+    real = intercept_runs.timed_engagement
 
     def sometimes(sc_, est, noise, ss):
         if ss.spawn_key == (1,):
             return {"status": "failed", "error": "RuntimeError: boom", "wall_s": 0.0}
         return real(sc_, est, noise, ss)
 
-    monkeypatch.setattr(runner, "timed_engagement", sometimes)
+    monkeypatch.setattr(intercept_runs, "timed_engagement", sometimes)
     df = run_experiment(sc, "infoset", "random", 3, 11, tmp_path, workers=1, progress=False)
     assert list(df["status"]) == ["ok", "failed", "ok"]
     assert "boom" in df.loc[1, "error"]
@@ -237,14 +237,14 @@ def test_engagement_errors_are_caught_per_run(short):
     """timed_engagement records an exception inside a run as a failed row."""
     sc = load_scenario(short)
     broken = sc.model_copy(update={"model": sc.model.model_copy(update={"dt_s": float("nan")})})
-    row = runner.timed_engagement(broken, "infoset", "random", runner.run_seed(1, 1, 0))
+    row = intercept_runs.timed_engagement(broken, "infoset", "random", runner.run_seed(1, 0))
     assert row["status"] == "failed" and row["error"]
 
 
 def test_results_are_written_atomically_with_the_resolved_scenario(short, tmp_path):
     sc = load_scenario(short)
     run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
-    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
     meta = json.loads((tmp_path / "_meta" / f"{path.stem}.json").read_text())
     assert meta["scenario"]["name"] == "short" and meta["seed"] == 11
     assert read_metadata(path) == meta  # the table carries its description too
@@ -318,7 +318,7 @@ def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_pat
 
     sc = load_scenario(short)
     run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
-    path = runner.results_path(tmp_path, sc, "infoset", "random", 11)
+    path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
     meta_path = tmp_path / "_meta" / f"{path.stem}.json"
     meta = json.loads(meta_path.read_text())
     assert meta["code"] == json.loads(json.dumps(code_identity()))
@@ -357,8 +357,8 @@ def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tm
     for extra in ([], ["--set", "range_finder.enabled=false"]):
         r = cli_inproc(capsys, "intercept", short, "--out", out, "--no-progress", *extra)
         assert r.returncode == 0, r.stderr
-    mine = runner.results_path(out, over, "infoset", "random", 11)
-    orig = runner.results_path(out, load_scenario(short), "infoset", "random", 11)
+    mine = intercept_runs.results_path(out, over, "infoset", "random", 11)
+    orig = intercept_runs.results_path(out, load_scenario(short), "infoset", "random", 11)
     assert mine != orig and mine.exists() and orig.exists()
     ref = run_experiment(load_scenario(edited), "infoset", "random", 4, 11, tmp_path / "e", 1,
                          progress=False)  # fmt: skip
@@ -384,7 +384,7 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     for ext in ("csv", "md", "png", "svg"):
         assert (out / f"short-sweep-model.nu_mps2.{ext}").is_file()
     r2 = cli_inproc(
-        capsys, "intercept", short, "--set", "model.nu_mps2=0.02", "--estimator", "ekf",
+        capsys, "intercept", short, "--set", "model.nu_mps2=0.02", "--estimators", "ekf",
         "--noise", "random", "--runs", "2", "--out", tmp_path / "one", "--no-progress", "--json",
     )  # fmt: skip
     one = json.loads(r2.stdout.strip().splitlines()[-1])

@@ -184,7 +184,7 @@ def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):
     p = tmp_path / "tiny_rw.toml"
     p.write_text(TINY_RW)
     out = tmp_path / "out"
-    args = ["attitude", str(p), "--noise", "random", "--estimator", "box,perfect"]
+    args = ["attitude", str(p), "--noise", "random", "--estimators", "box,perfect"]
     assert main([*args, "--out", str(out), "--json", "--no-progress"]) == 0
     files = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["files"]
     assert any(f.endswith("-history.png") for f in files)

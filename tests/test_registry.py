@@ -219,7 +219,7 @@ def test_a_toy_attitude_estimator_runs_in_the_attitude_loop(toys, tmp_path, caps
     scenario = tmp_path / "tiny_rw.toml"
     scenario.write_text(TINY_RW)
     result = _main(
-        capsys, "attitude", scenario, "--estimator", "toy_att,box", "--noise", "random",
+        capsys, "attitude", scenario, "--estimators", "toy_att,box", "--noise", "random",
         "--runs", 2, "--out", tmp_path, "--json",
     )  # fmt: skip
     assert result["failures"] == 0 and result["estimator"] == "toy_att"

@@ -251,7 +251,7 @@ def test_trace_figures_of_two_seeds_do_not_replace_each_other(short, tmp_path, c
     out = tmp_path / "out"
     for seed in (3, 4):
         r = run(capsys, "intercept", short, "--runs", 1, "--trace", 0, "--seed", seed,
-                "--estimator", "ukf", "--workers", 1, "--no-progress", "--out", out)  # fmt: skip
+                "--estimators", "ukf", "--workers", 1, "--no-progress", "--out", out)  # fmt: skip
         assert r.returncode == 0, r.stderr
     names = {p.name for p in out.rglob("*-processes.png")}
     assert names == {f"short-ukf-random-s{s}-run0-processes.png" for s in (3, 4)}
@@ -260,7 +260,7 @@ def test_trace_figures_of_two_seeds_do_not_replace_each_other(short, tmp_path, c
 def test_attitude_figures_of_two_estimators_do_not_replace_each_other(tiny_rw, tmp_path, capsys):
     out = tmp_path / "out"
     for est in ("perfect", "box"):
-        r = run(capsys, "attitude", tiny_rw, "--estimator", est, "--noise", "random",
+        r = run(capsys, "attitude", tiny_rw, "--estimators", est, "--noise", "random",
                 "--out", out)  # fmt: skip
         assert r.returncode == 0, r.stderr
     names = {p.name for p in out.rglob("*-history.png")}

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 from harness_texts import SHORT, TINY_RW, one_line_error
 from harness_texts import run_cli as run
-from kalman_vs_infoset.experiments import executors, runner
+from kalman_vs_infoset.experiments import executors, intercept_runs
 from kalman_vs_infoset.experiments.files import exclusive
 from kalman_vs_infoset.experiments.limits import limited
 
@@ -191,13 +191,15 @@ def _fails_on_run_1(real, error):
 def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monkeypatch):
     out = tmp_path / "out"
     args = ["intercept", short, "--runs", 3, "--workers", 1, "--no-progress", "--out", out]
-    real = runner.run_engagement
-    monkeypatch.setattr(runner, "run_engagement", _fails_on_run_1(real, ArithmeticError("x")))
+    real = intercept_runs.run_engagement
+    monkeypatch.setattr(
+        intercept_runs, "run_engagement", _fails_on_run_1(real, ArithmeticError("x"))
+    )
     r = run(capsys, *args)
     assert r.returncode == 1
     assert "1 runs failed" in r.stderr.strip().splitlines()[-1] and "rerun" in r.stderr
     assert list(_table(out)["status"]) == ["ok", "failed", "ok"]
-    monkeypatch.setattr(runner, "run_engagement", real)
+    monkeypatch.setattr(intercept_runs, "run_engagement", real)
     r = run(capsys, *args)
     assert r.returncode == 0, r.stderr
     assert "running 1 failed runs again" in r.stderr
@@ -209,13 +211,13 @@ def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monk
 def test_memory_error_is_not_recorded_as_a_failed_run(short, tmp_path, capsys, monkeypatch):
     out = tmp_path / "out"
     args = ["intercept", short, "--runs", 3, "--workers", 1, "--no-progress", "--out", out]
-    real = runner.run_engagement
-    monkeypatch.setattr(runner, "run_engagement", _fails_on_run_1(real, MemoryError()))
+    real = intercept_runs.run_engagement
+    monkeypatch.setattr(intercept_runs, "run_engagement", _fails_on_run_1(real, MemoryError()))
     r = run(capsys, *args)
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "1 runs out of memory" in r.stderr
     assert sorted(_table(out)["run"]) == [0, 2]  # missing, not failed
-    monkeypatch.setattr(runner, "run_engagement", real)
+    monkeypatch.setattr(intercept_runs, "run_engagement", real)
     assert run(capsys, *args).returncode == 0
     assert sorted(_table(out)["run"]) == [0, 1, 2] and (_table(out)["status"] == "ok").all()
 
@@ -228,14 +230,14 @@ def _spin(*args, **kwargs):
 
 @linux
 def test_a_run_over_the_cpu_limit_is_recorded_as_failed(short, tmp_path, capsys, monkeypatch):
-    real = runner.run_engagement
+    real = intercept_runs.run_engagement
 
     def spins_on_run_1(sc, est, noise, rng):
         if rng.bit_generator.seed_seq.spawn_key == (1,):
             _spin()
         return real(sc, est, noise, rng)
 
-    monkeypatch.setattr(runner, "run_engagement", spins_on_run_1)
+    monkeypatch.setattr(intercept_runs, "run_engagement", spins_on_run_1)
     out = tmp_path / "out"
     r = run(capsys, "intercept", short, "--runs", 3, "--workers", 1, "--no-progress",
             "--out", out, "--run-cpu-limit-s", 0.3)  # fmt: skip

@@ -288,7 +288,7 @@ def test_tightness_command_measures_a_family_with_its_margin_off(capsys, tmp_pat
     sc = auxiliary_model_options(load_scenario(fig5), False, names=("infoset", "zonotope"))
     assert sc.estimator.options_for("zonotope").kinematic_margin is False
     assert sc.estimator.options_for("infoset").kinematic_margin is False
-    code = main(["tightness", fig5, "--estimator", "zonotope", "--times", "2", "--json",
+    code = main(["tightness", fig5, "--estimators", "zonotope", "--times", "2", "--json",
                  "--out", str(tmp_path)])  # fmt: skip
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert code == 0 and res["estimator"] == "zonotope"

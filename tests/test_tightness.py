@@ -70,7 +70,7 @@ def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_pat
         ["--times", "5.3"],  # not a decision time (0.5 s steps)
         ["--noise", "pink"],
         ["--switch-s", "soon"],
-        ["--estimator", "kalman9"],
+        ["--estimators", "kalman9"],
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, tmp_path, args):

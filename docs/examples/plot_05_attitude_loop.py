@@ -20,7 +20,7 @@ main(
         "smallsat_rw",
         "--noise",
         "random",
-        "--estimator",
+        "--estimators",
         "box,perfect",
         "--runs",
         "2",

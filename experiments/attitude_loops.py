@@ -1,0 +1,94 @@
+"""The attitude experiments as typed objects: one :class:`AttitudeLoop` per simulation.
+
+Each loop module (:mod:`experiments.attitude_rw`, :mod:`experiments.attitude_cmg`,
+:mod:`experiments.attitude_gyrostat`) declares its ``LOOP``: the controllers it runs,
+its chunk size, and the functions that validate a scenario, simulate a chunk of runs,
+summarise the rows and replay one run with recording. :data:`LOOPS` is the one table
+from a controller to the module declaring its loop; the module is imported only when
+its controller is asked for (:func:`loop_of`), so a loop whose module cannot be imported
+is "not available" in one line, and the others still run.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import pandas as pd
+from kalman_vs_infoset.experiments.errors import InputError
+
+#: prepare(source, scenario, controller, noise) -> the validated set-up of the runs
+Prepare = Callable[[str, Mapping[str, Any], str, str], Any]
+#: task(setup, controller, noise, estimator, seeds) -> one row per seed
+Task = Callable[..., list[dict[str, Any]]]
+#: summarise(setup, controller, noise, estimator, runs, seed, ok_rows, failures) -> JSON
+Summarise = Callable[..., dict[str, Any]]
+#: trace(setup, controller, noise, estimator, seed_seq) -> long-format rows of one run
+Trace = Callable[..., pd.DataFrame]
+
+
+@dataclass(frozen=True)
+class AttitudeLoop:
+    """One attitude simulation as the ``attitude`` command runs it.
+
+    Parameters
+    ----------
+    name : str
+        What it simulates (messages).
+    controllers : tuple of str
+        The controllers it runs (the scenario's ``controller`` or ``--controller``).
+    chunk : int
+        Runs per task of the runner (the vectorised loops batch their runs).
+    prepare, task, summarise, trace
+        The validation, the runs of a chunk, the JSON of docs/models.md §3.1 from the
+        finished rows, and one run replayed with recording
+        (:mod:`experiments.attitude_traces`).
+    """
+
+    name: str
+    controllers: tuple[str, ...]
+    chunk: int
+    prepare: Prepare
+    task: Task
+    summarise: Summarise
+    trace: Trace
+
+
+#: controller -> the module declaring its :class:`AttitudeLoop` as ``LOOP``
+LOOPS: dict[str, str] = {
+    "pd": "kalman_vs_infoset.experiments.attitude_rw",
+    "lqr": "kalman_vs_infoset.experiments.attitude_rw",
+    "energy": "kalman_vs_infoset.experiments.attitude_cmg",
+    "euler": "kalman_vs_infoset.experiments.attitude_cmg",
+    "game": "kalman_vs_infoset.experiments.attitude_gyrostat",
+}
+
+
+def loop_of(controller: str) -> AttitudeLoop:
+    """The loop running ``controller`` (``InputError`` of one line if unknown or not
+    available)."""
+    if controller not in LOOPS:
+        raise InputError(f"unknown controller '{controller}' (allowed: {', '.join(LOOPS)})")
+    name = LOOPS[controller]
+    try:
+        module = importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        if exc.name != name:
+            raise
+        raise InputError(f"controller {controller} is not available") from None
+    loop = module.LOOP
+    if not isinstance(loop, AttitudeLoop) or controller not in loop.controllers:
+        raise InputError(f"controller {controller} is not available")
+    return loop
+
+
+def same_loop(a: str, b: str) -> bool:
+    """Whether controllers ``a`` and ``b`` are run by one simulation (one scenario kind)."""
+    return LOOPS.get(a) == LOOPS.get(b)
+
+
+def controllers_like(controller: str) -> str:
+    """The controllers of ``controller``'s simulation, quoted (messages)."""
+    return ", ".join(repr(k) for k, v in LOOPS.items() if v == LOOPS[controller])

@@ -1,0 +1,184 @@
+"""The intercept's runs on the generic runner (:mod:`experiments.runner`).
+
+The runner knows no problem: this module makes the intercept's :class:`Job` (one run a
+task, :func:`timed_engagement`), names its results files, summarises its tables
+(docs/models.md §3.1) and runs a grid of estimators x noises on the same seeds, the
+experiment behind ``kvi intercept``, ``compare``, ``sweep``, ``adversaries`` and ``fig5``.
+A run that takes long shows its steps (:func:`experiments.progress.step_progress`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from concurrent.futures import Executor
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from kalman_vs_infoset.experiments.progress import step_progress
+from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
+from kalman_vs_infoset.experiments.sim.intercept import Engagement, EngagementResult
+from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
+from kalman_vs_infoset.experiments.stats import summary_stats
+
+
+def results_path(out_dir: Path, sc: InterceptScenario, estimator: str, noise: str, seed: int):
+    """The results table of one estimator x noise (the runner's :func:`job_path`)."""
+    return Path(out_dir) / f"{sc.name}-{estimator}-{noise}-s{seed}.parquet"
+
+
+def intercept_job(sc: InterceptScenario, estimator: str, noise: str, seed: int) -> Job:
+    """The runs of an intercept scenario with one estimator and one noise (1 run a task)."""
+    choice = {"estimator": estimator, "noise": noise}
+    return Job(
+        name=sc.name,
+        label=f"{estimator}-{noise}",
+        seed=seed,
+        meta={"scenario": sc.model_dump(mode="json"), **choice, "seed": seed},
+        base={"scenario": sc.name, **choice, "seed": seed},
+        task=partial(_intercept_chunk, sc, estimator, noise, seed),
+    )
+
+
+def _intercept_chunk(sc, estimator: str, noise: str, seed: int, runs: list[int]):
+    # looked up at call time: tests replace it
+    return [(j, timed_engagement(sc, estimator, noise, run_seed(seed, j))) for j in runs]
+
+
+def run_engagement(
+    sc: InterceptScenario, estimator: str, noise: str, rng: np.random.Generator
+) -> EngagementResult:
+    """One engagement (the loop of :func:`experiments.sim.intercept.run_engagement`),
+    its steps shown when it takes long."""
+    eng = Engagement(sc, estimator, noise, rng)
+    key = getattr(rng.bit_generator.seed_seq, "spawn_key", ())
+    run = f" run {key[-1]}" if key else ""  # the runner's run index
+    with step_progress(eng.max_steps, f"{sc.name} {estimator}-{noise}{run}") as shown:
+        while eng.step():
+            shown(eng.step_index)
+    return eng.finish()
+
+
+def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]:
+    """Run one engagement from a ``SeedSequence``; returns a result row (never raises,
+    but for ``MemoryError``: a resource, not the run, which the runner reports)."""
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed_seq)
+    try:
+        res = run_engagement(sc, estimator_name, noise_name, rng).as_row()
+        res.update(status="ok", error="")
+    except MemoryError:
+        raise
+    except Exception as exc:  # a failing run is recorded, not fatal
+        res = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+    res["wall_s"] = time.perf_counter() - t0
+    return res
+
+
+def run_experiment(
+    sc: InterceptScenario,
+    estimator: str,
+    noise: str,
+    runs: int,
+    seed: int,
+    out_dir: Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    executor: Executor | None = None,
+    limit_s: float | None = None,
+) -> pd.DataFrame:
+    """Run (or complete) an intercept experiment and return its per-run table."""
+    job = intercept_job(sc, estimator, noise, check_seed(seed))
+    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limit_s)
+
+
+def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
+    """The intercept JSON object of docs/models.md §3.1 for one estimator x noise."""
+    ok = df[df["status"] == "ok"] if "status" in df else df.iloc[0:0]
+    return {
+        "scenario": sc.name,
+        "estimator": estimator,
+        "noise": noise,
+        "runs": int(len(df)),
+        "seed": int(seed),
+        "miss_m": summary_stats(ok["miss_m"].to_numpy(dtype=float) if len(ok) else []),
+        "fuel_mps": summary_stats(ok["fuel_mps"].to_numpy(dtype=float) if len(ok) else []),
+        "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
+        "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
+        # beliefs reported Status.DIVERGED: emptied, so guidance stopped early
+        "diverged": int(ok["diverged"].sum()) if len(ok) else 0,
+        "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
+        "wall_s": float(wall_s),
+    }
+
+
+def run_grid(
+    sc: InterceptScenario,
+    args,
+    runs: int,
+    seed: int,
+    out: Path,
+    estimators: Sequence[str],
+    noises: Sequence[str],
+) -> tuple[list[dict], list[pd.DataFrame]]:
+    """Every estimator x noise on the same seeds (paired runs): summaries and run tables,
+    in the order estimator-major. ``args`` holds the runner's options
+    (:func:`experiments.options.add_runner`)."""
+    rows, frames = [], []
+    for est in estimators:
+        for noise in noises:
+            t1 = time.perf_counter()
+            df = run_experiment(
+                sc, est, noise, runs, seed, out, args.workers, args.scheduler,
+                not args.no_progress, limit_s=args.run_cpu_limit_s,
+            )  # fmt: skip
+            rows.append(summarise(df, sc, est, noise, seed, time.perf_counter() - t1))
+            frames.append(df)
+    return rows, frames
+
+
+def miss_floor_m(sc: InterceptScenario) -> float:
+    """Miss floor set by the last bearings: bound at eps times eps (docs/models.md §1.8)."""
+    m = sc.model
+    return m.bearing_bound_end_rad * m.eps_km * 1e3
+
+
+def paper_marks(sc: InterceptScenario) -> dict[str, tuple[float | None, float | None]]:
+    """The scenario's ``[reference]`` as ``{noise: (miss_m, fuel_mps)}``."""
+    ref = sc.reference
+    return {"random": (ref.miss_random_m, ref.fuel_random_mps),
+            "game": (ref.miss_game_m, ref.fuel_game_mps)}  # fmt: skip
+
+
+def draw_traces(files, sc: InterceptScenario) -> list:
+    """The figures of freshly written traces, with the paper's printed miss and fuel of
+    the scenario's ``[reference]`` marked."""
+    from kalman_vs_infoset.experiments.cmd_plot import plot_files  # matplotlib: lazily
+
+    steps = [f for f in files if str(f).endswith("-trace.parquet")]
+    return plot_files(steps, paper=paper_marks(sc))
+
+
+def write_traces(
+    sc: InterceptScenario,
+    traced: list[int],
+    pairs: Sequence[tuple[str, str]],
+    frames: Sequence[pd.DataFrame],
+    seed: int,
+    out: Path,
+) -> list:
+    """The traces of runs ``traced`` of each (estimator, noise) in ``pairs`` whose run
+    table (``frames``, in the same order) has them finished, and their figures."""
+    from kalman_vs_infoset.experiments import traces
+
+    written = []
+    for (est, noise), df in zip(pairs, frames, strict=True):
+        ok = traces.traceable(traced, df, f"{sc.name} {est}-{noise}")
+        if ok:
+            path = results_path(out, sc, est, noise, seed)
+            written += traces.write_intercept_trace(sc, est, noise, seed, ok, path)
+    return written + draw_traces(written, sc) if written else []

@@ -1,0 +1,233 @@
+"""The command line's shared options: one spelling and one parser for each.
+
+Every command takes its options from here, so a flag means the same everywhere:
+
+* ``--estimators NAME[,NAME...]``: a comma list of registered estimators, checked against
+  the registry (:mod:`kalman_vs_infoset.estim.registry`) while the command line is parsed,
+  before any work; empty lists and names given twice are refused. The old singular
+  ``--estimator`` is refused in one line naming the new flag (argparse would otherwise
+  take it as an abbreviation of ``--estimators``).
+* ``--noise NAME[,NAME...]``: a comma list from the command's noise vocabulary.
+* ``--runs``, ``--seed``, ``--workers``, ``--run-cpu-limit-s``: bounded numbers.
+* :func:`add_common` and :func:`resolve`: a scenario's Monte Carlo options.
+
+Bad input is an ``argparse`` error: one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.runner import MAX_RUNS, MAX_SEED
+
+
+def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = lo - 1
+        if value < lo:
+            raise argparse.ArgumentTypeError(f"expected a {what} integer, got {text!r}")
+        return value
+
+    return parse
+
+
+positive_int = _int_at_least(1, "positive")
+
+
+def runs_int(text: str) -> int:
+    """A run count: an integer in [1, 10^6] (the runner holds the run indices)."""
+    value = positive_int(text)
+    if value > MAX_RUNS:
+        raise argparse.ArgumentTypeError(f"expected an integer in [1, {MAX_RUNS}], got {text!r}")
+    return value
+
+
+def seed_int(text: str) -> int:
+    """A root seed: an integer in [0, 2^63 - 1] (the results tables hold it as int64)."""
+    value = _int_at_least(0, "non-negative")(text)
+    if value > MAX_SEED:
+        raise argparse.ArgumentTypeError(f"expected an integer in [0, 2^63 - 1], got {text!r}")
+    return value
+
+
+def cpu_limit_s(text: str) -> float:
+    """A CPU-time limit of a run, in seconds: a number in (0, 1e6]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 < value <= 1e6:
+        raise argparse.ArgumentTypeError(f"expected seconds in (0, 1e6], got {text!r}")
+    return value
+
+
+def split_list(text: str, allowed: Sequence[str], what: str) -> list[str]:
+    """A comma list of names from ``allowed``: none missing, unknown or given twice
+    (``ValueError`` of one line otherwise)."""
+    items = [t.strip() for t in str(text).split(",") if t.strip()]
+    bad = [t for t in items if t not in allowed]
+    if not items or bad:
+        got = f"unknown {', '.join(bad)}" if bad else "an empty list"
+        raise ValueError(
+            f"expected a comma-separated list of {what} from {', '.join(allowed)}; "
+            f"got {got} in {text!r}"
+        )
+    twice = sorted({t for t in items if items.count(t) > 1})
+    if twice:  # each would be run and tabled twice
+        raise ValueError(f"{', '.join(twice)} given twice in {text!r}")
+    return items
+
+
+def list_of(allowed: Sequence[str], what: str = "names") -> Callable[[str], list[str]]:
+    """An argparse ``type``: :func:`split_list` with its error as an argparse error."""
+    allowed = tuple(allowed)
+
+    def parse(text: str) -> list[str]:
+        try:
+            return split_list(text, allowed, what)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse
+
+
+class _Renamed(argparse.Action):
+    """An old flag: refused in one line naming the one that replaced it."""
+
+    def __init__(self, option_strings, dest, new: str = "", **kwargs) -> None:
+        self.new = new
+        super().__init__(option_strings, dest, nargs="?", help=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        example = f"{self.new} {values}" if values else self.new
+        parser.error(f"{option_string} is now {self.new} (a comma list), e.g. {example}")
+
+
+def add_estimators(
+    p: argparse.ArgumentParser,
+    problem: str,
+    default: list[str] | None,
+    help_default: str,
+    most: int | None = None,
+) -> None:
+    """``--estimators`` of ``problem`` (``"intercept"`` or ``"attitude"``), and the
+    refusal of ``--estimator``. ``most`` caps the list's length (a command that studies
+    one estimator at a time)."""
+    from kalman_vs_infoset.estim import registry  # the registry, not the parser, is heavy
+
+    names = registry.names(problem)
+    parse = list_of(names, f"{problem} estimators")
+    if most is not None:
+        many = parse
+
+        def parse(text: str) -> list[str]:
+            items = many(text)
+            if len(items) > most:
+                raise argparse.ArgumentTypeError(
+                    f"this command takes at most {most} estimator(s), got {text!r}"
+                )
+            return items
+
+    p.add_argument(
+        "--estimators",
+        type=parse,
+        default=default,
+        metavar="NAME[,NAME...]",
+        help=f"comma-separated, from {','.join(names)} (default: {help_default})",
+    )
+    p.add_argument("--estimator", action=_Renamed, new="--estimators")
+
+
+def add_noise(
+    p: argparse.ArgumentParser, allowed: Sequence[str], default: list[str] | None, help_default: str
+) -> None:
+    """``--noise``: a comma list from ``allowed`` (the command's noise vocabulary)."""
+    p.add_argument(
+        "--noise",
+        type=list_of(allowed, "noises"),
+        default=default,
+        metavar="NAME[,NAME...]",
+        help=f"comma-separated, from {','.join(allowed)} (default: {help_default})",
+    )
+
+
+def add_limit(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--run-cpu-limit-s",
+        type=cpu_limit_s,
+        help="CPU-time limit of one run, s (a run over it is recorded as failed, with the "
+        "reason; local runs only; default: none)",
+    )
+
+
+def add_runner(p: argparse.ArgumentParser) -> None:
+    """Where the runs go: ``--workers``, ``--scheduler``, ``--no-progress`` and the limit."""
+    p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
+    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_limit(p)
+
+
+def add_overrides(p: argparse.ArgumentParser, example: str) -> None:
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        dest="overrides",
+        help=f"override a scenario field with a TOML value, e.g. {example} (repeatable; "
+        "validated like the file; the scenario's name gets a +key=value suffix)",
+    )
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    """A scenario's Monte Carlo options (the intercept commands)."""
+    from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP
+
+    p.add_argument("scenario", help=SCENARIO_HELP)
+    p.add_argument("--runs", type=runs_int, help="number of runs (default: the scenario's)")
+    p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
+    p.add_argument("--out", help="output directory (default: results/<scenario name>)")
+    add_runner(p)
+    add_overrides(p, "estimator.ekf.noise_inflation=10")
+
+
+def add_grid(p: argparse.ArgumentParser, trace: bool = True) -> None:
+    """A scenario's options, ``--trace`` (with ``trace``), ``--estimators`` (default: all)
+    and ``--noise`` (default: random,game): the estimators x noises of ``compare`` and
+    ``sweep``."""
+    from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.experiments import traces
+    from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
+
+    add_common(p)
+    if trace:
+        traces.add_argument(p)
+    add_estimators(p, "intercept", list(registry.names("intercept")), "all")
+    add_noise(p, NOISES, ["random", "game"], "random,game")
+
+
+def out_folder(given: str | None, default: Path) -> Path:
+    """``--out`` or ``default``; refused in one line when it names a file."""
+    out = Path(given) if given else default
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: not a directory")
+    return out
+
+
+def resolve(args: argparse.Namespace) -> tuple[Any, int, int, Path]:
+    """The intercept scenario of :func:`add_common`'s options with its runs, seed and
+    output folder (the scenario's where an option is not given)."""
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    sc = load_scenario(args.scenario, args.overrides)
+    runs = args.runs or sc.experiment.runs
+    seed = sc.experiment.seed if args.seed is None else args.seed
+    return sc, runs, seed, out_folder(args.out, Path("results") / sc.name)
