@@ -26,7 +26,7 @@ from contextlib import contextmanager
 from functools import partial
 from typing import Any
 
-from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import InputError, check_stop

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from harness_texts import RANGE_FINDER, SHORT, TINY_RW
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
@@ -24,8 +24,8 @@ from kalman_vs_infoset.estim.attitude_model import (
     draw_measurement,
 )
 from kalman_vs_infoset.estim.base import Belief, Estimator, Extremes, Status
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.model import (
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
     ChannelModel,
     ChannelPrior,
@@ -34,9 +34,10 @@ from kalman_vs_infoset.estim.model import (
     Range,
     impulse_parts,
 )
-from kalman_vs_infoset.estim.rotations import qinv, qlog, qmul
 from kalman_vs_infoset.experiments.cli import main
 from pydantic import BaseModel, ConfigDict, Field
+
+from kalman_vs_infoset.numerics.rotations import qinv, qlog, qmul
 
 
 # -- a toy intercept estimator: an (alpha, omega, x) box, corners moved by the model ----

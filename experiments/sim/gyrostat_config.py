@@ -16,12 +16,13 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from kalman_vs_infoset.estim.rotations import error_quaternion, qmul
 from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
 from kalman_vs_infoset.experiments.sim.gyrostat import LoopConfig
 from kalman_vs_infoset.guidance.attitude.game import GameLaw, design_a_star
 from kalman_vs_infoset.guidance.attitude.gyrostat import Gyrostat
 from pydantic import model_validator
+
+from kalman_vs_infoset.numerics.rotations import error_quaternion, qmul
 
 #: most control steps a run may take
 MAX_STEPS = 100_000
