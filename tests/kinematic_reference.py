@@ -10,7 +10,7 @@ true motion is a motion of seed 003's auxiliary model with the disturbance
 
 The first term is what ``nu`` stands for. The second has the sign of ``-alpha``:
 a line of sight off the axis always turns further off it. Its magnitude is bounded
-above by :func:`kalman_vs_infoset.estim.intercept.slabs.estimator.kinematic_margin_mps2`; it is
+above by :func:`kalman_vs_infoset.estim.intercept.kinematic.kinematic_margin_mps2`; it is
 bounded *below* when neither ``w`` nor ``alpha`` can be zero over the step:
 
 * ``|h| >= e |w|_min - nu dt rho_max`` (``cos^2 <= 1``; ``dh/dt = rho a_perp``, the
@@ -31,8 +31,8 @@ set several times wider.
 from __future__ import annotations
 
 import numpy as np
-from kalman_vs_infoset.estim.common import _kernels as _k
-from kalman_vs_infoset.estim.intercept.slabs.estimator import MAX_BEARING_RAD
+from kalman_vs_infoset.estim.intercept import kinematic
+from kalman_vs_infoset.estim.intercept.kinematic import MAX_BEARING_RAD
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
@@ -74,7 +74,7 @@ def kinematic_interval_mps2(
                                                x_min_m, x_max_m))
     )  # fmt: skip
     flat = (np.ascontiguousarray(np.ravel(v)) for v in args)
-    lo, hi = _k.kinematic_interval(
+    lo, hi = kinematic.kinematic_interval(
         *flat, float(dt_s), float(e_mps), float(nu_mps2), MAX_BEARING_RAD
     )
     return lo.reshape(args[0].shape), hi.reshape(args[0].shape)

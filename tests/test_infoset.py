@@ -5,13 +5,15 @@ import pytest
 import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range, off_axis_bound_rad
-from kalman_vs_infoset.estim.intercept.slabs.estimator import (
+from kalman_vs_infoset.estim.intercept.kinematic import (
     MAX_BEARING_RAD,
     STRIP_MARGIN,
+    kinematic_margin_mps2,
+)
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.intercept.slabs.estimator import (
     InformationSet,
     InformationSetEstimator,
-    kinematic_margin_mps2,
 )
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km

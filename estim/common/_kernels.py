@@ -263,25 +263,6 @@ def simplify(xy, offsets, rel_tol, max_vertices):
 
 
 @njit(cache=True)
-def dedupe(xy, offsets):
-    """Remove consecutive duplicate vertices (keeping one per polygon)."""
-    n = offsets.shape[0] - 1
-    out = np.empty_like(xy)
-    new_off = np.zeros(n + 1, dtype=np.int64)
-    tol = 1e-15 * _scale(xy)
-    k = 0
-    for i in range(n):
-        start = k
-        for j in range(offsets[i], offsets[i + 1]):
-            out[k, 0] = xy[j, 0]
-            out[k, 1] = xy[j, 1]
-            k += 1
-        k = _dedupe_tail(out, start, k, tol)
-        new_off[i + 1] = k
-    return out[:k].copy(), new_off
-
-
-@njit(cache=True)
 def clip_slab(xy, offsets, axis, lo, hi):
     """Polygon i intersected with ``lo[i] <= p[axis] <= hi[i]`` (both lines, one call)."""
     n = offsets.shape[0] - 1
@@ -383,87 +364,6 @@ def section_abs_max(xy, offsets):
     return ax, ay
 
 
-@njit(cache=True)
-def _margin1(w0, a0, x_min, x_max, rho_factor, dt, e, max_bearing):
-    a = min(abs(a0), max_bearing)
-    h = e * abs(w0) / np.cos(a) ** 2 + rho_factor * x_max
-    ag = min(a + h * dt / x_min**2, np.pi / 6.0)
-    return 2.0 * h * h / x_min**3 * np.cos(ag) ** 3 * np.sin(ag)
-
-
-@njit(cache=True)
-def kinematic_margin(w0, a0, x_min, x_max, dt, e, nu, max_bearing):
-    """Elementwise body of :func:`estim.intercept.slabs.estimator.kinematic_margin_mps2` (see
-    there)."""
-    n = w0.shape[0]
-    out = np.empty(n)
-    rho_factor = nu * dt / np.cos(max_bearing)
-    for i in range(n):
-        out[i] = _margin1(w0[i], a0[i], x_min[i], x_max[i], rho_factor, dt, e, max_bearing)
-    return out
-
-
-@njit(cache=True)
-def _g(a):
-    # ** 3.0 (a float power, as numpy's ** 3), not repeated multiplication
-    return np.cos(a) ** 3.0 * np.sin(a)
-
-
-@njit(cache=True)
-def _interval1(w_lo, w_hi, a_lo, a_hi, x_min, x_max, rho_factor, dt, e, nu, max_bearing):
-    w_abs = max(abs(w_lo), abs(w_hi))
-    a_abs = max(abs(a_lo), abs(a_hi))
-    upper = _margin1(w_abs, a_abs, x_min, x_max, rho_factor, dt, e, max_bearing)
-    # the same crude rho bound as the upper bound (rho <= x / cos(max_bearing))
-    drift = nu * dt * x_max / np.cos(max_bearing)
-    h_max = e * w_abs / np.cos(min(a_abs, max_bearing)) ** 2 + drift
-    swing = h_max * dt / x_min**2
-    lo_a, hi_a = a_lo - swing, a_hi + swing
-    if not (lo_a > 0 or hi_a < 0):
-        return -upper, upper
-    w_min = min(abs(w_lo), abs(w_hi)) if (w_lo > 0 or w_hi < 0) else 0.0
-    h_min = max(e * w_min - drift, 0.0)
-    near, far = min(abs(lo_a), abs(hi_a)), min(max(abs(lo_a), abs(hi_a)), 0.5 * np.pi)
-    g_min = min(_g(near), _g(far))
-    lower = min(2.0 * h_min**2 * g_min / x_max**3.0, upper)
-    return (-upper, -lower) if lo_a > 0 else (lower, upper)
-
-
-@njit(cache=True)
-def kinematic_interval(w_lo, w_hi, a_lo, a_hi, x_min, x_max, dt, e, nu, max_bearing):
-    """Elementwise body of :func:`estim.kinematics.kinematic_interval_mps2` (see there)."""
-    n = w_lo.shape[0]
-    lo, hi = np.empty(n), np.empty(n)
-    rho_factor = nu * dt / np.cos(max_bearing)
-    for i in range(n):
-        lo[i], hi[i] = _interval1(
-            w_lo[i], w_hi[i], a_lo[i], a_hi[i], x_min[i], x_max[i], rho_factor, dt, e, nu,
-            max_bearing,
-        )  # fmt: skip
-    return lo, hi
-
-
-@njit(cache=True)
-def piece_kinematic(per, u_lo, u_hi, dt, eps, e, nu, max_bearing):
-    """The kinematic interval of every piece of a node set from its per-piece bounds
-    ``per`` (``w``, ``alpha``, ``tau``), as
-    the node set estimator's ``_kinematic`` describes; a piece without cells
-    (``tau_lo = inf``) gets zero."""
-    n = u_lo.shape[0]
-    lo, hi = np.zeros(n), np.zeros(n)
-    rho_factor = nu * dt / np.cos(max_bearing)
-    for b in range(n):
-        if not np.isfinite(per[b, 4]):
-            continue
-        x_max = max(per[b, 5], 0.0) / u_lo[b]
-        x_min = max(min((per[b, 4] - dt) / u_hi[b], x_max), eps)
-        lo[b], hi[b] = _interval1(
-            per[b, 0], per[b, 1], per[b, 2], per[b, 3], x_min, x_max, rho_factor, dt, e, nu,
-            max_bearing,
-        )  # fmt: skip
-    return lo, hi
-
-
 def warm_up() -> None:
     """Load every kernel (from numba's on-disk cache, or compile) in this process.
 
@@ -488,12 +388,5 @@ def warm_up() -> None:
         predict_sections(p, o, zero, one, one, False, 1e-6, 16)
         predict_sections(p, o, zero, one, one, True, 1e-6, 16)
         polygon_contains(p, o, idx, 0.5, 0.5, 1e-9)
-        dedupe(p, o)
         section_abs_max(p, o)
         convex_hulls(p, o)
-    for x_max in (one, ro(one)):
-        kinematic_margin(one, zero, one, x_max, 0.5, 1.0, 0.0, 1.5)
-    kinematic_interval(one, one, zero, one, one, one, 0.5, 1.0, 0.0, 1.5)
-    per = np.ones((1, 6))
-    for u in (one, ro(one)):  # a node set's bands are read-only
-        piece_kinematic(per, u, u, 0.5, 1.0, 1.0, 0.0, 1.5)

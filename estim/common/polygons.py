@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import shapely
 from kalman_vs_infoset.estim.common import _kernels as _k
 from numpy.typing import ArrayLike, NDArray
 
@@ -108,17 +107,6 @@ class ConvexPolygons:
 
     def polygon(self, i: int) -> FloatArray:
         return self.xy[self.offsets[i] : self.offsets[i + 1]]
-
-    def to_list(self) -> list[FloatArray]:
-        return [self.polygon(i).copy() for i in range(self.n)]
-
-    def to_shapely(self) -> np.ndarray:
-        """Array of shapely geometries (convex hull of each vertex set: Polygon,
-        LineString, Point or empty)."""
-        out = np.empty(self.n, dtype=object)
-        for i in range(self.n):  # not a hot path: tests and plots only
-            out[i] = shapely.MultiPoint(self.polygon(i)).convex_hull
-        return out
 
     # -- kernels ---------------------------------------------------------------------
     def clip_halfplanes(self, normal: ArrayLike, bound: ArrayLike) -> ConvexPolygons:
@@ -237,11 +225,3 @@ class ConvexPolygons:
         nxt = self.next_index()
         cr = self.xy[:, 0] * self.xy[nxt, 1] - self.xy[nxt, 0] * self.xy[:, 1]
         return 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n)
-
-    # -- internals -------------------------------------------------------------------
-    def _dedupe(self) -> ConvexPolygons:
-        """Remove vertices equal to their successor (keeping one per polygon)."""
-        if len(self.xy) == 0:
-            return self
-        xy, off = _k.dedupe(self.xy, self.offsets)
-        return ConvexPolygons._make(xy, off)

@@ -141,8 +141,3 @@ def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.floa
 def attitude_error(q: ArrayLike, q_target: ArrayLike) -> Rotation:
     """Error rotation ``q_target^-1 * q`` (body attitude relative to the target)."""
     return Rotation.from_quat(q_target).inv() * Rotation.from_quat(q)
-
-
-def error_angle_deg(q: ArrayLike, q_target: ArrayLike) -> float:
-    """Principal angle of the attitude error, degrees."""
-    return float(np.degrees(attitude_error(q, q_target).magnitude()))

@@ -141,10 +141,6 @@ class Ellipsoid:
         lam = self._eig[0]
         return int(np.count_nonzero(lam > _RANK_RTOL * max(lam.max(initial=0.0), 1e-300)))
 
-    def semi_axes(self) -> FloatArray:
-        """Semi-axis lengths, ascending."""
-        return np.sqrt(self._eig[0])
-
     # -- exact operations ----------------------------------------------------------
     def affine(self, a: ArrayLike, b: ArrayLike | None = None) -> Ellipsoid:
         """``{A x + b : x in E} = E(A c + b, A P A^T)`` (``A`` may be rectangular)."""

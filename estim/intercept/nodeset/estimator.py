@@ -32,7 +32,7 @@ nodes follow the surviving range interval.
 
 What the slices do not know: the kinematic term the linear model neglects near the
 target (``2 omega^2 x tan alpha``,
-:func:`kalman_vs_infoset.estim.intercept.slabs.estimator.kinematic_margin_mps2`) is added to ``nu``
+:func:`kalman_vs_infoset.estim.intercept.kinematic.kinematic_margin_mps2`) is added to ``nu``
 for the whole piece each step, from the piece's own extremes, and an impulse's geometry (``k cos^2
 alpha``) widens it; both are common to the piece, which keeps ``K`` convex. Polygons are kept in
 ``(a, zs) = (alpha / alpha_scale, e_nom (Y~ + V~ tau))``: ``zs`` is the zero-effort miss in metres
@@ -51,6 +51,12 @@ import numpy as np
 from kalman_vs_infoset.estim.base import Estimator, Status
 from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.kinematic import (
+    DIVERGED_W_PER_X,
+    MAX_BEARING_RAD,
+    STRIP_MARGIN,
+    piece_kinematic,
+)
 from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
     ChannelModel,
@@ -65,11 +71,6 @@ from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
 from kalman_vs_infoset.estim.intercept.nodeset.options import DEFAULTS
 from kalman_vs_infoset.estim.intercept.nodeset.refine import NodeRefinement
-from kalman_vs_infoset.estim.intercept.slabs.estimator import (
-    DIVERGED_W_PER_X,
-    MAX_BEARING_RAD,
-    STRIP_MARGIN,
-)
 from numpy.typing import NDArray
 
 __all__ = ["NodeSet", "NodeSetEstimator"]
@@ -324,7 +325,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         cells get zero."""
         # x in [(tau_lo - dt) / u_hi (at least eps), tau_hi / u_lo] over the step;
         # compiled (kinematic_interval_mps2 per piece: a handful of numbers every step)
-        return _k.piece_kinematic(
+        return piece_kinematic(
             per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
             MAX_BEARING_RAD,
         )  # fmt: skip

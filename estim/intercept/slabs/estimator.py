@@ -64,7 +64,8 @@ far out, but grows like ``w^2 e^2 / x^3`` near the target and where the line of
 sight swings (a 9 km offset at 800 km with saturated guidance took the truth out of
 a set built with ``nu`` alone). The slab set therefore adds to ``nu``, per section
 and step, a bound of that term over the section and the step, written through the
-planar angular momentum ``h`` (:func:`kinematic_margin_mps2`), and widens an impulse
+planar angular momentum ``h``
+(:func:`~kalman_vs_infoset.estim.intercept.kinematic.kinematic_margin_mps2`), and widens an impulse
 by the same geometry: an
 impulse ``k`` changes ``omega`` by ``k cos^2(alpha) / x``, not ``k / x``. The seed's
 point sections keep the seed's ``nu``.
@@ -90,6 +91,12 @@ import numpy as np
 from kalman_vs_infoset.estim.base import Estimator, Status
 from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.kinematic import (
+    DIVERGED_W_PER_X,
+    MAX_BEARING_RAD,
+    STRIP_MARGIN,
+    kinematic_margin,
+)
 from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
     ChannelModel,
@@ -101,68 +108,11 @@ from kalman_vs_infoset.estim.intercept.model import (
 from kalman_vs_infoset.estim.intercept.slabs.belief import InformationSet
 from kalman_vs_infoset.estim.intercept.slabs.options import DEFAULTS
 from kalman_vs_infoset.estim.intercept.slabs.sections import PolygonFamily, SectionFamily
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-__all__ = ["InformationSet", "InformationSetEstimator", "kinematic_margin_mps2"]
+__all__ = ["InformationSet", "InformationSetEstimator"]
 
 FloatArray = NDArray[np.float64]
-
-#: relative outward margin of bearing strips (outward rounding, ~1e-13 rad)
-STRIP_MARGIN = 1.0e-9
-#: bearing (rad) up to which the slab set's kinematic margin is a bound (~86 deg)
-MAX_BEARING_RAD = 1.5
-#: |w| / x above which a slab set is reported ``"diverged"`` (emptied, not propagated)
-DIVERGED_W_PER_X = 1.0e3
-
-
-def kinematic_margin_mps2(
-    w_abs_m: ArrayLike,
-    alpha_abs_rad: ArrayLike,
-    x_min_m: ArrayLike,
-    x_max_m: ArrayLike,
-    dt_s: float,
-    e_mps: float,
-    nu_mps2: float,
-) -> FloatArray:
-    """Bound of the kinematic term the auxiliary model neglects, over one step.
-
-    With the planar angular momentum ``h = rho^2 omega = e w / cos^2(alpha)`` the term
-    (module docstring) is ``2 omega^2 x tan(alpha) = 2 h^2 cos^3(alpha) sin(alpha) / x^3``.
-    Over the step ``dh/dt = rho a_perp``, so ``|h| <= e |w_0| / cos^2(alpha_0) +
-    nu dt rho_max``: unlike ``w``, ``h`` cannot grow through the term itself (the
-    bound needs no fixed point; one built on ``w`` has none near the target). Then
-    ``|omega| <= |h| / x^2``, ``|alpha| <= |alpha_0| + |h| dt / x_min^2``, and
-    ``cos^3 sin`` increases up to 30 deg (its maximum, 0.325), so::
-
-        m = 2 h_max^2 / x_min^3 * g(alpha_max),  g(a) = cos^3 sin of min(a, pi/6)
-
-    It stays finite however far a section's states are from the line of sight.
-    Bearings are capped at ``MAX_BEARING_RAD`` inside ``cos`` (beyond it the channel
-    model -- atan2 bearings, ``x`` for the range -- is void anyway).
-
-    Parameters
-    ----------
-    w_abs_m, alpha_abs_rad : array
-        Per section: largest ``|w|`` (m) and ``|alpha|`` (rad) at the step's start.
-    x_min_m, x_max_m : array
-        Per section: smallest range over the step (m, > 0) and largest at its start.
-    dt_s, e_mps, nu_mps2 : float
-        Step, nominal closing speed, the bound of the acceleration across the line
-        of sight (the model's ``nu``).
-
-    Returns
-    -------
-    array
-        The margin (m/s^2) to add to ``nu`` for each section.
-    """
-    # rho <= x_max / cos(MAX_BEARING_RAD): crude, but the nu term is ~1e-4 of h0 or
-    # less wherever the margin is not negligible anyway (compiled: one loop)
-    w0, a0, x_min, x_max = np.broadcast_arrays(
-        *(np.asarray(v, dtype=float) for v in (w_abs_m, alpha_abs_rad, x_min_m, x_max_m))
-    )
-    flat = (np.ravel(v) for v in (w0, a0, x_min, x_max))
-    out = _k.kinematic_margin(*flat, float(dt_s), float(e_mps), float(nu_mps2), MAX_BEARING_RAD)
-    return out.reshape(w0.shape)
 
 
 @dataclass(frozen=True)
@@ -313,21 +263,6 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             self.alpha_scale_rad, self.w_scale_m,
         )  # fmt: skip
 
-    def from_sections(
-        self, x_lo_m: ArrayLike, sections: list[ArrayLike], x_hi_m: ArrayLike | None = None
-    ) -> InformationSet:
-        """A set from explicit ``(alpha, omega)`` CCW polygons (``omega`` converted to
-        ``w`` at ``x_lo``); intervals ``[x_lo, x_hi]`` (points when ``x_hi`` is None)."""
-        lo = np.asarray(x_lo_m, dtype=float)
-        hi = lo if x_hi_m is None else np.asarray(x_hi_m, dtype=float)
-        scaled = []
-        for x, sec in zip(lo, sections, strict=True):
-            s = np.asarray(sec, dtype=float).reshape(-1, 2)
-            w = self.model.zero_effort_miss_m(s[:, 1], x)
-            scaled.append(np.column_stack([s[:, 0] / self.alpha_scale_rad, w / self.w_scale_m]))
-        sections = self.section_family.from_polygons(ConvexPolygons.from_list(scaled))
-        return InformationSet(self.model, lo, hi, sections, self.alpha_scale_rad, self.w_scale_m)
-
     # -- Estimator interface ---------------------------------------------------------
     def update(self, belief: InformationSet, measurement: Bearing | Range) -> InformationSet:
         """Intersect with a bearing strip, or with a range interval."""
@@ -426,7 +361,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             a_abs, w_abs = sections.abs_max()
         if not points and self.kinematic_margin:
             # the kinematic term the linear model neglects (module docstring)
-            nu = nu + _k.kinematic_margin(
+            nu = nu + kinematic_margin(
                 w_abs * self.w_scale_m, a_abs * self.alpha_scale_rad, x_lo1,
                 belief.x_hi_m, dt_s, self.model.e, nu, MAX_BEARING_RAD,
             )  # fmt: skip
