@@ -6,7 +6,6 @@ harness asks the options' hooks, never an estimator's name."""
 from __future__ import annotations
 
 import importlib
-import json
 import shutil
 import sys
 from pathlib import Path
@@ -57,20 +56,13 @@ def add_family(monkeypatch, root: Path, problem: str, name: str, options: str) -
     return folder
 
 
-def _main(capsys, *args) -> dict:
-    code = main([str(a) for a in args])
-    out = capsys.readouterr()
-    assert code == 0, out.err
-    return json.loads(out.out.strip().splitlines()[-1])
-
-
 def test_an_intercept_family_folder_runs_through_compare_and_the_contract(fresh, tmp_path, capsys):
     add_family(fresh, tmp_path / "src", "intercept", "toybox", "ToyOptions")
     names = registry.names("intercept")
     assert "toybox" in names and "infoset" in names and names.index("toybox") == len(names) - 1
     scenario = tmp_path / "short.toml"
     scenario.write_text(SHORT + RANGE_FINDER)
-    result = _main(
+    result = contract._main(
         capsys, "compare", scenario, "--estimators", "toybox,infoset", "--noise", "random",
         "--runs", 2, "--workers", 1, "--out", tmp_path, "--no-progress", "--json",
     )  # fmt: skip
@@ -92,7 +84,7 @@ def test_an_attitude_family_folder_runs_in_the_attitude_loop_and_the_contract(
     assert "toypoint" in registry.names("attitude")
     scenario = tmp_path / "tiny_rw.toml"
     scenario.write_text(TINY_RW)
-    result = _main(
+    result = contract._main(
         capsys, "attitude", scenario, "--estimator", "toypoint,box", "--noise", "random",
         "--runs", 2, "--out", tmp_path, "--json",
     )  # fmt: skip
