@@ -1,4 +1,4 @@
-"""The node set (estim.nodeset): exact slices at moving nodes, sound bounds between them.
+"""The node set (estim.intercept.nodeset): exact slices at moving nodes, sound bounds between them.
 
 Independent references: the auxiliary model's own exact step (ChannelModel.step,
 seed 003 section 4) for the truth, a dense node set (the same exact slices at 10x

@@ -1,4 +1,4 @@
-"""The set-membership families of the intercept channel (estim.catalog_sets): brute-force
+"""The set-membership families of the intercept channel (estim.intercept.sections): brute-force
 containment of consistent states, the exact reference's interval inside each family's
 (estim.intercept.exact_reference), whole engagements that never lose the truth, and the options
 tables.

@@ -34,8 +34,8 @@ range does not.
 Operations on all sections at once
 (:class:`kalman_vs_infoset.estim.intercept.slabs.sections.SectionBatch`: convex polygons,
 :class:`~estim.common.polygons.ConvexPolygons`, by default; the slab set may hold an ellipsoid, a
-zonotope or a box per section instead, :mod:`estim.catalog_sets`, with every operation below an
-outer bound of the same exact one):
+zonotope or a box per section instead, :mod:`kalman_vs_infoset.estim.intercept.sections`, with every
+operation below an outer bound of the same exact one):
 
 * bearing update: clip with ``|alpha - alpha_m| <= bound(x_lo_j)`` (the widest
   strip over the interval, since the bound shrinks with range);
@@ -151,9 +151,9 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     family : SectionFamily or None
         The set held per section (:mod:`kalman_vs_infoset.estim.intercept.slabs.sections`): None for
         convex polygons (simplified with ``simplify_rel_area`` and ``max_vertices``), or an
-        ellipsoid, zonotope or box family (:mod:`kalman_vs_infoset.estim.catalog_sets`; ``"slabs"``
-        only). The initial polygons are converted by the family (an outer bound); every later
-        operation is the family's.
+        ellipsoid, zonotope or box family (:mod:`kalman_vs_infoset.estim.intercept.sections`;
+        ``"slabs"`` only). The initial polygons are converted by the family (an outer bound); every
+        later operation is the family's.
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
