@@ -41,7 +41,7 @@ from kalman_vs_infoset.experiments.sim.fields import (
     number,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
-from pydantic import BaseModel, ValidationError, model_validator
+from pydantic import BaseModel, Field, ValidationError, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
@@ -194,7 +194,10 @@ class ExperimentTable(Table):
     runs: integer(1, 10**6) = field(1, "runs of the Monte Carlo")
     seed: integer(0, 2**63 - 1) = field(1, "root seed")
     noise: Literal[NOISES] = field("random", "measurement noise")
-    estimator: str = field("infoset", "estimator name (registered)")
+    estimator: str = Field(
+        default_factory=lambda: registry.reference("intercept").name,
+        description="estimator name (registered; default: the reference estimator)",
+    )
 
     @model_validator(mode="after")
     def _registered(self) -> ExperimentTable:
