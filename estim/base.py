@@ -2,8 +2,8 @@
 
 Design (after Stone Soup): an *estimator* is an algorithm that holds configuration
 only; a *belief* is an immutable value. ``initial`` builds the first belief from the
-problem's prior (one prior type per problem: :class:`estim.model.ChannelPrior` for an
-intercept channel, :class:`kalman_vs_infoset.estim.attitude_model.AttitudePrior` for attitude);
+problem's prior (one prior type per problem: :class:`estim.intercept.model.ChannelPrior` for an
+intercept channel, :class:`kalman_vs_infoset.estim.attitude.model.AttitudePrior` for attitude);
 ``predict`` and ``update`` take a belief and return a new one; nothing is mutated in
 place. A known control enters ``predict(belief, dt_s, control)`` with one meaning
 everywhere: it acts over the step being predicted (an impulse at its start, a torque
@@ -38,22 +38,6 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-
-def frozen_array(a: ArrayLike) -> NDArray[np.float64]:
-    """A read-only float copy of ``a`` (beliefs are values: their arrays never change)."""
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
-
-
-def frozen_view(a: np.ndarray) -> np.ndarray:
-    """``a`` read-only without a copy: for arrays the caller has just created."""
-    if a.flags.writeable:
-        a = a.view()
-        a.setflags(write=False)
-    return a
-
 
 #: A vectorised scalar function of the state: ``fn(points)`` with ``points`` of
 #: shape ``(n, dim)`` returns ``n`` values.

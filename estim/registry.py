@@ -1,26 +1,33 @@
-"""Estimators by name: ``(problem, name) -> (options model, factory)``.
+"""Estimators by name: ``(problem, name) -> Registration`` (options model, factory).
 
 A consumer (the intercept engagement, the attitude loops, the command line) never
 names a concrete estimator class: it asks the registry for a name's
 :class:`Registration`, validates the scenario's ``[estimator.<name>]`` table with the
-registration's options model (pydantic, ``extra="forbid"``) and calls its factory.
-Adding an estimator is one module and one :func:`register` call; a third-party
-package registers its own through the entry-point group :data:`ENTRY_POINT_GROUP`
-(each entry point names a callable that calls :func:`register`, or a module whose
-import does).
+registration's options model (pydantic, ``extra="forbid"``) and builds the estimator.
+
+Where registrations come from:
+
+* the package's own: every family folder under a problem's package
+  (:data:`PROBLEM_PACKAGES`, e.g. ``estim/intercept/gaussian/``) lists its estimators
+  in ``REGISTRATIONS`` (:func:`declare`) in its ``__init__``; the folders are found by
+  scanning, so adding an estimator is one new folder and touches no other file;
+* a third-party package's: the entry-point group :data:`ENTRY_POINT_GROUP` (each entry
+  point names a callable that calls :func:`register`, or a module whose import does).
 
 Problems and what their factories receive (besides the validated options):
 
-* ``"intercept"``: a :class:`estim.model.ChannelSetting` (channel model, closing-speed
-  interval); beliefs start from a :class:`kalman_vs_infoset.estim.model.ChannelPrior`;
-* ``"attitude"``: an :class:`estim.attitude_model.AttitudeModel`; beliefs start from an
-  :class:`kalman_vs_infoset.estim.attitude_model.AttitudePrior` and are batched
-  :class:`kalman_vs_infoset.estim.attitude_model.AttitudeBelief` values.
+* ``"intercept"``: a :class:`kalman_vs_infoset.estim.intercept.model.ChannelSetting`
+  (channel model, closing-speed interval); beliefs start from a
+  :class:`kalman_vs_infoset.estim.intercept.model.ChannelPrior`;
+* ``"attitude"``: an :class:`kalman_vs_infoset.estim.attitude.model.AttitudeModel`;
+  beliefs start from an :class:`kalman_vs_infoset.estim.attitude.model.AttitudePrior`
+  and are batched :class:`kalman_vs_infoset.estim.attitude.model.AttitudeBelief` values.
 """
 
 from __future__ import annotations
 
 import importlib
+import pkgutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib import metadata
@@ -30,9 +37,11 @@ from kalman_vs_infoset.estim.base import Estimator
 from pydantic import BaseModel
 
 PROBLEMS = ("intercept", "attitude")
+#: the packages whose sub-packages (the family folders) register the built-in estimators
+PROBLEM_PACKAGES = {p: f"kalman_vs_infoset.estim.{p}" for p in PROBLEMS}
 ENTRY_POINT_GROUP = "kalman_vs_infoset.estimators"
-#: modules whose import registers the package's own estimators
-BUILTIN = ("kalman_vs_infoset.estim.catalog", "kalman_vs_infoset.estim.catalog_sets")
+#: listing position of a registration that gives none (after the built-in ones)
+LAST = 1000
 
 _REGISTRY: dict[tuple[str, str], Registration] = {}
 _loaded = False
@@ -54,6 +63,11 @@ class Registration:
         ``factory(options, setting) -> Estimator`` (setting: module docstring).
     doc : str
         One line for listings.
+    rank : int
+        Position in listings (ties: registration order).
+    reference : bool
+        The problem's reference estimator: the set the seed's game adversary reasons
+        with (:func:`reference`).
     """
 
     name: str
@@ -61,35 +75,77 @@ class Registration:
     options: type[BaseModel]
     factory: Callable[[Any, Any], Estimator]
     doc: str = ""
+    rank: int = LAST
+    reference: bool = False
+
+    def validate(self, options: BaseModel | dict[str, Any] | None) -> BaseModel:
+        """``options`` validated by the options model (a table or None: the defaults)."""
+        if isinstance(options, self.options):
+            return options
+        return self.options.model_validate(options or {})
 
     def build(self, options: BaseModel | dict[str, Any] | None, setting: Any) -> Estimator:
-        """The estimator for validated ``options`` (a model, a table or None: defaults)."""
-        if not isinstance(options, self.options):
-            options = self.options.model_validate(options or {})
-        return self.factory(options, setting)
+        """The estimator for ``options`` (a model, a table or None: defaults)."""
+        return self.factory(self.validate(options), setting)
 
 
-def register(
+def _options_build(options: Any, setting: Any) -> Estimator:
+    return options.build(setting)
+
+
+def declare(
     name: str,
     problem: str,
     options: type[BaseModel],
-    factory: Callable[[Any, Any], Estimator],
+    factory: Callable[[Any, Any], Estimator] | None = None,
     doc: str = "",
-    replace: bool = False,
+    rank: int = LAST,
+    reference: bool = False,
 ) -> Registration:
-    """Register an estimator; a taken ``(problem, name)`` is an error unless ``replace``."""
+    """A checked registration, not yet registered: what a family folder lists in its
+    ``REGISTRATIONS`` (and :func:`register` adds).
+
+    ``factory`` defaults to the options model's own ``build(setting)``
+    (:class:`kalman_vs_infoset.estim.options.EstimatorOptions`).
+    """
     if problem not in PROBLEMS:
         raise ValueError(f"problem must be one of {PROBLEMS}, got {problem!r}")
     if not name or not name.replace("_", "").replace("-", "").isalnum():
         raise ValueError(f"estimator names are letters, digits, '_' and '-'; got {name!r}")
     if not (isinstance(options, type) and issubclass(options, BaseModel)):
         raise TypeError("options must be a pydantic model class")
-    key = (problem, name)
+    if factory is None:
+        if not callable(getattr(options, "build", None)):
+            raise TypeError("give a factory, or an options model with build(setting)")
+        factory = _options_build
+    return Registration(name, problem, options, factory, doc, rank, reference)
+
+
+def _add(reg: Registration, replace: bool) -> Registration:
+    key = (reg.problem, reg.name)
     if key in _REGISTRY and not replace:
-        raise ValueError(f"{problem} estimator {name!r} is already registered")
-    reg = Registration(name, problem, options, factory, doc)
+        raise ValueError(f"{reg.problem} estimator {reg.name!r} is already registered")
     _REGISTRY[key] = reg
     return reg
+
+
+def register(
+    name: str,
+    problem: str,
+    options: type[BaseModel],
+    factory: Callable[[Any, Any], Estimator] | None = None,
+    doc: str = "",
+    replace: bool = False,
+    rank: int = LAST,
+    reference: bool = False,
+) -> Registration:
+    """Register an estimator; a taken ``(problem, name)`` is an error unless ``replace``.
+
+    The built-in estimators are loaded first, so ``replace=True`` replaces one of them
+    whenever it is called (also before the first lookup). Arguments: :func:`declare`.
+    """
+    _load()
+    return _add(declare(name, problem, options, factory, doc, rank, reference), replace)
 
 
 def unregister(problem: str, name: str) -> None:
@@ -97,13 +153,22 @@ def unregister(problem: str, name: str) -> None:
     _REGISTRY.pop((problem, name), None)
 
 
+def family_modules(problem: str) -> list[str]:
+    """The family folders of a problem's package, as module names (scanned, sorted)."""
+    package = importlib.import_module(PROBLEM_PACKAGES[problem])
+    prefix = package.__name__ + "."
+    return sorted(prefix + m.name for m in pkgutil.iter_modules(package.__path__) if m.ispkg)
+
+
 def _load() -> None:
     global _loaded
     if _loaded:
         return
-    _loaded = True
-    for module in BUILTIN:
-        importlib.import_module(module)
+    _loaded = True  # first: a plug-in's register() call comes back here
+    for problem in PROBLEMS:
+        for module in family_modules(problem):
+            for reg in getattr(importlib.import_module(module), "REGISTRATIONS", ()):
+                _add(reg, replace=False)
     for entry in metadata.entry_points(group=ENTRY_POINT_GROUP):
         loaded = entry.load()
         if callable(loaded):
@@ -111,9 +176,10 @@ def _load() -> None:
 
 
 def names(problem: str) -> tuple[str, ...]:
-    """Registered names of a problem, in registration order."""
+    """Registered names of a problem, by listing rank (then registration order)."""
     _load()
-    return tuple(n for p, n in _REGISTRY if p == problem)
+    regs = [r for (p, _), r in _REGISTRY.items() if p == problem]
+    return tuple(r.name for r in sorted(regs, key=lambda r: r.rank))
 
 
 def get(problem: str, name: str) -> Registration:
@@ -124,3 +190,12 @@ def get(problem: str, name: str) -> Registration:
     except KeyError:
         allowed = ", ".join(names(problem))
         raise KeyError(f"unknown {problem} estimator '{name}' (allowed: {allowed})") from None
+
+
+def reference(problem: str) -> Registration:
+    """The problem's reference estimator (the first registered with ``reference=True``)."""
+    _load()
+    for (p, _), reg in _REGISTRY.items():
+        if p == problem and reg.reference:
+            return reg
+    raise LookupError(f"no reference {problem} estimator is registered")

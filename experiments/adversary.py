@@ -64,8 +64,8 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Estimator
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Impulse, Range
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Impulse, Range
 
 #: relative margin inside the bound (the other generators' too)
 MARGIN = 1e-9

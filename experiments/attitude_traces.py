@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.estim.rotations import error_quaternion, qlog
 from kalman_vs_infoset.experiments.traces import long_rows
+
+from kalman_vs_infoset.numerics.rotations import error_quaternion, qlog
 
 
 def _error_rotvec_deg(q: np.ndarray, q_target: np.ndarray) -> np.ndarray:

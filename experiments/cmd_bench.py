@@ -58,8 +58,8 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.model import Bearing
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.executors import make_executor
 from kalman_vs_infoset.experiments.intercept_runs import run_experiment
 from kalman_vs_infoset.experiments.options import positive_int

@@ -1,23 +1,18 @@
 """``kvi tightness SCENARIO.toml``: a set's interval of the miss
 against the exact one.
 
-One lateral channel of the scenario, in the auxiliary model of seed 003 (the model
-the exact reference solves, :mod:`kalman_vs_infoset.estim.exact_reference`): the truth is drawn from
-the scenario's truth boxes (``y``, ``Vy``, ``x``, closing speed ``-Vx``) and moves by
-``x -= e dt``, ``Y'' = v`` with ``v`` uniform in ``+-nu``, constant over each decision
-step, ``V += k`` per impulse; one channel, so the range is ``x``. Bearing errors by
-``--noise``: ``random`` uniform in the bound; ``bias`` held at ``+a`` (a hair inside);
-``switch`` held at ``+a``, then at ``-a`` from ``--switch-s`` on; ``game`` the seed's
-adversary with its own set (:class:`kalman_vs_infoset.experiments.noise.GameNoise`). Range
-measurements when the scenario's range finder is on (errors by the same kind).
+One lateral channel of the scenario in the auxiliary model of seed 003 (the model the
+exact reference solves, :mod:`kalman_vs_infoset.estim.intercept.exact_reference`), run by
+the simulation layer (:mod:`kalman_vs_infoset.experiments.sim.channel`: truth, noise
+kinds, guidance).
 
-The estimator under test (:func:`set_under_test`) gets the same measurements; with
-``--guided`` the seed's law issues impulses from it, which the truth and the
-reference receive too. At each requested time (after the bearing, before the
-impulse): the estimator's interval of ``w = omega x^2 / e_nom``, the exact one
-(inner values attained by consistent trajectories; the outer certificate beside
-them), ``ratio`` = estimator width / exact inner width (an upper bound of the true
-ratio; ``ratio_outer`` uses the outer width, a lower bound), ``exact_inside`` (the
+The estimator under test gets the same measurements; with ``--guided`` the seed's law
+issues impulses from it, which the truth and the reference receive too.
+
+At each requested time (after the bearing, before the impulse): the estimator's interval of ``w =
+omega x^2 / e_nom``, the exact one (inner values attained by consistent trajectories; the outer
+certificate beside them), ``ratio`` = estimator width / exact inner width (an upper bound of the
+true ratio; ``ratio_outer`` uses the outer width, a lower bound), ``exact_inside`` (the
 exact inner interval within the estimator's, to 1e-6 of its width: false means the
 estimator misses a consistent state) and the truth's ``w``.
 """
@@ -33,23 +28,23 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.costs import ZeroEffortMiss
-from kalman_vs_infoset.estim.exact_reference import (
+from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.exact_reference import (
     ExactChannelSet,
     History,
     InconsistentHistory,
     PriorBox,
 )
-from kalman_vs_infoset.estim.model import Bearing, Range
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
-from kalman_vs_infoset.experiments.noise import RandomNoise
 from kalman_vs_infoset.experiments.options import add_estimators, seed_int
 from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
-from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
-from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
+from kalman_vs_infoset.experiments.sim.channel import (
+    NOISE_KINDS,
+    auxiliary_model_options,
+    run_channel,
+)
 
-NOISE_KINDS = ("random", "bias", "game", "switch")
 INSIDE_REL_TOL = 1e-6
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
@@ -86,7 +81,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
     add("--guided", action="store_true", help="the seed's law issues impulses")
-    add_estimators(p, "intercept", ["infoset"], "infoset; one estimator under test", most=1)
+    reference = registry.reference("intercept").name
+    add_estimators(p, "intercept", [reference], f"{reference}; one estimator under test", most=1)
     add("--switch-s", type=_positive, default=50.0,
         help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
     add("--kinematic-margin", action="store_true",
@@ -98,67 +94,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="override a scenario field (as for intercept)")  # fmt: skip
 
 
-def set_under_test(name: str, sc, model):
-    """The estimator under test and its initial belief of the lateral channel."""
-    return build_estimator(name, sc, model, "lateral")
-
-
-def auxiliary_model_options(sc, margin: bool, names=("infoset",)):
-    """The scenario with the kinematic margin of the estimators ``names`` (those that
-    have one: the information set, the set families) as asked: the margin bounds a term
-    of the *nonlinear* motion that this command's truth (the auxiliary model) does not
-    have."""
-    options = dict(sc.estimator.options)
-    for name in names:
-        if "kinematic_margin" in registry.get("intercept", name).options.model_fields:
-            options[name] = {**options.get(name, {}), "kinematic_margin": margin}
-    return sc.model_copy(update={"estimator": sc.estimator.model_copy(update={"options": options})})
-
-
 def _prior(sc) -> PriorBox:
     e = sc.estimator
     return PriorBox(
         *(tuple(v * 1e3 for v in getattr(e, k)) for k in ("y_km", "vy_kmps", "x_km")),
         tuple(v * 1e3 for v in sc.closing_speed_kmps),
     )
-
-
-def _draw_truth(sc, rng: np.random.Generator) -> tuple[float, float, float, float]:
-    """``(Y, V, x, e)`` uniform in the truth boxes (m, m/s, m, m/s)."""
-    t = sc.truth
-    y, v, x = (rng.uniform(*getattr(t, k)) * 1e3 for k in ("y_km", "vy_kmps", "x_km"))
-    return y, v, x, -rng.uniform(*t.vx_kmps) * 1e3
-
-
-class _Errors:
-    """Bearing and range measurements of one channel by noise kind (module docstring)."""
-
-    def __init__(self, kind, sc, model, rng, switch_s):
-        self.kind, self.model, self.switch_s = kind, model, switch_s
-        self.random = RandomNoise(model, rng)
-        self.game = build_noise("game", sc, model, ["lateral"], rng) if kind == "game" else None
-
-    def _sign(self, t: float) -> float:
-        return -1.0 if self.kind == "switch" and t >= self.switch_s else 1.0
-
-    def bearing(self, t: float, truth: np.ndarray) -> float:
-        if self.kind == "random":
-            return self.random.bearings([truth], truth[2])[0]
-        if self.kind == "game":
-            return self.game.bearings([truth], truth[2])[0]
-        bound = float(self.model.bearing_bound(truth[2])) * (1 - 1e-9)
-        return float(truth[0] + self._sign(t) * bound)
-
-    def range(self, t: float, x: float) -> float:
-        if self.kind == "random":
-            return self.random.range(x)
-        if self.kind == "game":
-            return self.game.range(x)
-        return x * (1 + self._sign(t) * self.model.range_rel_bound * (1 - 1e-9))
-
-    def report(self, what: str, *args) -> None:
-        if self.game is not None:
-            getattr(self.game, what)(*args)
 
 
 def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
@@ -176,42 +117,14 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
             f"--times: {min(args.times):g} s and later are after the end of every run (the "
             f"range reaches model.eps_km by {last_s:.1f} s at the latest)"
         )
-    children = np.random.SeedSequence(seed).spawn(3)
-    truth_rng, noise_rng, v_rng = (np.random.default_rng(c) for c in children)
-    y, v, x, e = _draw_truth(sc, truth_rng)
-    est, belief = set_under_test(args.estimators[0], sc, model)
-    errors = _Errors(args.noise, sc, model, noise_rng, args.switch_s)
-    g = sc.guidance
-    law = ForecastCentringLaw(
-        model, ImpulseLimits(g.min_impulse_mps, g.max_impulse_mps, g.reserve_mps)
+    prior = _prior(sc)
+
+    def observe(belief, est, hist, truth_w):
+        return _evaluate(model, prior, est, belief, hist, truth_w)
+
+    records, fuel = run_channel(
+        sc, args.estimators[0], args.noise, seed, steps, observe, args.guided, args.switch_s
     )
-    prior, fuel = _prior(sc), 0.0
-    hist: dict[str, list[float]] = {"t": [], "a": [], "k": [], "d": []}
-    records: dict[int, dict[str, Any]] = {}
-    for step in range(max(steps) + 1):
-        t = step * dt
-        if x < model.eps_m:
-            break
-        obs = np.array([y / x, (v * x + e * y) / x**2, x])
-        alpha = errors.bearing(t, obs)
-        belief = est.update(belief, Bearing(alpha))
-        d_m = np.nan
-        if sc.range_finder.due(t):
-            d_m = errors.range(t, x)
-            meas = Range(d_m, off_axis_rad=0.0)  # one channel: the range is x
-            belief = est.update(belief, meas)
-            errors.report("observe_range", meas)
-        hist["t"].append(t), hist["a"].append(alpha), hist["d"].append(d_m)
-        if step in steps:
-            records[step] = _evaluate(model, prior, est, belief, hist, (v * x + e * y) / model.e)
-        k = law.impulse_mps(belief, fuel) if args.guided else 0.0
-        fuel += abs(k)
-        hist["k"].append(k)
-        v += k
-        acc = float(v_rng.uniform(-1.0, 1.0)) * model.nu_mps2
-        belief = est.predict(belief, dt, k)  # the impulse acts at the step's start
-        errors.report("predict", dt, [k])
-        y, v, x = y + v * dt + 0.5 * acc * dt**2, v + acc * dt, x - e * dt
     return [
         records.get(k, {"truth_w_m": None, "reason": "truth under eps"}) | {"time_s": t}
         for t, k in zip(args.times, steps, strict=True)
@@ -258,7 +171,7 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 def run(args) -> dict[str, Any]:
     sc = auxiliary_model_options(
         load_scenario(args.scenario, args.overrides), args.kinematic_margin,
-        names=sorted({"infoset", args.estimators[0]}),
+        names=sorted({registry.reference("intercept").name, args.estimators[0]}),
     )  # fmt: skip
     seed = sc.experiment.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("results") / "tightness"

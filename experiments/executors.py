@@ -26,7 +26,8 @@ from contextlib import contextmanager
 from functools import partial
 from typing import Any
 
-from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.common import _kernels as _k
+from kalman_vs_infoset.estim.intercept import kinematic
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import InputError, check_stop
@@ -67,6 +68,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         return
     n = workers or os.cpu_count() or 1
     _k.warm_up()  # forked workers inherit the loaded kernels
+    kinematic.warm_up()
     nodeset_warm_up()
     kepler_warm_up()
     pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))

@@ -42,11 +42,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from kalman_vs_infoset.estim.base import Belief
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
-from kalman_vs_infoset.estim.model import Bearing, BearingBound, ChannelModel, Impulse, Range
+from kalman_vs_infoset.estim.base import Belief, Estimator
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import (
+    Bearing,
+    BearingBound,
+    ChannelModel,
+    Impulse,
+    Range,
+)
 
 #: noise kinds of the intercept (``random`` and ``game`` are the seed's two;
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
@@ -156,8 +160,9 @@ class GameNoise:
 
     Parameters
     ----------
-    estimator : InformationSetEstimator or NodeSetEstimator
-        The information set of the pursuer's model (its ``model`` is the one the
+    estimator : Estimator
+        The information set of the pursuer's model (the reference estimator; its
+        beliefs answer ``alpha_range_rad()``) (its ``model`` is the one the
         adversary's rule uses).
     sets : sequence of beliefs, or None
         Its own initial sets, one per channel; ``None``: the pursuer runs this very
@@ -170,7 +175,7 @@ class GameNoise:
 
     def __init__(
         self,
-        estimator: InformationSetEstimator | NodeSetEstimator,
+        estimator: Estimator,
         sets: Sequence[Belief] | None = None,
         sensor_bound: BearingBound | None = None,
     ):

@@ -14,11 +14,11 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
-from kalman_vs_infoset.estim.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.model import Bearing, Range
 from kalman_vs_infoset.estim.intercept.nodeset.bands import live_bands
-from kalman_vs_infoset.estim.model import Bearing, Range
-from kalman_vs_infoset.experiments.cmd_tightness import auxiliary_model_options
 from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,4 +1,4 @@
-"""Random sets and points inside them, for the brute-force containment tests of estim.sets.
+"""Random sets and points inside them, for the brute-force containment tests of estim.common.sets.
 
 Every sampler returns interior points *and* extreme points (the sphere for an
 ellipsoid, sign vertices for a zonotope, corners for a box), so that an outer bound
@@ -8,7 +8,7 @@ that cuts a corner is caught.
 from __future__ import annotations
 
 import numpy as np
-from kalman_vs_infoset.estim.sets import Box, Ellipsoid, Zonotope
+from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
 
 
 def random_ellipsoid(rng: np.random.Generator, n: int, rank: int | None = None) -> Ellipsoid:

@@ -8,9 +8,9 @@ import json
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.gaussian.estimator import KalmanChannelEstimator
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, ChannelPrior
 from kalman_vs_infoset.experiments.adversary import (
     LookaheadNoise,
     PursuerView,

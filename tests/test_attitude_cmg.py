@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.rotations import cross
 from kalman_vs_infoset.experiments.attitude_cmg import run, setup_from_scenario
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import load_toml
@@ -13,6 +12,8 @@ from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, 
 from scipy.integrate import cumulative_trapezoid
 from scipy.linalg import pinv
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.rotations import cross
 
 CLUSTER = CmgCluster()
 BETA0 = np.radians(RESURS_P_BETA0_DEG)

@@ -14,23 +14,24 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeEstimator
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
     draw_measurement,
 )
-from kalman_vs_infoset.estim.attitude_ukf import (
+from kalman_vs_infoset.estim.attitude.ukf.estimator import (
     UkfAttitudeBelief,
     UkfAttitudeEstimator,
     residual_x,
     state_add,
 )
-from kalman_vs_infoset.estim.rotations import qexp, qlog, qmatrix, qmul
 from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.rotations import qexp, qlog, qmatrix, qmul
 
 
 def test_quaternion_maps_equal_scipy():

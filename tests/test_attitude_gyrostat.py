@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.rotations import error_quaternion, quaternion_rate
 from kalman_vs_infoset.experiments.attitude_gyrostat import initial_quaternion, parse_scenario, run
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import load_toml
@@ -37,6 +36,8 @@ from kalman_vs_infoset.guidance.attitude.gyrostat import (
 )
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.rotations import error_quaternion, quaternion_rate
 
 SCENARIO = Path(__file__).resolve().parents[1] / "data" / "scenarios" / "gyrostat_game.toml"
 GYRO = Gyrostat([120.0, 100.0, 80.0], [0.12, 0.10, 0.08])

@@ -3,7 +3,7 @@ remainders, tightness against the box, the registry and the command line.
 
 Independent references: scipy's ``Rotation`` (rotation vectors, products), scipy's DOP853
 (:func:`guidance.attitude.plant.propagate`) for the truth, the single-instance sets of
-:mod:`estim.sets` (LP membership of a zonotope) and sampled points (:mod:`sets_sampling`).
+:mod:`estim.common.sets` (LP membership of a zonotope) and sampled points (:mod:`sets_sampling`).
 """
 
 from __future__ import annotations
@@ -15,18 +15,18 @@ import pytest
 from harness_texts import TINY_RW, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim import attitude_ellipsoid as ell
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.attitude_box import BoxAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_ellipsoid import EllipsoidAttitudeEstimator
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeEstimator
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
 )
-from kalman_vs_infoset.estim.attitude_sets_maps import predict_map, recentre_map, right_jacobian
-from kalman_vs_infoset.estim.attitude_zonotope import (
+from kalman_vs_infoset.estim.attitude.sets import ellipsoid as ell
+from kalman_vs_infoset.estim.attitude.sets.ellipsoid import EllipsoidAttitudeEstimator
+from kalman_vs_infoset.estim.attitude.sets.maps import predict_map, recentre_map, right_jacobian
+from kalman_vs_infoset.estim.attitude.sets.zonotope import (
     ZonotopeAttitudeEstimator,
     affine_plus_box,
     axis_strips,
@@ -34,7 +34,7 @@ from kalman_vs_infoset.estim.attitude_zonotope import (
     reduce_girard,
     zonotope_inside,
 )
-from kalman_vs_infoset.estim.sets import Ellipsoid, Zonotope
+from kalman_vs_infoset.estim.common.sets import Ellipsoid, Zonotope
 from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.spatial.transform import Rotation
 from sets_sampling import sample_ellipsoid, sample_zonotope
@@ -98,7 +98,7 @@ def test_recentre_map_encloses_scipy():
             assert np.all(np.abs(np.r_[e1, x[3:]] - A[0] @ x - b[0]) <= rho[0])
 
 
-# -- batched zonotope operations against estim.sets and sampled points ------------------
+# -- batched zonotope operations against estim.common.sets and sampled points ------------------
 def _random_zonotopes(rng, runs=3, m=8):
     scale = rng.uniform(0.1, 2, (runs, 1, m))
     return rng.normal(size=(runs, 6)), rng.normal(size=(runs, 6, m)) * scale
@@ -160,7 +160,7 @@ def test_affine_plus_box_and_reduction_contain_the_images():
         assert Zonotope(nc[r], red[r]).contains(img, tol=1e-9).all()
 
 
-# -- batched ellipsoid operations against estim.sets, sampled points and scans ----------
+# -- batched ellipsoid operations against estim.common.sets, sampled points and scans ----------
 def _random_ellipsoids(rng, runs=3):
     f = rng.normal(size=(runs, 6, 6)) * rng.uniform(0.2, 2, (runs, 1, 6))
     return rng.normal(size=(runs, 6)), f @ f.transpose(0, 2, 1)
@@ -255,7 +255,7 @@ def _zoom_argmin(f, lo: float, hi: float) -> float:
 def test_fogel_huang_1982_minimum_volume_weight_against_a_determinant_scan():
     """Fogel & Huang (1982), the minimum-volume weight in closed form: the same as the
     weight minimising ``det P+`` over a brute-force scan (6-D), and as
-    :meth:`kalman_vs_infoset.estim.sets.Ellipsoid.intersect_strip`."""
+    :meth:`kalman_vs_infoset.estim.common.sets.Ellipsoid.intersect_strip`."""
     rng = np.random.default_rng(9)
     c, p = _random_ellipsoids(rng, runs=4)
     for r in range(4):
@@ -306,7 +306,8 @@ def test_fogel_huang_1982_minimum_trace_weight_against_a_trace_scan():
 def test_kurzhanski_valyi_minimum_volume_segment_sum_against_a_determinant_scan():
     """Kurzhanski & Valyi (1997) / Chernousko (1994): the minimum-volume member of
     Schweppe's family for ``E + [-d, d]`` in 6-D, ``n q^2 + (n-1) L q - L = 0``, against a
-    scan of ``det((1 + q) P + (1 + 1/q) d d^T)`` and :meth:`estim.sets.Ellipsoid.minkowski_sum`."""
+    scan of ``det((1 + q) P + (1 + 1/q) d d^T)`` and
+    :meth:`estim.common.sets.Ellipsoid.minkowski_sum`."""
     rng = np.random.default_rng(11)
     c, p = _random_ellipsoids(rng, runs=3)
     p += np.eye(6)  # well conditioned: log det exact to the rounding

@@ -1,21 +1,22 @@
-"""The exact reference of one channel (kalman_vs_infoset.estim.exact_reference, issue 12 item 1).
+"""The exact reference of one channel (kalman_vs_infoset.estim.intercept.exact_reference, issue 12
+item 1).
 
 Checked against computations that share nothing with it: a closed form (two
 bearings triangulate), brute force (consistent trajectories found by rejection
 sampling and simulated forward), and the model's own one-step map
-(:meth:`kalman_vs_infoset.estim.model.ChannelModel.step`) for the trajectories it reports.
+(:meth:`kalman_vs_infoset.estim.intercept.model.ChannelModel.step`) for the trajectories it reports.
 """
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.exact_reference import (
+from kalman_vs_infoset.estim.intercept.exact_reference import (
     ExactChannelSet,
     History,
     InconsistentHistory,
     Objective,
     PriorBox,
 )
-from kalman_vs_infoset.estim.model import BearingBound, ChannelModel
+from kalman_vs_infoset.estim.intercept.model import BearingBound, ChannelModel
 
 # a small engagement in which every datum matters: strips of +-500 m at 100 km, a
 # disturbance that moves Y by ~100 m in 4 s, an uncertain closing speed

@@ -1,10 +1,10 @@
-"""estim.filters.hinf against an independent, literal transcription of Simon's recursion,
+"""estim.intercept.hinf.filter against an independent, literal transcription of Simon's recursion,
 the Kalman filter at theta = 0, the game's cost bound, and filterpy's HInfinityFilter."""
 
 import numpy as np
 import pytest
 from filterpy.hinfinity import HInfinityFilter
-from kalman_vs_infoset.estim.filters.hinf import (
+from kalman_vs_infoset.estim.intercept.hinf.filter import (
     HInfinityEstimate,
     HInfinityModel,
     hinf_filter,

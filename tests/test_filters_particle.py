@@ -1,4 +1,4 @@
-"""estim.filters.particle: convergence to the Kalman filter on a linear-Gaussian model,
+"""estim.intercept.pf.filter: convergence to the Kalman filter on a linear-Gaussian model,
 resampling identical to filterpy's given the same uniforms, and the step mechanics."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from filterpy.monte_carlo import resampling as fp_resampling
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.filters.particle import (
+from kalman_vs_infoset.estim.intercept.pf.filter import (
     ParticleSet,
     bootstrap_step,
     stratified_resample,

@@ -12,8 +12,8 @@ keeping a copy changes no result, to the last digit.
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.model import Bearing
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.noise import GameNoise
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import Engagement, build_noise

@@ -1,12 +1,12 @@
-"""The intercept channel's H-infinity filter (estim.hinf_channel) against Simon's (2006,
+"""The intercept channel's H-infinity filter (estim.intercept.hinf.estimator) against Simon's (2006,
 Section 11.3) recursion written out below with explicit inverses, the package's EKF at
 theta = 0, and the Sherman-Morrison reading of its weight (a Kalman update of an
 inflated prior)."""
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.hinf_channel import HInfinityChannelEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel
+from kalman_vs_infoset.estim.intercept.hinf.estimator import HInfinityChannelEstimator
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel
 
 MODEL = ChannelModel()
 E, NU, DT = MODEL.e, MODEL.nu_mps2, 0.5

@@ -5,14 +5,16 @@ import pytest
 import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.infoset import (
+from kalman_vs_infoset.estim.intercept.kinematic import (
     MAX_BEARING_RAD,
     STRIP_MARGIN,
-    InformationSet,
-    InformationSetEstimator,
     kinematic_margin_mps2,
 )
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.intercept.slabs.estimator import (
+    InformationSet,
+    InformationSetEstimator,
+)
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 SLABS = InformationSetEstimator(MODEL, n_sections=29)
@@ -341,8 +343,8 @@ def test_point_sections_contain_an_on_grid_truth_seed003_model(y, vy, j, mode, v
     dt=st.sampled_from([0.25, 0.5]),
 )
 def test_kinematic_margin_bounds_the_exact_neglected_term_of_free_motion(y0, vy, x0, e, dt):
-    """The term the auxiliary model folds into ``v`` (estim.infoset docstring), taken
-    from the exact Cartesian motion, not from the formula: for free straight-line
+    """The term the auxiliary model folds into ``v`` (estim.intercept.slabs.estimator docstring),
+    taken from the exact Cartesian motion, not from the formula: for free straight-line
     relative motion the model's ``v`` is ``d(omega x^2)/dt / x`` with ``omega = (x Vy -
     y Vx) / (x^2 + y^2)``, differentiated here by the complex step (exact to rounding;
     central differences lose ~1 % to cancellation far out, where ``v`` is 1e-10). It
@@ -395,7 +397,7 @@ def test_wide_slab_near_eps_splits_or_is_reported_diverged_not_overflowed():
 def test_uncertain_impulse_keeps_every_possible_truth():
     """An Impulse(k, dk) widens the set so that any actual impulse in [k-dk, k+dk]
     keeps the truth inside (thrust misalignment from a pointing error)."""
-    from kalman_vs_infoset.estim.model import Impulse
+    from kalman_vs_infoset.estim.intercept.model import Impulse
 
     rng = np.random.default_rng(5)
     s = SLABS.update(SLABS.from_boxes(B_Y, D_VY, B_X), Bearing(0.0))

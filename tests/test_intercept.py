@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.slabs.estimator import InformationSetEstimator
 from kalman_vs_infoset.experiments.noise import BiasNoise, game_bearing, game_range
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from kalman_vs_infoset.guidance.intercept.truth import TwoBodyTruth
@@ -228,8 +228,8 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
     """Offsets up to 9.5 km at 800 km: the impulses saturate, the miss is kilometres,
     and the line of sight swings by tenths of a radian near the end -- where the
     linear model's neglected term ``2 omega^2 x tan(alpha)`` exceeds nu by orders of
-    magnitude. Before the slab set's kinematic margin (estim.infoset) such runs put the
-    truth outside (e.g. this example: 1 step of 29, miss 5.8 km); with it, none."""
+    magnitude. Before the slab set's kinematic margin (estim.intercept.slabs.estimator) such runs
+    put the truth outside (e.g. this example: 1 step of 29, miss 5.8 km); with it, none."""
     text = SHORT_ENGAGEMENT.format(range="false", vertical=str(vertical).lower())
     text = text.replace("y_km = [-1.0, 1.0]", "y_km = [-9.5, 9.5]")
     text = text.replace(
@@ -241,9 +241,9 @@ def test_full_engagement_beyond_the_guidance_authority_keeps_the_truth(
 def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
     """Forked Monte Carlo workers inherit what the parent loaded: after the warm-ups
     (the slab kernels', the node set's and the Kepler step's) an engagement (random,
-    game and bias noise) must not need a new compiled version of any kernel, the node set's included
-    (read-only polygon arrays are a type of their own for numba)."""
-    from kalman_vs_infoset.estim import _kernels as k
+    game and bias noise) must not need a new compiled version of any kernel, the node
+    set's included (read-only polygon arrays are a type of their own for numba)."""
+    from kalman_vs_infoset.estim.common import _kernels as k
     from kalman_vs_infoset.estim.intercept.nodeset import _contains
     from kalman_vs_infoset.estim.intercept.nodeset import _geometry as ng
     from kalman_vs_infoset.estim.intercept.nodeset import _kernels as nk
@@ -273,7 +273,7 @@ def test_game_adversary_updates_its_sets_with_the_pursuers_range_measurement():
     issues. ``range`` only chooses the value; the set is updated in ``observe_range``
     with the measurement as the pursuer receives it (here: with an off-axis bound
     tighter than the model's assumed 0.1 rad), so both sets see the same data."""
-    from kalman_vs_infoset.estim.model import Range
+    from kalman_vs_infoset.estim.intercept.model import Range
     from kalman_vs_infoset.experiments.noise import GameNoise
 
     est = InformationSetEstimator(MODEL, n_sections=9, closing_speed_mps=(57.9e3, 58.1e3))

@@ -10,10 +10,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.kalman import KalmanChannelEstimator
-from kalman_vs_infoset.estim.kalman_belief import GaussianBelief, psd_cholesky
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.gaussian.belief import GaussianBelief, psd_cholesky
+from kalman_vs_infoset.estim.intercept.gaussian.estimator import KalmanChannelEstimator
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range
 from scipy import stats
 from scipy.spatial.distance import mahalanobis
 
@@ -344,7 +344,7 @@ def test_range_projection_is_the_simon_2010_estimate_projection():
     D = e_k: project_on_bound equals the KKT solution of the constrained weighted
     least squares and scipy's SLSQP minimiser; the covariance is left unchanged and
     a mean inside the interval is not touched."""
-    from kalman_vs_infoset.estim.kalman import project_on_bound
+    from kalman_vs_infoset.estim.intercept.gaussian.estimator import project_on_bound
     from scipy.optimize import minimize
 
     rng = np.random.default_rng(5)
@@ -554,7 +554,7 @@ def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, 
     truths, boxes, guidance and seed, so their Kalman rows pair with kp_fig5's."""
     from kalman_vs_infoset.estim import registry
     from kalman_vs_infoset.experiments.scenario import load_scenario
-    from kalman_vs_infoset.experiments.sim.intercept_config import LEGACY_OPTIONS
+    from kalman_vs_infoset.experiments.sim.intercept_config import legacy_options
 
     def resolved(sc):
         out = sc.model_dump(exclude={"name": True, "description": True})
@@ -565,7 +565,7 @@ def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, 
 
     base = resolved(load_scenario("data/scenarios/kp_fig5.toml"))
     var = resolved(load_scenario(f"data/scenarios/{variant}.toml"))
-    for name, option in LEGACY_OPTIONS[key]:
+    for name, option in legacy_options()[key]:
         assert var["estimator"]["options"][name][option] == value
         assert base["estimator"]["options"][name][option] != value
         var["estimator"]["options"][name][option] = base["estimator"]["options"][name][option]

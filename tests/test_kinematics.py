@@ -1,4 +1,4 @@
-"""The neglected kinematic term as a signed interval (kalman_vs_infoset.estim.kinematics).
+"""The neglected kinematic term as a signed interval (kinematic_reference).
 
 Reference: the exact Cartesian free motion, differentiated by the complex step (as
 for the upper bound in tests/test_infoset.py): the auxiliary model's ``v`` of a
@@ -9,7 +9,7 @@ Vx) / (x^2 + y^2)``.
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.kinematics import kinematic_interval_mps2
+from kinematic_reference import kinematic_interval_mps2
 
 
 def _exact_term(y0, vy, x0, e, dt):

@@ -1,4 +1,4 @@
-"""The node set (estim.nodeset): exact slices at moving nodes, sound bounds between them.
+"""The node set (estim.intercept.nodeset): exact slices at moving nodes, sound bounds between them.
 
 Independent references: the auxiliary model's own exact step (ChannelModel.step,
 seed 003 section 4) for the truth, a dense node set (the same exact slices at 10x
@@ -11,9 +11,15 @@ import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.base import Status
-from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+)
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
 
 MODEL = ChannelModel()  # seed 003 section 6: e = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
 E, DT = MODEL.e, 0.5

@@ -10,10 +10,16 @@ are the belief's own vertices at the pieces' closing-speed ends, evaluated here.
 
 import numpy as np
 import pytest
-from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
-from kalman_vs_infoset.estim.describe import describe_channel
+from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.describe import describe_channel
+from kalman_vs_infoset.estim.intercept.model import (
+    Bearing,
+    ChannelModel,
+    ChannelPrior,
+    Impulse,
+    Range,
+)
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Impulse, Range
 
 MODEL = ChannelModel()  # seed 003 section 6
 DT = 0.5

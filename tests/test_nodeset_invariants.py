@@ -20,7 +20,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from nodeset_schedules import DENT_TOL, ROOT, run_schedule, winding_and_turn
 
@@ -187,7 +187,7 @@ def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):
 _REPLAY = """
 import json, sys
 import numpy as np
-from kalman_vs_infoset.estim import _kernels as _k
+from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 calls = np.load(sys.argv[1], allow_pickle=False)
 n = int(calls["n"])

@@ -4,19 +4,20 @@ References: numpy's own reductions (argmin/argmax with their tie and nan rules,
 min/max), shapely's convex hull of the box corners mapped at both ends of each
 node's closing-speed interval (the prior slice of seed 003 section 4's auxiliary
 model), brute-force sampling for the impulse's interval, and the public
-:func:`kalman_vs_infoset.estim.kinematics.kinematic_interval_mps2` for the per-piece kinematic term.
+:func:`kinematic_reference.kinematic_interval_mps2` for the per-piece kinematic term.
 """
 
 import numpy as np
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim import _kernels as _k
-from kalman_vs_infoset.estim import polygons
-from kalman_vs_infoset.estim.infoset import MAX_BEARING_RAD
+from kalman_vs_infoset.estim.common import _kernels as _k
+from kalman_vs_infoset.estim.common import polygons
+from kalman_vs_infoset.estim.intercept import kinematic
+from kalman_vs_infoset.estim.intercept.kinematic import MAX_BEARING_RAD
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
-from kalman_vs_infoset.estim.kinematics import kinematic_interval_mps2
+from kinematic_reference import kinematic_interval_mps2
 
 E = 58e3
 
@@ -142,7 +143,7 @@ def test_piece_kinematic_is_the_public_interval_per_piece():
     )
     u_lo, u_hi = np.full(3, 1 / 58.1e3), np.full(3, 1 / 57.9e3)
     dt, eps, nu = 0.5, 5e3, 0.005
-    lo, hi = _k.piece_kinematic(per, u_lo, u_hi, dt, eps, E, nu, MAX_BEARING_RAD)
+    lo, hi = kinematic.piece_kinematic(per, u_lo, u_hi, dt, eps, E, nu, MAX_BEARING_RAD)
     for b in range(2):
         x_max = per[b, 5] / u_lo[b]
         x_min = max(min((per[b, 4] - dt) / u_hi[b], x_max), eps)

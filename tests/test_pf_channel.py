@@ -1,4 +1,4 @@
-"""The intercept channel's particle filter (estim.pf_channel): its mean converges to a
+"""The intercept channel's particle filter (estim.intercept.pf.estimator): its mean converges to a
 Kalman filter written out below on a linear-Gaussian case (Gordon, Salmond & Smith 1993:
 the bootstrap filter approximates the Bayes recursion), its bounded likelihood holds the
 truth on the channel with uniform errors, a contradiction is reported, not raised, and
@@ -7,11 +7,11 @@ randomness comes from its seed only."""
 import numpy as np
 import pytest
 from kalman_vs_infoset.estim.base import Status
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.filters.particle import ParticleSet
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Range
-from kalman_vs_infoset.estim.pf_belief import ParticleBelief, particle_rows
-from kalman_vs_infoset.estim.pf_channel import ParticleChannelEstimator
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, ChannelPrior, Range
+from kalman_vs_infoset.estim.intercept.pf.belief import ParticleBelief, particle_rows
+from kalman_vs_infoset.estim.intercept.pf.estimator import ParticleChannelEstimator
+from kalman_vs_infoset.estim.intercept.pf.filter import ParticleSet
 
 MODEL = ChannelModel()
 E, NU, DT = MODEL.e, MODEL.nu_mps2, 0.5

@@ -19,8 +19,8 @@ import pytest
 from harness_texts import TINY_RW
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.base import PointBelief
-from kalman_vs_infoset.estim.describe import FIELDS, describe_channel
-from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.describe import FIELDS, describe_channel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.experiments import figstyle
 from kalman_vs_infoset.experiments.cli import main
 from kalman_vs_infoset.experiments.scenario import load_scenario

@@ -5,7 +5,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 
 
 def _random_convex(rng, n_poly, kind="polygon"):
@@ -138,9 +138,9 @@ def test_all_sections_empty():
     collinear=st.booleans(),
 )
 def test_convex_hulls_kernel_equals_shapely_convex_hull(seed, n, scale, collinear):
-    """The prediction's hull step (estim._kernels.convex_hulls) is shapely's convex hull
+    """The prediction's hull step (estim.common._kernels.convex_hulls) is shapely's convex hull
     of the vertices, counter-clockwise, also with (nearly) collinear points."""
-    from kalman_vs_infoset.estim import _kernels as k
+    from kalman_vs_infoset.estim.common import _kernels as k
 
     rng = np.random.default_rng(seed)
     pts = rng.normal(size=(n, 2)) * scale

@@ -84,10 +84,10 @@ def test_a_flat_option_key_is_refused_naming_its_table_key(short, tmp_path, caps
 
 def test_shipped_scenarios_use_only_table_keys():
     from kalman_vs_infoset.experiments.scenario import load_toml
-    from kalman_vs_infoset.experiments.sim.intercept_config import LEGACY_OPTIONS
+    from kalman_vs_infoset.experiments.sim.intercept_config import legacy_options
 
     for path in sorted((ROOT / "data/scenarios").glob("kp_*.toml")):
-        assert not set(load_toml(path).get("estimator", {})) & set(LEGACY_OPTIONS), path
+        assert not set(load_toml(path).get("estimator", {})) & set(legacy_options()), path
 
 
 def test_a_utf8_byte_order_mark_is_accepted(tmp_path, capsys):

@@ -1,7 +1,7 @@
-"""kalman_vs_infoset.estim.sections and its families: every batch operation is an outer bound (brute
-force), the vectorised ones equal kalman_vs_infoset.estim.sets' per-set ones (Alamo et al. 2005 and
-Girard/Combastel for zonotopes, Fogel & Huang 1982 and Schweppe 1968 for ellipsoids,
-interval arithmetic for boxes), and the least-area zonotope update beats a search over
+"""kalman_vs_infoset.estim.intercept.slabs.sections and its families: every batch operation is an
+outer bound (brute force), the vectorised ones equal kalman_vs_infoset.estim.common.sets' per-set
+ones (Alamo et al. 2005 and Girard/Combastel for zonotopes, Fogel & Huang 1982 and Schweppe 1968 for
+ellipsoids, interval arithmetic for boxes), and the least-area zonotope update beats a search over
 its whole family."""
 
 import numpy as np
@@ -10,17 +10,21 @@ import sets_sampling as S
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.polygons import ConvexPolygons
-from kalman_vs_infoset.estim.sections import clip_slabs, enclosing_parallelograms
-from kalman_vs_infoset.estim.sections_box import BoxFamily, BoxSections
-from kalman_vs_infoset.estim.sections_ellipsoid import (
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
+from kalman_vs_infoset.estim.common.sets._common import EmptyIntersectionError, clip_slab
+from kalman_vs_infoset.estim.intercept.sections.box import BoxFamily, BoxSections
+from kalman_vs_infoset.estim.intercept.sections.ellipsoid import (
     EllipsoidFamily,
     EllipsoidSections,
     segment_sum,
 )
-from kalman_vs_infoset.estim.sections_zonotope import ZonotopeFamily, ZonotopeSections, _area
-from kalman_vs_infoset.estim.sets import Box, Ellipsoid, Zonotope
-from kalman_vs_infoset.estim.sets._common import EmptyIntersectionError, clip_slab
+from kalman_vs_infoset.estim.intercept.sections.zonotope import (
+    ZonotopeFamily,
+    ZonotopeSections,
+    _area,
+)
+from kalman_vs_infoset.estim.intercept.slabs.sections import clip_slabs, enclosing_parallelograms
 
 SEEDS = st.integers(0, 2**32 - 1)
 FEW = settings(max_examples=20, deadline=None)
@@ -40,7 +44,7 @@ def _random_batch(kind: str, rng: np.random.Generator, **family):
 
 
 def _section(batch, j: int):
-    """Section ``j`` as an kalman_vs_infoset.estim.sets value (exact: no conversion)."""
+    """Section ``j`` as an kalman_vs_infoset.estim.common.sets value (exact: no conversion)."""
     if isinstance(batch, BoxSections):
         return Box(batch.lo[j], batch.hi[j])
     if isinstance(batch, ZonotopeSections):
@@ -55,8 +59,8 @@ def _sample(batch, j: int, rng) -> np.ndarray:
 
 
 def _inside(batch, j: int, pts: np.ndarray) -> bool:
-    """All points in section ``j`` (kalman_vs_infoset.estim.sets' vectorised test; the batch's own
-    ``contains`` on a few)."""
+    """All points in section ``j`` (kalman_vs_infoset.estim.common.sets' vectorised test; the
+    batch's own ``contains`` on a few)."""
     if not all(batch.contains([j], p, 1e-9) for p in pts[::50]):
         return False
     return bool(np.all(_section(batch, j).contains(pts, tol=1e-9)))
@@ -107,8 +111,8 @@ def test_every_operation_contains_the_exact_image_of_sampled_points(seed, kind):
 @FEW
 @given(SEEDS, st.sampled_from(KINDS))
 def test_support_functions_and_w_extreme_points_are_exact(seed, kind):
-    """abs_max and alpha_bounds equal kalman_vs_infoset.estim.sets' support functions; the w-extreme
-    points lie in their sections and attain the support in -/+ e_1."""
+    """abs_max and alpha_bounds equal kalman_vs_infoset.estim.common.sets' support functions; the
+    w-extreme points lie in their sections and attain the support in -/+ e_1."""
     rng = np.random.default_rng(seed)
     b = _random_batch(kind, rng)
     a_abs, w_abs = b.abs_max()

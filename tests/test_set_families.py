@@ -1,10 +1,10 @@
-"""The set-membership families of the intercept channel (estim.catalog_sets): brute-force
+"""The set-membership families of the intercept channel (estim.intercept.sections): brute-force
 containment of consistent states, the exact reference's interval inside each family's
-(estim.exact_reference), whole engagements that never lose the truth, and the options
+(estim.intercept.exact_reference), whole engagements that never lose the truth, and the options
 tables.
 
 Consistent states are found by the exact reference's fixed-``(x0, e)`` linear programme
-(:meth:`estim.exact_reference.ExactChannelSet.fixed`): each optimum is a trajectory of
+(:meth:`estim.intercept.exact_reference.ExactChannelSet.fixed`): each optimum is a trajectory of
 the auxiliary model that satisfies every datum, and extreme in its direction -- the
 states an outer bound is most likely to cut off. Midpoints of two optima at the same
 ``(x0, e)`` are consistent too (the feasible set is convex there)."""
@@ -14,10 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
-from kalman_vs_infoset.estim.exact_reference import ExactChannelSet, History, Objective, PriorBox
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-from kalman_vs_infoset.estim.model import (
+from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.exact_reference import (
+    ExactChannelSet,
+    History,
+    Objective,
+    PriorBox,
+)
+from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
     BearingBound,
     ChannelModel,
@@ -25,9 +29,10 @@ from kalman_vs_infoset.estim.model import (
     ChannelSetting,
     Range,
 )
-from kalman_vs_infoset.estim.sections_box import BoxSections
-from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidSections
-from kalman_vs_infoset.estim.sections_zonotope import ZonotopeSections
+from kalman_vs_infoset.estim.intercept.sections.box import BoxSections
+from kalman_vs_infoset.estim.intercept.sections.ellipsoid import EllipsoidSections
+from kalman_vs_infoset.estim.intercept.sections.zonotope import ZonotopeSections
+from kalman_vs_infoset.estim.intercept.slabs.estimator import InformationSetEstimator
 
 FAMILIES = ("ellipsoid", "zonotope", "box")
 
@@ -169,7 +174,7 @@ def test_tightness_exact_interval_of_w_is_inside_each_familys(case):
     assert all(r >= 1.0 for r in widths.values())
     assert (
         widths["box"] > widths["zonotope"]
-    )  # a box never narrows w (kalman_vs_infoset.estim.sections_box)
+    )  # a box never narrows w (kalman_vs_infoset.estim.intercept.sections.box)
 
 
 @pytest.mark.parametrize("name", FAMILIES)
@@ -275,14 +280,14 @@ def test_options_tables_are_validated_and_reach_the_family():
 
 
 def test_tightness_command_measures_a_family_with_its_margin_off(capsys, tmp_path):
-    """``tightness --estimator zonotope``: the exact interval inside the family's, and the
+    """``tightness --estimators zonotope``: the exact interval inside the family's, and the
     family built with the kinematic margin off, as the information set is (its truth is
     the auxiliary model)."""
     import json
 
     from kalman_vs_infoset.experiments.cli import main
-    from kalman_vs_infoset.experiments.cmd_tightness import auxiliary_model_options
     from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 
     fig5 = "data/scenarios/kp_fig5.toml"
     sc = auxiliary_model_options(load_scenario(fig5), False, names=("infoset", "zonotope"))

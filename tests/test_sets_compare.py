@@ -9,7 +9,7 @@ outer family must contain that polygon, and so the truth, at every step.
 import numpy as np
 import pytest
 import shapely
-from kalman_vs_infoset.estim.sets import Box, Ellipsoid, Zonotope
+from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
 from shapely import affinity
 
 

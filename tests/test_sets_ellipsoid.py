@@ -1,4 +1,4 @@
-"""estim.sets.ellipsoid: brute-force containment, optimality of the chosen parameters,
+"""estim.common.sets.ellipsoid: brute-force containment, optimality of the chosen parameters,
 and worked examples (the parallel-cut ellipsoid of Todd 1982, exact 1-D intervals)."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 import sets_sampling as S
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.sets import Ellipsoid, EmptyIntersectionError
+from kalman_vs_infoset.estim.common.sets import Ellipsoid, EmptyIntersectionError
 
 SEEDS = st.integers(0, 2**32 - 1)
 DIMS = st.integers(1, 4)

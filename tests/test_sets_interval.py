@@ -1,4 +1,4 @@
-"""estim.sets.interval: brute-force containment, and the one-pass contraction against the
+"""estim.common.sets.interval: brute-force containment, and the one-pass contraction against the
 exact interval hull of box ∩ strip computed by linear programming."""
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 import sets_sampling as S
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.sets import Box, EmptyIntersectionError
+from kalman_vs_infoset.estim.common.sets import Box, EmptyIntersectionError
 from scipy.optimize import linprog
 
 SEEDS = st.integers(0, 2**32 - 1)

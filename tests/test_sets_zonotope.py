@@ -1,4 +1,4 @@
-"""estim.sets.zonotope: brute-force containment, the Alamo et al. strip update worked by
+"""estim.common.sets.zonotope: brute-force containment, the Alamo et al. strip update worked by
 hand, order reduction, and the LP containment and planar vertices against shapely."""
 
 import itertools
@@ -9,7 +9,7 @@ import sets_sampling as S
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.sets import EmptyIntersectionError, Zonotope
+from kalman_vs_infoset.estim.common.sets import EmptyIntersectionError, Zonotope
 
 SEEDS = st.integers(0, 2**32 - 1)
 DIMS = st.integers(1, 4)

@@ -27,13 +27,13 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.costs import ZeroEffortMiss
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
+from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, ChannelPrior, Range
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, ChannelPrior, Range
-from kalman_vs_infoset.estim.sections_box import BoxFamily
-from kalman_vs_infoset.estim.sections_ellipsoid import EllipsoidFamily
-from kalman_vs_infoset.estim.sections_zonotope import ZonotopeFamily
+from kalman_vs_infoset.estim.intercept.sections.box import BoxFamily
+from kalman_vs_infoset.estim.intercept.sections.ellipsoid import EllipsoidFamily
+from kalman_vs_infoset.estim.intercept.sections.zonotope import ZonotopeFamily
+from kalman_vs_infoset.estim.intercept.slabs.estimator import InformationSetEstimator
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw
 
 MODEL = ChannelModel()  # seed 003 section 6: e_nom = 58 km/s, nu = 0.005 m/s^2, eps = 5 km
@@ -74,7 +74,7 @@ FACTORIES: dict[str, Callable] = {
     "box": lambda m, b: _infoset(m, b, family=BoxFamily()),
 }
 #: factories whose sets may report ``Status.DIVERGED`` near eps (emptied, not
-#: propagated): a box never narrows ``w`` (estim.sections_box), so near the target its
+#: propagated): a box never narrows ``w`` (estim.intercept.sections.box), so near the target its
 #: kinematic margin bounds line-of-sight rates of rad/s; the run ends there, the truth
 #: contained until then
 MAY_DIVERGE = (FACTORIES["box"],)

@@ -103,10 +103,10 @@ def test_band_split_keeps_every_consistent_state():
     truth stays inside at every step (the halves are recomputed from the prior and
     the log), the miss interval is no wider than without splitting, and more bands
     are live at the end."""
-    from kalman_vs_infoset.estim.costs import ZeroEffortMiss
+    from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+    from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range
     from kalman_vs_infoset.estim.intercept.nodeset.bands import live_bands
     from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
-    from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range
 
     model = ChannelModel()
     box = dict(lateral_m=(-1e3, 1e3), lateral_vel_mps=(-100.0, 100.0), x_m=(1.0e6, 1.1e6))

@@ -109,10 +109,16 @@ def venv(built, tmp_path_factory):
     (site / "_project_dependencies.pth").write_text(sysconfig.get_path("purelib") + "\n")
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["MPLBACKEND"] = "Agg"
+    # first the index's own "guidance" (a language-model library): ours must sit beside it
+    index = subprocess.run(
+        [sys.executable, "-m", "pip", "--python", python, "install", "-q", "--no-deps",
+         "guidance"], cwd=root, env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    guidance_error = index.stderr.strip().splitlines()[-1:] if index.returncode else None
     _run([sys.executable, "-m", "pip", "--python", python, "install", "-q", "--no-deps",
           built[0]], root, env)  # fmt: skip
     _seed_numba_cache(site / "kalman_vs_infoset")
-    return root / "bin", site, env
+    return root / "bin", site, env, guidance_error
 
 
 def test_the_wheel_installs_one_top_level_name_and_its_data(built):
@@ -145,7 +151,7 @@ def test_the_commands_work_from_an_empty_folder(venv, tmp_path):
     """``kvi scenarios``, ``kvi intercept kp_fig3 --runs 2``, ``kvi pd-gains`` (quick
     settings) and ``kvi paper-figures --quick`` (two groups: the intercept's, and Akimov's
     that reads the f0 table) from the installed wheel, in a folder with no data."""
-    bin_dir, site, env = venv
+    bin_dir, site, env, _ = venv
     kvi = bin_dir / "kvi"
     where = _run([bin_dir / "python", "-c", "import kalman_vs_infoset as k; print(k.__file__)"],
                  tmp_path, env).stdout  # fmt: skip
@@ -176,3 +182,42 @@ def test_the_commands_work_from_an_empty_folder(venv, tmp_path):
     assert written["quick"] is True and written["numbers"]
     figures = {p.stem for p in (tmp_path / "results" / "figures").glob("*.png")}
     assert {"kp_fig3", "akimov_fig14", "akimov_fig15"} <= figures
+
+
+def _files(bin_dir: Path, env, dist: str) -> tuple[Path, set[str]]:
+    """``pip show -f``: the distribution's location and its files (relative paths)."""
+    out = _run([sys.executable, "-m", "pip", "--python", bin_dir / "python", "show", "-f", dist],
+               bin_dir, env).stdout  # fmt: skip
+    location = Path(next(s for s in out.splitlines() if s.startswith("Location:")).split(": ")[1])
+    files = out.split("Files:", 1)[1].split()
+    return location, {f for f in files if not f.startswith("..")}
+
+
+def test_the_wheel_sits_beside_the_index_guidance_package(venv, tmp_path):
+    """The index's ``guidance`` installed first, then the wheel: the two file lists are
+    disjoint and none of guidance's files changed (its RECORD hashes); our guidance layer
+    imports, and ``kvi --help`` works in a folder holding an ``experiments/`` package."""
+    import base64
+    import hashlib
+
+    bin_dir, site, env, guidance_error = venv
+    if guidance_error is not None:
+        pytest.skip(f"the index's 'guidance' could not be installed: {guidance_error}")
+    where, theirs = _files(bin_dir, env, "guidance")
+    _, ours = _files(bin_dir, env, "kalman-vs-infoset")
+    assert "guidance/__init__.py" in theirs and "kalman_vs_infoset/guidance/__init__.py" in ours
+    assert not theirs & ours
+    (record,) = where.glob("guidance-*.dist-info/RECORD")
+    for row in record.read_text().splitlines():
+        path, digest, _ = row.rsplit(",", 2)
+        if digest.startswith("sha256="):
+            raw = hashlib.sha256((where / path).read_bytes()).digest()
+            assert base64.urlsafe_b64encode(raw).rstrip(b"=").decode() == digest[7:], path
+    project = tmp_path / "project"
+    (project / "experiments").mkdir(parents=True)
+    (project / "experiments" / "__init__.py").write_text("raise ImportError('not ours')\n")
+    probe = "import kalman_vs_infoset.guidance.intercept.law as g; print(g.__file__)"
+    where_ours = _run([bin_dir / "python", "-c", probe], project, env).stdout.strip()
+    assert Path(where_ours).is_relative_to(site / "kalman_vs_infoset" / "guidance")
+    for cmd in ([bin_dir / "kvi", "--help"], [bin_dir / "python", "-m", "kalman_vs_infoset", "-h"]):
+        assert "intercept" in _run(cmd, project, env).stdout

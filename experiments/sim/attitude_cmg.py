@@ -26,13 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from kalman_vs_infoset.estim.rotations import qlog
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.experiments.sim.turn_setup import SQRT3, TurnSetup
 from kalman_vs_infoset.guidance.attitude.cmg import rk4_step
@@ -45,6 +44,8 @@ from kalman_vs_infoset.guidance.attitude.euler_turn import EulerTurnTracker
 from kalman_vs_infoset.guidance.attitude.min_energy import min_energy_turn
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.rotations import qlog
 
 CONTROLLERS = ("energy", "euler")
 #: Seed 000, section 5: accumulated index Z (N^2 m^2 s) of the two turns.

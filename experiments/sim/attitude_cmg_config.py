@@ -116,7 +116,7 @@ class CmgScenario(Table):
     name: str = field("", "scenario name; names the result files (default resurs_p)")
     description: str = field("", "one line")
     controller: Literal["energy", "euler"] = field("energy", "controller (--controller wins)")
-    estimator: str | None = field(None, "attitude estimator(s) (--estimator wins)")
+    estimator: str | None = field(None, "attitude estimator(s) (--estimators wins)")
     dt_s: number(1e-3, 1.0) = field(0.1, "step of the law and the plant, s")
     duration_s: number(1.0, 1e4) = field(300.0, "turn time (energy index and final errors), s")
     horizon_s: number(1.0, 1e4) = field(360.0, "simulated time, s")

@@ -23,7 +23,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,

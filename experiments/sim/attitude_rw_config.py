@@ -132,7 +132,7 @@ class RwScenario(Table):
     name: str = field("", "scenario name; names the result files")
     description: str = field("", "one line")
     controller: Literal["pd", "lqr"] | None = field(None, "controller (--controller wins)")
-    estimator: str | None = field(None, "attitude estimator(s) (--estimator wins)")
+    estimator: str | None = field(None, "attitude estimator(s) (--estimators wins)")
     body: BodyTable = field(..., "the rigid body")
     wheels: WheelsTable = field(WheelsTable(), "wheel limits")
     maneuver: ManeuverTable = field(ManeuverTable(), "the turn or the random initial states")

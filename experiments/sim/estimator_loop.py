@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,

@@ -17,7 +17,7 @@ Disturbance kinds (``|v_i| <= beta_i`` always):
 * ``"adversarial"``: each period the vertex that most delays arrival
   (:func:`guidance.attitude.game.adversarial_disturbance_Nm`, chosen from the true state).
 
-For the estimators the gyrostat is the rigid body of :mod:`estim.attitude_model` with
+For the estimators the gyrostat is the rigid body of :mod:`estim.attitude.model` with
 ``J_g = diag(A)``, ``J_b = diag(A - J)``, body torque ``M_u = -u``, disturbance ``v``
 (``|v_i| <= beta_i``) and relative rotor momentum ``h = J phi'``: from ``J (phi'' + x')
 = u``, ``(A - J) x' = K x x - u + v`` with ``K = A x + J phi'`` is
@@ -35,13 +35,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from kalman_vs_infoset.estim.rotations import error_angle_rad, error_quaternion
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.guidance.attitude.game import GameLaw, adversarial_disturbance_Nm
 from kalman_vs_infoset.guidance.attitude.gyrostat import (
@@ -55,6 +54,8 @@ from kalman_vs_infoset.guidance.attitude.gyrostat import (
     rk4_step,
 )
 from numpy.typing import ArrayLike, NDArray
+
+from kalman_vs_infoset.numerics.rotations import error_angle_rad, error_quaternion
 
 Array = NDArray[np.float64]
 DISTURBANCES = ("none", "random", "constant", "adversarial")

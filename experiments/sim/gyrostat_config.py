@@ -16,12 +16,13 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from kalman_vs_infoset.estim.rotations import error_quaternion, qmul
 from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
 from kalman_vs_infoset.experiments.sim.gyrostat import LoopConfig
 from kalman_vs_infoset.guidance.attitude.game import GameLaw, design_a_star
 from kalman_vs_infoset.guidance.attitude.gyrostat import Gyrostat
 from pydantic import model_validator
+
+from kalman_vs_infoset.numerics.rotations import error_quaternion, qmul
 
 #: most control steps a run may take
 MAX_STEPS = 100_000
@@ -102,7 +103,7 @@ class GyrostatScenario(Table):
     name: str | None = field(None, "scenario name; names the result files (default: the file)")
     description: str = field("", "one line")
     controller: Literal["game"] | None = field(None, "controller (--controller wins)")
-    estimator: str | None = field(None, "attitude estimator(s) (--estimator wins)")
+    estimator: str | None = field(None, "attitude estimator(s) (--estimators wins)")
     gyrostat: GyrostatTable = field(..., "the gyrostat and its bounds")
     manoeuvre: ManoeuvreTable = field(..., "the turn")
     simulation: SimulationTable = field(SimulationTable(), "sampling, settle, noise")

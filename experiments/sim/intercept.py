@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.base import Belief, Estimator, Status
-from kalman_vs_infoset.estim.infoset import InformationSetEstimator
-from kalman_vs_infoset.estim.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, Range, off_axis_bound_rad
+from kalman_vs_infoset.estim.intercept.options import hooks
 from kalman_vs_infoset.experiments.adversary import (
     LookaheadNoise,
     PursuerView,
@@ -74,11 +74,12 @@ def build_noise(
     """Noise generator; ``sensor`` (default ``model``) bounds the sensor's own errors
     while ``model`` is what the pursuer's estimators (and the adversary's set) use.
 
-    ``pursuer`` names the pursuer's estimator: when it is the information set (the
-    same registered estimator with the same options as the game adversary's) and the
-    sensor's errors are all the adversary issues (``sensor is model``: no pointing
-    errors added), the game adversary reads the pursuer's sets instead of keeping its
-    own copy (the engagement shows them to it before each measurement); ``None``
+    The game adversary reasons with the problem's reference estimator (the information
+    set: :func:`kalman_vs_infoset.estim.registry.reference`) with the scenario's
+    options. ``pursuer`` names the pursuer's estimator: when it is that same estimator
+    and the sensor's errors are all the adversary issues (``sensor is model``: no
+    pointing errors added), the adversary reads the pursuer's sets instead of keeping
+    its own copy (the engagement shows them to it before each measurement); ``None``
     keeps the copy."""
     sensor = sensor or model
     if name == "random":
@@ -86,8 +87,9 @@ def build_noise(
     if name == "bias":
         return BiasNoise(sensor, rng, len(channels))
     if name == "game":
-        est = make_estimator("infoset", sc, model)
-        if pursuer == "infoset" and sensor is model:  # one set per engagement
+        name = registry.reference("intercept").name
+        est = make_estimator(name, sc, model)
+        if pursuer == name and sensor is model:  # one set per engagement
             return GameNoise(est, None, sensor.bearing_bound)
         sets = [est.initial(sc.estimator.prior(ch)) for ch in channels]
         return GameNoise(est, sets, sensor.bearing_bound)
@@ -191,13 +193,9 @@ class Engagement:
         limits = ImpulseLimits(g.min_impulse_mps, g.max_impulse_mps, g.reserve_mps)
         self.law = ForecastCentringLaw(model, limits)
         self.check_floor_m = model.eps_m
-        points = [e for e in self.estimators if isinstance(e, InformationSetEstimator)]
-        if points and points[0].sections == "points":
-            # the seed's point sections bracket the truth only above eps + one step +
-            # one spacing; slabs (and other estimators) contain it down to eps
-            x_box = sc.estimator.x_km
-            spacing_m = (x_box[1] - x_box[0]) * 1e3 / max(points[0].n_sections - 1, 1)
-            self.check_floor_m += model.e * self.dt + spacing_m
+        # e.g. the seed's point sections hold the truth only above eps + a step + a spacing
+        options = hooks(sc.estimator.options_for(estimator_name))
+        self.check_floor_m += options.containment_margin_m(sc.estimator.x_km, model.e, self.dt)
         self.fuel = 0.0
         self.n_imp = self.outside = self.checked = self.step_index = 0
         self.issued: list[float] = []

@@ -12,7 +12,7 @@ noises' search: :mod:`kalman_vs_infoset.experiments.adversary`), an optional
 spacecraft's axis (:class:`kalman_vs_infoset.experiments.sim.pointing.PointingConfig`).
 
 An option has one spelling, its table's: the flat keys of earlier releases
-(``estimator.n_sections``, ``kalman_noise_inflation``, ...: :data:`LEGACY_OPTIONS`) are
+(``estimator.n_sections``, ``kalman_noise_inflation``, ...: :func:`legacy_options`) are
 refused with a message naming the table key(s) to use instead.
 """
 
@@ -23,7 +23,13 @@ import re
 from typing import Any, Literal
 
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.model import BearingBound, ChannelModel, ChannelPrior, ChannelSetting
+from kalman_vs_infoset.estim.intercept.model import (
+    BearingBound,
+    ChannelModel,
+    ChannelPrior,
+    ChannelSetting,
+)
+from kalman_vs_infoset.estim.intercept.options import hooks
 from kalman_vs_infoset.experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
 from kalman_vs_infoset.experiments.sim.fields import (
     NONNEGATIVE,
@@ -35,7 +41,7 @@ from kalman_vs_infoset.experiments.sim.fields import (
     number,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
-from pydantic import BaseModel, ValidationError, model_validator
+from pydantic import BaseModel, Field, ValidationError, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
@@ -44,17 +50,18 @@ BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
 MAX_STEPS = 100_000
 #: a scenario's name names its result files: no path separators, no "..", no leading dot
 SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.,=+\-]*$")
-#: flat keys of earlier releases -> the (estimator, option) of the [estimator.<name>]
-#: tables that replace them (named in the refusal)
-LEGACY_OPTIONS = {
-    "n_sections": (("infoset", "n_sections"),),
-    "sections": (("infoset", "sections"),),
-    "kinematic_margin": (("infoset", "kinematic_margin"),),
-    "split_ratio": (("infoset", "split_ratio"),),
-    "kalman_sigma": (("ekf", "n_sigma"), ("ukf", "n_sigma")),
-    "kalman_range_constraint": (("ekf", "range_constraint"), ("ukf", "range_constraint")),
-    "kalman_noise_inflation": (("ekf", "noise_inflation"), ("ukf", "noise_inflation")),
-}
+
+
+def legacy_options() -> dict[str, tuple[tuple[str, str], ...]]:
+    """Flat keys of earlier releases -> the ``(estimator, option)`` of the
+    ``[estimator.<name>]`` tables that replace them (named in the refusal), as each
+    registered estimator's options declare them (``legacy_keys``)."""
+    out: dict[str, tuple[tuple[str, str], ...]] = {}
+    for name in registry.names("intercept"):
+        declared = getattr(registry.get("intercept", name).options, "legacy_keys", {})
+        for key, option in declared.items():
+            out[key] = (*out.get(key, ()), (name, option))
+    return out
 
 
 def check_name(name: str) -> str:
@@ -124,7 +131,7 @@ class EstimatorTable(Table):
         options = {k: dict(v) for k, v in data.pop("options", {}).items()}
         for key in [k for k, v in data.items() if isinstance(v, dict)]:
             options.setdefault(key, {}).update(data.pop(key))
-        for key, targets in LEGACY_OPTIONS.items():
+        for key, targets in legacy_options().items():
             if key in data:
                 now = " and ".join(f"'estimator.{name}.{option}'" for name, option in targets)
                 raise ValueError(
@@ -187,7 +194,10 @@ class ExperimentTable(Table):
     runs: integer(1, 10**6) = field(1, "runs of the Monte Carlo")
     seed: integer(0, 2**63 - 1) = field(1, "root seed")
     noise: Literal[NOISES] = field("random", "measurement noise")
-    estimator: str = field("infoset", "estimator name (registered)")
+    estimator: str = Field(
+        default_factory=lambda: registry.reference("intercept").name,
+        description="estimator name (registered; default: the reference estimator)",
+    )
 
     @model_validator(mode="after")
     def _registered(self) -> ExperimentTable:
@@ -291,14 +301,14 @@ class InterceptScenario(Table):
             raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
         closing = sorted(-v for v in self.truth.vx_kmps)
         lo, hi = self.closing_speed_kmps
-        constrained = _range_constrained(e.options)
+        constrained = self.closing_interval_options()
         if (e.closing_speed_kmps is not None or constrained) and (
             closing[0] < lo or closing[1] > hi
         ):
             # the estimators' ranges (the Kalman filters' range constraint) move at the
             # interval's speeds: like the boxes, a given interval must hold the truth
             when = (
-                f" when 'estimator.{constrained[0]}.range_constraint' is true"
+                f" when 'estimator.{constrained[0]}' is true"
                 if e.closing_speed_kmps is None
                 else ""
             )
@@ -336,6 +346,18 @@ class InterceptScenario(Table):
     def channel_model(self) -> ChannelModel:
         return self.model.channel_model(self.range_finder.rel_bound)
 
+    def closing_interval_options(self) -> list[str]:
+        """``<estimator>.<option>`` of every registered intercept estimator whose options
+        (as given, or by default) make its ranges move at the closing-speed interval's
+        speeds (e.g. the Kalman filters' ``range_constraint``): the interval must then
+        hold the truth for every one of them."""
+        out = []
+        for name in registry.names("intercept"):
+            option = hooks(self.estimator.options_for(name)).closing_interval_option()
+            if option is not None:
+                out.append(f"{name}.{option}")
+        return out
+
     def setting(self, model: ChannelModel | None = None) -> ChannelSetting:
         """What an estimator of a channel is built with (:mod:`estim.registry`)."""
         speed = tuple(v * 1e3 for v in self.closing_speed_kmps)
@@ -352,19 +374,3 @@ def _check_options(name: str, table: dict[str, Any]) -> None:
         reg.options.model_validate(table)
     except ValidationError as exc:
         raise ValueError(first_error(exc, f"estimator.{name}.", reg.options)) from None
-
-
-def _range_constrained(options: dict) -> list[str]:
-    """The registered intercept estimators whose ``range_constraint`` option (given in
-    ``options`` or by default) is true: their ranges move at the closing-speed
-    interval's speeds, so the interval must hold the truth for every one of them."""
-    from kalman_vs_infoset.estim import registry
-
-    out = []
-    for name in registry.names("intercept"):
-        field = registry.get("intercept", name).options.model_fields.get("range_constraint")
-        if field is None:
-            continue
-        if options.get(name, {}).get("range_constraint", field.default):
-            out.append(name)
-    return out

@@ -35,15 +35,14 @@ from typing import Any, Literal
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.estim.attitude_model import (
+from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     draw_measurement,
 )
-from kalman_vs_infoset.estim.attitude_perfect import PerfectAttitudeEstimator
 from kalman_vs_infoset.estim.base import PointBelief
-from kalman_vs_infoset.estim.model import BearingBound, ChannelModel, Impulse
+from kalman_vs_infoset.estim.intercept.model import BearingBound, ChannelModel, Impulse
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.experiments.sim.fields import Table, number, vector
 from kalman_vs_infoset.experiments.sim.fields import field as declared
@@ -206,9 +205,7 @@ class PointingLoop:
     @property
     def knowledge_bound_rad(self) -> float:
         """Bound on the angle between :attr:`true_error` and :attr:`estimated_error`."""
-        if isinstance(self.loop.estimator, PerfectAttitudeEstimator):
-            return float(np.linalg.norm(self.loop.model.meas_angle_bound_rad))
-        return float(self.loop.attitude_bound_rad(self.belief)[0])
+        return float(self.belief.knowledge_bound_rad(self.loop.model)[0])
 
     def summary(self) -> dict[str, Any]:
         return {

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief
-from kalman_vs_infoset.estim.describe import describe_channel, section_vertices
-from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.describe import describe_channel, section_vertices
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 
 
 @dataclass
@@ -58,7 +58,7 @@ def channel_row(
     range_meas_m: float,
 ) -> dict[str, Any]:
     """One channel's record after the step's measurements: truth, measurement and its
-    error and bound, and what the belief says (:func:`estim.describe.describe_channel`).
+    error and bound, and what the belief says (:func:`estim.intercept.describe.describe_channel`).
 
     ``truth`` is the channel's true ``(alpha, omega, x)``; ``range_meas_m`` is NaN when
     no range was measured.

@@ -39,11 +39,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from kalman_vs_infoset.estim.integrate import renormalised
-from kalman_vs_infoset.estim.integrate import rk4_step as rk4
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody, attitude_rhs
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.integrate import renormalised
+from kalman_vs_infoset.numerics.integrate import rk4_step as rk4
 
 #: Seed 000, section 4: initial precession angles of the six gyrodines, degrees.
 RESURS_P_BETA0_DEG = (315.0, 225.0, 315.0, 225.0, 315.0, 225.0)
@@ -174,8 +175,8 @@ def rk4_step(
     dt_s: float,
     ext_torque_Nm: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
-    """One step of the shared RK4 (:mod:`estim.integrate`) of the common plant (field of
-    ``plant.attitude_rhs``), torque held.
+    """One step of the shared RK4 (:mod:`kalman_vs_infoset.numerics.integrate`) of the common plant
+    (field of ``plant.attitude_rhs``), torque held.
 
     ``x = (q[4], w[3], h[3])``; the quaternion is renormalised. A cheap stand-in for
     ``plant.propagate`` (DOP853) for the 3000-step turns; tests compare the two.

@@ -77,10 +77,6 @@ class EulerAxisProfile:
         object.__setattr__(self, "_rate", accel.antiderivative(1))
         object.__setattr__(self, "_angle", accel.antiderivative(2))
 
-    @property
-    def max_accel_radps2(self) -> float:
-        return float(np.max(np.abs(self._accel(np.linspace(0, self.duration_s, 2001)))))
-
     def _clip(self, t_s: ArrayLike) -> NDArray[np.float64]:
         return np.clip(np.asarray(t_s, dtype=float), 0.0, self.duration_s)
 

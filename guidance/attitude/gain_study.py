@@ -28,7 +28,7 @@ these choices is a parameter of :class:`StudySettings`.
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
@@ -259,10 +259,3 @@ def rule_settle_times(
 ) -> FloatArray:
     """Settle times along angles for given gains (one batch; seed Fig. 15)."""
     return settle_times(settings.turn_rad(phi0_deg), k_q, k_w, settings)
-
-
-def with_limits(
-    settings: StudySettings, torque_max_Nm: float, momentum_max_Nms: float
-) -> StudySettings:
-    """A copy of ``settings`` with wheel limits."""
-    return replace(settings, torque_max_Nm=torque_max_Nm, momentum_max_Nms=momentum_max_Nms)

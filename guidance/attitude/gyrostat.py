@@ -12,7 +12,7 @@ line reads ``(A - J) dx/dt = K x x - u + v`` (the OCR of (1.1) is garbled; this 
 reading that makes ``dK/dt + x x K = v``, checked in the tests).
 
 Kinematics (seed eq. 1.2), scalar-last quaternion ``eta = (eta_v, eta4)`` as in
-:func:`kalman_vs_infoset.estim.rotations.quaternion_rate`::
+:func:`kalman_vs_infoset.numerics.rotations.quaternion_rate`::
 
     2 deta_v/dt = eta4 x + eta_v x x,     2 deta4/dt = -eta_v . x
 
@@ -28,10 +28,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from kalman_vs_infoset.estim import integrate
-from kalman_vs_infoset.estim.integrate import renormalised
-from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
 from numpy.typing import ArrayLike, NDArray
+
+from kalman_vs_infoset.numerics import integrate
+from kalman_vs_infoset.numerics.integrate import renormalised
+from kalman_vs_infoset.numerics.rotations import cross, quaternion_rate
 
 Array = NDArray[np.float64]
 
@@ -130,8 +131,8 @@ def rhs(state: Array, gyro: Gyrostat, u_Nm: Array, v_Nm: Array) -> Array:
 
 
 def rk4_step(gyro: Gyrostat, state: Array, u_Nm: Array, v_Nm: Array, dt_s: float) -> Array:
-    """One step of the shared RK4 (:mod:`estim.integrate`) with ``u`` and ``v`` held
-    (zero-order hold); renormalises the quaternion."""
+    """One step of the shared RK4 (:mod:`kalman_vs_infoset.numerics.integrate`) with ``u`` and ``v``
+    held (zero-order hold); renormalises the quaternion."""
     return renormalised(integrate.rk4_step(rhs, state, dt_s, gyro, u_Nm, v_Nm), Q)
 
 

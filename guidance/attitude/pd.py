@@ -27,10 +27,11 @@ from typing import Literal
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief
-from kalman_vs_infoset.estim.rotations import cross, error_quaternion
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.rotations import cross, error_quaternion
 
 FloatArray = NDArray[np.float64]
 QuaternionTerm = Literal["vector", "twice"]

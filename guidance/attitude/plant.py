@@ -17,11 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from kalman_vs_infoset.estim.base import frozen_array
-from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
+
+from kalman_vs_infoset.numerics.arrays import readonly
+from kalman_vs_infoset.numerics.rotations import cross, quaternion_rate
 
 
 def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
@@ -30,7 +31,7 @@ def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.floa
         raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite")
-    return frozen_array(arr)
+    return readonly(arr)
 
 
 @dataclass(frozen=True)
@@ -140,8 +141,3 @@ def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.floa
 def attitude_error(q: ArrayLike, q_target: ArrayLike) -> Rotation:
     """Error rotation ``q_target^-1 * q`` (body attitude relative to the target)."""
     return Rotation.from_quat(q_target).inv() * Rotation.from_quat(q)
-
-
-def error_angle_deg(q: ArrayLike, q_target: ArrayLike) -> float:
-    """Principal angle of the attitude error, degrees."""
-    return float(np.degrees(attitude_error(q, q_target).magnitude()))

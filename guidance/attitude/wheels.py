@@ -9,7 +9,8 @@ adds what the controllers of docs/models.md §2.2/2.3 need for speed:
 
 * :class:`ReactionWheels`: three wheels along the body axes with a per-axis torque
   limit ``|M_u,i| <= M_max`` and momentum limit ``|h_i| <= L_max``;
-* :func:`rk4_step`: one step of the shared RK4 (:mod:`estim.integrate`) of the plant
+* :func:`rk4_step`: one step of the shared RK4 (:mod:`kalman_vs_infoset.numerics.integrate`) of the
+plant
   for a whole batch of states ``(..., 10)`` with the torque held constant over the
   step (zero-order hold: the controller is sampled once per step);
 * :func:`simulate_closed_loop`: a sampled-data loop (controller every
@@ -26,11 +27,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from kalman_vs_infoset.estim import integrate
-from kalman_vs_infoset.estim.integrate import renormalised
-from kalman_vs_infoset.estim.rotations import cross, quaternion_rate
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import ArrayLike, NDArray
+
+from kalman_vs_infoset.numerics import integrate
+from kalman_vs_infoset.numerics.integrate import renormalised
+from kalman_vs_infoset.numerics.rotations import cross, quaternion_rate
 
 FloatArray = NDArray[np.float64]
 
@@ -99,8 +101,8 @@ def rk4_step(
     dt_s: float,
     ext_torque_Nm: FloatArray | float = 0.0,
 ) -> FloatArray:
-    """One step of the shared RK4 (:mod:`estim.integrate`) of the plant with the torques
-    held constant; renormalises ``q``."""
+    """One step of the shared RK4 (:mod:`kalman_vs_infoset.numerics.integrate`) of the plant with
+    the torques held constant; renormalises ``q``."""
     return renormalised(
         integrate.rk4_step(plant_rhs_batch, x, dt_s, body, torque_Nm, ext_torque_Nm)
     )

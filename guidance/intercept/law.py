@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes
-from kalman_vs_infoset.estim.costs import MissForecast
-from kalman_vs_infoset.estim.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.costs import MissForecast
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 
 
 @dataclass(frozen=True)

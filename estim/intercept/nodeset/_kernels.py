@@ -10,7 +10,7 @@ in :mod:`._geometry`.
 from __future__ import annotations
 
 import numpy as np
-from kalman_vs_infoset.estim._kernels import _dedupe_tail, simplify_polygon
+from kalman_vs_infoset.estim.common._kernels import _dedupe_tail, simplify_polygon
 from numba import njit
 
 #: operation codes of the log

@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
-from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.estim.intercept.nodeset import _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
-from kalman_vs_infoset.estim.model import ChannelModel
-from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
@@ -177,11 +177,11 @@ class NodeSet(Belief):
     def extremes(self, fn: StateFunction) -> Extremes:
         """Sound min and max of ``fn`` over the whole set (nodes and cells between).
 
-        Only :class:`~estim.costs.MissForecast` and :class:`~estim.costs.ZeroEffortMiss`
-        (recognised by type) are bounded: the rows returned are representative states at
-        the range where each bound is attained (``x = e_nom tau``, the cell's middle
-        bearing). Between its nodes the set is known through bounds only, so any other
-        function is refused (``TypeError``): its values at the node vertices would be
+        Only :class:`~estim.intercept.costs.MissForecast` and
+        :class:`~estim.intercept.costs.ZeroEffortMiss` (recognised by type) are bounded: the rows
+        returned are representative states at the range where each bound is attained (``x = e_nom
+        tau``, the cell's middle bearing). Between its nodes the set is known through bounds only,
+        so any other function is refused (``TypeError``): its values at the node vertices would be
         inner values, not extremes. The coordinates have their own sound intervals
         (:meth:`alpha_range_rad`, :meth:`omega_range_radps`, :meth:`x_range_m`);
         :meth:`attained` gives the values of any function at the set's own points.

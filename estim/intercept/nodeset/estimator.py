@@ -31,12 +31,12 @@ recorded operations are replayed on them (:meth:`NodeSetEstimator.refine`), so t
 nodes follow the surviving range interval.
 
 What the slices do not know: the kinematic term the linear model neglects near the
-target (``2 omega^2 x tan alpha``, :func:`kalman_vs_infoset.estim.infoset.kinematic_margin_mps2`) is
-added to ``nu`` for the whole piece each step, from the piece's own extremes, and an
-impulse's geometry (``k cos^2 alpha``) widens it; both are common to the piece, which
-keeps ``K`` convex. Polygons are kept in ``(a, zs) = (alpha / alpha_scale, e_nom
-(Y~ + V~ tau))``: ``zs`` is the zero-effort miss in metres for ``e = e_nom``, and the
-prediction is the unit-determinant shear of the seed.
+target (``2 omega^2 x tan alpha``,
+:func:`kalman_vs_infoset.estim.intercept.kinematic.kinematic_margin_mps2`) is added to ``nu``
+for the whole piece each step, from the piece's own extremes, and an impulse's geometry (``k cos^2
+alpha``) widens it; both are common to the piece, which keeps ``K`` convex. Polygons are kept in
+``(a, zs) = (alpha / alpha_scale, e_nom (Y~ + V~ tau))``: ``zs`` is the zero-effort miss in metres
+for ``e = e_nom``, and the prediction is the unit-determinant shear of the seed.
 
 An update that empties every node (after refinement) contradicts the model: it is
 rejected, the set before it kept and the status set to ``"contradiction"``. When every
@@ -48,15 +48,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from kalman_vs_infoset.estim import _kernels as _k
 from kalman_vs_infoset.estim.base import Estimator, Status
-from kalman_vs_infoset.estim.infoset import DIVERGED_W_PER_X, MAX_BEARING_RAD, STRIP_MARGIN
-from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
-from kalman_vs_infoset.estim.intercept.nodeset.bands import split_live_bands
-from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
-from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
-from kalman_vs_infoset.estim.intercept.nodeset.refine import NodeRefinement
-from kalman_vs_infoset.estim.model import (
+from kalman_vs_infoset.estim.common import _kernels as _k
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.kinematic import (
+    DIVERGED_W_PER_X,
+    MAX_BEARING_RAD,
+    STRIP_MARGIN,
+    piece_kinematic,
+)
+from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
     ChannelModel,
     ChannelPrior,
@@ -64,7 +65,12 @@ from kalman_vs_infoset.estim.model import (
     Range,
     impulse_parts,
 )
-from kalman_vs_infoset.estim.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
+from kalman_vs_infoset.estim.intercept.nodeset.bands import split_live_bands
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
+from kalman_vs_infoset.estim.intercept.nodeset.options import DEFAULTS
+from kalman_vs_infoset.estim.intercept.nodeset.refine import NodeRefinement
 from numpy.typing import NDArray
 
 __all__ = ["NodeSet", "NodeSetEstimator"]
@@ -120,18 +126,18 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
 
     model: ChannelModel = field(default_factory=ChannelModel)
     closing_speed_mps: tuple[float, float] | None = None
-    n_bands: int | None = None
-    n_nodes: int = 12
-    min_live_nodes: int = 5
-    split_ratio: float = 2.0
-    max_pieces: int = 16
-    tighten_rtol: float = 0.01
+    n_bands: int | None = DEFAULTS.n_bands
+    n_nodes: int = DEFAULTS.n_nodes
+    min_live_nodes: int = DEFAULTS.min_live_nodes
+    split_ratio: float = DEFAULTS.node_split_ratio
+    max_pieces: int = DEFAULTS.max_pieces
+    tighten_rtol: float = DEFAULTS.tighten_rtol
     max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4
-    kinematic_margin: bool = True
-    max_vertices: int = 128
-    split_bands: bool = True
-    max_bands: int = 32
+    kinematic_margin: bool = DEFAULTS.kinematic_margin
+    max_vertices: int = DEFAULTS.max_vertices
+    split_bands: bool = DEFAULTS.split_bands
+    max_bands: int = DEFAULTS.max_bands
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:
@@ -238,7 +244,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         """The operation of an impulse ``k`` (m/s, relative velocity): ``V += k
         cos^2(alpha)``, i.e. ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece
         and ``alpha`` up to the piece's largest bearing; an
-        :class:`~estim.model.Impulse` known to ``+-dk`` adds ``dk u_hi`` either way.
+        :class:`~estim.intercept.model.Impulse` known to ``+-dk`` adds ``dk u_hi`` either way.
         The per-piece bounds of ``w`` in ``per`` move by what the impulse can do."""
         k, dk = impulse_parts(control)
         # per piece (compiled: a handful of numbers, every step): with sin^2 of the
@@ -255,7 +261,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         nodes under eps, split wide pieces and re-grid thinned ones.
 
         The disturbance of each piece is ``nu`` plus the interval of the kinematic
-        term over its states (:func:`kalman_vs_infoset.estim.kinematics.kinematic_interval_mps2`),
+        term over its states (:func:`kinematic_reference.kinematic_interval_mps2`),
         sized from the belief's own summary (the impulse's effect on ``w`` added), so
         a step computes the bounds between nodes once; impulse and prediction are
         one compiled call.
@@ -319,7 +325,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         cells get zero."""
         # x in [(tau_lo - dt) / u_hi (at least eps), tau_hi / u_lo] over the step;
         # compiled (kinematic_interval_mps2 per piece: a handful of numbers every step)
-        return _k.piece_kinematic(
+        return piece_kinematic(
             per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
             MAX_BEARING_RAD,
         )  # fmt: skip
@@ -330,7 +336,7 @@ def warm_up() -> None:
     set with a closing-speed interval: bearings, ranges, an impulse, the extremes and
     the containment test). Forked Monte Carlo workers then inherit them instead of
     each loading or compiling them again."""
-    from kalman_vs_infoset.estim.costs import MissForecast, ZeroEffortMiss
+    from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
 
     model = ChannelModel()
     est = NodeSetEstimator(model, closing_speed_mps=(57.9e3, 58.1e3))

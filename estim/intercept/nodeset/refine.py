@@ -17,12 +17,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from kalman_vs_infoset.estim.infoset import STRIP_MARGIN
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+from kalman_vs_infoset.estim.intercept.kinematic import STRIP_MARGIN
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
-from kalman_vs_infoset.estim.polygons import ConvexPolygons
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]

@@ -1,0 +1,1 @@
+"""Attitude estimators (batched runs), one folder per family; the model in :mod:`.model`."""

@@ -1,0 +1,15 @@
+"""Guaranteed zonotope and ellipsoid on the attitude error state, each intersected with
+the box (:mod:`kalman_vs_infoset.estim.attitude.box`)."""
+
+from kalman_vs_infoset.estim.attitude.sets.options import (
+    EllipsoidAttitudeOptions,
+    ZonotopeAttitudeOptions,
+)
+from kalman_vs_infoset.estim.registry import declare
+
+REGISTRATIONS = (
+    declare("zonotope", "attitude", ZonotopeAttitudeOptions, rank=3,
+            doc="guaranteed zonotope on the error state, intersected with the box"),
+    declare("ellipsoid", "attitude", EllipsoidAttitudeOptions, rank=4,
+            doc="guaranteed ellipsoid on the error state, intersected with the box"),
+)  # fmt: skip

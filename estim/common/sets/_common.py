@@ -1,0 +1,63 @@
+"""Helpers shared by the set representations: array checks, slabs, emptiness."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+#: Relative tolerance below which a slab that misses a set by rounding is taken to touch it.
+TOUCH_RTOL = 1e-12
+
+
+class EmptyIntersectionError(ValueError):
+    """The intersection is empty: the measurement is inconsistent with the set."""
+
+
+def vector(x: ArrayLike, n: int | None = None, name: str = "vector") -> FloatArray:
+    """A finite 1-D float copy of ``x`` (of length ``n`` when given)."""
+    v = np.array(x, dtype=float).reshape(-1)
+    if n is not None and v.size != n:
+        raise ValueError(f"{name} must have length {n}, got {v.size}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} must be finite")
+    return v
+
+
+def matrix(m: ArrayLike, rows: int | None, cols: int | None, name: str) -> FloatArray:
+    """A finite 2-D float copy of ``m`` with the given shape (``None``: any)."""
+    a = np.array(m, dtype=float)
+    if a.ndim != 2 or (rows is not None and a.shape[0] != rows):
+        raise ValueError(f"{name} must be a 2-D array with {rows} rows, got shape {a.shape}")
+    if cols is not None and a.shape[1] != cols:
+        raise ValueError(f"{name} must have {cols} columns, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite")
+    return a
+
+
+def strip_bounds(b: float, r: float) -> tuple[float, float]:
+    """``{x : |a.x - b| <= r}`` as the slab ``lo <= a.x <= hi``."""
+    b, r = float(b), float(r)
+    if not (np.isfinite(b) and np.isfinite(r)) or r < 0:
+        raise ValueError(f"a strip needs a finite centre and a finite radius >= 0, got {b}, {r}")
+    return b - r, b + r
+
+
+def clip_slab(lo: float, hi: float, set_lo: float, set_hi: float) -> tuple[float, float]:
+    """The slab ``[lo, hi]`` clipped to the set's range ``[set_lo, set_hi]`` of ``a.x``.
+
+    The set's intersection with the clipped slab is the same set, and the clipped slab
+    is the tighter measurement to feed an outer update. Raises
+    :class:`EmptyIntersectionError` when the ranges are disjoint by more than rounding.
+    """
+    new_lo, new_hi = max(lo, set_lo), min(hi, set_hi)
+    if new_lo > new_hi:
+        scale = max(abs(set_lo), abs(set_hi), set_hi - set_lo, 1e-300)
+        if new_lo - new_hi > TOUCH_RTOL * scale:
+            raise EmptyIntersectionError(
+                f"slab [{lo:.6g}, {hi:.6g}] misses the set's range [{set_lo:.6g}, {set_hi:.6g}]"
+            )
+        new_lo = new_hi = 0.5 * (new_lo + new_hi)
+    return new_lo, new_hi

@@ -1,0 +1,105 @@
+"""Options of the information set ``infoset``: the node set's, and (inherited) those of
+the slab and point sections it may run instead (``sections``)."""
+
+from __future__ import annotations
+
+from typing import Annotated, ClassVar, Literal
+
+from kalman_vs_infoset.estim.intercept.slabs.options import SlabOptions
+from pydantic import Field, model_validator
+
+
+class InfosetOptions(SlabOptions):
+    """Options of the information set: the node set's (``sections="nodes"``,
+    :class:`~kalman_vs_infoset.estim.intercept.nodeset.estimator.NodeSetEstimator`) and,
+    inherited, those of the slabs and point sections."""
+
+    legacy_keys: ClassVar[dict[str, str]] = {
+        k: k for k in ("n_sections", "sections", "kinematic_margin", "split_ratio")
+    }
+
+    sections: Annotated[
+        Literal["nodes", "slabs", "points"],
+        Field(
+            description="nodes (exact slices, tight), slabs (guaranteed, coarse) or the "
+            "seed's point sections"
+        ),
+    ] = "nodes"
+    n_nodes: Annotated[
+        int, Field(ge=4, le=200, description="nodes: nodes per piece after (re)gridding")
+    ] = 12
+    min_live_nodes: Annotated[
+        int, Field(ge=4, le=200, description="nodes: a piece with fewer is re-gridded")
+    ] = 5
+    n_bands: Annotated[
+        int | None,
+        Field(
+            ge=1, le=16, description="nodes: closing-speed bands (None: of 0.1 % each, at most 8)"
+        ),
+    ] = None
+    max_pieces: Annotated[
+        int, Field(ge=1, le=256, description="nodes: most pieces per closing-speed band")
+    ] = 16
+    node_split_ratio: Annotated[
+        float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
+    ] = 2.0
+    tighten_rtol: Annotated[
+        float,
+        Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
+    ] = 0.01
+    max_vertices: Annotated[
+        int,
+        Field(
+            ge=8,
+            le=100_000,
+            description="nodes: a slice with more vertices after a prediction is "
+            "outer-simplified to this many (sound)",
+        ),
+    ] = 128
+    split_bands: Annotated[
+        bool,
+        Field(description="nodes: split closing-speed bands where their width dominates"),
+    ] = True
+    max_bands: Annotated[
+        int, Field(ge=1, le=256, description="nodes: most live closing-speed bands")
+    ] = 32
+
+    @model_validator(mode="after")
+    def _room_for_the_nodes(self) -> InfosetOptions:
+        if self.min_live_nodes > self.n_nodes:
+            raise ValueError(
+                f"min_live_nodes ({self.min_live_nodes}) must be <= n_nodes ({self.n_nodes})"
+            )
+        return self
+
+    def containment_margin_m(self, x_km: tuple[float, float], e_mps: float, dt_s: float) -> float:
+        if self.sections != "points":
+            return 0.0
+        # the seed's point sections bracket the truth only above eps + one step + one
+        # spacing; slabs and nodes contain it down to eps
+        spacing_m = (x_km[1] - x_km[0]) * 1e3 / max(self.n_sections - 1, 1)
+        return e_mps * dt_s + spacing_m
+
+    def build(self, setting):
+        if self.sections != "nodes":
+            return self.slab_estimator(setting, sections=self.sections)
+        from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
+
+        return NodeSetEstimator(
+            setting.model,
+            closing_speed_mps=setting.closing_speed_mps,
+            n_bands=self.n_bands,
+            n_nodes=self.n_nodes,
+            min_live_nodes=self.min_live_nodes,
+            kinematic_margin=self.kinematic_margin,
+            split_ratio=self.node_split_ratio,
+            max_pieces=self.max_pieces,
+            tighten_rtol=self.tighten_rtol,
+            max_vertices=self.max_vertices,
+            split_bands=self.split_bands,
+            max_bands=self.max_bands,
+        )
+
+
+#: the defaults (the node set's dataclass fields take theirs from here)
+DEFAULTS = InfosetOptions()

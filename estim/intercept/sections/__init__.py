@@ -1,0 +1,21 @@
+"""The set families per slab: the slab information set holding an ellipsoid, a zonotope
+or an interval box per section instead of a convex polygon.
+
+Each keeps the slabs' geometry (range slabs, shears over a slab, disturbance, impulse,
+kinematic margin, splitting, threshold) and so their soundness argument, with every
+operation an outer bound of the exact one
+(:mod:`kalman_vs_infoset.estim.intercept.slabs.sections`).
+"""
+
+from kalman_vs_infoset.estim.intercept.sections.options import (
+    BoxSlabOptions,
+    EllipsoidOptions,
+    ZonotopeOptions,
+)
+from kalman_vs_infoset.estim.registry import declare
+
+REGISTRATIONS = (
+    declare("ellipsoid", "intercept", EllipsoidOptions, doc="an ellipsoid per range slab", rank=0),
+    declare("zonotope", "intercept", ZonotopeOptions, doc="a zonotope per range slab", rank=1),
+    declare("box", "intercept", BoxSlabOptions, doc="an interval box per range slab", rank=2),
+)

@@ -1,0 +1,35 @@
+"""Read-only arrays: beliefs and sets are values, their arrays never change."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
+
+
+def readonly(a: ArrayLike, dtype: DTypeLike = float, copy: bool = True) -> np.ndarray:
+    """``a`` as a read-only array.
+
+    Parameters
+    ----------
+    a : array_like
+        The values.
+    dtype : dtype, default float
+        The copy's type (``copy=True``).
+    copy : bool, default True
+        True: a new array of ``dtype``. False: no copy, for an array the caller has just
+        created (the hot paths): ``a`` when it is read-only already, else a read-only
+        view of it (``dtype`` is then ignored).
+
+    Returns
+    -------
+    numpy.ndarray
+        A read-only array.
+    """
+    if copy:
+        arr = np.array(a, dtype=dtype)
+    elif a.flags.writeable:
+        arr = a.view()
+    else:
+        return a
+    arr.setflags(write=False)
+    return arr
