@@ -158,8 +158,10 @@ def _chunks(todo: list[int], size: int) -> list[list[int]]:
 
 
 def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
-    """Yield ``(run, row)`` as chunks finish: in order in this process for one local
-    worker (so Ctrl-C stops between chunks), else as completed on the executor. Local
+    """Yield each finished chunk's ``[(run, row), ...]`` whole: in order in this process
+    for one local worker (so Ctrl-C stops between chunks), else as completed on the
+    executor. A chunk is one value, so a command stopped while it takes the rows in
+    saves whole chunks only. Local
     workers are capped at the number of chunks; runs lost to a dead worker or to memory
     are counted and raise :class:`WorkerLost` once the others are through."""
     chunks = _chunks(todo, job.chunk)
@@ -174,7 +176,7 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
             except MemoryError:
                 lost["memory"] += len(chunk)
                 continue
-            yield from pairs
+            yield pairs
     else:
         with executor_or(executor, n, scheduler) as ex:
             window = len(chunks) if scheduler or executor else IN_FLIGHT * n
@@ -186,7 +188,8 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
 
 
 def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict[str, int]):
-    """The rows of ``chunks`` on ``ex``, at most ``window`` chunks queued at a time."""
+    """The rows of ``chunks`` on ``ex`` (a list per chunk), at most ``window`` chunks
+    queued at a time."""
     queue = iter(chunks)
     pending: dict[Any, list[int]] = {}
     idle_since = None
@@ -233,7 +236,7 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
             except Exception as exc:  # the task itself raised outside the runs
                 row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
                 pairs = [(j, dict(row)) for j in chunk]
-            yield from pairs
+            yield pairs
         refill()
 
 

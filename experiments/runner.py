@@ -244,10 +244,12 @@ def _complete(job, runs, todo, table, path, meta, progress, executor, workers, s
     changed = False
     try:
         with steps_shown(progress):  # a slow run in this process shows its steps
-            for j, row in results(job, todo, executor, workers, scheduler, limit_s):
-                table[j] = {**job.base, "run": j, **row}
+            for pairs in results(job, todo, executor, workers, scheduler, limit_s):
+                # one update per chunk: a signal between two bytecodes cannot leave
+                # part of a chunk in the table (a vectorised chunk is saved whole)
+                table.update({j: {**job.base, "run": j, **row} for j, row in pairs})
                 changed = True
-                bar.update(1)
+                bar.update(len(pairs))
                 check_stop()
                 if time.monotonic() - last_save > SAVE_EVERY_S:
                     _write_rows(path, list(table.values()), meta)

@@ -234,13 +234,13 @@ def run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
         )
     job = intercept_runs.intercept_job(sc, estimator, noise, runner.check_seed(seed))
-    pairs = runner.results(job, list(range(runs)), executor, workers, scheduler)
+    chunks = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
     rows = []
     try:
-        for j, row in pairs:
-            rows.append({**job.base, "run": j, **row})
-            bar.update(1)
+        for pairs in chunks:
+            rows += [{**job.base, "run": j, **row} for j, row in pairs]
+            bar.update(len(pairs))
     finally:
         bar.close()
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
