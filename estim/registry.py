@@ -22,6 +22,16 @@ Problems and what their factories receive (besides the validated options):
 * ``"attitude"``: an :class:`kalman_vs_infoset.estim.attitude.model.AttitudeModel`;
   beliefs start from an :class:`kalman_vs_infoset.estim.attitude.model.AttitudePrior`
   and are batched :class:`kalman_vs_infoset.estim.attitude.model.AttitudeBelief` values.
+
+What a registration says about its estimator's part in the comparisons, so that no
+command or figure names an estimator (each has a fallback, so a plug-in that says
+nothing still runs everywhere):
+
+* ``reference``: the problem's reference estimator (:func:`reference`);
+* ``roles`` (:data:`ROLES`): e.g. the Kalman baselines a set is compared with
+  (:func:`with_role`);
+* ``label`` and ``colour``: how figures name and draw it (default: its name, and a
+  spare colour chosen by name in the figures).
 """
 
 from __future__ import annotations
@@ -42,6 +52,12 @@ PROBLEM_PACKAGES = {p: f"kalman_vs_infoset.estim.{p}" for p in PROBLEMS}
 ENTRY_POINT_GROUP = "kalman_vs_infoset.estimators"
 #: listing position of a registration that gives none (after the built-in ones)
 LAST = 1000
+#: the parts an estimator may declare it plays (:func:`with_role`)
+ROLES = {
+    "baseline": "a Kalman-type baseline the reference set estimator is compared with",
+    "yardstick": "the baseline in whose step cost other costs are stated (kvi bench)",
+    "exact": "reads the measurement as the state (exact with exact measurements)",
+}
 
 _REGISTRY: dict[tuple[str, str], Registration] = {}
 _loaded = False
@@ -68,6 +84,12 @@ class Registration:
     reference : bool
         The problem's reference estimator: the set the seed's game adversary reasons
         with (:func:`reference`).
+    roles : tuple of str
+        The parts it plays in the comparisons (keys of :data:`ROLES`; :func:`with_role`).
+    label : str
+        Its name in figure legends, in words ("" : its name; :attr:`words`).
+    colour : str
+        Its colour in figures, a matplotlib colour ("" : the figures choose one).
     """
 
     name: str
@@ -77,6 +99,14 @@ class Registration:
     doc: str = ""
     rank: int = LAST
     reference: bool = False
+    roles: tuple[str, ...] = ()
+    label: str = ""
+    colour: str = ""
+
+    @property
+    def words(self) -> str:
+        """Its name in figure legends: the label, or the name without one."""
+        return self.label or self.name
 
     def validate(self, options: BaseModel | dict[str, Any] | None) -> BaseModel:
         """``options`` validated by the options model (a table or None: the defaults)."""
@@ -101,6 +131,9 @@ def declare(
     doc: str = "",
     rank: int = LAST,
     reference: bool = False,
+    roles: tuple[str, ...] = (),
+    label: str = "",
+    colour: str = "",
 ) -> Registration:
     """A checked registration, not yet registered: what a family folder lists in its
     ``REGISTRATIONS`` (and :func:`register` adds).
@@ -118,7 +151,12 @@ def declare(
         if not callable(getattr(options, "build", None)):
             raise TypeError("give a factory, or an options model with build(setting)")
         factory = _options_build
-    return Registration(name, problem, options, factory, doc, rank, reference)
+    unknown = sorted(set(roles) - set(ROLES))
+    if unknown:
+        raise ValueError(f"unknown roles {unknown}; allowed: {', '.join(ROLES)}")
+    return Registration(
+        name, problem, options, factory, doc, rank, reference, tuple(roles), label, colour
+    )
 
 
 def _add(reg: Registration, replace: bool) -> Registration:
@@ -138,6 +176,9 @@ def register(
     replace: bool = False,
     rank: int = LAST,
     reference: bool = False,
+    roles: tuple[str, ...] = (),
+    label: str = "",
+    colour: str = "",
 ) -> Registration:
     """Register an estimator; a taken ``(problem, name)`` is an error unless ``replace``.
 
@@ -145,7 +186,8 @@ def register(
     whenever it is called (also before the first lookup). Arguments: :func:`declare`.
     """
     _load()
-    return _add(declare(name, problem, options, factory, doc, rank, reference), replace)
+    reg = declare(name, problem, options, factory, doc, rank, reference, roles, label, colour)
+    return _add(reg, replace)
 
 
 def unregister(problem: str, name: str) -> None:
@@ -199,3 +241,27 @@ def reference(problem: str) -> Registration:
         if p == problem and reg.reference:
             return reg
     raise LookupError(f"no reference {problem} estimator is registered")
+
+
+def with_role(problem: str, role: str) -> tuple[Registration, ...]:
+    """The registrations of ``problem`` that declare ``role``, by listing rank."""
+    if role not in ROLES:
+        raise ValueError(f"unknown role {role!r}; allowed: {', '.join(ROLES)}")
+    _load()
+    regs = [r for (p, _), r in _REGISTRY.items() if p == problem and role in r.roles]
+    return tuple(sorted(regs, key=lambda r: r.rank))
+
+
+def first_with_role(problem: str, role: str) -> Registration:
+    """The first registration of ``problem`` declaring ``role`` (LookupError if none)."""
+    regs = with_role(problem, role)
+    if not regs:
+        raise LookupError(f"no {problem} estimator declares the role {role!r}")
+    return regs[0]
+
+
+def by_name(name: str) -> tuple[Registration, ...]:
+    """The registrations called ``name``, over all problems (a figure knows the name
+    of a curve's estimator, not always its problem)."""
+    _load()
+    return tuple(r for (_, n), r in _REGISTRY.items() if n == name)

@@ -53,34 +53,6 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     return [str(f) for f in plots.save(fig, out_dir / f"{stem}-cdf")]
 
 
-def comparison_figure(tables: dict[str, list[Path]], out_stem: Path) -> list[Path]:
-    """README figure: one row per scenario, columns settle time / energy / final error,
-    one CDF curve per estimator x noise, from the per-run Parquet tables."""
-    from kalman_vs_infoset.experiments import figstyle as fs
-    from kalman_vs_infoset.experiments import plots
-
-    fig, axes = fs.figure(len(tables), 3, size=(15, 3.3 * len(tables)))
-    for row, (name, paths) in zip(axes, tables.items(), strict=True):
-        df = pd.concat([pd.read_parquet(p) for p in paths], ignore_index=True)
-        for ax, (col, label) in zip(row, PANELS, strict=True):
-            for (est, noise), grp in df.groupby(["estimator", "noise"], sort=True):
-                plots._cdf(
-                    ax, grp[col].to_numpy(dtype=float), f"{est} / {noise}", **fs.line(est, noise)
-                )
-            vals = df[col].to_numpy(dtype=float)
-            vals = vals[np.isfinite(vals)]
-            if col != "settle_time_s" and vals.size and vals.min() > 0:
-                if vals.max() / vals.min() > 20:
-                    ax.set_xscale("log")
-            ax.set_xlabel(label)
-            ax.set_ylabel(plots.CDF_LABEL)
-            ax.set_ylim(0, 1.02)
-        ctrl = ", ".join(sorted(set(df["controller"])))
-        row[0].set_title(f"{name} ({ctrl})", loc="left", fontsize=9)
-    fs.figure_legend(fig, axes.flat)
-    return plots.save(fig, out_stem)
-
-
 def run_here(loop, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
     """A loop's attitude runs (:class:`experiments.attitude_loops.AttitudeLoop`) in this
     process, without files (tests, notebooks): the same chunks, retries and summary as

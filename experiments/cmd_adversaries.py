@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options, plots
 from kalman_vs_infoset.experiments.intercept_runs import run_grid
 from kalman_vs_infoset.experiments.report import write_tables, write_text
@@ -32,7 +33,8 @@ RULES = ("game", "targeted", "lookahead")
 
 def add_arguments(p) -> None:
     options.add_common(p)
-    options.add_estimators(p, "intercept", ["infoset"], "infoset, the seed's")
+    seed = registry.reference("intercept").name  # the set the seed's game reasons with
+    options.add_estimators(p, "intercept", [seed], f"{seed}, the seed's")
     p.add_argument(
         "--lookahead",
         type=options.positive_int,

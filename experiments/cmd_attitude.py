@@ -106,7 +106,13 @@ def request(args: argparse.Namespace) -> AttitudeRequest:
     if estimators is None:
         from kalman_vs_infoset.estim import registry
 
-        fallback = "perfect" if noises == ("none",) else "box"
+        # exact measurements: read as the state; noisy ones: the reference set
+        exact = noises == ("none",)
+        fallback = (
+            registry.first_with_role("attitude", "exact")
+            if exact
+            else registry.reference("attitude")
+        ).name
         try:
             estimators = options.split_list(
                 default_est or fallback, registry.names("attitude"), "attitude estimators"

@@ -19,7 +19,9 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   over the whole approach to the blind range whatever ``--steps`` is;
 * ``engagement_ms``: one full Fig. 3 engagement, both channels, game noise
   (``engagement_random_ms``: random noise); ``engagement_in_ukf_steps`` and
-  ``engagement_random_in_ukf_steps``: the same divided by ``ukf_step_us``;
+  ``engagement_random_in_ukf_steps``: the same divided by ``ukf_step_us`` (the
+  information set is the registry's reference estimator, the UKF the estimator with the
+  role ``yardstick``; the keys carry their registered names);
 * ``cost_exponent``: the slope of log(CPU time of the information set over a whole
   approach) against log(its number of steps), least squares over three approaches of
   about 100, 200 and 400 steps (``cost_steps``, ``cost_ms``). The approach is the same
@@ -82,8 +84,7 @@ def add_arguments(p) -> None:
 
 #: the impulse every timed step applies (m/s)
 BENCH_IMPULSE_MPS = 0.5
-#: estimators also timed over the whole approach, to the blind range
-WHOLE_APPROACH = ("infoset", "ukf")
+
 #: more steps than any approach has (the bearings stop at the blind range)
 _ALL_STEPS = 100_000
 #: time steps (s) of the approaches of the cost exponent: about 100, 200 and 400 steps
@@ -95,14 +96,23 @@ _FIRST_RUN = """
 import json, resource, sys, time
 import numpy as np
 from kalman_vs_infoset._numba_cache import CompileNotice
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 notice = CompileNotice("bench", stream=sys.stderr).install()
 sc = load_scenario(sys.argv[1])
-run_engagement(sc, "infoset", "random", np.random.default_rng(1))
+run_engagement(sc, registry.reference("intercept").name, "random", np.random.default_rng(1))
 r = resource.getrusage(resource.RUSAGE_SELF)
 print(json.dumps({"compile_s": notice.cpu_s, "cpu_s": r.ru_utime + r.ru_stime}))
 """
+
+
+def compared() -> tuple[str, str]:
+    """The reference set estimator and the yardstick baseline (registered names): both
+    also timed over the whole approach, to the blind range; costs are stated in the
+    yardstick's steps."""
+    yardstick = registry.first_with_role("intercept", "yardstick")
+    return registry.reference("intercept").name, yardstick.name
 
 
 def _bearings(model, steps: int, dt: float, rng) -> list[float]:
@@ -158,7 +168,7 @@ def cost_exponent(sc, dts: tuple[float, ...]) -> dict[str, Any]:
     log(steps), the approach cut into as many steps as each ``dt`` gives."""
     cost_ms, steps = [], []
     for dt in dts:
-        cpu_s, done = _approach_cpu_s("infoset", sc, _ALL_STEPS, dt)
+        cpu_s, done = _approach_cpu_s(compared()[0], sc, _ALL_STEPS, dt)
         cost_ms.append(cpu_s * 1e3)
         steps.append(done)
     slope = float(np.polyfit(np.log(steps), np.log(cost_ms), 1)[0])
@@ -172,7 +182,7 @@ def engagement_ms(sc, noise: str, repeat: int) -> float:
     times = []
     for _ in range(repeat):
         t0 = time.thread_time()
-        run_engagement(both, "infoset", noise, np.random.default_rng(1))
+        run_engagement(both, compared()[0], noise, np.random.default_rng(1))
         times.append((time.thread_time() - t0) * 1e3)
     return float(np.median(times))
 
@@ -208,7 +218,7 @@ def throughput(sc, runs: int, workers: int) -> dict[str, float]:
     with tempfile.TemporaryDirectory() as tmp, make_executor(workers) as pool:
         wall0, cpu0 = time.perf_counter(), _cpu_s()
         run_experiment(
-            sc, "infoset", "random", runs, 1, Path(tmp), workers=workers, progress=False,
+            sc, compared()[0], "random", runs, 1, Path(tmp), workers=workers, progress=False,
             executor=pool,
         )  # fmt: skip
         rss = _peak_rss_mb(getattr(pool, "_processes", {}) or {})
@@ -240,8 +250,9 @@ def run(args) -> dict[str, Any]:
     quick = args.quick
     n_steps, repeat = (5, 1) if quick else (args.steps, args.repeat)
     mc_runs = 2 if quick else args.mc_runs
+    ref, unit = compared()
     # warm-up: imports, compiled kernels, filterpy
-    step_cost_us("infoset", fig3, 5, 1)
+    step_cost_us(ref, fig3, 5, 1)
     engagement_ms(fig3, "random", 1)
     timed = {n: step_cost_us(n, fig3, n_steps, repeat) for n in registry.names("intercept")}
     steps = {n: us for n, (us, _) in timed.items()}
@@ -250,17 +261,17 @@ def run(args) -> dict[str, Any]:
     result["steps_timed"] = {n: k for n, (_, k) in timed.items()}
     result["engagement_ms"] = engagement_ms(fig3, "game", repeat)
     result["engagement_random_ms"] = engagement_ms(fig3, "random", repeat)
-    ukf_ms = result["ukf_step_us"] / 1e3
-    result["engagement_in_ukf_steps"] = result["engagement_ms"] / ukf_ms
-    result["engagement_random_in_ukf_steps"] = result["engagement_random_ms"] / ukf_ms
-    result["infoset_to_ukf_ratio"] = result["infoset_step_us"] / result["ukf_step_us"]
+    unit_ms = steps[unit] / 1e3
+    result[f"engagement_in_{unit}_steps"] = result["engagement_ms"] / unit_ms
+    result[f"engagement_random_in_{unit}_steps"] = result["engagement_random_ms"] / unit_ms
+    result[f"{ref}_to_{unit}_ratio"] = steps[ref] / steps[unit]
     if quick:  # the whole approach at a coarse step: a few dozen steps
-        whole = {n: _whole(n, fig3, COST_DT_S_QUICK[-1]) for n in WHOLE_APPROACH}
+        whole = {n: _whole(n, fig3, COST_DT_S_QUICK[-1]) for n in (ref, unit)}
     else:
-        whole = {n: step_cost_us(n, fig3, _ALL_STEPS, repeat) for n in WHOLE_APPROACH}
+        whole = {n: step_cost_us(n, fig3, _ALL_STEPS, repeat) for n in (ref, unit)}
     result["whole_approach_step_us"] = {n: us for n, (us, _) in whole.items()}
     result["whole_approach_steps"] = {n: k for n, (_, k) in whole.items()}
-    result["whole_approach_ratio"] = whole["infoset"][0] / whole["ukf"][0]
+    result["whole_approach_ratio"] = whole[ref][0] / whole[unit][0]
     result.update(cost_exponent(fig3, COST_DT_S_QUICK if quick else COST_DT_S))
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
     # interleaved and best-of-repeat: the machine's speed drifts (shared host)
@@ -298,11 +309,13 @@ def _whole(name: str, sc, dt: float) -> tuple[float, int]:
 
 def render(result: dict[str, Any]) -> str:
     m = result["machine"]
-    ukf = result["step_us"].get("ukf")
+    unit = compared()[1]
+    yard = result["step_us"].get(unit)
+    in_steps = f"{registry.get('intercept', unit).words} steps"
     timed = result.get("steps_timed", {})
     steps = [
         f"  {name:15s} {us:9.1f} us"
-        + (f"   ({us / ukf:.2f} x UKF)" if ukf else "")
+        + (f"   ({us / yard:.2f} x {registry.get('intercept', unit).words})" if yard else "")
         + (f"   over {timed[name]} steps" if name in timed else "")
         for name, us in result["step_us"].items()
     ]
@@ -323,9 +336,9 @@ def render(result: dict[str, Any]) -> str:
             )
             + f" (ratio {result['whole_approach_ratio']:.2f})",
             f"full Fig. 3 engagement, both channels: game {result['engagement_ms']:.0f} ms "
-            f"({result['engagement_in_ukf_steps']:.0f} UKF steps), random "
+            f"({result[f'engagement_in_{unit}_steps']:.0f} {in_steps}), random "
             f"{result['engagement_random_ms']:.0f} ms "
-            f"({result['engagement_random_in_ukf_steps']:.0f} UKF steps)",
+            f"({result[f'engagement_random_in_{unit}_steps']:.0f} {in_steps})",
             f"cost in approach length: exponent {result['cost_exponent']:.2f} ({cost})",
             f"Monte Carlo: {result['runs_per_s']:.2f} runs/s (1 worker), "
             f"{result['runs_per_s_2']:.2f} runs/s (2 workers), x{result['speedup_2_workers']:.2f}; "

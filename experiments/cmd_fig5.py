@@ -13,21 +13,27 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options, plots
 from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid
 from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
 from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
 
 VARIANTS = (("kp_fig5.toml", "bearing only"), ("kp_fig5_range.toml", "bearing + range"))
-#: the seed's estimator: its files keep the plain names (fig5_runs, fig5_cdf, ...)
-SEED_ESTIMATORS = ["infoset"]
+
+
+def seed_estimators() -> list[str]:
+    """The seed's estimator, the registry's reference: its files keep the plain names
+    (fig5_runs, fig5_cdf, ...)."""
+    return [registry.reference("intercept").name]
 
 
 def add_arguments(p) -> None:
     p.add_argument("--runs", type=options.runs_int, default=50,
                    help="runs per variant (default 50)")  # fmt: skip
     p.add_argument("--seed", type=options.seed_int, help="root seed (default: the scenario's)")
-    options.add_estimators(p, "intercept", SEED_ESTIMATORS, "infoset, the seed's")
+    ref = seed_estimators()
+    options.add_estimators(p, "intercept", ref, f"{ref[0]}, the seed's")
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--out", default="results/fig5", help="output directory")
     options.add_runner(p)
@@ -36,7 +42,7 @@ def add_arguments(p) -> None:
 def _stem(args) -> str:
     """The files' stem: ``fig5``, with the estimators and seed when not the seed's, so
     another choice never replaces the seed's figure."""
-    ests = "" if args.estimators == SEED_ESTIMATORS else "-" + ",".join(args.estimators)
+    ests = "" if args.estimators == seed_estimators() else "-" + ",".join(args.estimators)
     return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}")
 
 

@@ -2,13 +2,14 @@
 
 What encodes what, the same way in every figure:
 
-* **colour = estimator** (Okabe-Ito palette, safe for the common colour-vision
-  deficiencies, for the package's first estimators): the information set blue, the box
-  sky blue, EKF vermillion, UKF bluish green, the perfect-information point reddish
-  purple; the other registered families have fixed darker hues (ellipsoid orange,
-  zonotope brown, H-infinity wine, particle filter indigo), so a figure with all eight
-  intercept estimators has eight colours; estimators registered later take spare
-  colours by name (stable across figures and runs);
+* **colour = estimator**, declared by each estimator's registration
+  (:mod:`kalman_vs_infoset.estim.registry`; Okabe-Ito palette, safe for the common
+  colour-vision deficiencies, for the package's first estimators: the information set
+  blue, the box sky blue, EKF vermillion, UKF bluish green, the perfect-information
+  point reddish purple; the other families darker hues: ellipsoid orange, zonotope
+  brown, H-infinity wine, particle filter indigo), so a figure with all eight intercept
+  estimators has eight colours; an estimator registered without a colour takes a spare
+  one by name (stable across figures and runs);
 * **line style = noise**: random solid, game dashed, bias dotted, none dash-dotted,
   the white-box adversaries (targeted, lookahead) and switching errors dash-dot
   patterns of their own;
@@ -42,17 +43,6 @@ OKABE_ITO = {
     "vermillion": "#D55E00",
     "reddish_purple": "#CC79A7",
 }
-ESTIMATOR_COLOURS = {
-    "infoset": OKABE_ITO["blue"],
-    "box": OKABE_ITO["sky_blue"],
-    "ekf": OKABE_ITO["vermillion"],
-    "ukf": OKABE_ITO["bluish_green"],
-    "perfect": OKABE_ITO["reddish_purple"],
-    "ellipsoid": OKABE_ITO["orange"],
-    "zonotope": "#8C6D1F",  # brown
-    "hinf": "#882255",  # wine (Tol's muted palette)
-    "pf": "#332288",  # indigo (Tol's muted palette)
-}
 #: for estimators without a fixed colour (yellow is kept for fills only)
 _SPARE = ("#44AA99", "#999933", "#AA4499", "#7F7F7F")
 NOISE_STYLES = {
@@ -74,26 +64,22 @@ DPI = 110
 SIZE_ONE = (6.4, 4.2)
 
 
+def _registrations(name: str):
+    from kalman_vs_infoset.estim import registry  # the registry, not the style, is heavy
+
+    return registry.by_name(name)
+
+
 def estimator_colour(name: str) -> str:
-    """The colour of an estimator: fixed for the package's own, else by name."""
-    if name in ESTIMATOR_COLOURS:
-        return ESTIMATOR_COLOURS[name]
+    """The colour of an estimator: its registration's, else a spare one chosen by name."""
+    for reg in _registrations(name):
+        if reg.colour:
+            return reg.colour
     digest = hashlib.sha256(name.encode()).digest()
     return _SPARE[digest[0] % len(_SPARE)]
 
 
-#: legends in words: what an estimator and a noise kind are
-ESTIMATOR_WORDS = {
-    "infoset": "information set",
-    "box": "guaranteed box",
-    "ekf": "EKF",
-    "ukf": "UKF",
-    "perfect": "state as measured",
-    "ellipsoid": "ellipsoid",
-    "zonotope": "zonotope",
-    "hinf": "H-infinity filter",
-    "pf": "particle filter",
-}
+#: legends in words: what a noise kind is
 NOISE_WORDS = {
     "random": "random errors",
     "game": "game errors",
@@ -108,11 +94,13 @@ NOISE_WORDS = {
 def words(estimator: str, noise: str | None = None) -> str:
     """An estimator (and a noise kind) in words for a legend, e.g. ``"UKF, random errors"``.
 
-    Exact measurements read directly are ``"exact state"``.
+    The estimator's words are its registration's label (else its name); exact
+    measurements read directly (an estimator with the role ``exact``) are ``"exact state"``.
     """
-    if estimator == "perfect" and noise == "none":
+    regs = _registrations(estimator)
+    if noise == "none" and any("exact" in r.roles for r in regs):
         return "exact state"
-    est = ESTIMATOR_WORDS.get(estimator, estimator)
+    est = next((r.label for r in regs if r.label), estimator)
     return est if noise is None else f"{est}, {NOISE_WORDS.get(noise, noise)}"
 
 

@@ -157,7 +157,7 @@ def paper_marks(sc: InterceptScenario) -> dict[str, tuple[float | None, float | 
 def draw_traces(files, sc: InterceptScenario) -> list:
     """The figures of freshly written traces, with the paper's printed miss and fuel of
     the scenario's ``[reference]`` marked."""
-    from kalman_vs_infoset.experiments.cmd_plot import plot_files  # matplotlib: lazily
+    from kalman_vs_infoset.experiments.plots_traces import plot_files  # matplotlib: lazily
 
     steps = [f for f in files if str(f).endswith("-trace.parquet")]
     return plot_files(steps, paper=paper_marks(sc))

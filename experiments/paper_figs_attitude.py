@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
 from kalman_vs_infoset.experiments.attitude_loops import loop_of
@@ -38,6 +39,12 @@ QUICK = {
     "smallsat_rw.toml": ["simulation.control_period_s=0.05"],
     "gyrostat_game.toml": ["simulation.control_period_s=0.2"],
 }
+
+
+def exact_estimator() -> str:
+    """The estimator reading the measurement as the state (role ``exact``): with exact
+    measurements, the exact state the papers' figures show."""
+    return registry.first_with_role("attitude", "exact").name
 
 
 def trace(ctx, scenario: str, controller: str, noise: str, estimator: str, overrides=()):
@@ -87,10 +94,10 @@ def history_figure(ctx, name, traces, column, ylabel, title, log=False, paper=No
 
 # -- seed 001 --------------------------------------------------------------------------
 def akimov(ctx) -> dict[str, Any]:
-    eff, config = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect")
+    eff, config = trace(ctx, "smallsat_rw.toml", "pd", "none", exact_estimator())
     k_w = float(config.pd.k_w)
     kq9 = float(baseline_kq(k_w, "vector"))
-    base, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect", [f"pd.k_q={kq9!r}"])
+    base, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", exact_estimator(), [f"pd.k_q={kq9!r}"])
     out = {}
     points = {
         "eff": pa.segment_points(eff, _settle(eff)),
@@ -106,7 +113,9 @@ def akimov(ctx) -> dict[str, Any]:
             (axes[0, 0], "momentum_Nms", "momentum_max_Nms", "wheel momentum L_z, N m s"),
             (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
         ):
-            ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"), label=f"exact state, {what}")
+            ax.plot(
+                z["t_s"], z[col], **fs.line(exact_estimator(), "none"), label=f"exact state, {what}"
+            )
             for s in (-1, 1):
                 ax.plot(z["t_s"], s * z[lim], color=fs.REFERENCE, lw=0.8, label="limit")
             ax.set_ylabel(lab)
@@ -125,7 +134,7 @@ def akimov(ctx) -> dict[str, Any]:
     _zoom(ctx, "akimov_fig5", eff, ts, "akimov_fig5: the final transient (segment 4-5)",
           points=points["eff"])  # fmt: skip
     twice, _ = trace(
-        ctx, "smallsat_rw.toml", "pd", "none", "perfect", ['pd.quaternion_term="twice"']
+        ctx, "smallsat_rw.toml", "pd", "none", exact_estimator(), ['pd.quaternion_term="twice"']
     )
     t2 = _settle(twice)
     _zoom(
@@ -161,7 +170,7 @@ def _history_axis(ctx, name, df, title, points) -> None:
     axes[0, 0].plot(
         z["t_s"],
         z["error_deg"],
-        **fs.line("perfect", "none"),
+        **fs.line(exact_estimator(), "none"),
         label="exact state: rotation about z from the target",
     )
     axes[0, 0].set_xlabel("time t, s")
@@ -187,7 +196,7 @@ def _zoom(ctx, name, df, settle_s, title, log=False, points=None, note=None) -> 
     ax.plot(
         d["t_s"],
         d["angle_deg"],
-        **fs.line("perfect", "none"),
+        **fs.line(exact_estimator(), "none"),
         label=f"exact state: error angle, settles at {settle_s:.2f} s",
     )
     ax.axvline(
@@ -231,7 +240,7 @@ def _gain_figures(ctx) -> dict[str, Any]:
         kw,
         kq,
         ".",
-        color=fs.estimator_colour("perfect"),
+        color=fs.estimator_colour(exact_estimator()),
         ms=4,
         label="curve 2: efficient coefficients (least settle time per k_w)",
     )
@@ -258,7 +267,7 @@ def _gain_figures(ctx) -> dict[str, Any]:
         kw,
         kq,
         ".-",
-        color=fs.estimator_colour("perfect"),
+        color=fs.estimator_colour(exact_estimator()),
         ms=3,
         lw=0.8,
         label="curve 2: efficient coefficients (ours)",
@@ -302,14 +311,14 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
         list(f0),
         list(f0.values()),
         "x",
-        color=fs.estimator_colour("perfect"),
+        color=fs.estimator_colour(exact_estimator()),
         label="ours: efficient-curve fit per angle",
     )
     grid = np.linspace(0.2, 6.0, 200)
     ax.plot(
         grid,
         gs.f0_model(np.radians(grid), **fit),
-        color=fs.estimator_colour("perfect"),
+        color=fs.estimator_colour(exact_estimator()),
         label="ours: fit of eq. (28)",
     )
     ax.set_xlabel("initial angle phi0, deg")
@@ -323,7 +332,12 @@ def _f0_figures(ctx, fig15_times) -> dict[str, Any]:
     fig, axes = fs.figure(1, 1, size=(6.6, 4.2))
     ax = axes[0, 0]
     ax.plot(ang, times["baseline"], color=fs.REFERENCE, ls="--", label="rule (10): k_q = k_w^2/2")
-    ax.plot(ang, times["fitted"], color=fs.estimator_colour("perfect"), label="rule (29), our fit")
+    ax.plot(
+        ang,
+        times["fitted"],
+        color=fs.estimator_colour(exact_estimator()),
+        label="rule (29), our fit",
+    )
     ax.plot(ang, times["seed_eq29"], color=fs.PAPER, ls=":", label="paper: rule (29), its fit")
     ax.set_xlabel("initial angle phi0, deg")
     ax.set_ylabel("settle time, s")
@@ -361,7 +375,7 @@ def _fig13(ctx, curves, f0, table) -> None:
 
 # -- seed 004 --------------------------------------------------------------------------
 def gyrostat(ctx) -> dict[str, Any]:
-    quiet, setup = trace(ctx, "gyrostat_game.toml", "game", "none", "perfect")
+    quiet, setup = trace(ctx, "gyrostat_game.toml", "game", "none", exact_estimator())
     game, _ = trace(ctx, "gyrostat_game.toml", "game", "game", "box")
     tau = float(setup.design.tau_s)
     mark = [(tau, f"guaranteed time tau = {tau:.1f} s (eq. 2.8)")]

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_intercept, plots_sets
 from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_experiment
@@ -24,6 +25,16 @@ from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.traces import intercept_trace
 
 NOISES = ("random", "game")
+
+
+def _seed_estimator() -> str:
+    """The seed's estimator: the registry's reference (the information set)."""
+    return registry.reference("intercept").name
+
+
+def _baselines() -> tuple[str, ...]:
+    """The Kalman baselines the set is compared with (the EKF and UKF), by rank."""
+    return tuple(r.name for r in registry.with_role("intercept", "baseline"))
 
 
 def _paper(sc) -> dict[str, tuple[Any, Any]]:
@@ -38,19 +49,20 @@ def fig3(ctx) -> dict[str, Any]:
     sc = load_scenario(ctx.scenarios / "kp_fig3.toml")
     seed = sc.experiment.seed
     frames = {}
-    for est in ("infoset", "ekf", "ukf"):
+    ref = _seed_estimator()
+    for est in (ref, *_baselines()):
         for noise in NOISES:
             frames[est, noise] = intercept_trace(sc, est, noise, seed, [0], sets_every=0)[0]
     steps = pd.concat(frames.values(), ignore_index=True)
     ours = {
         n: (
-            float(frames["infoset", n]["miss_m"].iloc[0]),
-            float(frames["infoset", n]["final_fuel_mps"].iloc[0]),
+            float(frames[ref, n]["miss_m"].iloc[0]),
+            float(frames[ref, n]["final_fuel_mps"].iloc[0]),
         )
         for n in NOISES
     }
     fig = plots_intercept.control_processes(
-        steps[steps["estimator"] == "infoset"], 0, "infoset", list(NOISES), paper=_paper(sc)
+        steps[steps["estimator"] == ref], 0, ref, list(NOISES), paper=_paper(sc)
     )
     ctx.save(fig, "kp_fig3")
     fig, axes = fs.figure(3, 2, size=(12.0, 8.0), sharex="col")
@@ -67,7 +79,7 @@ def fig3(ctx) -> dict[str, Any]:
             float(frames[e, n]["miss_m"].iloc[0]),
             float(frames[e, n]["final_fuel_mps"].iloc[0]),
         )
-        for e in ("ekf", "ukf")
+        for e in _baselines()
         for n in NOISES
     }
     return {
@@ -79,7 +91,7 @@ def fig3(ctx) -> dict[str, Any]:
 def fig4(ctx) -> dict[str, Any]:
     sc = load_scenario(ctx.scenarios / "kp_fig3.toml", ["range_finder.enabled=true"])
     steps, sets, _ = intercept_trace(
-        sc, "infoset", "random", sc.experiment.seed, [0], sets_every=1000
+        sc, _seed_estimator(), "random", sc.experiment.seed, [0], sets_every=1000
     )
     step = int(sets.loc[sets["t_s"] == 1.0, "step"].iloc[0])
     fig = plots_sets.stacked_3d(
@@ -107,6 +119,7 @@ def fig4(ctx) -> dict[str, Any]:
 def fig5(ctx) -> dict[str, Any]:
     frames, means = [], {}
     sc = None
+    ref = _seed_estimator()
     sc3 = load_scenario(ctx.scenarios / "kp_fig3.toml")
     for fname, variant in (
         ("kp_fig5.toml", "bearings only"),
@@ -116,7 +129,7 @@ def fig5(ctx) -> dict[str, Any]:
         for noise in NOISES:
             df = run_experiment(
                 sc,
-                "infoset",
+                ref,
                 noise,
                 ctx.runs,
                 sc.experiment.seed,
@@ -146,7 +159,7 @@ def fig5(ctx) -> dict[str, Any]:
                 np.r_[v[0], v],
                 np.r_[0.0, p],
                 where="post",
-                **{**fs.line("infoset", noise), "lw": lw},
+                **{**fs.line(ref, noise), "lw": lw},
                 label=f"{number}: {variant}, {fs.NOISE_WORDS[noise]} (n={len(v)})",
             )
             mid = min(len(v) - 1, len(v) // 2)
@@ -157,7 +170,7 @@ def fig5(ctx) -> dict[str, Any]:
                 textcoords="offset points",
                 fontsize=9,
                 fontweight="bold",
-                color=fs.estimator_colour("infoset"),
+                color=fs.estimator_colour(ref),
             )
         # the Fig. 3 engagement (one run, kp_fig3.toml), not the Fig. 5 box: above the CDF
         ax.axhline(1.0, color=fs.REFERENCE, lw=0.6, label="CDF = 1; above: one engagement")
@@ -170,7 +183,7 @@ def fig5(ctx) -> dict[str, Any]:
                 )  # fmt: skip
             ax.plot(
                 [one[noise][k]], [1.13], marker=marker, ms=8, mfc="none", ls="none", clip_on=False,
-                color=fs.estimator_colour("infoset"),
+                color=fs.estimator_colour(ref),
                 label=f"ours, the same engagement, {fs.NOISE_WORDS[noise]}: {one[noise][k]:.3g}",
             )  # fmt: skip
         if col == "miss_m":
@@ -220,7 +233,7 @@ def _fig3_engagement(ctx) -> dict[str, tuple[float, float]]:
     out = {}
     for noise in NOISES:
         df = run_experiment(
-            sc3, "infoset", noise, 1, sc3.experiment.seed, ctx.out / "runs", workers=1,
+            sc3, _seed_estimator(), noise, 1, sc3.experiment.seed, ctx.out / "runs", workers=1,
             progress=False,
         )  # fmt: skip
         out[noise] = (float(df["miss_m"].iloc[0]), float(df["fuel_mps"].iloc[0]))

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments.attitude_loops import loop_of
-from kalman_vs_infoset.experiments.paper_figs_attitude import QUICK, trace
+from kalman_vs_infoset.experiments.paper_figs_attitude import QUICK, exact_estimator, trace
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.scenario import read
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
@@ -43,7 +43,7 @@ def akimov_fig8(ctx) -> dict[str, Any]:
     peaks = {}
     config = None
     for a in angles:
-        df, config = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect",
+        df, config = trace(ctx, "smallsat_rw.toml", "pd", "none", exact_estimator(),
                            [f"maneuver.angle_deg={a!r}"])  # fmt: skip
         peaks[a] = _peaks(df)
     pd_ = config.pd
@@ -67,7 +67,7 @@ def akimov_fig8(ctx) -> dict[str, Any]:
         ax.text(np.sqrt(a * b), 1.12, name.split(":")[0], ha="center", fontsize=12,
                 fontweight="bold")  # fmt: skip
     a_arr = np.array(list(peaks))
-    ax.plot(a_arr, [peaks[a][0] for a in a_arr], "o-", color=fs.estimator_colour("perfect"),
+    ax.plot(a_arr, [peaks[a][0] for a in a_arr], "o-", color=fs.estimator_colour(exact_estimator()),
             label="exact state: peak |torque| / M_max")  # fmt: skip
     ax.plot(a_arr, [peaks[a][1] for a in a_arr], "s--", color=fs.OKABE_ITO["blue"],
             label="exact state: peak |wheel momentum| / L_max")  # fmt: skip
@@ -100,7 +100,7 @@ def akimov_fig8(ctx) -> dict[str, Any]:
 
 def akimov_fig9(ctx) -> dict[str, Any]:
     phi0 = PAPER_PHI10_DEG
-    df, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", "perfect",
+    df, _ = trace(ctx, "smallsat_rw.toml", "pd", "none", exact_estimator(),
                   [f"maneuver.angle_deg={phi0!r}"])  # fmt: skip
     z = df[df["axis"] == 3]
     fig, axes = fs.figure(2, 1, size=(7.0, 5.6), sharex="col")
@@ -109,7 +109,7 @@ def akimov_fig9(ctx) -> dict[str, Any]:
         (axes[1, 0], "torque_Nm", "torque_max_Nm", "torque on the body M_z, N m"),
     ):
         limit = float(z[lim].iloc[0])
-        ax.plot(z["t_s"], z[col], **fs.line("perfect", "none"),
+        ax.plot(z["t_s"], z[col], **fs.line(exact_estimator(), "none"),
                 label=f"exact state (limit +-{limit:g}, off the panel)")  # fmt: skip
         ax.set_ylabel(lab)
         ax.set_xlabel("time t, s")
@@ -132,7 +132,7 @@ def lqr_lyapunov(ctx) -> dict[str, Any]:
     config = loop_of("lqr").prepare(src, data, "lqr", "none")
     rec: dict = {}
     rng = np.random.default_rng(run_seed(0, 0))
-    simulate_runs(config, "lqr", "none", [rng], "perfect", rec)
+    simulate_runs(config, "lqr", "none", [rng], exact_estimator(), rec)
     law = make_controller("lqr", config)
     x = rec["states"][:, 0]
     v = law.lyapunov(x)
@@ -142,14 +142,14 @@ def lqr_lyapunov(ctx) -> dict[str, Any]:
     roundoff = 1e-12 * float(v[0])  # 2 (1 - lambda0) bottoms out near 1e-16
     fig, axes = fs.figure(2, 1, size=(7.0, 6.0), sharex="col")
     ax = axes[0, 0]
-    ax.plot(t, v, color=fs.estimator_colour("perfect"), lw=1.5,
+    ax.plot(t, v, color=fs.estimator_colour(exact_estimator()), lw=1.5,
             label="exact state: V = w^T P12^-1 Z^-1 w / 2 + 2 (1 - lambda0)")  # fmt: skip
     ax.set_yscale("log")
     ax.set_ylabel("Lyapunov function V, -")
     ax.set_xlabel("time t, s")
     fs.legend(ax, loc="upper right", fontsize=7)
     ax = axes[1, 0]
-    ax.plot(t, angle[:, 0], color=fs.estimator_colour("perfect"), lw=1.5,
+    ax.plot(t, angle[:, 0], color=fs.estimator_colour(exact_estimator()), lw=1.5,
             label="exact state: error angle")  # fmt: skip
     ax.set_yscale("log")
     ax.set_ylabel("error angle, deg")

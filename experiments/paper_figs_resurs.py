@@ -19,6 +19,7 @@ from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_attitude as pa
 from kalman_vs_infoset.experiments.paper_figs_attitude import (
     components_figure,
+    exact_estimator,
     history_figure,
     trace,
 )
@@ -28,10 +29,15 @@ PAPER_Z = {"energy": 2150.0, "euler": 11200.0}
 
 
 def resurs(ctx) -> dict[str, Any]:
-    energy, setup = trace(ctx, "resurs_p.toml", "energy", "none", "perfect")
-    euler, _ = trace(ctx, "resurs_p.toml", "euler", "none", "perfect")
+    energy, setup = trace(ctx, "resurs_p.toml", "energy", "none", exact_estimator())
+    euler, _ = trace(ctx, "resurs_p.toml", "euler", "none", exact_estimator())
     u0, _ = trace(
-        ctx, "resurs_p.toml", "energy", "none", "perfect", ["energy.u0_Nm=[-5.4, -1.1, -2.4]"]
+        ctx,
+        "resurs_p.toml",
+        "energy",
+        "none",
+        exact_estimator(),
+        ["energy.u0_Nm=[-5.4, -1.1, -2.4]"],
     )
     turn = float(setup.duration_s)
     mark = [(turn, "paper: turn ends at 300 s within 0.2 deg, 0.02 deg/s")]
@@ -44,7 +50,7 @@ def resurs(ctx) -> dict[str, Any]:
             ax.plot(
                 d["t_s"],
                 d[own],
-                **fs.line("perfect", "none"),
+                **fs.line(exact_estimator(), "none"),
                 label=f"given system x_{k + 3 * col} (exact state)",
             )
             ax.plot(
@@ -156,11 +162,11 @@ def resurs(ctx) -> dict[str, Any]:
     k_end = energy.loc[energy["t_s"] <= turn + 1e-9].groupby("axis")["momentum_Nms"].last()
     f1_0 = 2.65e-5  # what the paper's 300-s point would take (README, "Resurs-P")
     f1_up, _ = trace(
-        ctx, "resurs_p.toml", "energy", "none", "perfect", [f"energy.f1=[{f1_0}, 5e-3]"]
+        ctx, "resurs_p.toml", "energy", "none", exact_estimator(), [f"energy.f1=[{f1_0}, 5e-3]"]
     )
     up = _at_turn(f1_up, turn)
     gentle, _ = trace(
-        ctx, "resurs_p.toml", "euler", "none", "perfect", ["euler.accel_time_s=100.0"]
+        ctx, "resurs_p.toml", "euler", "none", exact_estimator(), ["euler.accel_time_s=100.0"]
     )
     end = energy[(energy["axis"] == 1) & (energy["t_s"] <= turn + 1e-9)].iloc[-1]
     return {
@@ -217,11 +223,11 @@ def _error_zoom(axes, energy: pd.DataFrame, turn_s: float, tol_deg: float, tol_d
         (axes[0], "angle_deg", tol_deg, "deg"),
         (axes[1], "rate_norm_degps", tol_degps, "deg/s"),
     ):
-        ax.plot(d["t_s"], d[col], **fs.line("perfect", "none"), label="exact state")
+        ax.plot(d["t_s"], d[col], **fs.line(exact_estimator(), "none"), label="exact state")
         ax.axhspan(0.0, tol, color=fs.OKABE_ITO["yellow"], alpha=0.35,
                    label=f"paper: within {tol:g} {unit} at the end of the turn")  # fmt: skip
         ax.axvline(turn_s, color=fs.PAPER, ls=":", lw=1.2, label="paper: the turn ends at 300 s")
-        ax.plot([turn_s], [at[col]], "o", color=fs.estimator_colour("perfect"), ms=6,
+        ax.plot([turn_s], [at[col]], "o", color=fs.estimator_colour(exact_estimator()), ms=6,
                 label=f"ours at {turn_s:g} s: {at[col]:.3g} {unit}")  # fmt: skip
         ax.set_ylim(0.0, 1.6 * max(float(at[col]), tol))
         ax.set_xlabel("time t = i dt, s")

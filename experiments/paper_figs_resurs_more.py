@@ -15,8 +15,9 @@ import itertools
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import figstyle as fs
-from kalman_vs_infoset.experiments.paper_figs_attitude import trace
+from kalman_vs_infoset.experiments.paper_figs_attitude import exact_estimator, trace
 from kalman_vs_infoset.experiments.paper_figs_resurs import PAPER_Z
 from kalman_vs_infoset.guidance.attitude.energy import (
     INERTIA_SIGN_READINGS,
@@ -26,8 +27,11 @@ from kalman_vs_infoset.guidance.attitude.energy import (
 
 #: seed section 5 (Fig. 8): the initial torques with which the oscillation disappears
 PAPER_U0_NM = (-5.4, -1.1, -2.4)
-#: the estimator of the noisy turn (any name of the attitude registry)
-NOISY_ESTIMATOR = "ukf"
+
+
+def noisy_estimator() -> str:
+    """The estimator of the noisy turn: the attitude Kalman baseline (the UKF)."""
+    return registry.first_with_role("attitude", "baseline").name
 
 
 def reading_name(signs: tuple[int, ...]) -> str:
@@ -55,7 +59,7 @@ def inertia_signs(ctx) -> dict[str, Any]:
         over = [f"inertia_products_sign={list(signs)}"]
         name = reading_name(signs)
         for ctrl in ("energy", "euler"):
-            df, setup = trace(ctx, "resurs_p.toml", ctrl, "none", "perfect", over)
+            df, setup = trace(ctx, "resurs_p.toml", ctrl, "none", exact_estimator(), over)
             d = df[(df["axis"] == 1) & (df["t_s"] <= setup.duration_s + 1e-9)]
             z[ctrl][name] = float(d["energy_N2m2s"].iloc[-1])
         u0[name] = [round(float(v), 3) for v in _first_step_u0(signs, setup)]
@@ -96,8 +100,9 @@ def inertia_signs(ctx) -> dict[str, Any]:
 
 
 def noisy(ctx) -> dict[str, Any]:
-    exact, setup = trace(ctx, "resurs_p.toml", "energy", "none", "perfect")
-    noisy_df, _ = trace(ctx, "resurs_p.toml", "energy", "random", NOISY_ESTIMATOR)
+    noisy_name = noisy_estimator()
+    exact, setup = trace(ctx, "resurs_p.toml", "energy", "none", exact_estimator())
+    noisy_df, _ = trace(ctx, "resurs_p.toml", "energy", "random", noisy_name)
     turn = float(setup.duration_s)
     fig, axes = fs.figure(3, 1, size=(7.6, 8.4), sharex="col")
     ax = axes[0, 0]
@@ -114,11 +119,11 @@ def noisy(ctx) -> dict[str, Any]:
     d = noisy_df[noisy_df["axis"] == 1]
     err = noisy_df.assign(miss=noisy_df["est_error_deg"] - noisy_df["error_deg"])
     est_err = err.groupby("step")["miss"].apply(lambda v: float(np.linalg.norm(v)))
-    style = fs.line(NOISY_ESTIMATOR, "random")
+    style = fs.line(noisy_name, "random")
     ax.plot(d["t_s"], est_err.to_numpy(), **{**style, "lw": 0.8},
-            label=f"{fs.words(NOISY_ESTIMATOR)}: |estimate - truth| of the angles")  # fmt: skip
+            label=f"{fs.words(noisy_name)}: |estimate - truth| of the angles")  # fmt: skip
     ax.plot(d["t_s"], d["knowledge_bound_deg"], color=fs.REFERENCE, lw=1.0,
-            label=f"{fs.words(NOISY_ESTIMATOR)}: its attitude bound")  # fmt: skip
+            label=f"{fs.words(noisy_name)}: its attitude bound")  # fmt: skip
     ax.set_yscale("log")
     ax.set_ylabel("estimation error, deg")
     fs.legend(ax, loc="upper right", fontsize=6.5)
@@ -135,7 +140,7 @@ def noisy(ctx) -> dict[str, Any]:
         a.set_xlabel("time t = i dt, s")
     fig.suptitle(
         "resurs_noisy: the energy-saving turn under noisy measurements (the paper's K_eps,\n"
-        f"bounded), the state read from the {fs.words(NOISY_ESTIMATOR)}, against the exact state"
+        f"bounded), the state read from the {fs.words(noisy_name)}, against the exact state"
     )
     ctx.save(fig, "resurs_noisy")
     k = int(round(turn / setup.dt_s))
@@ -146,7 +151,7 @@ def noisy(ctx) -> dict[str, Any]:
 
     return {
         "resurs_noisy": {
-            "estimator": NOISY_ESTIMATOR,
+            "estimator": noisy_name,
             "Z_noisy": at_turn(noisy_df, "energy_N2m2s"),
             "Z_exact": at_turn(exact, "energy_N2m2s"),
             "angle_at_300s_deg": {

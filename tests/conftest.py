@@ -18,7 +18,7 @@ settings.register_profile("fuzz", derandomize=False, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
-# Tests write only to temporary folders (issue 15, defect o: `make test` used to write
+# Tests write only to temporary folders (`make test` used to write
 # into the user's results/): every test module is checked against a snapshot of the
 # repository's results/ folder taken before it ran.
 _RESULTS = Path(__file__).resolve().parents[1] / "results"

@@ -1,4 +1,4 @@
-"""Typed attitude scenarios (issue 15, item 2): the reaction-wheel, gyrodine and gyrostat
+"""Typed attitude scenarios (docs/models.md §2.5): the reaction-wheel, gyrodine and gyrostat
 tables (:mod:`experiments.sim.attitude_rw_config`, :mod:`experiments.sim.attitude_cmg_config`,
 :mod:`kalman_vs_infoset.experiments.sim.gyrostat_config`).
 

@@ -2,8 +2,8 @@
 
 Reference values come from the seed's equations re-derived independently here (momentum
 balance of 1.1, the printed form of 2.1, Cauchy-Schwarz 2.3, the double-integrator time
-2.8), from numpy/scipy (matrix inverse, solve_ivp) and from the acceptance criteria of
-issue 7 (turn within tau, |u_i| <= alpha_i under every disturbance kind).
+2.8), from numpy/scipy (matrix inverse, solve_ivp) and from the seed's claims (turn
+within tau, |u_i| <= alpha_i under every disturbance kind).
 """
 
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""The attitude loops on the one runner (issue 15): results do not depend on the worker
+"""The attitude loops on the one runner (docs/models.md §3): results do not depend on the worker
 count or the scheduler, and an interrupted run resumes to identical results."""
 
 from __future__ import annotations

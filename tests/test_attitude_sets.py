@@ -1,5 +1,5 @@
-"""Attitude zonotope and ellipsoid (issue 14): the guarantee, the set operations, the maps'
-remainders, tightness against the box, the registry and the command line.
+"""Attitude zonotope and ellipsoid (docs/models.md §2.5): the guarantee, the set operations,
+the maps' remainders, tightness against the box, the registry and the command line.
 
 Independent references: scipy's ``Rotation`` (rotation vectors, products), scipy's DOP853
 (:func:`guidance.attitude.plant.propagate`) for the truth, the single-instance sets of

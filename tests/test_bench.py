@@ -11,7 +11,7 @@ from kalman_vs_infoset.estim import registry
 
 
 def test_bench_reports_every_field_side_by_side(capsys):
-    """`bench --json` (issue 5): all costs measured in one process, in CPU time
+    """`bench --json` (docs/models.md §3.1): all costs measured in one process, in CPU time
     (``--quick``: a few steps, short approaches, two Monte Carlo runs)."""
     r = cli_inproc(capsys, "bench", "--json", "--quick")
     assert r.returncode == 0, r.stderr

@@ -1,5 +1,5 @@
-"""Regression tests of the defects a-r found by trying the package as a new user and as a
-tester would (issue 15). Each failed on the code before the fix.
+"""Regression tests of the defects found by trying the package as a new user and as a
+tester would. Each failed on the code before the fix.
 
 "One line" = one line on stderr, exit status 2, no traceback, nothing half-written.
 """

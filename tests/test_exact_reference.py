@@ -1,5 +1,5 @@
-"""The exact reference of one channel (kalman_vs_infoset.estim.intercept.exact_reference, issue 12
-item 1).
+"""The exact reference of one channel (kalman_vs_infoset.estim.intercept.exact_reference,
+docs/models.md §1.4).
 
 Checked against computations that share nothing with it: a closed form (two
 bearings triangulate), brute force (consistent trajectories found by rejection
@@ -160,7 +160,7 @@ def test_feasible_initial_range_is_an_interval_holding_the_truth():
     e and over all e: the truth's x0 is inside; inner and outer ends agree to 10 cm;
     just outside the outer ends nothing is consistent, and points inside the inner
     interval are (convexity: an interval, no holes); the bearings alone have pinned
-    the range to a tenth of the box (issue 12: 37 km of 1000 at 90 s)."""
+    the range to a tenth of the box (docs/models.md §1.4: 37 km of 1000 at 90 s)."""
     model = ChannelModel()
     box = PriorBox((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3), (57.9e3, 58.1e3))
     x0, e = 5801.3e3, 57.95e3

@@ -1,4 +1,4 @@
-"""Command line, scenario validation and the Monte Carlo harness (docs/models.md §3, issue 5)."""
+"""Command line, scenario validation and the Monte Carlo harness (docs/models.md §3)."""
 
 import json
 import subprocess

@@ -68,7 +68,7 @@ def _assert_inside(b, row):
     kind=st.sampled_from(["uniform", "bound", "switch"]),
     seed=st.integers(0, 2**16),
 )
-@example(y=-10e3, vy=-100.0, x0=6301.299e3, e=58.1e3, kind="bound", seed=0)  # issue 12
+@example(y=-10e3, vy=-100.0, x0=6301.299e3, e=58.1e3, kind="bound", seed=0)  # once failed
 def test_truth_inside_at_every_step_in_physical_coordinates(y, vy, x0, e, kind, seed):
     """Seed 003 section 4's guarantee, for any state of the a-priori box (corners
     included) and any closing speed of the interval: errors uniform, held at the

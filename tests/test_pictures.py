@@ -1,4 +1,4 @@
-"""Traces and figures (issue 13): what a trace holds, that recording only observes, and
+"""Traces and figures: what a trace holds, that recording only observes, and
 that every figure is fit for print (checked through matplotlib's objects, not pixels).
 
 Every figure the package saves goes through :func:`kalman_vs_infoset.experiments.figstyle.save`; the

@@ -1,4 +1,4 @@
-"""Soundness of the set estimators in physical coordinates (issue 12, item 3).
+"""Soundness of the set estimators in physical coordinates (docs/models.md §1.4).
 
 The truth is drawn the way the a-priori data describe it, not in the estimator's
 own coordinates: lateral position ``Y`` and velocity ``V`` in their boxes, initial

@@ -1,4 +1,4 @@
-"""The repository stands alone (issue 13, item 5).
+"""The repository stands alone.
 
 A user's clone holds neither the project's internal brief nor the paper texts, so no
 tracked file may point at them; the package documents its models in ``docs/models.md``

@@ -1,4 +1,4 @@
-"""``kvi tightness`` (issue 12 item 2): a set's interval of the miss
+"""``kvi tightness`` (docs/models.md §1.4): a set's interval of the miss
 against the exact reference, on short runs."""
 
 import json

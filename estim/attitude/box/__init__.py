@@ -5,5 +5,6 @@ from kalman_vs_infoset.estim.registry import declare
 
 REGISTRATIONS = (
     declare("box", "attitude", BoxAttitudeOptions,
-            doc="guaranteed box on the error state", rank=2),
+            doc="guaranteed box on the error state", rank=2, label="guaranteed box", reference=True,
+            colour="#56B4E9"),  # Okabe & Ito (2008) sky blue
 )  # fmt: skip

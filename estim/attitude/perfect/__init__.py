@@ -12,5 +12,6 @@ def _perfect(options: NoOptions, model):
 
 REGISTRATIONS = (
     declare("perfect", "attitude", NoOptions, _perfect,
-            doc="the measurement taken as the state", rank=0),
+            doc="the measurement taken as the state", rank=0, roles=("exact",),
+            label="state as measured", colour="#CC79A7"),  # Okabe & Ito (2008) reddish purple
 )  # fmt: skip

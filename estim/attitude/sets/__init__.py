@@ -9,7 +9,9 @@ from kalman_vs_infoset.estim.registry import declare
 
 REGISTRATIONS = (
     declare("zonotope", "attitude", ZonotopeAttitudeOptions, rank=3,
-            doc="guaranteed zonotope on the error state, intersected with the box"),
+            doc="guaranteed zonotope on the error state, intersected with the box",
+            label="zonotope", colour="#8C6D1F"),  # brown
     declare("ellipsoid", "attitude", EllipsoidAttitudeOptions, rank=4,
-            doc="guaranteed ellipsoid on the error state, intersected with the box"),
+            doc="guaranteed ellipsoid on the error state, intersected with the box",
+            label="ellipsoid", colour="#E69F00"),  # Okabe & Ito (2008) orange
 )  # fmt: skip

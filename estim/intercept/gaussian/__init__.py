@@ -3,7 +3,11 @@
 from kalman_vs_infoset.estim.intercept.gaussian.options import KalmanOptions, UkfOptions
 from kalman_vs_infoset.estim.registry import declare
 
+# the Kalman baselines the reference set is compared with; the UKF is the yardstick of
+# the step costs (colours: Okabe & Ito 2008, vermillion and bluish green)
 REGISTRATIONS = (
-    declare("ekf", "intercept", KalmanOptions, doc="EKF read as its n-sigma ellipsoid", rank=4),
-    declare("ukf", "intercept", UkfOptions, doc="UKF read as its n-sigma ellipsoid", rank=5),
-)
+    declare("ekf", "intercept", KalmanOptions, doc="EKF read as its n-sigma ellipsoid", rank=4,
+            roles=("baseline",), label="EKF", colour="#D55E00"),
+    declare("ukf", "intercept", UkfOptions, doc="UKF read as its n-sigma ellipsoid", rank=5,
+            roles=("baseline", "yardstick"), label="UKF", colour="#009E73"),
+)  # fmt: skip

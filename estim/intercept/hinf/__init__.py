@@ -5,5 +5,6 @@ from kalman_vs_infoset.estim.registry import declare
 
 REGISTRATIONS = (
     declare("hinf", "intercept", HinfOptions,
-            doc="H-infinity filter read as its n-sigma ellipsoid", rank=6),
+            doc="H-infinity filter read as its n-sigma ellipsoid", rank=6,
+            label="H-infinity filter", colour="#882255"),  # wine (Tol's muted palette)
 )  # fmt: skip

@@ -10,5 +10,6 @@ from kalman_vs_infoset.estim.registry import declare
 
 REGISTRATIONS = (
     declare("infoset", "intercept", InfosetOptions, doc="convex-section information set",
-            rank=3, reference=True),
+            rank=3, reference=True, label="information set",
+            colour="#0072B2"),  # Okabe & Ito (2008) blue
 )  # fmt: skip

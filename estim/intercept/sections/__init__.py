@@ -14,8 +14,13 @@ from kalman_vs_infoset.estim.intercept.sections.options import (
 )
 from kalman_vs_infoset.estim.registry import declare
 
+# colours as the attitude families of the same sets: Okabe & Ito (2008) orange and sky
+# blue, and a brown
 REGISTRATIONS = (
-    declare("ellipsoid", "intercept", EllipsoidOptions, doc="an ellipsoid per range slab", rank=0),
-    declare("zonotope", "intercept", ZonotopeOptions, doc="a zonotope per range slab", rank=1),
-    declare("box", "intercept", BoxSlabOptions, doc="an interval box per range slab", rank=2),
-)
+    declare("ellipsoid", "intercept", EllipsoidOptions, doc="an ellipsoid per range slab", rank=0,
+            label="ellipsoid", colour="#E69F00"),
+    declare("zonotope", "intercept", ZonotopeOptions, doc="a zonotope per range slab", rank=1,
+            label="zonotope", colour="#8C6D1F"),
+    declare("box", "intercept", BoxSlabOptions, doc="an interval box per range slab", rank=2,
+            label="guaranteed box", colour="#56B4E9"),
+)  # fmt: skip

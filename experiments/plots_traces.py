@@ -1,0 +1,123 @@
+"""The figures of trace files (``--trace``; :mod:`kalman_vs_infoset.experiments.traces`):
+what ``kvi plot`` draws, and what the commands draw for the traces they write.
+
+Intercept traces give, per traced run, the seed's Fig. 3-style control processes of each
+estimator (one column per noise) and, with several estimators, their forecast-miss
+intervals overlaid per noise; a trace with a sets file beside it also gives the set in
+3-D, 2-D slices and an animation. Attitude traces give their time histories.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.results import TRACE_DIR, existing_sidecar
+
+NOISE_ORDER = ("random", "game", "bias", "none")
+
+
+def _read(path: Path) -> pd.DataFrame:
+    try:
+        df = pd.read_parquet(path)
+    except Exception as exc:  # missing, truncated or not Parquet
+        raise InputError(f"{path}: cannot read a trace ({type(exc).__name__})") from None
+    if not ({"run", "step"} <= set(df.columns) and ({"channel", "axis"} & set(df.columns))):
+        raise InputError(f"{path}: not a trace (written by --trace: run, step, channel or axis)")
+    return df
+
+
+def _paper_from_json(path: Path) -> dict[str, tuple[Any, Any]] | None:
+    table = path.with_name(path.name.replace("-trace.parquet", ".parquet"))
+    if path.parent.name == TRACE_DIR:  # the results table is in the folder above
+        table = path.parent.parent / table.name
+    try:
+        ref = json.loads(existing_sidecar(table).read_text())["scenario"]["reference"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return {
+        "random": (ref.get("miss_random_m"), ref.get("fuel_random_mps")),
+        "game": (ref.get("miss_game_m"), ref.get("fuel_game_mps")),
+    }
+
+
+def _noises(df: pd.DataFrame) -> list[str]:
+    present = list(dict.fromkeys(df["noise"]))
+    return sorted(present, key=lambda n: NOISE_ORDER.index(n) if n in NOISE_ORDER else 99)
+
+
+def plot_files(paths, paper=None, out: Path | None = None, animation: bool = True) -> list[Path]:
+    """Draw every figure of the traces ``paths``; returns the files written."""
+    from kalman_vs_infoset.experiments import plots_attitude
+
+    paths = [Path(p) for p in paths]
+    if not paths:
+        return []
+    out = Path(out) if out is not None else paths[0].parent
+    frames = [_read(p) for p in paths]
+    files: list[Path] = []
+    for path, df in zip(paths, frames, strict=True):
+        if "axis" in df:
+            stem = out / path.name.replace("-trace.parquet", "-history")
+            files += fs.save(plots_attitude.time_histories([g for _, g in df.groupby("run")]), stem)
+    steps = [df for df in frames if "channel" in df]
+    if not steps:
+        return files
+    paper = paper if paper is not None else _paper_from_json(paths[0])
+    df = pd.concat(steps, ignore_index=True)
+    if "seed" not in df:
+        df = df.assign(seed=None)
+    for seed, by_seed in df.groupby("seed", dropna=False, sort=True):
+        tag = "" if pd.isna(seed) else f"-s{int(seed)}"
+        files += _step_figures(by_seed, str(by_seed["scenario"].iloc[0]), tag, out, paper)
+    for path in paths:
+        files += _set_figures(path, out, animation)
+    return files
+
+
+def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> list[Path]:
+    """One seed's figures; their names carry what distinguishes the run (estimator,
+    noises, seed ``tag``, run), so drawing another seed never replaces them."""
+    from kalman_vs_infoset.experiments import plots_intercept
+
+    files: list[Path] = []
+    for run in sorted(df["run"].unique()):
+        for est in dict.fromkeys(df["estimator"]):
+            d = df[df["estimator"] == est]
+            noises = _noises(d)
+            fig = plots_intercept.control_processes(d, int(run), str(est), noises, paper=paper)
+            stem = f"{name}-{est}-{','.join(noises)}{tag}-run{run}-processes"
+            files += fs.save(fig, out / stem)
+        if df["estimator"].nunique() > 1:
+            for noise in _noises(df):
+                fig = plots_intercept.estimator_overlay(df, int(run), noise)
+                files += fs.save(fig, out / f"{name}-{noise}{tag}-run{run}-overlay")
+    return files
+
+
+def _set_figures(path: Path, out: Path, animation: bool) -> list[Path]:
+    from kalman_vs_infoset.experiments import plots_sets
+
+    sets_path = path.with_name(path.name.replace("-trace.parquet", "-trace-sets.parquet"))
+    if not sets_path.exists():
+        return []
+    sets, steps = pd.read_parquet(sets_path), pd.read_parquet(path)
+    stem = path.name.replace("-trace.parquet", "")
+    files: list[Path] = []
+    for run in sorted(sets["run"].unique()):
+        s = sets[sets["run"] == run]
+        prior = s[s["phase"] == "prior"]
+        if len(prior):  # t = 1 s when recorded (the seed's Fig. 4), else the last prior step
+            at = prior[prior["t_s"] == 1.0]
+            step = int((at if len(at) else prior)["step"].max())
+            fig = plots_sets.stacked_3d(s, int(run), step, steps, title=f"{stem}, run {run}")
+            files += fs.save(fig, out / f"{stem}-run{run}-set3d")
+        files += fs.save(plots_sets.slices(s, int(run), steps), out / f"{stem}-run{run}-slices")
+        if animation:
+            gif = out / f"{stem}-run{run}-set.gif"
+            files.append(plots_sets.animate(s, int(run), gif, steps))
+    return files
