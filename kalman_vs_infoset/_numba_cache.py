@@ -71,7 +71,7 @@ def configure(source_dir: Path | None = None) -> Path | None:
     os.environ[ENV] = str(folder)
     config = sys.modules.get("numba.core.config")
     if config is not None:
-        config.CACHE_DIR = str(folder)
+        setattr(config, "CACHE_DIR", str(folder))  # noqa: B010 - a module's attribute, set at run time
     return folder
 
 

@@ -24,6 +24,7 @@ kinematics ``phi' = w`` is exact along the reference motion.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.attitude.model import (
@@ -202,7 +203,7 @@ def simulate_turn(
         ref_rot, ref_w, ref_dw = tracker.reference(np.arange(n) * dt)
 
     xm = estimate(belief)
-    rec = None
+    rec: dict[str, list[Any]] | None = None
     if record is not None:
         rec = {"estimate": [xm], "knowledge_bound_rad": [float(loop.attitude_bound_rad(belief)[0])],
                "truth_inside": [bool(loop.inside(belief, x[None])[0])], "xi": []}  # fmt: skip

@@ -15,7 +15,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from kalman_vs_infoset.experiments.sim.fields import Table, field, number, vector
+from kalman_vs_infoset.experiments.sim.fields import (
+    Table,
+    Vector2,
+    Vector3,
+    Vector6,
+    field,
+    float_bounds,
+)
 from kalman_vs_infoset.guidance.attitude.cmg import RESURS_P_BETA0_DEG
 from kalman_vs_infoset.guidance.attitude.energy import INERTIA_SIGN_READINGS
 from pydantic import BeforeValidator, model_validator
@@ -23,9 +30,9 @@ from pydantic import BeforeValidator, model_validator
 #: most steps a turn may take (the loop keeps its histories)
 MAX_STEPS = 100_000
 
-_POS = number(0.0, open_lo=True)
-_VAR = vector(number(0.0, 1e6), 6)
-_GROWTH = vector(number(0.0, 1.0), 2)
+_POS = Annotated[float, float_bounds(0.0, open_lo=True)]
+_VAR = Vector6[Annotated[float, float_bounds(0.0, 1e6)]]
+_GROWTH = Vector2[Annotated[float, float_bounds(0.0, 1.0)]]
 
 
 def _sign_reading(value: Any) -> Any:
@@ -46,7 +53,9 @@ _SIGN_READING = Annotated[
 class EnergyTable(Table):
     """The energy-saving discrete law (seed sections 2 and 4)."""
 
-    u0_Nm: vector(number(-1e4, 1e4), 3) = field((0.0, 0.0, 0.0), "initial control U0, N m")
+    u0_Nm: Vector3[Annotated[float, float_bounds(-1e4, 1e4)]] = field(
+        (0.0, 0.0, 0.0), "initial control U0, N m"
+    )
     f1: _GROWTH = field((2.5e-5, 5e-3), "[f1_0, growth]: f1_i = f1_0 (1 + growth i)")
     f2: _GROWTH = field((0.01, 2.5e-4), "[f2_0, growth]: f2_i = f2_0 (1 + growth i)")
     state_var: _VAR = field(
@@ -55,7 +64,7 @@ class EnergyTable(Table):
     aux_var: _VAR = field(
         (1.0, 1.0, 1.0, 0.01, 0.01, 0.01), "diagonal of K_xi, rad^2 and (rad/s)^2"
     )
-    control_std0_Nm: number(0.0, 1e7, open_lo=True) = field(
+    control_std0_Nm: Annotated[float, float_bounds(0.0, 1e7, open_lo=True)] = field(
         5000.0, "initial control standard deviation (K_U0 = std0^2 E), N m"
     )
 
@@ -69,29 +78,33 @@ class EulerTable(Table):
         "each of the acceleration and deceleration phases, s; calibrated (the seed gives "
         "none): chosen so that the turn's Z is near the seed's 11200 N^2 m^2 s",
     )
-    jerk_time_s: number(0.0) = field(2.0, "each linear ramp of the acceleration, s")
-    natural_freq_radps: number(0.0, 10.0, open_lo=True) = field(
+    jerk_time_s: Annotated[float, float_bounds(0.0)] = field(
+        2.0, "each linear ramp of the acceleration, s"
+    )
+    natural_freq_radps: Annotated[float, float_bounds(0.0, 10.0, open_lo=True)] = field(
         0.1, "natural frequency of the PD tracking the reference, rad/s"
     )
-    damping: number(0.0, 10.0, open_lo=True) = field(0.9, "damping ratio of that PD")
+    damping: Annotated[float, float_bounds(0.0, 10.0, open_lo=True)] = field(
+        0.9, "damping ratio of that PD"
+    )
 
 
 class CmgTable(Table):
     """The cluster of six gyrodines (three pairs; seed section 4)."""
 
-    rotor_momentum_Nms: number(0.0, 1e5, open_lo=True) = field(
+    rotor_momentum_Nms: Annotated[float, float_bounds(0.0, 1e5, open_lo=True)] = field(
         250.0, "angular momentum of each rotor, N m s"
     )
-    cone_half_angle_deg: number(0.0, 90.0, open_lo=True, open_hi=True) = field(
-        30.0, "half-angle of the precession axes' cone, deg"
+    cone_half_angle_deg: Annotated[float, float_bounds(0.0, 90.0, open_lo=True, open_hi=True)] = (
+        field(30.0, "half-angle of the precession axes' cone, deg")
     )
-    pair_azimuths_deg: vector(number(-360.0, 360.0), 3) = field(
+    pair_azimuths_deg: Vector3[Annotated[float, float_bounds(-360.0, 360.0)]] = field(
         (0.0, 120.0, 240.0), "azimuths of the three pairs, deg"
     )
-    beta0_deg: vector(number(-720.0, 720.0), 6) = field(
+    beta0_deg: Vector6[Annotated[float, float_bounds(-720.0, 720.0)]] = field(
         RESURS_P_BETA0_DEG, "initial precession angles, deg"
     )
-    sr_threshold: number(0.0, 1.0, open_lo=True, open_hi=True) = field(
+    sr_threshold: Annotated[float, float_bounds(0.0, 1.0, open_lo=True, open_hi=True)] = field(
         0.05, "normalised manipulability below which the SR inverse is used"
     )
     sr_damping: _POS = field(0.01, "damping of the SR inverse")
@@ -100,12 +113,16 @@ class CmgTable(Table):
 class NoiseTable(Table):
     """Measurement errors and disturbances (``--noise random`` and ``game``)."""
 
-    angle_std_rad: number(0.0, 1.0) = field(3e-4, "attitude error standard deviation, rad")
-    rate_std_radps: number(0.0, 1.0) = field(7e-6, "rate error standard deviation, rad/s")
-    disturbance_std_Nm: number(0.0, 1e3) = field(
+    angle_std_rad: Annotated[float, float_bounds(0.0, 1.0)] = field(
+        3e-4, "attitude error standard deviation, rad"
+    )
+    rate_std_radps: Annotated[float, float_bounds(0.0, 1.0)] = field(
+        7e-6, "rate error standard deviation, rad/s"
+    )
+    disturbance_std_Nm: Annotated[float, float_bounds(0.0, 1e3)] = field(
         0.0, "white disturbance torque per step, standard deviation, N m"
     )
-    game_disturbance_Nm: number(0.0, 1e3) = field(
+    game_disturbance_Nm: Annotated[float, float_bounds(0.0, 1e3)] = field(
         0.0, "--noise game: bound of the torque opposing the control, N m (0: not defined)"
     )
 
@@ -117,10 +134,12 @@ class CmgScenario(Table):
     description: str = field("", "one line")
     controller: Literal["energy", "euler"] = field("energy", "controller (--controller wins)")
     estimator: str | None = field(None, "attitude estimator(s) (--estimators wins)")
-    dt_s: number(1e-3, 1.0) = field(0.1, "step of the law and the plant, s")
-    duration_s: number(1.0, 1e4) = field(300.0, "turn time (energy index and final errors), s")
-    horizon_s: number(1.0, 1e4) = field(360.0, "simulated time, s")
-    initial_error_deg: vector(number(-179.0, 179.0), 3) = field(
+    dt_s: Annotated[float, float_bounds(1e-3, 1.0)] = field(0.1, "step of the law and the plant, s")
+    duration_s: Annotated[float, float_bounds(1.0, 1e4)] = field(
+        300.0, "turn time (energy index and final errors), s"
+    )
+    horizon_s: Annotated[float, float_bounds(1.0, 1e4)] = field(360.0, "simulated time, s")
+    initial_error_deg: Vector3[Annotated[float, float_bounds(-179.0, 179.0)]] = field(
         (110.0, 45.0, 45.0), "rotation vector of the body relative to the target, deg"
     )
     inertia_products_sign: _SIGN_READING = field(

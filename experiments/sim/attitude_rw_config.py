@@ -14,23 +14,31 @@ which :mod:`experiments.scenario` turns into one line naming the file and the fi
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
+from kalman_vs_infoset.experiments.sim.fields import (
+    Table,
+    Vector3,
+    Vector4,
+    Vector6,
+    field,
+    float_bounds,
+    int_bounds,
+)
 from pydantic import model_validator
 
 #: most control steps (and RK4 steps) a run may take: the loop keeps the trajectory
 MAX_STEPS = 100_000
 
-_POS = number(0.0, open_lo=True)
+_POS = Annotated[float, float_bounds(0.0, open_lo=True)]
 
 
 class BodyTable(Table):
     """The rigid body: ``J = W diag(J_diag) W^T``."""
 
-    inertia_kgm2: vector(_POS, 3) = field(..., "principal moments of inertia J_diag, kg m^2")
-    axes_rotvec_deg: vector(number(-360.0, 360.0), 3) = field(
+    inertia_kgm2: Vector3[_POS] = field(..., "principal moments of inertia J_diag, kg m^2")
+    axes_rotvec_deg: Vector3[Annotated[float, float_bounds(-360.0, 360.0)]] = field(
         (0.0, 0.0, 0.0), "rotation vector of the principal axes W in the body frame, deg"
     )
 
@@ -46,16 +54,20 @@ class ManeuverTable(Table):
     """The turn: from ``q_target (x) rotation(angle_deg about axis)`` to the target at rest,
     or from random attitudes and rates."""
 
-    axis: vector(number(-1e9, 1e9), 3) = field((0.0, 0.0, 1.0), "turn axis (any non-zero length)")
-    angle_deg: number(0.0, 180.0) = field(0.0, "turn angle about the axis, deg")
-    initial_rate_degps: vector(number(-100.0, 100.0), 3) = field(
+    axis: Vector3[Annotated[float, float_bounds(-1e9, 1e9)]] = field(
+        (0.0, 0.0, 1.0), "turn axis (any non-zero length)"
+    )
+    angle_deg: Annotated[float, float_bounds(0.0, 180.0)] = field(
+        0.0, "turn angle about the axis, deg"
+    )
+    initial_rate_degps: Vector3[Annotated[float, float_bounds(-100.0, 100.0)]] = field(
         (0.0, 0.0, 0.0), "initial body rate, deg/s"
     )
-    target_quaternion: vector(number(-1.0, 1.0), 4) = field(
+    target_quaternion: Vector4[Annotated[float, float_bounds(-1.0, 1.0)]] = field(
         (0.0, 0.0, 0.0, 1.0), "target attitude, unit quaternion (x, y, z, w)"
     )
     random_attitude: bool = field(False, "a uniform random initial attitude per run")
-    random_rate_degps: number(0.0, 100.0) = field(
+    random_rate_degps: Annotated[float, float_bounds(0.0, 100.0)] = field(
         0.0, "uniform random addition to each initial rate component, bound in deg/s"
     )
 
@@ -71,9 +83,11 @@ class ManeuverTable(Table):
 class SimulationTable(Table):
     """Time span, sampling and the settle criterion."""
 
-    duration_s: number(1.0, 1e5) = field(..., "simulated time, s")
-    control_period_s: number(1e-4, 1.0) = field(0.05, "control period (torque held), s")
-    substeps: integer(1, 100) = field(1, "RK4 steps per control period")
+    duration_s: Annotated[float, float_bounds(1.0, 1e5)] = field(..., "simulated time, s")
+    control_period_s: Annotated[float, float_bounds(1e-4, 1.0)] = field(
+        0.05, "control period (torque held), s"
+    )
+    substeps: Annotated[int, int_bounds(1, 100)] = field(1, "RK4 steps per control period")
     settle_angle_deg: _POS = field(0.01, "settled: attitude error below this from then on, deg")
     settle_rate_degps: _POS = field(0.01, "settled: rate below this from then on, deg/s")
 
@@ -106,8 +120,8 @@ class PdTable(Table):
 class LqrTable(Table):
     """The LQR law with the analytic Riccati solution (seed 002)."""
 
-    q: vector(_POS, 6) = field(..., "diagonal of Q: rate weights q1..q3, attitude q4..q6")
-    r: vector(_POS, 3) = field(..., "diagonal of R: control weights")
+    q: Vector6[_POS] = field(..., "diagonal of Q: rate weights q1..q3, attitude q4..q6")
+    r: Vector3[_POS] = field(..., "diagonal of R: control weights")
     enforce_constraint: bool = field(
         True, "complete the intermediate-axis attitude weight so that constraint (*) holds"
     )
@@ -117,13 +131,15 @@ class LqrTable(Table):
 class NoiseTable(Table):
     """Measurement errors and disturbance (used with ``--noise random`` and ``game``)."""
 
-    meas_angle_deg: number(0.0, 10.0) = field(
+    meas_angle_deg: Annotated[float, float_bounds(0.0, 10.0)] = field(
         0.002, "attitude error 1-sigma per axis (uniform within +-sqrt(3) sigma), deg"
     )
-    meas_rate_degps: number(0.0, 10.0) = field(
+    meas_rate_degps: Annotated[float, float_bounds(0.0, 10.0)] = field(
         0.0005, "rate error 1-sigma per axis (uniform within +-sqrt(3) sigma), deg/s"
     )
-    disturbance_Nm: number(0.0, 10.0) = field(0.0, "disturbance torque bound per axis, N m")
+    disturbance_Nm: Annotated[float, float_bounds(0.0, 10.0)] = field(
+        0.0, "disturbance torque bound per axis, N m"
+    )
 
 
 class RwScenario(Table):

@@ -9,7 +9,7 @@ line turns the first error into one line naming the file and the field
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 from pydantic import (
     AfterValidator,
@@ -47,39 +47,56 @@ def field(default: Any = ..., doc: str = "", **bounds: Any) -> Any:
     return Field(default, description=doc, **bounds)
 
 
-def number(lo: float | None = None, hi: float | None = None, open_lo=False, open_hi=False):
-    """A float in ``[lo, hi]`` (open ends on request; ints accepted)."""
+def float_bounds(
+    lo: float | None = None, hi: float | None = None, open_lo: bool = False, open_hi: bool = False
+) -> Any:
+    """The bounds of a float field, ``Annotated[float, float_bounds(lo, hi)]``: a finite
+    value in ``[lo, hi]`` (open ends on request; ints accepted)."""
     bounds = {}
     if lo is not None:
         bounds["gt" if open_lo else "ge"] = lo
     if hi is not None:
         bounds["lt" if open_hi else "le"] = hi
-    return Annotated[float, Field(allow_inf_nan=False, **bounds)]
+    return Field(allow_inf_nan=False, **bounds)
 
 
-def integer(lo: int | None = None, hi: int | None = None):
-    return Annotated[int, Field(ge=lo, le=hi)]
+def int_bounds(lo: int | None = None, hi: int | None = None) -> Any:
+    """The bounds of an integer field, ``Annotated[int, int_bounds(lo, hi)]``."""
+    return Field(ge=lo, le=hi)
 
 
-def vector(item: Any, length: int):
-    """A list of ``length`` items (TOML array), stored as a tuple."""
-    return Annotated[
-        tuple[(item,) * length], BeforeValidator(_as_tuple), Field(json_schema_extra={"n": length})
-    ]
+# The shapes are generic aliases over the item type (``Vector3[Annotated[float, ...]]``)
+# rather than functions returning types, so that type checkers read them as types.
+_Item = TypeVar("_Item")
 
+#: a list of 2, 3, 4 or 6 items (TOML array), stored as a tuple
+Vector2 = Annotated[
+    tuple[_Item, _Item], BeforeValidator(_as_tuple), Field(json_schema_extra={"n": 2})
+]
+Vector3 = Annotated[
+    tuple[_Item, _Item, _Item], BeforeValidator(_as_tuple), Field(json_schema_extra={"n": 3})
+]
+Vector4 = Annotated[
+    tuple[_Item, _Item, _Item, _Item],
+    BeforeValidator(_as_tuple),
+    Field(json_schema_extra={"n": 4}),
+]
+Vector6 = Annotated[
+    tuple[_Item, _Item, _Item, _Item, _Item, _Item],
+    BeforeValidator(_as_tuple),
+    Field(json_schema_extra={"n": 6}),
+]
 
-def interval(item: Any):
-    """A list ``[lo, hi]`` with ``lo <= hi``, stored as a tuple."""
-    return Annotated[
-        tuple[item, item],
-        BeforeValidator(_as_tuple),
-        AfterValidator(_ordered),
-        Field(json_schema_extra={"interval": True}),
-    ]
+#: a list ``[lo, hi]`` with ``lo <= hi``, stored as a tuple
+Interval = Annotated[
+    tuple[_Item, _Item],
+    BeforeValidator(_as_tuple),
+    AfterValidator(_ordered),
+    Field(json_schema_extra={"interval": True}),
+]
 
-
-POSITIVE = number(0.0, open_lo=True)
-NONNEGATIVE = number(0.0)
+POSITIVE = Annotated[float, float_bounds(0.0, open_lo=True)]
+NONNEGATIVE = Annotated[float, float_bounds(0.0)]
 
 
 # -- one line per error -------------------------------------------------------------------

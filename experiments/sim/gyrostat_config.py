@@ -13,10 +13,17 @@ into one line naming the file and the field. :meth:`GyrostatSetup.from_config` d
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from kalman_vs_infoset.experiments.sim.fields import Table, field, integer, number, vector
+from kalman_vs_infoset.experiments.sim.fields import (
+    Table,
+    Vector3,
+    Vector4,
+    field,
+    float_bounds,
+    int_bounds,
+)
 from kalman_vs_infoset.experiments.sim.gyrostat import LoopConfig
 from kalman_vs_infoset.guidance.attitude.game import GameLaw, design_a_star
 from kalman_vs_infoset.guidance.attitude.gyrostat import Gyrostat
@@ -29,7 +36,7 @@ MAX_STEPS = 100_000
 #: ``simulation.disturbance = "auto"``: the disturbance kind of each ``--noise``
 AUTO_DISTURBANCE = {"none": "none", "random": "random", "game": "adversarial"}
 
-_POS3 = vector(number(0.0, open_lo=True), 3)
+_POS3 = Vector3[Annotated[float, float_bounds(0.0, open_lo=True)]]
 
 
 class GyrostatTable(Table):
@@ -38,8 +45,10 @@ class GyrostatTable(Table):
     A_kgm2: _POS3 = field(..., "total principal moments A_i (rotors included), kg m^2")
     rotor_J_kgm2: _POS3 = field(..., "rotor axial moments J_i, kg m^2")
     alpha_Nm: _POS3 = field(..., "rotor torque limits |u_i| <= alpha_i, N m")
-    beta_Nm: vector(number(0.0), 3) = field(..., "disturbance bounds |v_i| <= beta_i, N m")
-    rho: vector(number(0.0, 1.0, open_lo=True, open_hi=True), 3) = field(
+    beta_Nm: Vector3[Annotated[float, float_bounds(0.0)]] = field(
+        ..., "disturbance bounds |v_i| <= beta_i, N m"
+    )
+    rho: Vector3[Annotated[float, float_bounds(0.0, 1.0, open_lo=True, open_hi=True)]] = field(
         ..., "margins: beta* <= rho_i a*_i"
     )
 
@@ -55,9 +64,13 @@ class GyrostatTable(Table):
 class ManoeuvreTable(Table):
     """The rest-to-rest turn: ``initial_angle_deg`` about ``initial_axis`` to the target."""
 
-    initial_axis: vector(number(-1e6, 1e6), 3) = field(..., "turn axis, body frame (non-zero)")
-    initial_angle_deg: number(0.0, 180.0, open_hi=True) = field(..., "turn angle, deg")
-    target_quaternion: vector(number(-1.0, 1.0), 4) = field(
+    initial_axis: Vector3[Annotated[float, float_bounds(-1e6, 1e6)]] = field(
+        ..., "turn axis, body frame (non-zero)"
+    )
+    initial_angle_deg: Annotated[float, float_bounds(0.0, 180.0, open_hi=True)] = field(
+        ..., "turn angle, deg"
+    )
+    target_quaternion: Vector4[Annotated[float, float_bounds(-1.0, 1.0)]] = field(
         (0.0, 0.0, 0.0, 1.0), "target attitude, unit quaternion (x, y, z, w)"
     )
 
@@ -75,15 +88,17 @@ class ManoeuvreTable(Table):
 class SimulationTable(Table):
     """Sampling, horizon, settle criterion, disturbance and measurement errors."""
 
-    control_period_s: number(1e-4, 1.0) = field(0.05, "control period (law sampled, ZOH), s")
-    substeps: integer(1, 100) = field(1, "RK4 steps per control period")
-    horizon_factor: number(1.0, 10.0, open_lo=True) = field(
+    control_period_s: Annotated[float, float_bounds(1e-4, 1.0)] = field(
+        0.05, "control period (law sampled, ZOH), s"
+    )
+    substeps: Annotated[int, int_bounds(1, 100)] = field(1, "RK4 steps per control period")
+    horizon_factor: Annotated[float, float_bounds(1.0, 10.0, open_lo=True)] = field(
         1.25, "simulated time in units of the guaranteed time tau"
     )
-    settle_angle_deg: number(0.0, 10.0, open_lo=True) = field(
+    settle_angle_deg: Annotated[float, float_bounds(0.0, 10.0, open_lo=True)] = field(
         0.05, "settled: attitude error below this from then on, deg"
     )
-    settle_rate_degps: number(0.0, 10.0, open_lo=True) = field(
+    settle_rate_degps: Annotated[float, float_bounds(0.0, 10.0, open_lo=True)] = field(
         0.01, "settled: rate below this from then on, deg/s"
     )
     disturbance: Literal["auto", "none", "random", "constant", "adversarial"] = field(
@@ -92,9 +107,15 @@ class SimulationTable(Table):
     switching: Literal["discrete", "sign"] = field(
         "discrete", "exact discrete switching, or the raw sign of psi"
     )
-    meas_angle_deg: number(0.0, 1.0) = field(0.001, "attitude error bound per axis, deg")
-    meas_rate_degps: number(0.0, 1.0) = field(0.0001, "rate error bound per axis, deg/s")
-    meas_rotor_radps: number(0.0, 100.0) = field(0.01, "rotor-rate error bound, rad/s")
+    meas_angle_deg: Annotated[float, float_bounds(0.0, 1.0)] = field(
+        0.001, "attitude error bound per axis, deg"
+    )
+    meas_rate_degps: Annotated[float, float_bounds(0.0, 1.0)] = field(
+        0.0001, "rate error bound per axis, deg/s"
+    )
+    meas_rotor_radps: Annotated[float, float_bounds(0.0, 100.0)] = field(
+        0.01, "rotor-rate error bound, rad/s"
+    )
 
 
 class GyrostatScenario(Table):

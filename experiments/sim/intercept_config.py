@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.model import (
@@ -33,12 +33,12 @@ from kalman_vs_infoset.estim.intercept.options import hooks
 from kalman_vs_infoset.experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
 from kalman_vs_infoset.experiments.sim.fields import (
     NONNEGATIVE,
+    Interval,
     Table,
     field,
     first_error,
-    integer,
-    interval,
-    number,
+    float_bounds,
+    int_bounds,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
 from pydantic import BaseModel, Field, ValidationError, model_validator
@@ -77,14 +77,24 @@ def check_name(name: str) -> str:
 class ModelTable(Table):
     """The auxiliary model of a channel and the simulation step."""
 
-    closing_speed_kmps: number(1.0, 100.0) = field(58.0, "nominal closing speed e, km/s")
-    nu_mps2: number(0.0, 1.0) = field(0.005, "disturbance bound nu, m/s^2")
-    bearing_bound_start_rad: number(1e-7, 0.1) = field(1.5e-4, "bearing bound at nominal range")
-    bearing_bound_end_rad: number(1e-7, 0.1) = field(2.3e-4, "bearing bound at zero range")
-    nominal_range_km: number(10.0, 1e6) = field(5801.3, "range of the start bound, km")
-    eps_km: number(0.1, 1000.0) = field(5.0, "blind range eps, km")
-    dt_s: number(0.01, 60.0) = field(0.5, "decision step, s")
-    sun_distance_km: number(1e6, 1e10) = field(1.496e8, "heliocentric distance, km")
+    closing_speed_kmps: Annotated[float, float_bounds(1.0, 100.0)] = field(
+        58.0, "nominal closing speed e, km/s"
+    )
+    nu_mps2: Annotated[float, float_bounds(0.0, 1.0)] = field(0.005, "disturbance bound nu, m/s^2")
+    bearing_bound_start_rad: Annotated[float, float_bounds(1e-7, 0.1)] = field(
+        1.5e-4, "bearing bound at nominal range"
+    )
+    bearing_bound_end_rad: Annotated[float, float_bounds(1e-7, 0.1)] = field(
+        2.3e-4, "bearing bound at zero range"
+    )
+    nominal_range_km: Annotated[float, float_bounds(10.0, 1e6)] = field(
+        5801.3, "range of the start bound, km"
+    )
+    eps_km: Annotated[float, float_bounds(0.1, 1000.0)] = field(5.0, "blind range eps, km")
+    dt_s: Annotated[float, float_bounds(0.01, 60.0)] = field(0.5, "decision step, s")
+    sun_distance_km: Annotated[float, float_bounds(1e6, 1e10)] = field(
+        1.496e8, "heliocentric distance, km"
+    )
 
     def channel_model(self, range_rel_bound: float) -> ChannelModel:
         return ChannelModel(
@@ -100,10 +110,10 @@ class ModelTable(Table):
         )
 
 
-_LATERAL = interval(number(-1e4, 1e4))
-_VEL = interval(number(-10.0, 10.0))
-_RANGE = interval(number(1.0, 1e6))
-_CLOSING = interval(number(-100.0, -0.1))
+_LATERAL = Interval[Annotated[float, float_bounds(-1e4, 1e4)]]
+_VEL = Interval[Annotated[float, float_bounds(-10.0, 10.0)]]
+_RANGE = Interval[Annotated[float, float_bounds(1.0, 1e6)]]
+_CLOSING = Interval[Annotated[float, float_bounds(-100.0, -0.1)]]
 
 
 class EstimatorTable(Table):
@@ -115,7 +125,7 @@ class EstimatorTable(Table):
     vy_kmps: _VEL = field((-0.1, 0.1), "a-priori lateral velocity box, km/s")
     vz_kmps: _VEL = field((-0.1, 0.1), "a-priori vertical velocity box, km/s")
     vx_kmps: _CLOSING = field((-59.0, -57.0), "a-priori closing velocity box, km/s")
-    closing_speed_kmps: interval(number(0.1, 100.0)) | None = field(
+    closing_speed_kmps: Interval[Annotated[float, float_bounds(0.1, 100.0)]] | None = field(
         None, "interval of the true closing speed the estimators assume, km/s (default [e, e])"
     )
     options: dict[str, dict[str, Any]] = field({}, "[estimator.<name>] tables, by estimator")
@@ -170,9 +180,15 @@ class TruthTable(Table):
 
 class RangeFinderTable(Table):
     enabled: bool = field(False, "measure the range too")
-    rel_bound: number(0.0, 0.5, open_lo=True) = field(0.05, "relative range error bound")
-    first_s: number(0.0, 1e4) = field(1.0, "time of the first range measurement, s")
-    period_s: number(0.01, 1e4) = field(2.0, "period of the range measurements, s")
+    rel_bound: Annotated[float, float_bounds(0.0, 0.5, open_lo=True)] = field(
+        0.05, "relative range error bound"
+    )
+    first_s: Annotated[float, float_bounds(0.0, 1e4)] = field(
+        1.0, "time of the first range measurement, s"
+    )
+    period_s: Annotated[float, float_bounds(0.01, 1e4)] = field(
+        2.0, "period of the range measurements, s"
+    )
 
     def due(self, t_s: float) -> bool:
         """Whether a range measurement is taken at time ``t_s`` (first, then every period)."""
@@ -185,14 +201,18 @@ class RangeFinderTable(Table):
 class GuidanceTable(Table):
     lateral: bool = field(True, "guide the lateral channel")
     vertical: bool = field(True, "guide the vertical channel")
-    reserve_mps: number(0.0, 1e5) = field(2000.0, "fuel reserve mu, m/s")
-    min_impulse_mps: number(0.0, 1e3) = field(0.25, "smallest impulse issued mu1, m/s")
-    max_impulse_mps: number(0.0, 1e3, open_lo=True) = field(7.5, "largest impulse mu2, m/s")
+    reserve_mps: Annotated[float, float_bounds(0.0, 1e5)] = field(2000.0, "fuel reserve mu, m/s")
+    min_impulse_mps: Annotated[float, float_bounds(0.0, 1e3)] = field(
+        0.25, "smallest impulse issued mu1, m/s"
+    )
+    max_impulse_mps: Annotated[float, float_bounds(0.0, 1e3, open_lo=True)] = field(
+        7.5, "largest impulse mu2, m/s"
+    )
 
 
 class ExperimentTable(Table):
-    runs: integer(1, 10**6) = field(1, "runs of the Monte Carlo")
-    seed: integer(0, 2**63 - 1) = field(1, "root seed")
+    runs: Annotated[int, int_bounds(1, 10**6)] = field(1, "runs of the Monte Carlo")
+    seed: Annotated[int, int_bounds(0, 2**63 - 1)] = field(1, "root seed")
     noise: Literal[NOISES] = field("random", "measurement noise")
     estimator: str = Field(
         default_factory=lambda: registry.reference("intercept").name,
@@ -217,9 +237,15 @@ MAX_LEAVES = 1000
 class AdversaryTable(Table):
     """The search of the white-box noises (``targeted``, ``lookahead``)."""
 
-    candidates: integer(2, 101) = field(9, "targeted: candidate errors a measurement")
-    lookahead_steps: integer(1, 6) = field(2, "lookahead: depth k of the search, decision steps")
-    lookahead_candidates: integer(2, 21) = field(5, "lookahead: candidate errors a step")
+    candidates: Annotated[int, int_bounds(2, 101)] = field(
+        9, "targeted: candidate errors a measurement"
+    )
+    lookahead_steps: Annotated[int, int_bounds(1, 6)] = field(
+        2, "lookahead: depth k of the search, decision steps"
+    )
+    lookahead_candidates: Annotated[int, int_bounds(2, 21)] = field(
+        5, "lookahead: candidate errors a step"
+    )
     lookahead_objective: Literal["misdirection", "fuel", "width"] = field(
         "misdirection", "lookahead: value of a branch (misdirection, fuel or forecast width)"
     )

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
@@ -44,7 +44,7 @@ from kalman_vs_infoset.estim.attitude.model import (
 from kalman_vs_infoset.estim.base import PointBelief
 from kalman_vs_infoset.estim.intercept.model import BearingBound, ChannelModel, Impulse
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
-from kalman_vs_infoset.experiments.sim.fields import Table, number, vector
+from kalman_vs_infoset.experiments.sim.fields import Table, Vector3, Vector6, float_bounds
 from kalman_vs_infoset.experiments.sim.fields import field as declared
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
@@ -53,31 +53,37 @@ from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, rk4_step
 from pydantic import model_validator
 from scipy.spatial.transform import Rotation
 
-_POS = number(0.0, open_lo=True)
-_BOUND = number(0.0, 1.0, open_lo=True)
+_POS = Annotated[float, float_bounds(0.0, open_lo=True)]
+_BOUND = Annotated[float, float_bounds(0.0, 1.0, open_lo=True)]
 
 
 class PointingConfig(Table):
     """The ``[attitude]`` table of an intercept scenario: the loop holding the axis."""
 
-    inertia_kgm2: vector(_POS, 3) = declared((40.0, 50.0, 60.0), "principal inertia, kg m^2")
+    inertia_kgm2: Vector3[_POS] = declared((40.0, 50.0, 60.0), "principal inertia, kg m^2")
     controller: Literal["pd", "lqr"] = declared("pd", "quaternion PD or LQR")
     estimator: str = declared("box", "attitude estimator (registered name)")
-    control_period_s: number(1e-3, 1.0) = declared(0.05, "control period, s")
+    control_period_s: Annotated[float, float_bounds(1e-3, 1.0)] = declared(
+        0.05, "control period, s"
+    )
     k_q: _POS = declared(0.5, "PD attitude gain, 1/s^2")
     k_w: _POS = declared(1.0, "PD rate gain, 1/s")
-    lqr_q: vector(_POS, 6) = declared((0.5, 0.5, 0.5, 0.25, 0.25, 0.25), "LQR state weights")
-    lqr_r: vector(_POS, 3) = declared((1.0, 1.0, 1.0), "LQR control weights")
+    lqr_q: Vector6[_POS] = declared((0.5, 0.5, 0.5, 0.25, 0.25, 0.25), "LQR state weights")
+    lqr_r: Vector3[_POS] = declared((1.0, 1.0, 1.0), "LQR control weights")
     torque_max_Nm: _POS = declared(0.2, "wheel torque limit, N m")
     momentum_max_Nms: _POS = declared(5.0, "wheel momentum limit, N m s")
     meas_angle_bound_deg: _BOUND = declared(0.005, "star tracker error bound, deg")
     meas_rate_bound_degps: _BOUND = declared(0.0005, "gyro error bound, deg/s")
-    disturbance_Nm: number(0.0, 10.0) = declared(1e-3, "disturbance torque bound per axis, N m")
+    disturbance_Nm: Annotated[float, float_bounds(0.0, 10.0)] = declared(
+        1e-3, "disturbance torque bound per axis, N m"
+    )
     disturbance: Literal["constant", "random", "game"] = declared("random", "disturbance kind")
-    initial_error_deg: vector(number(-30.0, 30.0), 3) = declared(
+    initial_error_deg: Vector3[Annotated[float, float_bounds(-30.0, 30.0)]] = declared(
         (0.5, -0.3, 0.2), "initial pointing error (rotation vector), deg"
     )
-    initial_rate_degps: vector(number(-10.0, 10.0), 3) = declared((0.0, 0.0, 0.0), "deg/s")
+    initial_rate_degps: Vector3[Annotated[float, float_bounds(-10.0, 10.0)]] = declared(
+        (0.0, 0.0, 0.0), "deg/s"
+    )
 
     @model_validator(mode="after")
     def _buildable(self) -> PointingConfig:

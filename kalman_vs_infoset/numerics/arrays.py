@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
@@ -27,9 +29,12 @@ def readonly(a: ArrayLike, dtype: DTypeLike = float, copy: bool = True) -> np.nd
     """
     if copy:
         arr = np.array(a, dtype=dtype)
-    elif a.flags.writeable:
-        arr = a.view()
-    else:
-        return a
+        arr.setflags(write=False)
+        return arr
+    # no copy: the caller passes an array (documented above), not any array-like
+    given = cast(np.ndarray, a)
+    if not given.flags.writeable:
+        return given
+    arr = given.view()
     arr.setflags(write=False)
     return arr

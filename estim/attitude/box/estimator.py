@@ -189,8 +189,8 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     e_r: FloatArray
     w_c: FloatArray
     w_r: FloatArray
-    n_empty: FloatArray = field(default=None)  # type: ignore[assignment]
-    last_empty: FloatArray = field(default=None)  # type: ignore[assignment]
+    n_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
+    last_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
     n_unbounded: int = 0
 
     def __post_init__(self) -> None:

@@ -76,8 +76,8 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     box: BoxAttitudeBelief
     z_c: FloatArray
     z_m: FloatArray
-    n_empty: FloatArray = field(default=None)  # type: ignore[assignment]
-    last_empty: FloatArray = field(default=None)  # type: ignore[assignment]
+    n_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
+    last_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
 
     def __post_init__(self) -> None:
         for name in ("z_c", "z_m"):

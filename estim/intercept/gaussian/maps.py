@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
@@ -120,6 +121,11 @@ class ChannelMaps:
     of internal rows ``(alpha, r, x)``: a mixin of the filter of a channel, which
     holds ``model``, ``coords`` (``"rate"``: ``r = omega``; ``"zem"``: ``r = w``) and
     ``noise_inflation``."""
+
+    # what the mixin uses of the filter (declared there, as dataclass fields)
+    model: ChannelModel
+    coords: str
+    noise_inflation: float
 
     def step(self, q, dt_s: float) -> FloatArray:
         """Exact one-step map of internal rows ``(alpha, r, x)`` with ``v = 0``."""

@@ -66,7 +66,7 @@ class NodeSet(Belief):
         threshold): the bounds never reach beyond them.
     t_s : float
         Time since the initial set (s).
-    log : tuple
+    log : OpLog
         The operations applied since the initial set (replayed on new nodes).
     prior : tuple
         ``(y box, Vy box, x box)`` of the initial set, SI units.
@@ -91,7 +91,7 @@ class NodeSet(Belief):
     hard_lo_s: FloatArray
     hard_hi_s: FloatArray
     t_s: float
-    log: tuple
+    log: nb.OpLog
     prior: tuple
     alpha_scale_rad: float = 1.0e-4
     status: Status = Status.OK

@@ -190,11 +190,11 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             for lo, hi in zip(hard_lo, hard_hi, strict=True)
         ]
         piece = np.repeat(np.arange(len(u_lo)), [len(lab) for lab in labels])
-        prior = ((y0, y1), (v0, v1), (xa, xb))
+        boxes = ((y0, y1), (v0, v1), (xa, xb))
         empty = ConvexPolygons(np.zeros((0, 2)), np.zeros(1, dtype=np.int64))
         base = NodeSet(
             self.model, u_lo, u_hi, np.zeros(0, np.int64), np.zeros(0), empty, hard_lo,
-            hard_hi, 0.0, OpLog.empty(len(u_lo)), prior, self.alpha_scale_rad,
+            hard_hi, 0.0, OpLog.empty(len(u_lo)), boxes, self.alpha_scale_rad,
         )  # fmt: skip
         label = np.concatenate(labels)
         return replace(base, piece=piece, label_s=label, polygons=self._prior(base, piece, label))

@@ -15,10 +15,12 @@ New nodes get exact slices by replaying the recorded operations on the prior
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.kinematic import STRIP_MARGIN
+from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
@@ -34,6 +36,26 @@ MIN_SPACING_REL = 1e-12
 class NodeRefinement:
     """The refinement half of :class:`.estimator.NodeSetEstimator` (a mixin: it uses
     the estimator's options and its ``_apply`` and ``_prior``)."""
+
+    # what the mixin uses of the estimator (declared there, as dataclass fields)
+    model: ChannelModel
+    n_nodes: int
+    min_live_nodes: int
+    split_ratio: float
+    max_pieces: int
+    tighten_rtol: float
+    max_inserts: int
+    alpha_scale_rad: float
+
+    if TYPE_CHECKING:  # the estimator's methods, as the type checker sees them
+
+        def _prior(
+            self, s: NodeSet, piece: NDArray[np.int64], label: FloatArray
+        ) -> ConvexPolygons: ...
+
+        def _apply(
+            self, s: NodeSet, piece: Any, label: Any, polys: ConvexPolygons, ops: OpLog, t: float
+        ) -> tuple[ConvexPolygons, float, FloatArray, FloatArray, int]: ...
 
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
         """:meth:`_refine_pieces`, then drop the nodes and pieces that bound nothing
@@ -55,8 +77,8 @@ class NodeRefinement:
         reaches one of their ends, which are nodes of the new grid). Dead nodes outside
         the brackets are dropped.
         """
-        n_live = np.bincount(s.piece[s.live], minlength=len(s.u_lo))
-        if n_live.min() >= self.min_live_nodes:
+        live_per_piece = np.bincount(s.piece[s.live], minlength=len(s.u_lo))
+        if live_per_piece.min() >= self.min_live_nodes:
             return s  # every piece has its live nodes (the loop below would break at once)
         for p in range(len(s.u_lo)):
             searched = False
@@ -68,6 +90,7 @@ class NodeRefinement:
                     had = before is not None and bool((before.live & (before.piece == p)).any())
                     if not had or searched:
                         break
+                    assert before is not None  # had: before holds live nodes
                     lo, hi = self._bracket(before, p)
                     if int(s.log.kinds[-1]) == _nk.BEARING:
                         if not self._strip_misses(before, p, float(s.log.pa[-1])):
@@ -175,7 +198,7 @@ class NodeRefinement:
             polys = self._exact_slices(s, piece, labels)
         else:
             last = OpLog(*(a[-1:] for a in s.log.parts()))
-            polys, _, _, _, _ = self._apply(s, piece, labels, *polys_before_last[:1], last,
+            polys, _, _, _, _ = self._apply(s, piece, labels, polys_before_last[0], last,
                                          polys_before_last[1])  # fmt: skip
         return _merge(s, s.piece != b, piece, labels, polys)
 
