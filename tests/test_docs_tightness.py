@@ -1,4 +1,4 @@
-"""The README's range-finder tightness rows against the results files written by the
+"""The range-finder tightness rows of ``docs/infoset.md`` against the results files written by the
 command that produced them (``kvi tightness data/scenarios/kp_fig5_range.toml --seed
 S --out docs/results/tightness``): a stale number fails here."""
 
@@ -10,8 +10,8 @@ ROOT = Path(__file__).resolve().parents[1]
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
 
 
-def test_readme_range_finder_tightness_rows_match_their_results_files():
-    rows = ROW.findall((ROOT / "README.md").read_text())
+def test_infoset_page_range_finder_tightness_rows_match_their_results_files():
+    rows = ROW.findall((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8"))
     assert len(rows) == 5
     for seed, cells in rows:
         path = (
