@@ -201,6 +201,19 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # docs/intercept.md: Fig. 5 (``make run``)
     (INT, r"Perfect-information fuel \(mean over runs\) ([\d.]+) m/s; "
      r"bearing-limited miss floor ([\d.]+) m", FIG5, ("fuel_perfect_info_mps", "miss_floor_m")),
+    # docs/intercept.md: the Kalman filters on the Fig. 5 truths (``kvi compare``)
+    (INT, r"\(median miss ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\) against ([\d.]+) m\)", CMP,
+     _row("ekf", "random", "miss_m/p50") + _row("ukf", "random", "miss_m/p50")
+     + _row("infoset", "random", "miss_m/p50")),
+    (INT, r"\(mean ([\d.]+) and ([\d.]+) m/s against ([\d.]+) m/s\)", CMP,
+     _row("ekf", "random", "fuel_mps/mean") + _row("ukf", "random", "fuel_mps/mean")
+     + _row("infoset", "random", "fuel_mps/mean")),
+    (INT, r"\(median ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\)\)", CMP,
+     _row("ekf", "game", "miss_m/p50") + _row("ukf", "game", "miss_m/p50")),
+    (INT, r"the set's mean miss grows from ([\d.]+) to ([\d.]+) m \(fuel ([\d.]+) -> "
+     r"([\d.]+) m/s\)", CMP,
+     _row("infoset", "random", "miss_m/mean") + _row("infoset", "game", "miss_m/mean")
+     + _row("infoset", "random", "fuel_mps/mean") + _row("infoset", "game", "fuel_mps/mean")),
     # docs/performance.md: ``kvi bench``
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
