@@ -23,7 +23,11 @@ PRINTED_NAMES = {"EKF": "ekf", "UKF": "ukf", "H-infinity": "hinf", "particle fil
 
 @cache
 def results(path: str) -> dict | list:
-    """A results file (JSON), read once."""
+    """A results file, read once: JSON, or a run table (Parquet) as a list of records."""
+    if path.endswith(".parquet"):
+        import pandas as pd  # only for run tables
+
+        return pd.read_parquet(ROOT / path).to_dict(orient="records")
     return json.loads((ROOT / path).read_text(encoding="utf-8"))
 
 
@@ -65,6 +69,7 @@ def mismatches(text: str, pattern: str, data, keys: tuple[str, ...]) -> list[str
 
     ``pattern`` has one group per printed number; every occurrence is checked, and a
     pattern that does not occur is reported (a rewritten sentence must be re-pointed).
+    A key ``path::key`` reads another results file than ``data``.
     """
     found = re.findall(pattern, " ".join(text.split()))  # line breaks read as spaces
     if not found:
@@ -75,7 +80,8 @@ def mismatches(text: str, pattern: str, data, keys: tuple[str, ...]) -> list[str
         if len(groups) != len(keys):
             return [f"{pattern!r}: {len(groups)} groups for {len(keys)} keys"]
         for printed, key in zip(groups, keys, strict=True):
-            value = lookup(data, key)
+            source, _, inner = key.rpartition("::")  # a key in another results file
+            value = lookup(results(source) if source else data, inner)
             if isinstance(value, str):  # a version or a name: printed as it is
                 if printed != value:
                     bad.append(f"{key}: printed {printed}, results file {value}")

@@ -38,14 +38,18 @@ FIG5 = "docs/results/fig5.json"
 CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
+CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
+E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
 
 
-def _row(estimator: str, noise: str, *fields: str) -> tuple[str, ...]:
-    """Keys of a compare row's fields."""
-    return tuple(f"rows/[estimator={estimator},noise={noise}]/{f}" for f in fields)
+def _row(estimator: str, noise: str, *fields: str, path: str = CMP) -> tuple[str, ...]:
+    """Keys of a compare row's fields (in another results file than ``CMP``: its path
+    before ``::``)."""
+    pre = "" if path == CMP else path + "::"
+    return tuple(f"{pre}rows/[estimator={estimator},noise={noise}]/{f}" for f in fields)
 
 
 def _fig3_row(label: str, stem: str) -> tuple[str, str, str, tuple[str, ...]]:
@@ -54,6 +58,14 @@ def _fig3_row(label: str, stem: str) -> tuple[str, str, str, tuple[str, ...]]:
     pattern = rf"\| {label} \| {cell} \| {cell} \| (\d+) \| (\d+) \|"
     keys = (*MISS_FUEL, "truth_outside", "empty_set")
     return (INT, pattern, F3 + stem + ".json", keys)
+
+
+def _e2e_row(label: str, noise: str, more: str = r" \|", fields: tuple[str, ...] = ()):
+    """A row of the end-to-end table: the run of ``kvi intercept kp_fig3_attitude``."""
+    cell = r"\**([\d.]+)\**"
+    pattern = rf"\| {label} \| {cell} \| {cell} \| (\d+){more}"
+    keys = tuple(f"0/{f}" for f in ("miss_m", "fuel_mps", "truth_outside", *fields))
+    return (INT, pattern, E2E + noise + "-s3.parquet", keys)
 
 
 #: (document, pattern with one group per number, results file, key per group)
@@ -214,6 +226,23 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) m/s\)", CMP,
      _row("infoset", "random", "miss_m/mean") + _row("infoset", "game", "miss_m/mean")
      + _row("infoset", "random", "fuel_mps/mean") + _row("infoset", "game", "fuel_mps/mean")),
+    # docs/intercept.md: the range constraint (kvi compare kp_fig5_kalman_constrained)
+    (INT, r"Under the game it cuts the EKF's mean miss from ([\d.]+) to ([\d.]+) m and the UKF's "
+     r"from ([\d.]+) to ([\d.]+) m, and neither comes near the set's ([\d.]+) m", CMP,
+     _row("ekf", "game", "miss_m/mean") + _row("ekf", "game", "miss_m/mean", path=CONS)
+     + _row("ukf", "game", "miss_m/mean") + _row("ukf", "game", "miss_m/mean", path=CONS)
+     + _row("infoset", "game", "miss_m/mean")),
+    # docs/intercept.md: end-to-end with the attitude loop (run tables of kvi intercept)
+    _e2e_row(r"\*\*end-to-end, random\*\*", "random",
+             r" \| ([\d.]+) deg \| ([\d.]+) deg \|",
+             ("attitude_max_pointing_error_deg", "pointing_residual_max_deg")),
+    _e2e_row(r"\*\*end-to-end, game\*\*", "game"),
+    (INT, r"\| Fig\. 3, random, no attitude loop \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",
+     F3 + "random.json", (*MISS_FUEL, "truth_outside")),
+    (INT, r"\| Fig\. 3, game, no attitude loop \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",
+     F3 + "game.json", (*MISS_FUEL, "truth_outside")),
+    (INT, r"guaranteed knowledge bound, ([\d.]+) deg, to the bearing", E2E + "random-s3.parquet",
+     ("0/pointing_knowledge_bound_deg",)),
     # docs/performance.md: ``kvi bench``
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
