@@ -40,6 +40,7 @@ F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
+INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -232,6 +233,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      _row("ekf", "game", "miss_m/mean") + _row("ekf", "game", "miss_m/mean", path=CONS)
      + _row("ukf", "game", "miss_m/mean") + _row("ukf", "game", "miss_m/mean", path=CONS)
      + _row("infoset", "game", "miss_m/mean")),
+    # docs/intercept.md: the filters' noise inflated (kvi sweep kp_fig5_kalman_inflated)
+    (INT, r"at `s = 30` the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m", INFL,
+     ("rows/[value=30,estimator=ekf,noise=game]/miss_m/mean",
+      "rows/[value=30,estimator=ukf,noise=game]/miss_m/mean")),
     # docs/intercept.md: end-to-end with the attitude loop (run tables of kvi intercept)
     _e2e_row(r"\*\*end-to-end, random\*\*", "random",
              r" \| ([\d.]+) deg \| ([\d.]+) deg \|",
