@@ -227,6 +227,20 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) m/s\)", CMP,
      _row("infoset", "random", "miss_m/mean") + _row("infoset", "game", "miss_m/mean")
      + _row("infoset", "random", "fuel_mps/mean") + _row("infoset", "game", "fuel_mps/mean")),
+    (INT, r"errors \(mean miss ([\d.]+) -> ([\d.]+) m, fuel ([\d.]+) -> ([\d.]+) m/s\); under the "
+     r"game the range finder makes the miss worse here \(([\d.]+) -> ([\d.]+) m, fuel ([\d.]+) -> "
+     r"([\d.]+) m/s\)", FIG5,
+     tuple(f"variants/[variant={v},noise={n}]/{k}" for n, k in
+           (("random", "miss_m/mean"), ("random", "fuel_mps/mean"),
+            ("game", "miss_m/mean"), ("game", "fuel_mps/mean"))
+           for v in ("bearing only", "bearing + range"))),
+    (INT, r"their median miss is ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\) against the set's "
+     r"([\d.]+) m\. The set does almost as well with a bias as with random errors \(median "
+     r"([\d.]+) against ([\d.]+) m\) and spends less fuel \(mean ([\d.]+) against ([\d.]+) m/s\)",
+     CMP, _row("ekf", "bias", "miss_m/p50") + _row("ukf", "bias", "miss_m/p50")
+     + _row("infoset", "bias", "miss_m/p50") + _row("infoset", "bias", "miss_m/p50")
+     + _row("infoset", "random", "miss_m/p50") + _row("infoset", "bias", "fuel_mps/mean")
+     + _row("infoset", "random", "fuel_mps/mean")),
     # docs/intercept.md: the range constraint (kvi compare kp_fig5_kalman_constrained)
     (INT, r"Under the game it cuts the EKF's mean miss from ([\d.]+) to ([\d.]+) m and the UKF's "
      r"from ([\d.]+) to ([\d.]+) m, and neither comes near the set's ([\d.]+) m", CMP,
