@@ -168,6 +168,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"deg, ([\d.]+) deg/s at 300 s\) for Z = ([\d]+)", FIGS,
      (N + "resurs/f1_raised/within_tolerance_from_s", N + "resurs/f1_raised/angle_deg",
       N + "resurs/f1_raised/rate_degps", N + "resurs/f1_raised/Z")),
+    (ATT, r"settles in \*\*([\d.]+) s\*\* \(seed: ([\d.]+) s\)", FIGS,
+     (N + "akimov/akimov_fig12/settle_s", N + "akimov/akimov_fig12/paper_settle_s")),
+    (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
+     FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
+    (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
     # README: the papers' numbers beside ours
     (README, r"Fig\. 3, random errors \| miss, fuel \| ([\d.]+) m, ([\d.]+) m/s \| ([\d.]+) m, "
      r"([\d.]+) m/s \|", FIGS,
