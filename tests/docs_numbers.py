@@ -102,9 +102,9 @@ def tables(text: str) -> dict[str, list[list[str]]]:
         if in_code or not line.startswith("|"):
             header = None
             continue
-        if header is None:
+        if header is None:  # tables with the same header are read as one
             header = line.strip()
-            out[header] = []
+            out.setdefault(header, [])
         elif not set(line) <= set("|-: "):
             out[header].append([c.strip() for c in line.strip().strip("|").split("|")])
     return out

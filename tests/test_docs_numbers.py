@@ -190,6 +190,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      FIGS, (N + "resurs/Z_paper/euler", N + "resurs/Z_ours/euler")),
     (README, r"Fig\. 12 \| settling time \| ([\d.]+) s \| ([\d.]+) s \|", FIGS,
      (N + "akimov/akimov_fig12/paper_settle_s", N + "akimov/akimov_fig12/settle_s")),
+    (README, r"Lyapunov function V along a turn \| decreases \| ([\d.]+) -> ([\d.e-]+), never "
+     r"increasing \|", FIGS, (N + "lqr_lyapunov/V0", N + "lqr_lyapunov/V_end")),
+    (README, r"settling time, adversarial torques \| within the guaranteed time \| ([\d.]+) s "
+     r"within ([\d.]+) s \|", FIGS, (N + "gyrostat/settle_s/box/game", N + "gyrostat/tau_s")),
     (README, r"within 0\.2 deg only from ([\d]+) s", FIGS, (N + "resurs/within_tolerance_from_s",)),
     (README, r"Fig\. 5 \(four variants x (\d+) runs\)", FIG5, ("runs",)),
     (README, r"The estimators on the same (\d+) Fig\. 5 engagements", CMP, ("runs",)),
