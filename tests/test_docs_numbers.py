@@ -41,6 +41,7 @@ BENCH = "docs/results/bench.json"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
+NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -265,6 +266,15 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      _row("ekf", "game", "miss_m/mean") + _row("ekf", "game", "miss_m/mean", path=CONS)
      + _row("ukf", "game", "miss_m/mean") + _row("ukf", "game", "miss_m/mean", path=CONS)
      + _row("infoset", "game", "miss_m/mean")),
+    # docs/intercept.md: the node grid (kvi sweep kp_fig5 --key estimator.infoset.n_nodes)
+    (INT, r"\(mean miss ([\d.]+)-([\d.]+) m, fuel ([\d.]+)-([\d.]+) m/s\)\. Under the game the "
+     r"mean miss moves between ([\d.]+) and ([\d.]+) m in no clear direction and the fuel between "
+     r"([\d.]+) and ([\d.]+) m/s", NODES,
+     tuple(f"rows/[value={v},estimator=infoset,noise={n}]/{k}" for n, k, v in (
+         ("random", "miss_m/mean", 12), ("random", "miss_m/mean", 8),
+         ("random", "fuel_mps/mean", 6), ("random", "fuel_mps/mean", 8),
+         ("game", "miss_m/mean", 8), ("game", "miss_m/mean", 6),
+         ("game", "fuel_mps/mean", 12), ("game", "fuel_mps/mean", 6)))),
     # docs/intercept.md: the filters' noise inflated (kvi sweep kp_fig5_kalman_inflated)
     (INT, r"at `s = 30` the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m", INFL,
      ("rows/[value=30,estimator=ekf,noise=game]/miss_m/mean",

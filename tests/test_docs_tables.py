@@ -50,6 +50,16 @@ TABLES: list[TableCheck] = [
         {0: "estimator", 1: "noise"},
         {2: MISS4, 3: ("fuel_mps/mean",), 4: ("truth_outside",)},
     ),
+    # kvi sweep kp_fig5 --key estimator.infoset.n_nodes --values "[6, 8, 12, 16]"
+    # --estimators infoset --noise random,game --runs 50
+    TableCheck(
+        INT,
+        "| n_nodes | estimator | noise |",
+        "docs/results/sweeps/kp_fig5-n_nodes.json",
+        "rows",
+        {0: "value", 1: "estimator", 2: "noise"},
+        {3: ("miss_m/mean",), 4: ("fuel_mps/mean",), 5: ("truth_outside",)},
+    ),
     # kvi sweep kp_fig5_kalman_inflated --key estimator.ekf.noise_inflation,
     # estimator.ukf.noise_inflation --values "[1, 3, 10, 30]" --estimators ekf,ukf
     # --noise random,game,bias --runs 50
@@ -86,10 +96,6 @@ NOT_RESULTS = {
 UNBACKED = {
     (INT, "| reading of the rule | miss, m | fuel, m/s |"): (
         "readings of earlier releases' code (history; the current one is the Fig. 3 table)"
-    ),
-    (INT, "| n_nodes | random | game |"): (
-        "kvi sweep kp_fig5 --key estimator.infoset.n_nodes --values '[6, 8, 12, 16]' "
-        "--estimators infoset --noise random,game --runs 50 --json"
     ),
     (INT, "| estimator | noise | miss mean / p50 / p90 / max, m | fuel mean / p90, m/s |"): (
         "kvi compare kp_fig5 --runs 50 --estimators infoset,ellipsoid,zonotope,box,ekf,ukf,"
