@@ -20,3 +20,25 @@ def test_infoset_page_range_finder_tightness_rows_match_their_results_files():
         res = json.loads(path.read_text())
         assert [float(c) for c in cells.split("|")] == [round(r, 3) for r in res["ratio"]]
         assert all(res["exact_inside"]) and res["times_s"] == [10.0, 30.0, 60.0, 90.0, 95.0]
+
+
+#: a row of the main tightness table: (slab set,) scenario, seed, errors, guidance, ratios
+MAIN_ROW = re.compile(
+    r"^\| (29 slabs \(option\), )?(kp_fig[35]) \((\d+)\) \| (random|bias|switch)[^|]* \| "
+    r"(none|law) \|(.*)\|$",
+    re.M,
+)
+
+
+def test_infoset_page_tightness_table_matches_its_results_files():
+    """The main table (``kvi tightness kp_fig3|kp_fig5 --noise N --seed S [--guided]
+    [--set 'estimator.infoset.sections="slabs"'] --json``, one results file a row)."""
+    rows = MAIN_ROW.findall((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8"))
+    assert len(rows) == 16
+    for slabs, scenario, seed, noise, guidance, cells in rows:
+        stem = f"{scenario}-tightness-infoset-{noise}-seed{seed}"
+        stem += "-guided" * (guidance == "law") + "-slabs" * bool(slabs)
+        res = json.loads((ROOT / f"docs/results/tightness/{stem}.json").read_text())
+        assert res["guided"] is (guidance == "law") and res["seed"] == int(seed)
+        assert [float(c) for c in cells.split("|")] == [round(r, 3) for r in res["ratio"]], stem
+        assert all(res["exact_inside"]) and res["times_s"] == [10.0, 30.0, 60.0, 90.0, 95.0]
