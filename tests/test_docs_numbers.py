@@ -42,6 +42,7 @@ CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
 NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
+FAM = "docs/results/families/compare_kp_fig5_families.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -260,6 +261,38 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      + _row("infoset", "bias", "miss_m/p50") + _row("infoset", "bias", "miss_m/p50")
      + _row("infoset", "random", "miss_m/p50") + _row("infoset", "bias", "fuel_mps/mean")
      + _row("infoset", "random", "fuel_mps/mean")),
+    # docs/intercept.md: the estimator families (kvi compare kp_fig5, eight estimators)
+    (INT, r"under any kind \(from (\d+) to (\d+) steps outside a row\)", FAM,
+     _row("ekf", "random", "truth_outside", path=FAM)
+     + _row("ekf", "bias", "truth_outside", path=FAM)),
+    (INT, r"misses by ([\d.]+) m \(game\) to ([\d.]+) m \(targeted\) on average, the ellipsoid "
+     r"spends ([\d.]+) m/s against the set's ([\d.]+) m/s under random errors", FAM,
+     _row("zonotope", "game", "miss_m/mean", path=FAM)
+     + _row("zonotope", "targeted", "miss_m/mean", path=FAM)
+     + _row("ellipsoid", "random", "fuel_mps/mean", path=FAM)
+     + _row("infoset", "random", "fuel_mps/mean", path=FAM)),
+    (INT, r"fires \(fuel ([\d.]+) m/s, the miss is the unguided one, ([\d.]+) m on average\); "
+     r"late in the approach its kinematic bound outgrows the set, which is then reported "
+     r"diverged \(in (\d+) of (\d+) runs", FAM,
+     _row("box", "random", "fuel_mps/mean", "miss_m/mean", "diverged", path=FAM)
+     + (FAM + "::runs",)),
+    (INT, r"under a bias held at the bound the ellipsoid \(([\d.]+) m / ([\d.]+) m/s\) and the "
+     r"H-infinity filter \(([\d.]+) m / ([\d.]+) m/s\), and under the seed's game the ellipsoid "
+     r"\(([\d.]+) m / ([\d.]+) m/s against the set's ([\d.]+) m / ([\d.]+) m/s\)", FAM,
+     _row("ellipsoid", "bias", *MISS_FUEL, path=FAM) + _row("hinf", "bias", *MISS_FUEL, path=FAM)
+     + _row("ellipsoid", "game", *MISS_FUEL, path=FAM)
+     + _row("infoset", "game", *MISS_FUEL, path=FAM)),
+    (INT, r"estimators pay ([\d.]+) and ([\d.]+) m/s for that trust, and an adversary that aims "
+     r"at them \(`targeted`\) makes them miss by ([\d.]+) m and ([\d.]+) m", FAM,
+     _row("ellipsoid", "random", "fuel_mps/mean", path=FAM)
+     + _row("hinf", "random", "fuel_mps/mean", path=FAM)
+     + _row("ellipsoid", "targeted", "miss_m/mean", path=FAM)
+     + _row("hinf", "targeted", "miss_m/mean", path=FAM)),
+    (INT, r"closest of the filters to the set \(([\d.]+) m / ([\d.]+) m/s under random errors\) "
+     r"but not a bound \((\d+) steps outside\), and the white-box adversary zeroes every "
+     r"particle's weight at some step in (\d+) of (\d+) runs", FAM,
+     _row("pf", "random", *MISS_FUEL, "truth_outside", path=FAM)
+     + _row("pf", "targeted", "empty_set", path=FAM) + (FAM + "::runs",)),
     # docs/intercept.md: the range constraint (kvi compare kp_fig5_kalman_constrained)
     (INT, r"Under the game it cuts the EKF's mean miss from ([\d.]+) to ([\d.]+) m and the UKF's "
      r"from ([\d.]+) to ([\d.]+) m, and neither comes near the set's ([\d.]+) m", CMP,
