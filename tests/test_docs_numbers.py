@@ -43,6 +43,7 @@ E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
 NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
 FAM = "docs/results/families/compare_kp_fig5_families.json"
+WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -234,6 +235,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # docs/intercept.md: Fig. 5 (``make run``)
     (INT, r"Perfect-information fuel \(mean over runs\) ([\d.]+) m/s; "
      r"bearing-limited miss floor ([\d.]+) m", FIG5, ("fuel_perfect_info_mps", "miss_floor_m")),
+    # docs/intercept.md: the paper's whole closing-speed interval D (kvi intercept kp_fig5 --set)
+    (INT, r"mean miss ([\d.]+) m \(random\), ([\d.]+) m \(game\), ([\d.]+) m \(bias\), fuel "
+     r"([\d.]+) / ([\d.]+) / ([\d.]+) m/s, no step outside, no set diverged", WIDE + "random.json",
+     ("miss_m/mean", WIDE + "game.json::miss_m/mean", WIDE + "bias.json::miss_m/mean",
+      "fuel_mps/mean", WIDE + "game.json::fuel_mps/mean", WIDE + "bias.json::fuel_mps/mean")),
     # docs/intercept.md: the Kalman filters on the Fig. 5 truths (``kvi compare``)
     (INT, r"\(median miss ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\) against ([\d.]+) m\)", CMP,
      _row("ekf", "random", "miss_m/p50") + _row("ukf", "random", "miss_m/p50")

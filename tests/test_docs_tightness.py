@@ -24,17 +24,18 @@ def test_infoset_page_range_finder_tightness_rows_match_their_results_files():
 
 #: a row of the main tightness table: (slab set,) scenario, seed, errors, guidance, ratios
 MAIN_ROW = re.compile(
-    r"^\| (29 slabs \(option\), )?(kp_fig[35]) \((\d+)\) \| (random|bias|switch)[^|]* \| "
+    r"^\| (29 slabs \(option\), )?(kp_fig[35]) \((\d+)\) \| (random|bias|switch|game)[^|]* \| "
     r"(none|law) \|(.*)\|$",
     re.M,
 )
 
 
 def test_infoset_page_tightness_table_matches_its_results_files():
-    """The main table (``kvi tightness kp_fig3|kp_fig5 --noise N --seed S [--guided]
-    [--set 'estimator.infoset.sections="slabs"'] --json``, one results file a row)."""
+    """The main and the game tables (``kvi tightness kp_fig3|kp_fig5 --noise N --seed S
+    [--guided] [--set 'estimator.infoset.sections="slabs"'] --json``, one results file a
+    row)."""
     rows = MAIN_ROW.findall((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8"))
-    assert len(rows) == 16
+    assert len(rows) == 32  # 12 + 4 slab rows, 16 game rows
     for slabs, scenario, seed, noise, guidance, cells in rows:
         stem = f"{scenario}-tightness-infoset-{noise}-seed{seed}"
         stem += "-guided" * (guidance == "law") + "-slabs" * bool(slabs)
