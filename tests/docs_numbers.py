@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 
@@ -117,7 +117,8 @@ class TableCheck:
     ``labels``: per label column, the record's field it names (the printed estimator
     names read through ``PRINTED_NAMES``); each row must name exactly one record.
     ``cells``: per number column, the record keys of the numbers printed in that cell,
-    in order. A column in neither holds no number.
+    in order. A column in neither holds no number. ``column_labels``: for a table that
+    spreads records over columns too (a pivot), the fields each column's header names.
     """
 
     doc: str
@@ -126,6 +127,7 @@ class TableCheck:
     records: str
     labels: dict[int, str]
     cells: dict[int, tuple[str, ...]]
+    column_labels: dict[int, dict[str, str]] = field(default_factory=dict)
 
 
 def table_mismatches(text: str, check: TableCheck, data) -> list[str]:
@@ -136,16 +138,17 @@ def table_mismatches(text: str, check: TableCheck, data) -> list[str]:
     records = lookup(data, check.records) if check.records else data
     bad = []
     for cells in found[0]:
-        sel = ",".join(
-            f"{field}={PRINTED_NAMES.get(cells[col], cells[col])}"
-            for col, field in check.labels.items()
-        )
-        try:
-            record = _select(records, f"[{sel}]")
-        except KeyError as exc:
-            bad.append(f"row {cells}: {exc}")
-            continue
+        sel = [
+            f"{name}={PRINTED_NAMES.get(cells[col], cells[col])}"
+            for col, name in check.labels.items()
+        ]
         for col, keys in check.cells.items():
+            extra = [f"{k}={v}" for k, v in check.column_labels.get(col, {}).items()]
+            try:
+                record = _select(records, "[" + ",".join(sel + extra) + "]")
+            except KeyError as exc:
+                bad.append(f"row {cells}: {exc}")
+                continue
             printed = NUMBER.findall(cells[col])
             if len(printed) != len(keys):
                 bad.append(f"row {cells[:2]}, column {col}: {printed} for keys {keys}")

@@ -76,6 +76,16 @@ TABLES: list[TableCheck] = [
         {1: "noise"},
         FAMILY_CELLS,
     ),
+    # kvi adversaries kp_fig3 --runs 1 --estimators infoset,ekf,ukf,hinf,pf
+    TableCheck(
+        INT,
+        "| estimator | game | targeted | lookahead |",
+        "docs/results/adversaries/kp_fig3-adversaries.json",
+        "rows",
+        {0: "estimator"},
+        {c: ("miss_m/mean", "fuel_mps/mean", "truth_outside") for c in (1, 2, 3)},
+        {1: {"rule": "game"}, 2: {"rule": "targeted"}, 3: {"rule": "lookahead"}},
+    ),
     # kvi sweep kp_fig5 --key estimator.infoset.n_nodes --values "[6, 8, 12, 16]"
     # --estimators infoset --noise random,game --runs 50
     TableCheck(
@@ -129,9 +139,6 @@ UNBACKED = {
     (INT, "| estimator | rule | miss mean / p50 / p90, m |"): (
         "kvi adversaries kp_fig5 --runs 10 --estimators infoset,ekf,ukf,hinf,pf --json "
         "(the look-ahead rule is a tree search: long)"
-    ),
-    (INT, "| estimator | game | targeted | lookahead |"): (
-        "kvi adversaries kp_fig3 --runs 1 --estimators infoset,ekf,ukf,hinf,pf --json"
     ),
     ("docs/attitude.md", "| disturbance (noise) | settle mean / max, s |"): (
         "kvi attitude gyrostat_game --noise ... --runs 20 --json per row"
