@@ -20,6 +20,7 @@ INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
 NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
 FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
+ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -275,6 +276,27 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"particle's weight at some step in (\d+) of (\d+) runs", FAM,
      _row("pf", "random", *MISS_FUEL, "truth_outside", path=FAM)
      + _row("pf", "targeted", "empty_set", path=FAM) + (FAM + "::runs",)),
+    # docs/intercept.md: adversaries on the Fig. 5 truths (kvi adversaries kp_fig5 --runs 10)
+    (INT, r"particle filter gave every particle zero weight at some step in (\d+), (\d+) and (\d+) "
+     r"of the (\d+) runs", ADV5,
+     tuple(f"rows/[estimator=pf,rule={r}]/empty_set" for r in ("game", "targeted", "lookahead"))
+     + ("runs",)),
+    (INT, r"Fig\. 3 fuel gap \(ours ([\d.]+) m/s, seed ([\d.]+) m/s\)", FIGS,
+     (N + "kp_fig3/ours_miss_fuel/game/1", N + "kp_fig3/paper_miss_fuel/game/1")),
+    (INT, r"the largest fuel any rule drew from the pursuer was ([\d.]+) m/s \(the seed's rule\)",
+     ADV5, ("rows/[estimator=infoset,rule=game]/fuel_mps/max",)),
+    (INT, r"\(Fig\. 5 mean ([\d.]+) -> ([\d.]+) m under `targeted`", ADV5,
+     ("rows/[estimator=infoset,rule=game]/miss_m/mean",
+      "rows/[estimator=infoset,rule=targeted]/miss_m/mean")),
+    (INT, r"\(([\d.]+) m/s mean under the seed's rule, ([\d.]+) and ([\d.]+) under the white-box",
+     ADV5, tuple(f"rows/[estimator=infoset,rule={r}]/fuel_mps/mean"
+                 for r in ("game", "targeted", "lookahead"))),
+    (INT, r"pays ([\d.]+) and ([\d.]+) m/s on average \(targeted, look-ahead\)", ADV5,
+     ("rows/[estimator=hinf,rule=targeted]/fuel_mps/mean",
+      "rows/[estimator=hinf,rule=lookahead]/fuel_mps/mean")),
+    (INT, r"pay it in ([\d.]+) and ([\d.]+) of the runs under the look-ahead", ADV5,
+     ("rows/[estimator=ekf,rule=lookahead]/runs_at_seed_fuel",
+      "rows/[estimator=ukf,rule=lookahead]/runs_at_seed_fuel")),
     # docs/intercept.md: the range constraint (kvi compare kp_fig5_kalman_constrained)
     (INT, r"Under the game it cuts the EKF's mean miss from ([\d.]+) to ([\d.]+) m and the UKF's "
      r"from ([\d.]+) to ([\d.]+) m, and neither comes near the set's ([\d.]+) m", CMP,
