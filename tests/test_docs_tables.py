@@ -148,7 +148,8 @@ UNBACKED = {
         "readings of earlier releases' code (history; the current one is the Fig. 3 table)"
     ),
     (INT, "| estimator | width / exact width at 10-60 s |"): (
-        "kvi tightness SCENARIO --estimator NAME --noise ... --json per row, and kvi bench"
+        "kvi tightness kp_fig3|kp_fig5 --estimator NAME --noise N --seed 3|5 --json, "
+        "32 runs per estimator (ranges over them)"
     ),
     ("docs/attitude.md", "| disturbance (noise) | settle mean / max, s |"): (
         "kvi attitude gyrostat_game --noise ... --runs 20 --json per row"
