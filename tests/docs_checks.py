@@ -1,0 +1,357 @@
+"""The table of the docs' numbers and where each comes from (read by
+``test_docs_numbers.py``, which describes the rows).
+
+The results files and the commands that write them (the ``--json`` line of stdout,
+kept under ``docs/results/``) are listed in ``docs/results/README.txt``.
+"""
+
+from __future__ import annotations
+
+README, FIGMD = "README.md", "docs/figures.md"
+ATT, INT, PERF = "docs/attitude.md", "docs/intercept.md", "docs/performance.md"
+FIGS = "docs/figures/paper_figures.json"
+FIG5 = "docs/results/fig5.json"
+CMP = "docs/results/compare_kp_fig5.json"
+F3 = "docs/results/fig3/kp_fig3-infoset-"
+BENCH = "docs/results/bench.json"
+CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
+E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
+INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
+NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
+FAM = "docs/results/families/compare_kp_fig5_families.json"
+WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
+ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
+N = "numbers/"
+SIGNS = N + "resurs_inertia_signs/"
+MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
+
+
+def _row(estimator: str, noise: str, *fields: str, path: str = CMP) -> tuple[str, ...]:
+    """Keys of a compare row's fields (in another results file than ``CMP``: its path
+    before ``::``)."""
+    pre = "" if path == CMP else path + "::"
+    return tuple(f"{pre}rows/[estimator={estimator},noise={noise}]/{f}" for f in fields)
+
+
+def _fig3_row(label: str, stem: str) -> tuple[str, str, str, tuple[str, ...]]:
+    """A row of the Fig. 3 table: miss, fuel, steps outside, empty sets of one run."""
+    cell = r"\**([\d.]+)\**"
+    pattern = rf"\| {label} \| {cell} \| {cell} \| (\d+) \| (\d+) \|"
+    keys = (*MISS_FUEL, "truth_outside", "empty_set")
+    return (INT, pattern, F3 + stem + ".json", keys)
+
+
+def _e2e_row(label: str, noise: str, more: str = r" \|", fields: tuple[str, ...] = ()):
+    """A row of the end-to-end table: the run of ``kvi intercept kp_fig3_attitude``."""
+    cell = r"\**([\d.]+)\**"
+    pattern = rf"\| {label} \| {cell} \| {cell} \| (\d+){more}"
+    keys = tuple(f"0/{f}" for f in ("miss_m", "fuel_mps", "truth_outside", *fields))
+    return (INT, pattern, E2E + noise + "-s3.parquet", keys)
+
+
+#: (document, pattern with one group per number, results file, key per group)
+CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
+    # seed 003
+    (FIGMD, r"random errors, miss ([\d.]+) m and fuel ([\d.]+) m/s against the "
+     r"paper's 4.3", FIGS, (N + "kp_fig3/ours_miss_fuel/random/0",
+                            N + "kp_fig3/ours_miss_fuel/random/1")),
+    (FIGMD, r"game fuel, ([\d.]+) m/s against 521.7 m/s \(miss ([\d.]+) m", FIGS,
+     (N + "kp_fig3/ours_miss_fuel/game/1", N + "kp_fig3/ours_miss_fuel/game/0")),
+    (FIGMD, r"they spend ([\d]+)-([\d]+) m/s \(miss ([\d.]+)-([\d.]+) m\) against ([\d]+) m/s",
+     FIGS,
+     (N + "kp_fig3_overlay/kalman_miss_fuel/ukf_random/1",
+      N + "kp_fig3_overlay/kalman_miss_fuel/ekf_random/1",
+      N + "kp_fig3_overlay/kalman_miss_fuel/ukf_random/0",
+      N + "kp_fig3_overlay/kalman_miss_fuel/ekf_random/0", N + "kp_fig3/ours_miss_fuel/random/1")),
+    (FIGMD, r"and they miss by ([\d]+)-([\d]+) m\.", FIGS,
+     (N + "kp_fig3_overlay/kalman_miss_fuel/ukf_game/0",
+      N + "kp_fig3_overlay/kalman_miss_fuel/ekf_game/0")),
+    (FIGMD, r"\(([\d]+) node slices before, ([\d]+) after\)", FIGS,
+     (N + "kp_fig4/sections_before", N + "kp_fig4/sections_after")),
+    (FIGMD, r"bearings only ([\d.]+) m / ([\d.]+) m/s \(random\), ([\d.]+) m / "
+     r"([\d.]+) m/s \(game\)", FIGS,
+     (N + "kp_fig5/mean_miss_fuel/bearings only, random/0",
+      N + "kp_fig5/mean_miss_fuel/bearings only, random/1",
+      N + "kp_fig5/mean_miss_fuel/bearings only, game/0",
+      N + "kp_fig5/mean_miss_fuel/bearings only, game/1")),
+    (FIGMD, r"with the range finder ([\d.]+) m / ([\d.]+) m/s \(random\) and "
+     r"([\d.]+) m / ([\d.]+) m/s \(game\)", FIGS,
+     (N + "kp_fig5/mean_miss_fuel/bearings + range, random/0",
+      N + "kp_fig5/mean_miss_fuel/bearings + range, random/1",
+      N + "kp_fig5/mean_miss_fuel/bearings + range, game/0",
+      N + "kp_fig5/mean_miss_fuel/bearings + range, game/1")),
+    # seed 000
+    (FIGMD, r"at 300 s the error is ([\d.]+) deg and ([\d.]+) deg/s", FIGS,
+     (N + "resurs/angle_at_300s_deg", N + "resurs/rate_at_300s_degps")),
+    (FIGMD, r"within 0.2 deg from ([\d.]+) s", FIGS,
+     (N + "resurs/within_tolerance_from_s",)),
+    (FIGMD, r"Z = ([\d]+) N\^2 m\^2 s at 300 s against the paper's 2150", FIGS,
+     (N + "resurs/Z_ours/energy",)),
+    (FIGMD, r"Z = ([\d]+) against the paper's 11200", FIGS,
+     (N + "resurs/Z_ours/euler",)),
+    (FIGMD, r"excess variation ([\d.]+) N m over the first 30 s", FIGS,
+     (N + "resurs/initial_swing_Nm/U0=0",)),
+    (FIGMD, r"\(excess variation ([\d.]+) N m against ([\d.]+) N m\)", FIGS,
+     (N + "resurs/initial_swing_Nm/U0 paper", N + "resurs/initial_swing_Nm/U0=0")),
+    (FIGMD, r"\| standard, all \"-\" \| ([\d]+) \| ([\d]+) \|", FIGS,
+     (SIGNS + "Z_energy/[-,-,-] standard", SIGNS + "Z_euler/[-,-,-] standard")),
+    (FIGMD, r"\| entries, all \"\+\" \| ([\d]+) \| ([\d]+) \|", FIGS,
+     (SIGNS + "Z_energy/[+,+,+] entries", SIGNS + "Z_euler/[+,+,+] entries")),
+    (FIGMD, r"\| \[\+, -, -\] \| ([\d]+) \| ([\d]+) \|", FIGS,
+     (SIGNS + "Z_energy/[+,-,-]", SIGNS + "Z_euler/[+,-,-]")),
+    (FIGMD, r"\| \[\+, -, \+\] \| ([\d]+) \| ([\d]+) \|", FIGS,
+     (SIGNS + "Z_energy/[+,-,+]", SIGNS + "Z_euler/[+,-,+]")),
+    (FIGMD, r"UKF spends Z = ([\d]+) N\^2 m\^2 s \(exact state ([\d]+)\)", FIGS,
+     (N + "resurs_noisy/Z_noisy", N + "resurs_noisy/Z_exact")),
+    (FIGMD, r"error at 300 s ([\d.]+) deg \(exact state ([\d.]+) deg\)", FIGS,
+     (N + "resurs_noisy/angle_at_300s_deg/noisy", N + "resurs_noisy/angle_at_300s_deg/exact")),
+    # seed 001
+    (FIGMD, r"settles \(0.01 deg, 0.01 deg/s\) at ([\d.]+) s against the paper's",
+     FIGS, (N + "akimov/akimov_fig12/settle_s",)),
+    (FIGMD, r"the same gains. turn settles at ([\d.]+) s", FIGS,
+     (N + "akimov/akimov_fig12/settle_twice_s",)),
+    (FIGMD, r"transient \(([\d.]+) s against ([\d.]+) s\)", FIGS,
+     (N + "akimov/akimov_fig6/settle_s", N + "akimov/akimov_fig3/settle_s")),
+    (FIGMD, r"phi10 = ([\d.]+) deg and phi20 = ([\d.]+) deg", FIGS,
+     (N + "akimov_fig8/phi10_deg", N + "akimov_fig8/phi20_deg")),
+    (FIGMD, r"peak torque ([\d.]+) of M_max", FIGS,
+     (N + "akimov_fig9/peak_torque_ratio",)),
+    # seed 002
+    (FIGMD, r"from V = ([\d.]+) to ([\d.e-]+)", FIGS,
+     (N + "lqr_lyapunov/V0", N + "lqr_lyapunov/V_end")),
+    # seed 004
+    (FIGMD, r"settles at ([\d.]+) s \(exact state\) and ([\d.]+) s \(game\) within "
+     r"the guaranteed time tau = ([\d.]+) s", FIGS,
+     (N + "gyrostat/settle_s/perfect/none", N + "gyrostat/settle_s/box/game",
+      N + "gyrostat/tau_s")),
+    # docs/attitude.md, the Resurs-P section
+    (ATT, r"\| Z energy-saving, U0 = 0 / U0 = \(-5.4, -1.1, -2.4\) N m \| ([\d]+) / "
+     r"([\d]+) N\^2 m\^2 s", FIGS, (N + "resurs/Z_ours/energy", N + "resurs/Z_u0_paper")),
+    (ATT, r"\| Z Euler-axis flight turn \([\d.]+-s jerk-limited phases, CALIBRATED\) \| "
+     r"([\d]+) N\^2 m\^2 s", FIGS, (N + "resurs/Z_ours/euler",)),
+    (ATT, r"\| min-energy bound of the linear model, 300 s \| ([\d]+) N\^2 m\^2 s", FIGS,
+     (N + "resurs/lower_bound_N2m2s",)),
+    (ATT, r"\| energy-saving error at 300 s \| ([\d.]+) deg, ([\d.]+) deg/s \(0.2 deg "
+     r"reached at ([\d]+) s\)", FIGS,
+     (N + "resurs/angle_at_300s_deg", N + "resurs/rate_at_300s_degps",
+      N + "resurs/within_tolerance_from_s")),
+    (ATT, r"\| initial torque swing, first 30 s, U0 = 0 vs seed U0 \| ([\d.]+) vs "
+     r"([\d.]+) N m", FIGS, (N + "resurs/initial_swing_Nm/U0=0",
+                             N + "resurs/initial_swing_Nm/U0 paper")),
+    (ATT, r"with gentler 100-s phases an Euler-axis turn costs ([\d]+) N\^2", FIGS,
+     (N + "resurs/Z_euler_100s_phases",)),
+    (ATT, r"Z energy-saving under the sign readings: standard ([\d]+), entries ([\d]+), "
+     r"\[\+, -, -\] ([\d]+), \[\+, -, \+\] ([\d]+)", FIGS,
+     (SIGNS + "Z_energy/[-,-,-] standard", SIGNS + "Z_energy/[+,+,+] entries",
+      SIGNS + "Z_energy/[+,-,-]", SIGNS + "Z_energy/[+,-,+]")),
+    (ATT, r"the full gyrodine simulation within tolerance from ([\d.]+) s \(([\d.]+) "
+     r"deg, ([\d.]+) deg/s at 300 s\) for Z = ([\d]+)", FIGS,
+     (N + "resurs/f1_raised/within_tolerance_from_s", N + "resurs/f1_raised/angle_deg",
+      N + "resurs/f1_raised/rate_degps", N + "resurs/f1_raised/Z")),
+    (ATT, r"settles in \*\*([\d.]+) s\*\* \(seed: ([\d.]+) s\)", FIGS,
+     (N + "akimov/akimov_fig12/settle_s", N + "akimov/akimov_fig12/paper_settle_s")),
+    (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
+     FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
+    (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
+    # README: the papers' numbers beside ours
+    (README, r"Fig\. 3, random errors \| miss, fuel \| ([\d.]+) m, ([\d.]+) m/s \| ([\d.]+) m, "
+     r"([\d.]+) m/s \|", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/random/0", N + "kp_fig3/paper_miss_fuel/random/1",
+      N + "kp_fig3/ours_miss_fuel/random/0", N + "kp_fig3/ours_miss_fuel/random/1")),
+    (README, r"Fig\. 3, game errors \| miss, fuel \| ([\d.]+) m, ([\d.]+) m/s \| ([\d.]+) m, "
+     r"([\d.]+) m/s \|", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/game/0", N + "kp_fig3/paper_miss_fuel/game/1",
+      N + "kp_fig3/ours_miss_fuel/game/0", N + "kp_fig3/ours_miss_fuel/game/1")),
+    (README, r"energy-saving law \| index Z \| ([\d]+) N\^2 m\^2 s \| ([\d]+) N\^2 m\^2 s \|",
+     FIGS, (N + "resurs/Z_paper/energy", N + "resurs/Z_ours/energy")),
+    (README, r"\| error at 300 s \| <= 0\.2 deg \| ([\d.]+) deg \|", FIGS,
+     (N + "resurs/angle_at_300s_deg",)),
+    (README, r"Euler-axis baseline \| index Z \| ([\d]+) N\^2 m\^2 s \| ([\d]+) N\^2 m\^2 s \|",
+     FIGS, (N + "resurs/Z_paper/euler", N + "resurs/Z_ours/euler")),
+    (README, r"Fig\. 12 \| settling time \| ([\d.]+) s \| ([\d.]+) s \|", FIGS,
+     (N + "akimov/akimov_fig12/paper_settle_s", N + "akimov/akimov_fig12/settle_s")),
+    (README, r"Lyapunov function V along a turn \| decreases \| ([\d.]+) -> ([\d.e-]+), never "
+     r"increasing \|", FIGS, (N + "lqr_lyapunov/V0", N + "lqr_lyapunov/V_end")),
+    (README, r"settling time, adversarial torques \| within the guaranteed time \| ([\d.]+) s "
+     r"within ([\d.]+) s \|", FIGS, (N + "gyrostat/settle_s/box/game", N + "gyrostat/tau_s")),
+    (README, r"within 0\.2 deg only from ([\d]+) s", FIGS, (N + "resurs/within_tolerance_from_s",)),
+    (README, r"Fig\. 5 \(four variants x (\d+) runs\)", FIG5, ("runs",)),
+    (README, r"The estimators on the same (\d+) Fig\. 5 engagements", CMP, ("runs",)),
+    (README, r"the set misses by ([\d.]+) m for ([\d.]+) m/s; the EKF by ([\d.]+) m for "
+     r"([\d.]+) m/s and the UKF by ([\d.]+) m for ([\d.]+) m/s", CMP,
+     _row("infoset", "random", *MISS_FUEL) + _row("ekf", "random", *MISS_FUEL)
+     + _row("ukf", "random", *MISS_FUEL)),
+    (README, r"their ellipsoid left the truth at (\d+) and (\d+) steps, the set at (\d+)", CMP,
+     _row("ekf", "random", "truth_outside") + _row("ukf", "random", "truth_outside")
+     + _row("infoset", "random", "truth_outside")),
+    (README, r"the EKF misses by ([\d.]+) m and the UKF by ([\d.]+) m against the set's "
+     r"([\d.]+) m", CMP,
+     _row("ekf", "bias", "miss_m/mean") + _row("ukf", "bias", "miss_m/mean")
+     + _row("infoset", "bias", "miss_m/mean")),
+    (README, r"the set's miss grows to ([\d.]+) m for ([\d.]+) m/s, its guarantee holds "
+     r"\((\d+) steps outside\)", CMP, _row("infoset", "game", *MISS_FUEL, "truth_outside")),
+    (README, r"they miss by ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\)", CMP,
+     _row("ekf", "game", "miss_m/mean") + _row("ukf", "game", "miss_m/mean")),
+    # docs/intercept.md: Fig. 3, one engagement per row, and the paper's numbers
+    (INT, r"\| seed, random noise \| ([\d.]+) \| ([\d.]+) \|", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/random/0", N + "kp_fig3/paper_miss_fuel/random/1")),
+    (INT, r"\| seed, game noise \| ([\d.]+) \| ([\d.]+) \|", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/game/0", N + "kp_fig3/paper_miss_fuel/game/1")),
+    _fig3_row(r"\*\*ours, random\*\* \(node set, default\)", "random"),
+    _fig3_row(r"ours, random \(slabs, the previous default\)", "random-slabs"),
+    _fig3_row(r"ours, random \(seed's point sections\)", "random-points"),
+    _fig3_row(r"\*\*ours, game\*\* \(node set\)", "game"),
+    _fig3_row(r"ours, game \(slabs\)", "game-slabs"),
+    _fig3_row(r"ours, game \(seed's point sections\)", "game-points"),
+    (INT, r"with the exact set the miss is ([\d.]+) m against the seed's ([\d.]+) m",
+     FIGS, (N + "kp_fig3/ours_miss_fuel/random/0", N + "kp_fig3/paper_miss_fuel/random/0")),
+    (INT, r"our adversary costs the pursuer ([\d.]+) m/s with the node set, \d+ % "
+     r"of the seed's ([\d.]+) m/s \(miss ([\d.]+) m against ([\d.]+) m\)", FIGS,
+     (N + "kp_fig3/ours_miss_fuel/game/1", N + "kp_fig3/paper_miss_fuel/game/1",
+      N + "kp_fig3/ours_miss_fuel/game/0", N + "kp_fig3/paper_miss_fuel/game/0")),
+    # docs/intercept.md: Fig. 5 (``make run``)
+    (INT, r"Perfect-information fuel \(mean over runs\) ([\d.]+) m/s; "
+     r"bearing-limited miss floor ([\d.]+) m", FIG5, ("fuel_perfect_info_mps", "miss_floor_m")),
+    # docs/intercept.md: the paper's whole closing-speed interval D (kvi intercept kp_fig5 --set)
+    (INT, r"mean miss ([\d.]+) m \(random\), ([\d.]+) m \(game\), ([\d.]+) m \(bias\), fuel "
+     r"([\d.]+) / ([\d.]+) / ([\d.]+) m/s, no step outside, no set diverged", WIDE + "random.json",
+     ("miss_m/mean", WIDE + "game.json::miss_m/mean", WIDE + "bias.json::miss_m/mean",
+      "fuel_mps/mean", WIDE + "game.json::fuel_mps/mean", WIDE + "bias.json::fuel_mps/mean")),
+    # docs/intercept.md: the Kalman filters on the Fig. 5 truths (``kvi compare``)
+    (INT, r"\(median miss ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\) against ([\d.]+) m\)", CMP,
+     _row("ekf", "random", "miss_m/p50") + _row("ukf", "random", "miss_m/p50")
+     + _row("infoset", "random", "miss_m/p50")),
+    (INT, r"\(mean ([\d.]+) and ([\d.]+) m/s against ([\d.]+) m/s\)", CMP,
+     _row("ekf", "random", "fuel_mps/mean") + _row("ukf", "random", "fuel_mps/mean")
+     + _row("infoset", "random", "fuel_mps/mean")),
+    (INT, r"\(median ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\)\)", CMP,
+     _row("ekf", "game", "miss_m/p50") + _row("ukf", "game", "miss_m/p50")),
+    (INT, r"the set's mean miss grows from ([\d.]+) to ([\d.]+) m \(fuel ([\d.]+) -> "
+     r"([\d.]+) m/s\)", CMP,
+     _row("infoset", "random", "miss_m/mean") + _row("infoset", "game", "miss_m/mean")
+     + _row("infoset", "random", "fuel_mps/mean") + _row("infoset", "game", "fuel_mps/mean")),
+    (INT, r"errors \(mean miss ([\d.]+) -> ([\d.]+) m, fuel ([\d.]+) -> ([\d.]+) m/s\); under the "
+     r"game the range finder makes the miss worse here \(([\d.]+) -> ([\d.]+) m, fuel ([\d.]+) -> "
+     r"([\d.]+) m/s\)", FIG5,
+     tuple(f"variants/[variant={v},noise={n}]/{k}" for n, k in
+           (("random", "miss_m/mean"), ("random", "fuel_mps/mean"),
+            ("game", "miss_m/mean"), ("game", "fuel_mps/mean"))
+           for v in ("bearing only", "bearing + range"))),
+    (INT, r"their median miss is ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\) against the set's "
+     r"([\d.]+) m\. The set does almost as well with a bias as with random errors \(median "
+     r"([\d.]+) against ([\d.]+) m\) and spends less fuel \(mean ([\d.]+) against ([\d.]+) m/s\)",
+     CMP, _row("ekf", "bias", "miss_m/p50") + _row("ukf", "bias", "miss_m/p50")
+     + _row("infoset", "bias", "miss_m/p50") + _row("infoset", "bias", "miss_m/p50")
+     + _row("infoset", "random", "miss_m/p50") + _row("infoset", "bias", "fuel_mps/mean")
+     + _row("infoset", "random", "fuel_mps/mean")),
+    # docs/intercept.md: the estimator families (kvi compare kp_fig5, eight estimators)
+    (INT, r"under any kind \(from (\d+) to (\d+) steps outside a row\)", FAM,
+     _row("ekf", "random", "truth_outside", path=FAM)
+     + _row("ekf", "bias", "truth_outside", path=FAM)),
+    (INT, r"misses by ([\d.]+) m \(game\) to ([\d.]+) m \(targeted\) on average, the ellipsoid "
+     r"spends ([\d.]+) m/s against the set's ([\d.]+) m/s under random errors", FAM,
+     _row("zonotope", "game", "miss_m/mean", path=FAM)
+     + _row("zonotope", "targeted", "miss_m/mean", path=FAM)
+     + _row("ellipsoid", "random", "fuel_mps/mean", path=FAM)
+     + _row("infoset", "random", "fuel_mps/mean", path=FAM)),
+    (INT, r"fires \(fuel ([\d.]+) m/s, the miss is the unguided one, ([\d.]+) m on average\); "
+     r"late in the approach its kinematic bound outgrows the set, which is then reported "
+     r"diverged \(in (\d+) of (\d+) runs", FAM,
+     _row("box", "random", "fuel_mps/mean", "miss_m/mean", "diverged", path=FAM)
+     + (FAM + "::runs",)),
+    (INT, r"under a bias held at the bound the ellipsoid \(([\d.]+) m / ([\d.]+) m/s\) and the "
+     r"H-infinity filter \(([\d.]+) m / ([\d.]+) m/s\), and under the seed's game the ellipsoid "
+     r"\(([\d.]+) m / ([\d.]+) m/s against the set's ([\d.]+) m / ([\d.]+) m/s\)", FAM,
+     _row("ellipsoid", "bias", *MISS_FUEL, path=FAM) + _row("hinf", "bias", *MISS_FUEL, path=FAM)
+     + _row("ellipsoid", "game", *MISS_FUEL, path=FAM)
+     + _row("infoset", "game", *MISS_FUEL, path=FAM)),
+    (INT, r"estimators pay ([\d.]+) and ([\d.]+) m/s for that trust, and an adversary that aims "
+     r"at them \(`targeted`\) makes them miss by ([\d.]+) m and ([\d.]+) m", FAM,
+     _row("ellipsoid", "random", "fuel_mps/mean", path=FAM)
+     + _row("hinf", "random", "fuel_mps/mean", path=FAM)
+     + _row("ellipsoid", "targeted", "miss_m/mean", path=FAM)
+     + _row("hinf", "targeted", "miss_m/mean", path=FAM)),
+    (INT, r"closest of the filters to the set \(([\d.]+) m / ([\d.]+) m/s under random errors\) "
+     r"but not a bound \((\d+) steps outside\), and the white-box adversary zeroes every "
+     r"particle's weight at some step in (\d+) of (\d+) runs", FAM,
+     _row("pf", "random", *MISS_FUEL, "truth_outside", path=FAM)
+     + _row("pf", "targeted", "empty_set", path=FAM) + (FAM + "::runs",)),
+    # docs/intercept.md: adversaries on the Fig. 5 truths (kvi adversaries kp_fig5 --runs 10)
+    (INT, r"particle filter gave every particle zero weight at some step in (\d+), (\d+) and (\d+) "
+     r"of the (\d+) runs", ADV5,
+     tuple(f"rows/[estimator=pf,rule={r}]/empty_set" for r in ("game", "targeted", "lookahead"))
+     + ("runs",)),
+    (INT, r"Fig\. 3 fuel gap \(ours ([\d.]+) m/s, seed ([\d.]+) m/s\)", FIGS,
+     (N + "kp_fig3/ours_miss_fuel/game/1", N + "kp_fig3/paper_miss_fuel/game/1")),
+    (INT, r"the largest fuel any rule drew from the pursuer was ([\d.]+) m/s \(the seed's rule\)",
+     ADV5, ("rows/[estimator=infoset,rule=game]/fuel_mps/max",)),
+    (INT, r"\(Fig\. 5 mean ([\d.]+) -> ([\d.]+) m under `targeted`", ADV5,
+     ("rows/[estimator=infoset,rule=game]/miss_m/mean",
+      "rows/[estimator=infoset,rule=targeted]/miss_m/mean")),
+    (INT, r"\(([\d.]+) m/s mean under the seed's rule, ([\d.]+) and ([\d.]+) under the white-box",
+     ADV5, tuple(f"rows/[estimator=infoset,rule={r}]/fuel_mps/mean"
+                 for r in ("game", "targeted", "lookahead"))),
+    (INT, r"pays ([\d.]+) and ([\d.]+) m/s on average \(targeted, look-ahead\)", ADV5,
+     ("rows/[estimator=hinf,rule=targeted]/fuel_mps/mean",
+      "rows/[estimator=hinf,rule=lookahead]/fuel_mps/mean")),
+    (INT, r"pay it in ([\d.]+) and ([\d.]+) of the runs under the look-ahead", ADV5,
+     ("rows/[estimator=ekf,rule=lookahead]/runs_at_seed_fuel",
+      "rows/[estimator=ukf,rule=lookahead]/runs_at_seed_fuel")),
+    # docs/intercept.md: the range constraint (kvi compare kp_fig5_kalman_constrained)
+    (INT, r"Under the game it cuts the EKF's mean miss from ([\d.]+) to ([\d.]+) m and the UKF's "
+     r"from ([\d.]+) to ([\d.]+) m, and neither comes near the set's ([\d.]+) m", CMP,
+     _row("ekf", "game", "miss_m/mean") + _row("ekf", "game", "miss_m/mean", path=CONS)
+     + _row("ukf", "game", "miss_m/mean") + _row("ukf", "game", "miss_m/mean", path=CONS)
+     + _row("infoset", "game", "miss_m/mean")),
+    # docs/intercept.md: the node grid (kvi sweep kp_fig5 --key estimator.infoset.n_nodes)
+    (INT, r"\(mean miss ([\d.]+)-([\d.]+) m, fuel ([\d.]+)-([\d.]+) m/s\)\. Under the game the "
+     r"mean miss moves between ([\d.]+) and ([\d.]+) m in no clear direction and the fuel between "
+     r"([\d.]+) and ([\d.]+) m/s", NODES,
+     tuple(f"rows/[value={v},estimator=infoset,noise={n}]/{k}" for n, k, v in (
+         ("random", "miss_m/mean", 12), ("random", "miss_m/mean", 8),
+         ("random", "fuel_mps/mean", 6), ("random", "fuel_mps/mean", 8),
+         ("game", "miss_m/mean", 8), ("game", "miss_m/mean", 6),
+         ("game", "fuel_mps/mean", 12), ("game", "fuel_mps/mean", 6)))),
+    # docs/intercept.md: the filters' noise inflated (kvi sweep kp_fig5_kalman_inflated)
+    (INT, r"at `s = 30` the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m", INFL,
+     ("rows/[value=30,estimator=ekf,noise=game]/miss_m/mean",
+      "rows/[value=30,estimator=ukf,noise=game]/miss_m/mean")),
+    # docs/intercept.md: end-to-end with the attitude loop (run tables of kvi intercept)
+    _e2e_row(r"\*\*end-to-end, random\*\*", "random",
+             r" \| ([\d.]+) deg \| ([\d.]+) deg \|",
+             ("attitude_max_pointing_error_deg", "pointing_residual_max_deg")),
+    _e2e_row(r"\*\*end-to-end, game\*\*", "game"),
+    (INT, r"\| Fig\. 3, random, no attitude loop \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",
+     F3 + "random.json", (*MISS_FUEL, "truth_outside")),
+    (INT, r"\| Fig\. 3, game, no attitude loop \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",
+     F3 + "game.json", (*MISS_FUEL, "truth_outside")),
+    (INT, r"guaranteed knowledge bound, ([\d.]+) deg, to the bearing", E2E + "random-s3.parquet",
+     ("0/pointing_knowledge_bound_deg",)),
+    # docs/performance.md: ``kvi bench``
+    (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
+     ("steps_timed/infoset", "step_us/infoset")),
+    (PERF, r"\| `ellipsoid` / `zonotope` / `box` step \(29 slabs\) \| (\d+) / "
+     r"(\d+) / (\d+) us", BENCH, ("step_us/ellipsoid", "step_us/zonotope", "step_us/box")),
+    (PERF, r"\| `ekf` / `ukf` step \(filterpy\) \| (\d+) / (\d+) us", BENCH,
+     ("step_us/ekf", "step_us/ukf")),
+    (PERF, r"\| `hinf` / `pf` step \(2000 particles\) \| (\d+) / (\d+) us", BENCH,
+     ("step_us/hinf", "step_us/pf")),
+    (PERF, r"\| infoset / UKF, first (\d+) steps \| ([\d.]+) \|", BENCH,
+     ("steps_timed/ukf", "infoset_to_ukf_ratio")),
+    (PERF, r"whole approach \((\d+) steps\) \| (\d+) / (\d+) us: ([\d.]+) \|",
+     BENCH, ("whole_approach_steps/infoset", "whole_approach_step_us/infoset",
+             "whole_approach_step_us/ukf", "whole_approach_ratio")),
+    (PERF, r"game / random \| (\d+) / (\d+) ms: (\d+) / (\d+) UKF steps", BENCH,
+     ("engagement_ms", "engagement_random_ms", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps")),
+    (PERF, r"\((\d+) / (\d+) / (\d+) steps\) \| ([\d.]+) \((\d+) / (\d+) / (\d+) ms\)",
+     BENCH, ("cost_steps/0", "cost_steps/1", "cost_steps/2", "cost_exponent", "cost_ms/0",
+             "cost_ms/1", "cost_ms/2")),
+    (PERF, r"1 / 2 workers \| ([\d.]+) / ([\d.]+) \(peak (\d+) MB a worker\)", BENCH,
+     ("runs_per_cpu_s/1", "runs_per_cpu_s/2", "worker_peak_rss_mb/1")),
+    (PERF, r"\| ([\d.]+) CPU-s compiling \(([\d.]+) CPU-s in all\)", BENCH,
+     ("first_run_compile_s", "first_run_cpu_s")),
+    (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
+     r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
+     ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),
+]  # fmt: skip

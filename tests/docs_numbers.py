@@ -1,0 +1,162 @@
+"""Reading printed numbers out of the docs and comparing them with results files.
+
+Shared by ``test_docs_numbers.py`` (sentences) and ``test_docs_tables.py`` (tables). A
+printed number agrees with a result when it is the result rounded to the printed digits
+(half a unit of the last printed digit, plus a relative 1e-9 for the binary
+representation); a number in scientific notation, to its printed significant digits.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: a printed number: optional sign, digits, optional decimals and exponent
+NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:e-?\d+)?")
+#: the estimator names the tables print, by registry name
+PRINTED_NAMES = {"EKF": "ekf", "UKF": "ukf", "H-infinity": "hinf", "particle filter": "pf"}
+
+
+@cache
+def results(path: str) -> dict | list:
+    """A results file, read once: JSON, or a run table (Parquet) as a list of records."""
+    if path.endswith(".parquet"):
+        import pandas as pd  # only for run tables
+
+        return pd.read_parquet(ROOT / path).to_dict(orient="records")
+    return json.loads((ROOT / path).read_text(encoding="utf-8"))
+
+
+def _select(items: list, selector: str):
+    """The one item of a list of records whose fields equal ``[field=value,...]``."""
+    wanted = dict(pair.split("=", 1) for pair in selector[1:-1].split(","))
+    found = [it for it in items if all(str(it.get(k)) == v for k, v in wanted.items())]
+    if len(found) != 1:
+        raise KeyError(f"{selector}: {len(found)} records match")
+    return found[0]
+
+
+def lookup(data, key: str):
+    """The value at a ``/``-separated key: list items by index or by a selector
+    ``[field=value,...]`` naming one record; a name holding ``/``, such as
+    ``perfect/none``, is found by joining parts."""
+    parts = key.split("/")
+    while parts:
+        part = parts.pop(0)
+        if isinstance(data, list):
+            data = _select(data, part) if part.startswith("[") else data[int(part)]
+            continue
+        while part not in data and parts:
+            part += "/" + parts.pop(0)
+        data = data[part]
+    return data
+
+
+def agrees(printed: str, value: float) -> bool:
+    """Whether ``printed`` is ``value`` rounded to the printed digits."""
+    mantissa, _, exponent = printed.partition("e")
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    unit = 10.0 ** (int(exponent or 0) - decimals)  # of the last printed digit
+    return abs(value - float(printed)) <= 0.5 * unit + 1e-9 * abs(value)
+
+
+def mismatches(text: str, pattern: str, data, keys: tuple[str, ...]) -> list[str]:
+    """What disagrees between a document's text and the results (empty: all agree).
+
+    ``pattern`` has one group per printed number; every occurrence is checked, and a
+    pattern that does not occur is reported (a rewritten sentence must be re-pointed).
+    A key ``path::key`` reads another results file than ``data``.
+    """
+    found = re.findall(pattern, " ".join(text.split()))  # line breaks read as spaces
+    if not found:
+        return [f"pattern not in the document: {pattern!r}"]
+    bad = []
+    for groups in found:
+        groups = (groups,) if isinstance(groups, str) else groups
+        if len(groups) != len(keys):
+            return [f"{pattern!r}: {len(groups)} groups for {len(keys)} keys"]
+        for printed, key in zip(groups, keys, strict=True):
+            source, _, inner = key.rpartition("::")  # a key in another results file
+            value = lookup(results(source) if source else data, inner)
+            if isinstance(value, str):  # a version or a name: printed as it is
+                if printed != value:
+                    bad.append(f"{key}: printed {printed}, results file {value}")
+            elif not agrees(printed, float(value)):
+                bad.append(f"{key}: printed {printed}, results file {float(value):.6g}")
+    return bad
+
+
+def tables(text: str) -> dict[str, list[list[str]]]:
+    """The Markdown tables of a document: header line -> rows of cells (outside code
+    blocks; the separator line dropped)."""
+    out: dict[str, list[list[str]]] = {}
+    header = None
+    in_code = False
+    for line in text.splitlines():
+        if line.startswith("```"):
+            in_code = not in_code
+        if in_code or not line.startswith("|"):
+            header = None
+            continue
+        if header is None:  # tables with the same header are read as one
+            header = line.strip()
+            out.setdefault(header, [])
+        elif not set(line) <= set("|-: "):
+            out[header].append([c.strip() for c in line.strip().strip("|").split("|")])
+    return out
+
+
+@dataclass(frozen=True)
+class TableCheck:
+    """A table of a document against the records of a results file.
+
+    ``labels``: per label column, the record's field it names (the printed estimator
+    names read through ``PRINTED_NAMES``); each row must name exactly one record.
+    ``cells``: per number column, the record keys of the numbers printed in that cell,
+    in order. A column in neither holds no number. ``column_labels``: for a table that
+    spreads records over columns too (a pivot), the fields each column's header names.
+    """
+
+    doc: str
+    header: str
+    results: str
+    records: str
+    labels: dict[int, str]
+    cells: dict[int, tuple[str, ...]]
+    column_labels: dict[int, dict[str, str]] = field(default_factory=dict)
+
+
+def table_mismatches(text: str, check: TableCheck, data) -> list[str]:
+    """What disagrees between a document's table and its results file."""
+    found = [rows for head, rows in tables(text).items() if head.startswith(check.header)]
+    if len(found) != 1:
+        return [f"{len(found)} tables start with {check.header!r}"]
+    records = lookup(data, check.records) if check.records else data
+    bad = []
+    for cells in found[0]:
+        sel = [
+            f"{name}={PRINTED_NAMES.get(cells[col], cells[col])}"
+            for col, name in check.labels.items()
+        ]
+        for col, keys in check.cells.items():
+            extra = [f"{k}={v}" for k, v in check.column_labels.get(col, {}).items()]
+            try:
+                record = _select(records, "[" + ",".join(sel + extra) + "]")
+            except KeyError as exc:
+                bad.append(f"row {cells}: {exc}")
+                continue
+            printed = NUMBER.findall(cells[col])
+            if len(printed) != len(keys):
+                bad.append(f"row {cells[:2]}, column {col}: {printed} for keys {keys}")
+                continue
+            for p, key in zip(printed, keys, strict=True):
+                value = float(lookup(record, key))
+                if not agrees(p, value):
+                    bad.append(f"row {cells[:2]}, {key}: printed {p}, results file {value:.6g}")
+        left = [c for i, c in enumerate(cells) if i not in check.labels and i not in check.cells]
+        bad += [f"row {cells[:2]}: unchecked number in {c!r}" for c in left if NUMBER.search(c)]
+    return bad
