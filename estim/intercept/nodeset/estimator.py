@@ -100,8 +100,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         sizes its own kinematic margin (large only near the target) and impulse
         widening.
     tighten_rtol, max_inserts : float, int
-        After each update, nodes are added (up to ``max_inserts``) in the cells where
-        the bounds of the zero-effort miss exceed the nodes' exact values by more than
+        After each update, nodes are added (up to ``max_inserts`` rounds, times the
+        live closing-speed bands over the initial ones) in the cells where the bounds
+        of the zero-effort miss exceed the nodes' exact values by more than
         ``tighten_rtol`` of the set's width (:meth:`NodeSetEstimator.tighten`).
     min_live_nodes : int
         A piece with fewer live nodes is re-gridded (at least 4: the bounds between

@@ -215,9 +215,15 @@ class NodeRefinement:
         ``tighten_rtol`` of the set's width (typically a cell at the end of the
         surviving range, bounded from one side only), a node is added at the cell's
         middle, three at its quarters for a cell with a dead end (exact, by replay),
-        for up to ``max_inserts`` rounds per call.
+        for up to ``max_inserts`` rounds per call, times the number of closing-speed
+        bands over the number the estimator started with (split bands each have their
+        own end cells to locate).
         """
-        for _ in range(self.max_inserts):
+        # the budget grows with the closing-speed bands split off since the start: each
+        # live band has its own cells at the ends of the feasible interval to locate
+        n_bands = len({(a, b) for a, b in zip(s.u_lo, s.u_hi, strict=True)})
+        start = max(1, len(self.bands()[0]))
+        for _ in range(self.max_inserts * max(1, -(-n_bands // start))):
             sm = s._summary
             w = sm["w"]
             if len(w) == 0:
