@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
 
-def readonly(a: ArrayLike, dtype: DTypeLike = float, copy: bool = True) -> np.ndarray:
+def readonly(a: ArrayLike, dtype: DTypeLike = float, copy: bool | None = True) -> np.ndarray:
     """``a`` as a read-only array.
 
     Parameters
@@ -17,16 +17,27 @@ def readonly(a: ArrayLike, dtype: DTypeLike = float, copy: bool = True) -> np.nd
         The values.
     dtype : dtype, default float
         The copy's type (``copy=True``).
-    copy : bool, default True
+    copy : bool or None, default True
         True: a new array of ``dtype``. False: no copy, for an array the caller has just
         created (the hot paths): ``a`` when it is read-only already, else a read-only
-        view of it (``dtype`` is then ignored).
+        view of it (``dtype`` is then ignored). None: ``a`` itself when it is a
+        read-only array of ``dtype`` that owns its data (an immutable value's field
+        passed on by ``dataclasses.replace``), else a new array as for True.
 
     Returns
     -------
     numpy.ndarray
         A read-only array.
     """
+    if copy is None:
+        if (
+            isinstance(a, np.ndarray)
+            and a.dtype == dtype
+            and a.base is None
+            and not a.flags.writeable
+        ):
+            return a
+        copy = True
     if copy:
         arr = np.array(a, dtype=dtype)
         arr.setflags(write=False)

@@ -30,19 +30,10 @@ from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
 from numpy.typing import ArrayLike, NDArray
 
+from kalman_vs_infoset.numerics.arrays import readonly
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-def _ro(a: ArrayLike, dtype=float) -> NDArray:
-    # a read-only array that owns its data (one of ours, passed on by ``replace``)
-    # needs no copy
-    if isinstance(a, np.ndarray) and a.dtype == dtype and a.base is None:
-        if not a.flags.writeable:
-            return a
-    arr = np.array(a, dtype=dtype)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,8 +91,8 @@ class NodeSet(Belief):
 
     def __post_init__(self) -> None:
         for name in ("u_lo", "u_hi", "label_s", "hard_lo_s", "hard_hi_s"):
-            object.__setattr__(self, name, _ro(getattr(self, name)))
-        object.__setattr__(self, "piece", _ro(self.piece, np.int64))
+            object.__setattr__(self, name, readonly(getattr(self, name), copy=None))
+        object.__setattr__(self, "piece", readonly(self.piece, np.int64, copy=None))
         if len(self.piece) != self.polygons.n or len(self.label_s) != self.polygons.n:
             raise ValueError("one piece index and one label per node polygon")
 
