@@ -40,7 +40,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Literal, Protocol, get_args
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction
@@ -55,7 +55,8 @@ from kalman_vs_infoset.estim.intercept.model import (
 
 #: noise kinds of the intercept (``random`` and ``game`` are the seed's two;
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
-NOISES = ("random", "game", "bias", "targeted", "lookahead")
+Noise = Literal["random", "game", "bias", "targeted", "lookahead"]
+NOISES: tuple[str, ...] = get_args(Noise)
 
 
 class ChannelSet(Protocol):
