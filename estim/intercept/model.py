@@ -30,6 +30,7 @@ Miss forecast for free motion (seed 003 section 5)::
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -238,8 +239,8 @@ class ChannelModel:
         return np.stack([alpha, omega, x + 0.0 * alpha], axis=-1)
 
 
-def _interval(value: ArrayLike, name: str) -> tuple[float, float]:
-    lo, hi = (float(v) for v in np.asarray(value, dtype=float))
+def _interval(value: Iterable[float], name: str) -> tuple[float, float]:
+    lo, hi = (float(v) for v in value)
     if not lo <= hi:
         raise ValueError(f"{name} must be an interval [lo, hi] with lo <= hi")
     return lo, hi
