@@ -172,10 +172,12 @@ class WhiteBoxNoise:
         for r in rel:
             d = float(range_true_m * (1.0 + r))
             pairs = zip(view.estimators, view.beliefs, strict=True)
-            updated = [self.try_update(e, b, Range(d)) for e, b in pairs]
-            if any(u is None for u in updated):
+            tried = [self.try_update(e, b, Range(d)) for e, b in pairs]
+            updated = [u for u in tried if u is not None]
+            if len(updated) < len(tried):  # some estimator refused the measurement
                 continue
-            score = sum(misdirection(u, t, fc) for u, t in zip(updated, self._truth, strict=True))
+            misses = (misdirection(u, t, fc) for u, t in zip(updated, self._truth, strict=True))
+            score = sum(misses, 0.0)
             if score > best_score:
                 best, best_score = d, score
         return best

@@ -9,6 +9,7 @@ with
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from kalman_vs_infoset.experiments.attitude_cmg_setup import TurnSetup, setup_from_scenario
@@ -28,7 +29,7 @@ from kalman_vs_infoset.experiments.stats import summary_stats
 CHUNK = 1
 
 
-def prepare(source: str, scenario: dict, controller: str, noise: str) -> TurnSetup:
+def prepare(source: str, scenario: Mapping[str, Any], controller: str, noise: str) -> TurnSetup:
     """The validated turn (InputError naming the file and the field)."""
     if controller not in CONTROLLERS:
         raise InputError(f"{source}: controller {controller!r} is not handled here {CONTROLLERS}")

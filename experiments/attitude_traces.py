@@ -129,6 +129,10 @@ def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq)
         estimator,
         record=True,
     )
+    # record=True fills the per-instant traces
+    assert r.states is not None and r.torques_Nm is not None and r.time_s is not None
+    assert r.u_star is not None and r.disturbance_Nm is not None
+    assert r.knowledge_bound_rad is not None and r.truth_inside is not None
     st = r.states[0]
     eta = error_quaternion(st[:, Q], s.q_target)
     deta = eta_v_rate(eta, st[:, X])

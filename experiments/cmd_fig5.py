@@ -61,12 +61,13 @@ def run(args) -> dict[str, Any]:
             summary["variant"] = variant
             rows.append(summary)
             frames.append(df.assign(variant=variant))
+    assert sc is not None  # VARIANTS is not empty
     stem = _stem(args)
     table = pd.concat(frames, ignore_index=True)
     files = write_tables(table, out / f"{stem}_runs")
     ref = sc.reference
     floor = float(table["fuel_perfect_info_mps"].mean())
-    marks = {
+    given: dict[str, list[tuple[float | None, str]]] = {
         "miss_m": [
             (ref.miss_random_m, "seed Fig. 3 random"),
             (ref.miss_game_m, "seed Fig. 3 game"),
@@ -78,7 +79,9 @@ def run(args) -> dict[str, Any]:
             (floor, "perfect info (mean)"),
         ],
     }
-    marks = {k: [(v, lab) for v, lab in vals if v is not None] for k, vals in marks.items()}
+    marks: dict[str, list[tuple[float, str]]] = {
+        k: [(v, lab) for v, lab in vals if v is not None] for k, vals in given.items()
+    }
     by = ["variant", "noise"] + (["estimator"] if len(args.estimators) > 1 else [])
     fig = plots.cdf_figure(
         table,

@@ -23,6 +23,7 @@ import argparse
 import json
 import math
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -96,9 +97,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _prior(sc) -> PriorBox:
     e = sc.estimator
+
+    def metres(km: tuple[float, float]) -> tuple[float, float]:
+        return km[0] * 1e3, km[1] * 1e3
+
     return PriorBox(
-        *(tuple(v * 1e3 for v in getattr(e, k)) for k in ("y_km", "vy_kmps", "x_km")),
-        tuple(v * 1e3 for v in sc.closing_speed_kmps),
+        metres(e.y_km), metres(e.vy_kmps), metres(e.x_km), metres(sc.closing_speed_kmps)
     )
 
 
@@ -231,7 +235,7 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
     )
     paths = [stem.parent / f"{stem.name}.{ext}" for ext in ("png", "svg", "json")]
     for p, ext in zip(paths[:2], ("png", "svg"), strict=True):
-        atomic_write(p, lambda tmp, ext=ext: fig.savefig(tmp, format=ext, dpi=130))
+        atomic_write(p, partial(fig.savefig, format=ext, dpi=130))
     plt.close(fig)
     body = json.dumps({k: v for k, v in result.items() if k != "files"}, default=float)
     atomic_write(paths[2], lambda tmp: Path(tmp).write_text(body + "\n"))

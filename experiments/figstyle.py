@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -45,7 +46,7 @@ OKABE_ITO = {
 }
 #: for estimators without a fixed colour (yellow is kept for fills only)
 _SPARE = ("#44AA99", "#999933", "#AA4499", "#7F7F7F")
-NOISE_STYLES = {
+NOISE_STYLES: dict[str, str | tuple[Any, ...]] = {
     "random": "-",
     "game": "--",
     "bias": ":",
@@ -104,7 +105,7 @@ def words(estimator: str, noise: str | None = None) -> str:
     return est if noise is None else f"{est}, {NOISE_WORDS.get(noise, noise)}"
 
 
-def noise_style(noise: str) -> str | tuple:
+def noise_style(noise: str) -> str | tuple[Any, ...]:
     """The line style of a noise kind (unknown kinds: a long dash)."""
     return NOISE_STYLES.get(noise, (0, (8, 2)))
 

@@ -23,7 +23,7 @@ def _umask() -> int:
     return mask
 
 
-def atomic_write(path: Path, write: Callable[[str], None]) -> None:
+def atomic_write(path: Path, write: Callable[[str], object]) -> None:
     """Call ``write(tmp)`` on a temporary file beside ``path``, then ``os.replace`` it
     onto ``path`` (atomic on POSIX and Windows); the temporary file never survives and
     the file gets the permissions the umask gives new files."""
@@ -53,6 +53,7 @@ def exclusive(path: Path, what: str) -> Iterator[None]:
         return
     lock = path.with_name(f".{path.name}.lock")  # hidden: Parquet readers of the folder skip it
     told = False
+    fd: int | None  # None: the file system cannot lock
     while True:
         fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666 & ~_umask())
         try:

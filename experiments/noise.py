@@ -40,9 +40,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal, Protocol, get_args
 
 import numpy as np
-from kalman_vs_infoset.estim.base import Belief, Estimator
+from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
@@ -54,16 +55,30 @@ from kalman_vs_infoset.estim.intercept.model import (
 
 #: noise kinds of the intercept (``random`` and ``game`` are the seed's two;
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
-NOISES = ("random", "game", "bias", "targeted", "lookahead")
+Noise = Literal["random", "game", "bias", "targeted", "lookahead"]
+NOISES: tuple[str, ...] = get_args(Noise)
 
 
-def worst_point(belief: Belief, model: ChannelModel) -> np.ndarray:
+class ChannelSet(Protocol):
+    """What the adversary asks of a channel's set: the beliefs of the reference
+    estimator (slab set, node set) answer it; a plain :class:`~estim.base.Belief` need not."""
+
+    @property
+    def model(self) -> ChannelModel: ...
+    @property
+    def is_empty(self) -> bool: ...
+    def attained(self, fn: StateFunction) -> Extremes: ...
+    def alpha_range_rad(self) -> tuple[float, float]: ...
+    def x_range_m(self) -> tuple[float, float]: ...
+
+
+def worst_point(belief: ChannelSet, model: ChannelModel) -> np.ndarray:
     """The state of ``belief`` with the largest ``|Pi|`` (a state it holds:
     :meth:`~kalman_vs_infoset.estim.base.Belief.attained` of the forecast miss)."""
     return belief.attained(MissForecast(model)).largest_abs()[1]
 
 
-def game_bearing(alpha_true: float, bound_true: float, belief: Belief) -> float:
+def game_bearing(alpha_true: float, bound_true: float, belief: ChannelSet) -> float:
     """The adversary's bearing for one channel (rules (a)-(c) of the module docstring);
     ``belief`` is a set with ``alpha_range_rad()`` (the slab, point or node set)."""
     model = belief.model
@@ -176,13 +191,15 @@ class GameNoise:
     def __init__(
         self,
         estimator: Estimator,
-        sets: Sequence[Belief] | None = None,
+        sets: Sequence[ChannelSet] | None = None,
         sensor_bound: BearingBound | None = None,
     ):
         self.estimator = estimator
-        self.model = estimator.model
+        # the reference estimators are dataclasses with a ChannelModel field; the
+        # Estimator interface itself names no model
+        self.model: ChannelModel = estimator.model  # type: ignore[attr-defined]
         self.shared = sets is None
-        self.sets: list[Belief] = [] if sets is None else list(sets)
+        self.sets: list[ChannelSet] = [] if sets is None else list(sets)
         self.sensor_bound = sensor_bound or self.model.bearing_bound
 
     def observe_pursuer(self, view) -> None:
@@ -192,7 +209,7 @@ class GameNoise:
         if self.shared:
             self.sets = list(view.beliefs)
 
-    def _position(self, n_channels: int) -> list[Belief]:
+    def _position(self, n_channels: int) -> list[ChannelSet]:
         if len(self.sets) != n_channels:
             raise RuntimeError(
                 "a game adversary sharing the pursuer's set must be shown the pursuer "
@@ -220,6 +237,7 @@ class GameNoise:
             val, arg = s.attained(MissForecast(self.model)).largest_abs()
             if abs(val) > worst_val:
                 worst, worst_val = arg, abs(val)
+        assert worst is not None  # set by the first live set (|val| >= 0 > -1)
         x_lo = min(s.x_range_m()[0] for s in live)
         x_hi = max(s.x_range_m()[1] for s in live)
         return game_range(range_true_m, self.model.range_rel_bound, float(worst[2]), x_lo, x_hi)

@@ -143,6 +143,7 @@ def fig5(ctx) -> dict[str, Any]:
                 float(ok["miss_m"].mean()),
                 float(ok["fuel_mps"].mean()),
             )
+    assert sc is not None  # the variants are not empty
     table = pd.concat(frames, ignore_index=True)
     one = _fig3_engagement(ctx)
     fig, axes = fs.figure(1, 2, size=(11.0, 4.8))

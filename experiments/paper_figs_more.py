@@ -22,6 +22,7 @@ from kalman_vs_infoset.experiments.paper_figs_attitude import QUICK, exact_estim
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.scenario import read
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
+from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import angle_and_rate_deg, regime_boundaries
 
 #: seed 001, text after eq. (14): the angle it gives for the torque-limit boundary, deg
@@ -46,6 +47,7 @@ def akimov_fig8(ctx) -> dict[str, Any]:
         df, config = trace(ctx, "smallsat_rw.toml", "pd", "none", exact_estimator(),
                            [f"maneuver.angle_deg={a!r}"])  # fmt: skip
         peaks[a] = _peaks(df)
+    assert config is not None  # set by the first angle (there is always one)
     pd_ = config.pd
     j = float(config.body.inertia_kgm2[2])
     wh = config.wheels
@@ -134,6 +136,7 @@ def lqr_lyapunov(ctx) -> dict[str, Any]:
     rng = np.random.default_rng(run_seed(0, 0))
     simulate_runs(config, "lqr", "none", [rng], exact_estimator(), rec)
     law = make_controller("lqr", config)
+    assert isinstance(law, LQRController)  # the "lqr" law
     x = rec["states"][:, 0]
     v = law.lyapunov(x)
     t = rec["time_s"]

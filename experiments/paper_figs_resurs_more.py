@@ -12,7 +12,7 @@
 from __future__ import annotations
 
 import itertools
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
@@ -44,7 +44,8 @@ def reading_name(signs: tuple[int, ...]) -> str:
 def _first_step_u0(signs, setup) -> np.ndarray:
     """The torque keeping X on xi over the first step (least squares; ``D = -B``)."""
     j = resurs_p_inertia(signs)
-    a, b = given_system(np.linalg.inv(j), np.zeros(3), setup.dt_s)
+    j_inv = cast(np.ndarray, np.linalg.inv(j))  # float64 (numpy's stubs: any floating)
+    a, b = given_system(j_inv, np.zeros(3), setup.dt_s)
     x0 = np.r_[setup.initial_error_rad, np.zeros(3)]
     return np.linalg.lstsq(2 * b, setup.energy.aux_matrix(0) @ x0 - a @ x0, rcond=None)[0]
 

@@ -14,6 +14,7 @@ import subprocess
 from functools import cache
 from importlib import metadata
 from pathlib import Path
+from typing import TypedDict
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the packages whose sources decide a run's result
@@ -23,8 +24,16 @@ PACKAGES = ("estim", "guidance", "experiments")
 PRESENTATION = ("cli.py", "__main__.py", "cmd_*.py", "plots.py", "report.py", "files.py")
 
 
+class CodeIdentity(TypedDict):
+    """What :func:`code_identity` returns (a plain dict at run time)."""
+
+    version: str | None
+    sources_sha256: str
+    git_commit: str | None
+
+
 @cache
-def code_identity() -> dict[str, str | None]:
+def code_identity() -> CodeIdentity:
     """Package version, SHA-256 over the sources of :data:`PACKAGES`, and the git
     commit of the package's own sources when known (:func:`_git_commit`; informational:
     the hash decides).
@@ -80,4 +89,4 @@ def _installed_commit() -> str | None:
 
 def sources_sha256() -> str:
     """This process's :func:`code_identity` hash (run on Dask workers to compare)."""
-    return str(code_identity()["sources_sha256"])
+    return code_identity()["sources_sha256"]

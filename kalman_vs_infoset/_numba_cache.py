@@ -19,17 +19,18 @@ import os
 import sys
 import tempfile
 import time
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 #: the environment variable numba reads at import
 ENV = "NUMBA_CACHE_DIR"
 
 
-def user_cache_dir(environ: dict[str, str] | None = None) -> Path:
+def user_cache_dir(environ: Mapping[str, str] | None = None) -> Path:
     """``$XDG_CACHE_HOME/kalman_vs_infoset/numba`` (``~/.cache`` when unset or empty)."""
-    environ = os.environ if environ is None else environ
-    root = environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    env = os.environ if environ is None else environ
+    root = env.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
     return Path(root) / "kalman_vs_infoset" / "numba"
 
 
@@ -93,7 +94,7 @@ class CompileNotice:
         self.pid = os.getpid()
         self.depth, self.kernels = 0, 0
         self.cpu_s, self._t0 = 0.0, 0.0
-        self._listener = None
+        self._listener: Any = None  # numba's event listener while installed
 
     def install(self) -> CompileNotice:
         from numba.core import event

@@ -76,11 +76,13 @@ class AttitudeModel:
         ``J_b`` (divides the torque); ``J_g`` when omitted.
     """
 
-    inertia_kgm2: ArrayLike
-    disturbance_bound_Nm: ArrayLike
-    meas_angle_bound_rad: ArrayLike
-    meas_rate_bound_radps: ArrayLike
-    effective_inertia_kgm2: ArrayLike | None = None
+    # typed as what __post_init__ stores (read-only float arrays); at run time lists,
+    # floats and arrays are accepted and converted
+    inertia_kgm2: FloatArray
+    disturbance_bound_Nm: FloatArray | float
+    meas_angle_bound_rad: FloatArray | float
+    meas_rate_bound_radps: FloatArray | float
+    effective_inertia_kgm2: FloatArray | None = None
     j_b_inv: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:

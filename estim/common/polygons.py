@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import cast
 
 import numpy as np
 from kalman_vs_infoset.estim.common import _kernels as _k
@@ -143,9 +144,8 @@ class ConvexPolygons:
     def contains_point(self, index: ArrayLike, point: ArrayLike, tol: float) -> bool:
         """Whether ``point`` lies within ``tol`` of one of the polygons ``index``."""
         idx = np.ascontiguousarray(index, dtype=np.int64)
-        return bool(
-            _k.polygon_contains(self.xy, self.offsets, idx, float(point[0]), float(point[1]), tol)
-        )
+        p = np.asarray(point, dtype=float)
+        return bool(_k.polygon_contains(self.xy, self.offsets, idx, float(p[0]), float(p[1]), tol))
 
     def affine(self, matrix: ArrayLike, offset: ArrayLike = (0.0, 0.0)) -> ConvexPolygons:
         """``p -> matrix[i] @ p + offset[i]``; ``det(matrix[i]) > 0`` keeps the orientation."""
@@ -224,4 +224,5 @@ class ConvexPolygons:
         """Shoelace areas (zero for degenerate and empty polygons)."""
         nxt = self.next_index()
         cr = self.xy[:, 0] * self.xy[nxt, 1] - self.xy[nxt, 0] * self.xy[:, 1]
-        return 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n)
+        # float64 in, float64 out (numpy's stubs only promise a floating type)
+        return cast(FloatArray, 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n))

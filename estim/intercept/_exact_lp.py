@@ -27,6 +27,7 @@ each of its tangents ``beta + gamma x``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -69,6 +70,11 @@ class ChannelLP:
     ranges_m: FloatArray
     t: FloatArray = field(init=False, repr=False)
     n_lp: list[int] = field(init=False, repr=False)  # LPs solved (a counter)
+    # derived in __post_init__ from the fields above (not compared: equal when they are)
+    tau: FloatArray = field(init=False, repr=False, compare=False)
+    a_eq: Any = field(init=False, repr=False, compare=False)  # scipy.sparse CSR, untyped
+    b_eq: FloatArray = field(init=False, repr=False, compare=False)
+    kappa: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         t = self.times_s - self.times_s[0]
@@ -157,7 +163,11 @@ class ChannelLP:
         tau, alpha, n, nz = self.tau, self.bearings_rad, self.n, self.n_z
         sc, ec = 0.5 * (s[0] + s[1]), 0.5 * (e[0] + e[1])
         base = sc - ec * tau  # x_i = base_i + X_UNIT_M X - tau_i E
-        rows, cols, vals, rhs = [], [], [], []
+        # pieces of a COO matrix: index arrays or short lists, concatenated below
+        rows: list[Any] = []
+        cols: list[Any] = []
+        vals: list[Any] = []
+        rhs: list[Any] = []
         r0 = 0
         for idx, xbar in tangents:
             beta, gam = self.tangent(xbar)
@@ -171,13 +181,16 @@ class ChannelLP:
         # rows sg x_i <= r: the a-priori x_0, the threshold x_last >= eps, the ranges
         d, b = self.ranges_m, self.model.range_rel_bound
         has = np.flatnonzero(np.isfinite(d))
-        lin = [(0, 1.0, self.x_m[1]), (0, -1.0, -self.x_m[0]), (n - 1, -1.0, -self.model.eps_m)]
-        lin += [(i, 1.0, d[i] / (1 - b)) for i in has] + [(i, -1.0, -d[i] / (1 + b)) for i in has]
-        for i, sg, r in lin:
+        lin: list[tuple[int, float, float]] = [
+            (0, 1.0, self.x_m[1]), (0, -1.0, -self.x_m[0]), (n - 1, -1.0, -self.model.eps_m)
+        ]  # fmt: skip
+        lin += [(int(i), 1.0, d[i] / (1 - b)) for i in has]
+        lin += [(int(i), -1.0, -d[i] / (1 + b)) for i in has]
+        for i, sg, r_i in lin:
             rows += [[r0, r0]]
             cols += [[nz, nz + 1]]
             vals += [[sg * X_UNIT_M, -sg * tau[i]]]
-            rhs.append([r - sg * base[i]])
+            rhs.append([r_i - sg * base[i]])
             r0 += 1
         a_ub = sp.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),

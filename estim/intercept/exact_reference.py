@@ -77,6 +77,7 @@ from __future__ import annotations
 import heapq
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.intercept._exact_lp import X_UNIT_M, Cell, ChannelLP
@@ -163,14 +164,18 @@ class Objective:
         return cls(a=(0.0, 0.0, 1.0 / model.e), b=(0.0, 1.0 / model.e, 0.0))
 
     def coefficients(self, x_m: float, e_mps: float) -> tuple[float, float, float]:
-        return tuple(p[0] + p[1] * x_m + p[2] * e_mps for p in (self.a, self.b, self.c))
+        a, b, c = (p[0] + p[1] * x_m + p[2] * e_mps for p in (self.a, self.b, self.c))
+        return a, b, c
 
     def value(self, y_m, v_mps, x_m, e_mps):
         a, b, c = self.coefficients(x_m, e_mps)
         return a * y_m + b * v_mps + c
 
     def negated(self) -> Objective:
-        return Objective(*(tuple(-v for v in p) for p in (self.a, self.b, self.c)))
+        def neg(p: tuple[float, float, float]) -> tuple[float, float, float]:
+            return -p[0], -p[1], -p[2]
+
+        return Objective(neg(self.a), neg(self.b), neg(self.c))
 
 
 @dataclass(frozen=True)
@@ -220,6 +225,7 @@ class ExactChannelSet:
         if self.box.x_m[1] >= self.model.bearing_bound.max_range_m:
             raise ValueError("the bearing bound must be linear over the box's ranges")
         h, b = self.history, self.box
+        assert h.impulses_mps is not None and h.ranges_m is not None  # History fills both
         lp = ChannelLP(
             self.model, b.y_m, b.v_mps, b.x_m, b.e_mps, h.times_s, h.bearings_rad,
             h.impulses_mps, h.ranges_m,
@@ -354,7 +360,8 @@ class ExactChannelSet:
         (x0, e)]`` (updated in place): returns the outer bound."""
         ref = (0.0, 0.0)
         if best[1] is not None:  # the incumbent's state as the root's reference
-            ref = self._last_state(self.fixed(*best[1], obj)[1])
+            x0_m, e_mps = best[1]
+            ref = self._last_state(self.fixed(x0_m, e_mps, obj)[1])
         first = self._bound(root, obj, ref)
         if first is None:
             raise InconsistentHistory("no state of the auxiliary model fits the data")
@@ -400,10 +407,13 @@ class ExactChannelSet:
         x0_ends = self._x0_ends(root)
         # inner seeds: the feasible set's extreme points and their mean (interior)
         seeds = ends + x0_ends
-        hi, neg_lo = [-np.inf, None], [-np.inf, None]  # best max of f and of -f
-        for pt in [*seeds, tuple(np.mean(seeds, axis=0))]:
+        # best max of f and of -f: [value, (x0, e) or None], updated in place
+        hi: list[Any] = [-np.inf, None]
+        neg_lo: list[Any] = [-np.inf, None]
+        mean = np.mean(seeds, axis=0)
+        for pt in [*seeds, (float(mean[0]), float(mean[1]))]:
             for side, o in ((hi, obj), (neg_lo, obj.negated())):
-                got = self.fixed(*pt, o)
+                got = self.fixed(pt[0], pt[1], o)
                 if got is not None and got[0] > side[0]:
                     side[0], side[1] = got[0], pt
 
@@ -421,7 +431,7 @@ class ExactChannelSet:
             argmin=_point(neg_lo[1]),
             argmax=_point(hi[1]),
             x0_interval_m=(x0_ends[0][0], x0_ends[1][0]),
-            e_interval_mps=tuple(map(float, root.e)),
+            e_interval_mps=(float(root.e[0]), float(root.e[1])),
             n_lp=self.n_lp - n0,
             wall_s=time.perf_counter() - t0,
         )

@@ -30,6 +30,7 @@ Miss forecast for free motion (seed 003 section 5)::
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -238,7 +239,7 @@ class ChannelModel:
         return np.stack([alpha, omega, x + 0.0 * alpha], axis=-1)
 
 
-def _interval(value: ArrayLike, name: str) -> tuple[float, float]:
+def _interval(value: Iterable[float], name: str) -> tuple[float, float]:
     lo, hi = (float(v) for v in value)
     if not lo <= hi:
         raise ValueError(f"{name} must be an interval [lo, hi] with lo <= hi")
@@ -279,9 +280,9 @@ class ChannelPrior:
 
     def centre_state(self, model: ChannelModel) -> NDArray[np.float64]:
         """``(alpha, omega, x)`` of the box's centre (closing at the interval's middle)."""
-        mid = [0.5 * (lo + hi) for lo, hi in (self.lateral_m, self.lateral_vel_mps, self.x_m)]
+        y, vy, x = (0.5 * (lo + hi) for lo, hi in (self.lateral_m, self.lateral_vel_mps, self.x_m))
         speed = self.closing_speed_mps or (model.e, model.e)
-        return model.from_cartesian(*mid, -0.5 * (speed[0] + speed[1]))
+        return model.from_cartesian(y, vy, x, -0.5 * (speed[0] + speed[1]))
 
 
 @dataclass(frozen=True)

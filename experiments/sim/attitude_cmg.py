@@ -226,7 +226,7 @@ def simulate_turn(
         ext = None
         if noisy and noise == "game":
             ext = -d_bound * np.sign(torque)
-        elif noisy:
+        elif rng is not None:  # noisy
             ext = rng.uniform(-1.0, 1.0, 3) * d_bound
         x = rk4_step(body, x, torque, dt, ext)
         truth = _measure(x)
@@ -244,7 +244,7 @@ def simulate_turn(
             rec["truth_inside"].append(bool(loop.inside(belief, x[None])[0]))
             if controller == "energy":
                 rec["xi"].append(ctrl.xi)
-    if rec is not None:
+    if rec is not None and record is not None:  # rec exists only when record was given
         record.update({k: np.array(v) for k, v in rec.items()})
     err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
     return TurnResult(

@@ -30,7 +30,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     draw_measurement,
 )
 from kalman_vs_infoset.estim.base import PointBelief
-from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
+from kalman_vs_infoset.experiments.sim.attitude_rw_config import LqrTable, RwScenario
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
@@ -59,9 +59,12 @@ def make_controller(controller: str, config: RwScenario) -> QuaternionPD | LQRCo
     table is missing or describes no valid law)."""
     body, jd, w = body_of(config)
     q_t = tuple(np.asarray(config.maneuver.target_quaternion) / 1.0)
-    p = config.law_table(controller)
     if controller == "pd":
-        return QuaternionPD(body, p.k_q, p.k_w, p.quaternion_term, q_target=q_t)
+        pd = config.law_table("pd")
+        return QuaternionPD(body, pd.k_q, pd.k_w, pd.quaternion_term, q_target=q_t)
+    p = config.law_table(controller)
+    if not isinstance(p, LqrTable):  # a "pd" table was handled above
+        raise TypeError(f"controller '{controller}' has no LQR table")
     return LQRController(
         body.inertia_kgm2,
         p.q,

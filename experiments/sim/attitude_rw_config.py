@@ -14,7 +14,7 @@ which :mod:`experiments.scenario` turns into one line naming the file and the fi
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Literal, overload
 
 import numpy as np
 from kalman_vs_infoset.experiments.sim.fields import (
@@ -157,6 +157,13 @@ class RwScenario(Table):
     lqr: LqrTable | None = field(None, "LQR weights (controller lqr)")
     noise: NoiseTable = field(NoiseTable(), "measurement errors, disturbance bound")
 
+    # overloads: a literal controller name gives its table's own type
+    @overload
+    def law_table(self, controller: Literal["pd"]) -> PdTable: ...
+    @overload
+    def law_table(self, controller: Literal["lqr"]) -> LqrTable: ...
+    @overload
+    def law_table(self, controller: str) -> PdTable | LqrTable: ...
     def law_table(self, controller: str) -> PdTable | LqrTable:
         """The table of ``controller`` (``ValueError`` if the scenario has none)."""
         if controller not in ("pd", "lqr"):

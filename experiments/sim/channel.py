@@ -120,7 +120,9 @@ def run_channel(
             meas = Range(d_m, off_axis_rad=0.0)  # one channel: the range is x
             belief = est.update(belief, meas)
             errors.report("observe_range", meas)
-        hist["t"].append(t), hist["a"].append(alpha), hist["d"].append(d_m)
+        hist["t"].append(t)
+        hist["a"].append(alpha)
+        hist["d"].append(d_m)
         if step in steps:
             records[step] = observe(belief, est, hist, (v * x + e * y) / model.e)
         k = law.impulse_mps(belief, fuel) if guided else 0.0

@@ -52,7 +52,7 @@ def float_bounds(
 ) -> Any:
     """The bounds of a float field, ``Annotated[float, float_bounds(lo, hi)]``: a finite
     value in ``[lo, hi]`` (open ends on request; ints accepted)."""
-    bounds = {}
+    bounds: dict[str, Any] = {}
     if lo is not None:
         bounds["gt" if open_lo else "ge"] = lo
     if hi is not None:
@@ -153,7 +153,10 @@ def describe(model: type[BaseModel] | None, loc: tuple) -> str | None:
     if info is None:
         return None
     try:
-        hint = Annotated[(info.annotation, *info.metadata)] if info.metadata else info.annotation
+        # a type form built at run time (mypy cannot type Annotated[...] of a tuple)
+        hint: Any = (
+            Annotated[(info.annotation, *info.metadata)] if info.metadata else info.annotation
+        )
         schema = TypeAdapter(hint).json_schema()
     except Exception:  # noqa: BLE001 - a description is a courtesy
         return None

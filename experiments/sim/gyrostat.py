@@ -155,7 +155,7 @@ def gyrostat_model(gyro: Gyrostat, beta_Nm: ArrayLike, cfg: LoopConfig) -> Attit
     """The estimators' model of the gyrostat (see the module docstring)."""
     return AttitudeModel(
         np.diag(gyro.A_kgm2),
-        beta_Nm,
+        np.asarray(beta_Nm, dtype=float),
         max(cfg.meas_angle_rad, 1e-12),
         max(cfg.meas_rate_radps, 1e-12),
         effective_inertia_kgm2=np.diag(gyro.body_moments_kgm2),

@@ -55,7 +55,7 @@ class GyrostatTable(Table):
     @model_validator(mode="after")
     def _buildable(self) -> GyrostatTable:
         try:
-            Gyrostat(self.A_kgm2, self.rotor_J_kgm2)
+            Gyrostat(np.asarray(self.A_kgm2, float), np.asarray(self.rotor_J_kgm2, float))
         except ValueError as exc:
             raise ValueError(f"table 'gyrostat': {exc}") from None
         return self
@@ -173,7 +173,7 @@ class GyrostatSetup:
             The design is infeasible, or the horizon takes more than ``MAX_STEPS`` steps.
         """
         g, man, sim = config.gyrostat, config.manoeuvre, config.simulation
-        gyro = Gyrostat(g.A_kgm2, g.rotor_J_kgm2)
+        gyro = Gyrostat(np.asarray(g.A_kgm2, float), np.asarray(g.rotor_J_kgm2, float))
         alpha, beta, rho = (np.asarray(v, float) for v in (g.alpha_Nm, g.beta_Nm, g.rho))
         q_t = np.asarray(man.target_quaternion, float)
         q0 = initial_quaternion(man)

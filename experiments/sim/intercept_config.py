@@ -30,7 +30,7 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelSetting,
 )
 from kalman_vs_infoset.estim.intercept.options import hooks
-from kalman_vs_infoset.experiments.noise import NOISES  # noqa: F401 - the intercept's noise kinds
+from kalman_vs_infoset.experiments.noise import NOISES, Noise  # noqa: F401 - the intercept's noise kinds
 from kalman_vs_infoset.experiments.sim.fields import (
     NONNEGATIVE,
     Interval,
@@ -158,7 +158,7 @@ class EstimatorTable(Table):
         return ChannelPrior(
             tuple(v * 1e3 for v in getattr(self, pos)),
             tuple(v * 1e3 for v in getattr(self, vel)),
-            tuple(v * 1e3 for v in self.x_km),
+            (self.x_km[0] * 1e3, self.x_km[1] * 1e3),
             (-vx[1], -vx[0]),
         )
 
@@ -213,7 +213,7 @@ class GuidanceTable(Table):
 class ExperimentTable(Table):
     runs: Annotated[int, int_bounds(1, 10**6)] = field(1, "runs of the Monte Carlo")
     seed: Annotated[int, int_bounds(0, 2**63 - 1)] = field(1, "root seed")
-    noise: Literal[NOISES] = field("random", "measurement noise")
+    noise: Noise = field("random", "measurement noise")
     estimator: str = Field(
         default_factory=lambda: registry.reference("intercept").name,
         description="estimator name (registered; default: the reference estimator)",
@@ -289,7 +289,8 @@ class InterceptScenario(Table):
     def _truth_defaults(cls, data: Any) -> Any:
         if not isinstance(data, dict):
             return data
-        est = data.get("estimator") if isinstance(data.get("estimator"), dict) else {}
+        given = data.get("estimator")
+        est = given if isinstance(given, dict) else {}
         truth = data.get("truth", {})
         if isinstance(truth, dict):
             defaults = EstimatorTable.model_fields
@@ -386,7 +387,8 @@ class InterceptScenario(Table):
 
     def setting(self, model: ChannelModel | None = None) -> ChannelSetting:
         """What an estimator of a channel is built with (:mod:`estim.registry`)."""
-        speed = tuple(v * 1e3 for v in self.closing_speed_kmps)
+        lo, hi = self.closing_speed_kmps
+        speed = (lo * 1e3, hi * 1e3)
         return ChannelSetting(model or self.channel_model(), speed)
 
 

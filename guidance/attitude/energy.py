@@ -36,6 +36,7 @@ auxiliary acceleration -- which is what the seed's ``U_0 = (-5.4, -1.1, -2.4)`` 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -231,5 +232,7 @@ class EnergySavingController:
         k_u_next = 0.5 * (k_u_next + k_u_next.T)
         u_next = state.u_Nm + gain @ (np.asarray(x_meas_next, dtype=float) - xi_next)
         new_state = EnergySavingState(state.step + 1, xi_next, u_next, k_u_next)
-        diag = StepDiagnostics(gain, float(np.trace(delta)), float(np.trace(k_u_next)))
+        # float64 throughout (numpy's stubs type solve() as any floating)
+        gain64 = cast(NDArray[np.float64], gain)
+        diag = StepDiagnostics(gain64, float(np.trace(delta)), float(np.trace(k_u_next)))
         return new_state, diag

@@ -67,9 +67,9 @@ class EulerAxisProfile:
             else:  # zero-length phase: the value jumps (only at the ramp ends, where equal)
                 vs[-1] = v
         x = np.asarray(xs)
-        v = np.asarray(vs)
-        slope = np.diff(v) / np.diff(x)
-        unit_accel = PPoly(np.vstack([slope, v[:-1]]), x)
+        vals = np.asarray(vs)
+        slope = np.diff(vals) / np.diff(x)
+        unit_accel = PPoly(np.vstack([slope, vals[:-1]]), x)
         unit_angle = unit_accel.antiderivative(2)
         a_max = self.angle_rad / float(unit_angle(t))
         accel = PPoly(unit_accel.c * a_max, x)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody
@@ -151,4 +152,5 @@ def simulate_closed_loop(
         us[k] = u
         xs[k + 1] = x
     us[n] = us[n - 1] if n else 0.0
-    return Trajectory(np.arange(n + 1) * control_period_s, xs, us)
+    time_s = cast(FloatArray, np.arange(n + 1) * control_period_s)  # float64 (stubs: floating)
+    return Trajectory(time_s, xs, us)

@@ -179,6 +179,8 @@ class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
     model: AttitudeModel
     abs_inflation_rad: float = 1e-12
     picard_iterations: int = 8
+    # the box estimator B runs alongside (derived from the fields above: not compared)
+    box: BoxAttitudeEstimator = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         box = BoxAttitudeEstimator(self.model, self.abs_inflation_rad, self.picard_iterations)

@@ -222,7 +222,9 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     @property
     def _var_d(self) -> FloatArray:
         """Variance of a uniform disturbance in ``[-D, D]`` (floored: keeps P definite)."""
-        floor = self.floor_accel_radps2 * np.diag(self.model.effective_inertia_kgm2)
+        j_b = self.model.effective_inertia_kgm2
+        assert j_b is not None  # AttitudeModel.__post_init__ always sets J_b
+        floor = self.floor_accel_radps2 * np.diag(j_b)
         return np.maximum(self.model.disturbance_bound_Nm, floor) ** 2 / 3.0
 
     def initial(self, prior: AttitudePrior) -> UkfAttitudeBelief:

@@ -108,6 +108,8 @@ class MappedEKF(ExtendedKalmanFilter):
     override when ``F x`` is not the state map) and then ``P = F P F^T + Q``.
     """
 
+    x: FloatArray  # filterpy's state (column or row vector; filterpy ships no types)
+
     def __init__(self, fx) -> None:
         super().__init__(dim_x=3, dim_z=1)
         self._fx = fx

@@ -179,10 +179,13 @@ class HInfinityEstimate:
 
     def estimate(self, model: HInfinityModel) -> FloatArray:
         """``zhat_k = L xhat_k``."""
+        assert model.L is not None  # HInfinityModel.__post_init__ fills the default
         return model.L @ self.x
 
 
-def _check_pd(m: FloatArray, base: FloatArray, model: HInfinityModel, what: str) -> FloatArray:
+def _check_pd(
+    m: NDArray[np.floating], base: NDArray[np.floating], model: HInfinityModel, what: str
+) -> NDArray[np.floating]:
     """Lower Cholesky factor of ``m = base - theta Sbar``, or a ``ValueError`` naming
     ``what`` and the largest admissible ``theta`` (``1 / max eig(Sbar relative to base)``)."""
     m = 0.5 * (m + m.T)
@@ -200,7 +203,7 @@ def _check_pd(m: FloatArray, base: FloatArray, model: HInfinityModel, what: str)
     )
 
 
-def _existence_factor(p: FloatArray, model: HInfinityModel) -> FloatArray:
+def _existence_factor(p: FloatArray, model: HInfinityModel) -> NDArray[np.floating]:
     """Cholesky factor of ``M = P^-1 - theta Sbar + H^T R^-1 H`` after the checks."""
     try:
         p_inv = np.linalg.inv(p)
@@ -243,7 +246,7 @@ def hinf_filter(
 ) -> tuple[FloatArray, FloatArray]:
     """Run :func:`hinf_step` over the rows of ``ys``; returns the predictions
     ``xhat_0 .. xhat_N`` (shape (N+1, n)) and ``P_0 .. P_N`` (shape (N+1, n, n))."""
-    est = HInfinityEstimate(x0, p0)
+    est = HInfinityEstimate(np.asarray(x0, dtype=float), np.asarray(p0, dtype=float))
     xs, ps = [est.x], [est.P]
     for y in np.atleast_2d(np.asarray(ys, dtype=float).T).T:
         est = hinf_step(est, y, model)

@@ -102,7 +102,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
         hard_hi[p] = min(hard_hi[p], xb * um)
         two = replace(
             s, u_lo=np.r_[s.u_lo, um], u_hi=np.r_[np.where(np.arange(q) == p, um, s.u_hi), ub],
-            hard_lo_s=hard_lo, hard_hi_s=hard_hi, log=s.log.with_copied_column(p),
+            hard_lo_s=hard_lo, hard_hi_s=hard_hi, log=s.log.with_copied_column(int(p)),
         )  # fmt: skip
         piece = np.r_[np.full(len(labels), p), np.full(len(labels), q)]
         both = np.r_[labels, labels]

@@ -94,9 +94,10 @@ class OpLog:
             for buf, b in zip(spare.arrays, other.parts(), strict=True):
                 buf[n : n + k] = b
         elif n < 32:  # a short log (one step's operations): concatenated
-            return OpLog(
-                *(np.concatenate([a, b]) for a, b in zip(self.parts(), other.parts(), strict=True))
+            kinds, pa, pb, q_lo, q_hi = (
+                np.concatenate([a, b]) for a, b in zip(self.parts(), other.parts(), strict=True)
             )
+            return OpLog(kinds, pa, pb, q_lo, q_hi)
         else:
             cap = 2 * (n + k)
             arrays = tuple(np.empty((cap, *a.shape[1:]), dtype=a.dtype) for a in self.parts())
@@ -104,7 +105,8 @@ class OpLog:
                 buf[:n], buf[n : n + k] = a, b
             spare = _Spare(arrays)
         spare.fill = n + k
-        return OpLog(*(buf[: n + k] for buf in spare.arrays), _spare=spare)
+        kinds, pa, pb, q_lo, q_hi = (buf[: n + k] for buf in spare.arrays)
+        return OpLog(kinds, pa, pb, q_lo, q_hi, _spare=spare)
 
     def with_copied_column(self, p: int) -> OpLog:
         """The log with piece ``p``'s parameters copied into a new last column (a

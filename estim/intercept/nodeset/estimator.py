@@ -273,7 +273,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         per = belief._summary["per_piece"].copy()
         ops = OpLog.empty(len(belief.u_lo))
         k, dk = impulse_parts(control) if control is not None else (0.0, 0.0)
-        if k != 0.0 or dk != 0.0:
+        if control is not None and (k != 0.0 or dk != 0.0):  # (k, dk) = 0 without control
             ops = self._impulse(belief, control, per)
         s, per, ops = self._split(belief, per, ops)
         v_lo = np.full(len(s.u_lo), -self.model.nu_mps2)

@@ -89,7 +89,8 @@ class ParticleSet:
     """
 
     particles: FloatArray
-    weights: FloatArray | None = None
+    # None (uniform) is replaced by the normalised weights in __post_init__: typed as held
+    weights: FloatArray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         x = np.array(self.particles, dtype=float)

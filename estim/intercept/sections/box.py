@@ -64,7 +64,8 @@ class BoxSections:
         return self.lo.shape[0]
 
     def select(self, index: ArrayLike) -> BoxSections:
-        return BoxSections(self.family, self.lo[index], self.hi[index])
+        idx = np.asarray(index)
+        return BoxSections(self.family, self.lo[idx], self.hi[idx])
 
     def clip_alpha(self, lo: FloatArray, hi: FloatArray) -> tuple[BoxSections, BoolArray]:
         a_lo, a_hi, keep = clip_slabs(lo, hi, self.lo[:, 0], self.hi[:, 0])

@@ -181,7 +181,8 @@ class EllipsoidSections:
         return Ellipsoid._make(self.centre[j].copy(), self.shape[j].copy())
 
     def select(self, index: ArrayLike) -> EllipsoidSections:
-        return EllipsoidSections(self.family, self.centre[index], self.shape[index])
+        idx = np.asarray(index)
+        return EllipsoidSections(self.family, self.centre[idx], self.shape[idx])
 
     def clip_alpha(self, lo: FloatArray, hi: FloatArray) -> tuple[EllipsoidSections, BoolArray]:
         c, p = self.centre, self.shape
@@ -196,7 +197,7 @@ class EllipsoidSections:
         for j in np.flatnonzero(cut):  # the minimum-trace weight: a cubic per section
             b, r = 0.5 * (s_lo[j] + s_hi[j]), 0.5 * (s_hi[j] - s_lo[j])
             try:
-                e = self.ellipsoid(j).intersect_strip(_E0, b, r, "trace")
+                e = self.ellipsoid(int(j)).intersect_strip(_E0, b, r, "trace")
             except EmptyIntersectionError:  # pragma: no cover - clipped to the set above
                 keep[j] = False
                 continue
@@ -253,7 +254,8 @@ class EllipsoidSections:
         return self.centre.copy()
 
     def contains(self, index: ArrayLike, point: ArrayLike, rel_tol: float) -> bool:
-        return any(bool(self.ellipsoid(int(j)).contains(point, rel_tol)) for j in index)
+        idx = np.asarray(index)
+        return any(bool(self.ellipsoid(int(j)).contains(point, rel_tol)) for j in idx)
 
     def alpha_bounds(self) -> tuple[float, float]:
         r = self._radius()[:, 0]

@@ -168,7 +168,8 @@ class ZonotopeSections:
         return ZonotopeSections(self.family, self.centre, out)
 
     def select(self, index: ArrayLike) -> ZonotopeSections:
-        return ZonotopeSections(self.family, self.centre[index], self.generators[index])
+        idx = np.asarray(index)
+        return ZonotopeSections(self.family, self.centre[idx], self.generators[idx])
 
     def clip_alpha(self, lo: FloatArray, hi: FloatArray) -> tuple[ZonotopeSections, BoolArray]:
         c, g = self.centre, self.generators
@@ -227,7 +228,8 @@ class ZonotopeSections:
         return self.centre.copy()
 
     def contains(self, index: ArrayLike, point: ArrayLike, rel_tol: float) -> bool:
-        return any(bool(self.zonotope(int(j)).contains(point, rel_tol)) for j in index)
+        idx = np.asarray(index)
+        return any(bool(self.zonotope(int(j)).contains(point, rel_tol)) for j in idx)
 
     def alpha_bounds(self) -> tuple[float, float]:
         r = np.abs(self.generators[:, 0, :]).sum(axis=1)
