@@ -57,6 +57,8 @@ class NodeRefinement:
             self, s: NodeSet, piece: Any, label: Any, polys: ConvexPolygons, ops: OpLog, t: float
         ) -> tuple[ConvexPolygons, float, FloatArray, FloatArray, int]: ...
 
+        def bands(self) -> tuple[FloatArray, FloatArray]: ...
+
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
         """:meth:`_refine_pieces`, then drop the nodes and pieces that bound nothing
         (pieces are renumbered only here, after every piece was visited)."""
