@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments.attitude_cmg_setup import TurnSetup, setup_from_scenario
 from kalman_vs_infoset.experiments.attitude_est import run_here
 from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
@@ -91,8 +92,10 @@ def summarise(
     return result
 
 
-def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
+def run(source, scenario, controller, noise, runs, seed, estimator=None) -> dict[str, Any]:
     """The attitude JSON of these controllers, computed in this process without files."""
+    if estimator is None:  # the loops' default: the measurement read as the state
+        estimator = registry.first_with_role("attitude", "exact").name
     return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
 
 

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments.attitude_est import run_here
 from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
 from kalman_vs_infoset.experiments.attitude_traces import trace_rw
@@ -126,8 +127,10 @@ def summarise(
     return result
 
 
-def run(source, scenario, controller, noise, runs, seed, estimator="perfect") -> dict[str, Any]:
+def run(source, scenario, controller, noise, runs, seed, estimator=None) -> dict[str, Any]:
     """The attitude JSON of these controllers, computed in this process without files."""
+    if estimator is None:  # the loops' default: the measurement read as the state
+        estimator = registry.first_with_role("attitude", "exact").name
     return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
 
 

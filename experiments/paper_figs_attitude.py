@@ -376,7 +376,7 @@ def _fig13(ctx, curves, f0, table) -> None:
 # -- seed 004 --------------------------------------------------------------------------
 def gyrostat(ctx) -> dict[str, Any]:
     quiet, setup = trace(ctx, "gyrostat_game.toml", "game", "none", exact_estimator())
-    game, _ = trace(ctx, "gyrostat_game.toml", "game", "game", "box")
+    game, _ = trace(ctx, "gyrostat_game.toml", "game", "game", registry.reference("attitude").name)
     tau = float(setup.design.tau_s)
     mark = [(tau, f"guaranteed time tau = {tau:.1f} s (eq. 2.8)")]
     both = [quiet, game]

@@ -130,7 +130,7 @@ def simulate_turn(
     setup: TurnSetup,
     controller: str,
     rng: np.random.Generator | None = None,
-    estimator: str = "perfect",
+    estimator: str | None = None,
     noise: str | None = None,
     record: dict | None = None,
 ) -> TurnResult:

@@ -115,7 +115,7 @@ def simulate_runs(
     controller: str,
     noise: str,
     rngs: list[np.random.Generator],
-    estimator: str = "perfect",
+    estimator: str | None = None,
     record: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Simulate the runs as one batch; per-run metrics.
@@ -130,8 +130,9 @@ def simulate_runs(
         Measurement errors and disturbance (module docstring).
     rngs : list of numpy.random.Generator
         One generator per run: the run's initial state and noise.
-    estimator : str
-        A registered attitude estimator.
+    estimator : str or None
+        A registered attitude estimator (None: the one with the role ``exact``, the
+        measurement read as the state).
     record : dict, optional
         Filled with the trajectories (below).
 

@@ -30,15 +30,19 @@ NOISES = ("none", "random", "game")
 
 @dataclass(frozen=True)
 class EstimatorLoop:
-    """One registered attitude estimator run over a batch of runs."""
+    """One registered attitude estimator run over a batch of runs (``name`` None: the
+    one whose registration declares the role ``exact``, the measurement read as the
+    state, as the seeds' loops assume)."""
 
-    name: str
+    name: str | None
     model: AttitudeModel
     estimator: Estimator = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        if self.name is None:
+            object.__setattr__(self, "name", registry.first_with_role("attitude", "exact").name)
         try:
-            reg = registry.get("attitude", self.name)
+            reg = registry.get("attitude", str(self.name))
         except KeyError as exc:
             raise ValueError(exc.args[0]) from None
         object.__setattr__(self, "estimator", reg.build(None, self.model))

@@ -171,7 +171,7 @@ def simulate_turn(
     disturbance: str,
     rngs: Sequence[np.random.Generator],
     cfg: LoopConfig,
-    estimator: str = "perfect",
+    estimator: str | None = None,
     record: bool = False,
 ) -> LoopResult:
     """``len(rngs)`` rest-to-rest turns from ``q0`` (4,) or (R, 4) to ``q_target``, batched.

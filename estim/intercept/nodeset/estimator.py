@@ -262,7 +262,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         nodes under eps, split wide pieces and re-grid thinned ones.
 
         The disturbance of each piece is ``nu`` plus the interval of the kinematic
-        term over its states (:func:`kinematic_reference.kinematic_interval_mps2`),
+        term over its states (:func:`..kinematic.kinematic_interval`),
         sized from the belief's own summary (the impulse's effect on ``w`` added), so
         a step computes the bounds between nodes once; impulse and prediction are
         one compiled call.
@@ -325,7 +325,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         the per-piece bounds ``per`` of ``w``, ``alpha`` and ``tau``; pieces without
         cells get zero."""
         # x in [(tau_lo - dt) / u_hi (at least eps), tau_hi / u_lo] over the step;
-        # compiled (kinematic_interval_mps2 per piece: a handful of numbers every step)
+        # compiled (kinematic_interval per piece: a handful of numbers every step)
         return piece_kinematic(
             per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
             MAX_BEARING_RAD,
