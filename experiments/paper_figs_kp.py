@@ -156,10 +156,8 @@ def fig5(ctx) -> dict[str, Any]:
             p = np.arange(1, len(v) + 1) / len(v)
             lw = 1.3 if variant == "bearings only" else 2.8
             number = CURVE_NUMBERS[variant, noise]
-            ax.step(
-                np.r_[v[0], v],
-                np.r_[0.0, p],
-                where="post",
+            ax.ecdf(
+                v,
                 **{**fs.line(ref, noise), "lw": lw},
                 label=f"{number}: {variant}, {fs.NOISE_WORDS[noise]} (n={len(v)})",
             )
