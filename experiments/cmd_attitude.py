@@ -194,8 +194,9 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
     """The CDFs of the runs and the time histories of the traced ones; their names
     carry what distinguishes them: controller, estimators, noises, seed."""
     ok = table[table["status"] == "ok"] if len(table) else table
+    # '+' joins several names: a comma is awkward in file names on every shell
     stem = (
-        f"{req.name}-{req.controller}-{','.join(req.estimators)}-{','.join(req.noises)}-s{req.seed}"
+        f"{req.name}-{req.controller}-{'+'.join(req.estimators)}-{'+'.join(req.noises)}-s{req.seed}"
     )
     files = write_figure(req.out, stem, ok) if len(ok) and req.runs > 1 else []
     if histories:

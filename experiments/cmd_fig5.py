@@ -42,7 +42,7 @@ def add_arguments(p) -> None:
 def _stem(args) -> str:
     """The files' stem: ``fig5``, with the estimators and seed when not the seed's, so
     another choice never replaces the seed's figure."""
-    ests = "" if args.estimators == seed_estimators() else "-" + ",".join(args.estimators)
+    ests = "" if args.estimators == seed_estimators() else "-" + "+".join(args.estimators)
     return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}")
 
 

@@ -135,7 +135,7 @@ def test_attitude_runs_each_noise_and_names_its_figures_by_all_of_them(tiny_rw, 
     assert [(x["estimator"], x["noise"]) for x in res["rows"]] == [
         ("box", "none"), ("box", "random")
     ]  # fmt: skip
-    assert (out / "tiny_rw-pd-box-none,random-s0-cdf.png").exists()
+    assert (out / "tiny_rw-pd-box-none+random-s0-cdf.png").exists()
     assert len(list(out.glob("tiny_rw-pd-box-*-s0.parquet"))) == 2
 
 
@@ -175,7 +175,7 @@ def test_fig5_names_its_files_by_the_estimators_and_seed_when_not_the_seeds():
     from kalman_vs_infoset.experiments.cmd_fig5 import _stem
 
     assert _stem(Namespace(estimators=["infoset"], seed=None)) == "fig5"
-    assert _stem(Namespace(estimators=["ekf", "ukf"], seed=None)) == "fig5-ekf,ukf"
+    assert _stem(Namespace(estimators=["ekf", "ukf"], seed=None)) == "fig5-ekf+ukf"
     assert _stem(Namespace(estimators=["infoset"], seed=4)) == "fig5-s4"
 
 
