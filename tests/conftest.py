@@ -11,6 +11,7 @@ import os
 from pathlib import Path
 
 import pytest
+from harness_texts import SHORT, TINY_RW
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, print_blob=True)
@@ -63,3 +64,18 @@ def dask_cluster():
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster:
         yield cluster
+
+
+# scenario files of the command tests (a short engagement, a tiny reaction-wheel turn)
+@pytest.fixture
+def short(tmp_path) -> Path:
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT)
+    return p
+
+
+@pytest.fixture
+def tiny_rw(tmp_path) -> Path:
+    p = tmp_path / "tiny_rw.toml"
+    p.write_text(TINY_RW)
+    return p

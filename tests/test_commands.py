@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from harness_texts import SHORT, TINY_RW, one_line_error
+from harness_texts import TINY_RW, one_line_error
 from harness_texts import run_cli as run
 from kalman_vs_infoset.experiments import progress
 from kalman_vs_infoset.experiments.cli import COMMANDS, build_parser
@@ -30,20 +30,6 @@ CHOOSERS = {
     "attitude": ["smallsat_rw"],
     "tightness": ["kp_fig5"],
 }
-
-
-@pytest.fixture
-def short(tmp_path) -> Path:
-    p = tmp_path / "short.toml"
-    p.write_text(SHORT)
-    return p
-
-
-@pytest.fixture
-def tiny_rw(tmp_path) -> Path:
-    p = tmp_path / "tiny_rw.toml"
-    p.write_text(TINY_RW)
-    return p
 
 
 def _files(path: Path) -> list[Path]:

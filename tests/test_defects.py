@@ -38,13 +38,6 @@ def short(tmp_path) -> Path:
     return p
 
 
-@pytest.fixture
-def tiny_rw(tmp_path) -> Path:
-    p = tmp_path / "tiny_rw.toml"
-    p.write_text(TINY_RW)
-    return p
-
-
 def _intercept(capsys, scenario, out, *extra) -> Result:
     return run(capsys, "intercept", scenario, "--out", out, "--workers", 1, "--no-progress", *extra)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from harness_texts import SHORT, TINY_RW, experiment, one_line_error
+from harness_texts import SHORT, experiment, one_line_error
 from harness_texts import run_cli as run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -16,20 +16,6 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def files_under(path: Path) -> list[Path]:
     return sorted(p for p in Path(path).rglob("*") if p.is_file())
-
-
-@pytest.fixture
-def short(tmp_path) -> Path:
-    p = tmp_path / "short.toml"
-    p.write_text(SHORT)
-    return p
-
-
-@pytest.fixture
-def tiny_rw(tmp_path) -> Path:
-    p = tmp_path / "tiny_rw.toml"
-    p.write_text(TINY_RW)
-    return p
 
 
 def _refused(capsys, out: Path, *args) -> str:

@@ -30,13 +30,6 @@ linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX s
 SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 20.0")
 
 
-@pytest.fixture
-def short(tmp_path) -> Path:
-    p = tmp_path / "short.toml"
-    p.write_text(SHORT)
-    return p
-
-
 def _table(out: Path) -> pd.DataFrame:
     (pq,) = Path(out).rglob("*.parquet")
     return pd.read_parquet(pq)
