@@ -107,6 +107,12 @@ class Belief(ABC):
         (values at some of its points are not extremes).
         """
 
+    def trace_fields(self) -> dict[str, float]:
+        """What this belief reports to a trace beside the generic quantities (its set's
+        size, a filter's gate), names with units; its estimator's registration declares
+        the names (``registry.declare(..., trace_fields=...)``). None by default."""
+        return {}
+
     def attained(self, fn: StateFunction) -> Extremes:
         """Min and max of ``fn`` over states the belief holds, each attained at its
         argument (a state of the belief): witnesses, never wider than :meth:`extremes`.

@@ -90,6 +90,10 @@ class Registration:
         Its name in figure legends, in words ("" : its name; :attr:`words`).
     colour : str
         Its colour in figures, a matplotlib colour ("" : the figures choose one).
+    trace_fields : tuple of str
+        The quantities its beliefs report to a trace beside the generic ones
+        (``Belief.trace_fields()``: the set's size, a filter's gate), names with units;
+        the trace tables have a column for each field any registration declares.
     """
 
     name: str
@@ -102,6 +106,7 @@ class Registration:
     roles: tuple[str, ...] = ()
     label: str = ""
     colour: str = ""
+    trace_fields: tuple[str, ...] = ()
 
     @property
     def words(self) -> str:
@@ -134,6 +139,7 @@ def declare(
     roles: tuple[str, ...] = (),
     label: str = "",
     colour: str = "",
+    trace_fields: tuple[str, ...] = (),
 ) -> Registration:
     """A checked registration, not yet registered: what a family folder lists in its
     ``REGISTRATIONS`` (and :func:`register` adds).
@@ -155,8 +161,9 @@ def declare(
     if unknown:
         raise ValueError(f"unknown roles {unknown}; allowed: {', '.join(ROLES)}")
     return Registration(
-        name, problem, options, factory, doc, rank, reference, tuple(roles), label, colour
-    )
+        name, problem, options, factory, doc, rank, reference, tuple(roles), label, colour,
+        tuple(trace_fields),
+    )  # fmt: skip
 
 
 def _add(reg: Registration, replace: bool) -> Registration:
@@ -179,6 +186,7 @@ def register(
     roles: tuple[str, ...] = (),
     label: str = "",
     colour: str = "",
+    trace_fields: tuple[str, ...] = (),
 ) -> Registration:
     """Register an estimator; a taken ``(problem, name)`` is an error unless ``replace``.
 
@@ -186,7 +194,9 @@ def register(
     whenever it is called (also before the first lookup). Arguments: :func:`declare`.
     """
     _load()
-    reg = declare(name, problem, options, factory, doc, rank, reference, roles, label, colour)
+    reg = declare(
+        name, problem, options, factory, doc, rank, reference, roles, label, colour, trace_fields
+    )
     return _add(reg, replace)
 
 
@@ -222,6 +232,13 @@ def names(problem: str) -> tuple[str, ...]:
     _load()
     regs = [r for (p, _), r in _REGISTRY.items() if p == problem]
     return tuple(r.name for r in sorted(regs, key=lambda r: r.rank))
+
+
+def registrations(problem: str) -> tuple[Registration, ...]:
+    """The registrations of a problem, by listing rank (then registration order)."""
+    _load()
+    regs = [r for (p, _), r in _REGISTRY.items() if p == problem]
+    return tuple(sorted(regs, key=lambda r: r.rank))
 
 
 def get(problem: str, name: str) -> Registration:

@@ -19,7 +19,7 @@ import pytest
 from harness_texts import TINY_RW
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.base import PointBelief
-from kalman_vs_infoset.estim.intercept.describe import FIELDS, describe_channel
+from kalman_vs_infoset.estim.intercept.describe import describe_channel, fields
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.experiments import figstyle
 from kalman_vs_infoset.experiments.cli import main
@@ -34,7 +34,7 @@ UNIT = re.compile(r", \S")
 STEP_FIELDS = {
     "alpha_true_rad", "alpha_meas_rad", "alpha_err_rad", "alpha_bound_rad", "range_meas_m",
     "forecast_true_m", "zem_true_m", "truth_inside", "impulse_mps", "fuel_mps", "step", "t_s",
-    "channel", "run", "estimator", "noise", "miss_m", *FIELDS,
+    "channel", "run", "estimator", "noise", "miss_m", *fields(),
 }  # fmt: skip
 
 
@@ -134,7 +134,7 @@ def test_describe_takes_the_generic_route_for_any_belief():
     """A belief with nothing but the interface (a point) still gives every field."""
     model = ChannelModel()
     d = describe_channel(PointBelief(np.array([1e-3, 2e-6, 5e6])), model)
-    assert set(d) == set(FIELDS)
+    assert set(d) == set(fields())
     assert (
         d["forecast_lo_m"]
         == d["forecast_hi_m"]

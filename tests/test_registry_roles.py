@@ -82,3 +82,45 @@ def test_a_plugin_without_hints_is_named_and_drawn(plain_toy):
     ]
     assert lines and all(ln.get_color() == colour for ln in lines)
     plt.close(fig)
+
+
+# -- trace fields: declared on the registration, reported by the belief ----------------
+class _CountingBelief:
+    """What a plug-in's belief adds to a trace: one field of its own."""
+
+    @staticmethod
+    def trace_fields() -> dict[str, float]:
+        return {"toy_corners": 8.0}
+
+
+def test_trace_fields_are_declared_by_registrations_and_reported_by_beliefs():
+    """The shipped families declare their beliefs' own trace fields (the polygon set's
+    size, the filters' gate), and a plug-in's declared field becomes a trace column that
+    its belief fills and every other belief leaves NaN."""
+    import numpy as np
+    from kalman_vs_infoset.estim.intercept.describe import GENERIC, describe_channel, fields
+    from kalman_vs_infoset.estim.intercept.model import ChannelModel, ChannelPrior
+    from toy_estimators import ToyBelief
+
+    assert registry.get("intercept", "infoset").trace_fields == (
+        "n_sections", "n_vertices", "area_max_radm", "n_simplified",
+    )  # fmt: skip
+    assert registry.get("intercept", "ukf").trace_fields == ("n_sigma", "innovation_outliers")
+    assert fields()[: len(GENERIC)] == GENERIC and "n_sigma" in fields()
+
+    class CountingBelief(_CountingBelief, ToyBelief):
+        pass
+
+    registry.register("toycount", "intercept", ToyOptions, trace_fields=("toy_corners",))
+    try:
+        assert "toy_corners" in fields()
+        model = ChannelModel()
+        prior = ChannelPrior((-1e3, 1e3), (-10.0, 10.0), (7e5, 8e5))
+        plain = ToyEstimator(model).initial(prior)
+        mine = CountingBelief(plain.lo, plain.hi)
+        assert describe_channel(mine, model)["toy_corners"] == 8.0
+        assert np.isnan(describe_channel(plain, model)["toy_corners"])
+        assert np.isnan(describe_channel(plain, model)["n_sigma"])
+    finally:
+        registry.unregister("intercept", "toycount")
+    assert "toy_corners" not in fields()

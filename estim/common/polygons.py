@@ -226,3 +226,20 @@ class ConvexPolygons:
         cr = self.xy[:, 0] * self.xy[nxt, 1] - self.xy[nxt, 0] * self.xy[:, 1]
         # float64 in, float64 out (numpy's stubs only promise a floating type)
         return cast(FloatArray, 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n))
+
+    def size_fields(self, scale_radm: float, n_sections: int, n_simplified: int = 0) -> dict:
+        """A polygon set's size for a trace (``Belief.trace_fields``): live sections,
+        vertices, the largest section's area in rad m (``scale_radm``: the area of a
+        unit square of the stored coordinates) and the sections outer-simplified so far."""
+        areas = self.areas()
+        return {
+            "n_sections": float(n_sections),
+            "n_vertices": float(np.sum(self.counts)),
+            "area_max_radm": float(areas.max() * scale_radm) if areas.size else 0.0,
+            "n_simplified": float(n_simplified),
+        }
+
+
+#: the names :meth:`ConvexPolygons.size_fields` reports (a polygon set's registrations
+#: declare them as their trace fields)
+SIZE_FIELDS = ("n_sections", "n_vertices", "area_max_radm", "n_simplified")

@@ -10,9 +10,9 @@ coordinates -- and adds richer fields where the belief offers them:
   ``omega_range_radps()``, ``x_range_m()``: the node and slab sets where they have
   them), used instead of the generic extremes (the node set bounds no plain function:
   its ``extremes`` refuses one);
-* the set's size: ``n_sections``, ``n_vertices`` and the largest section's area
-  (``polygons.areas()`` in the belief's scaled coordinates, converted to rad m);
-* a Kalman belief's ``n_sigma`` and ``innovation_outliers``.
+* the belief's own ``trace_fields()`` (a polygon set's size, a filter's gate), whose
+  names each estimator's registration declares (``registry.declare(...,
+  trace_fields=...)``): :func:`fields` is the generic keys and every declared one.
 
 Nothing here changes a belief (beliefs are immutable values); an empty belief gives
 NaN bounds. Fields absent for a belief are NaN, so rows of different estimators share
@@ -31,8 +31,8 @@ from kalman_vs_infoset.estim.intercept.model import ChannelModel
 
 NAN = math.nan
 
-#: every key :func:`describe_channel` returns, with its unit in its name
-FIELDS = (
+#: the keys :func:`describe_channel` returns for every belief, units in their names
+GENERIC = (
     "alpha_est_rad",
     "omega_est_radps",
     "x_est_m",
@@ -52,13 +52,16 @@ FIELDS = (
     "status",
     "contradictions",
     "empty",
-    "n_sections",
-    "n_vertices",
-    "area_max_radm",
-    "n_simplified",
-    "n_sigma",
-    "innovation_outliers",
 )
+
+
+def fields() -> tuple[str, ...]:
+    """Every key :func:`describe_channel` returns: :data:`GENERIC`, then the trace fields
+    the registered intercept estimators declare (in listing order, each once)."""
+    from kalman_vs_infoset.estim import registry  # the registry loads the families
+
+    declared = [f for reg in registry.registrations("intercept") for f in reg.trace_fields]
+    return GENERIC + tuple(dict.fromkeys(f for f in declared if f not in GENERIC))
 
 
 def _column(k: int):
@@ -71,25 +74,6 @@ def _column(k: int):
 def _interval(belief: Belief, fn) -> tuple[float, float]:
     ext = belief.extremes(fn)
     return float(ext.min_value), float(ext.max_value)
-
-
-def _size(belief: Belief) -> dict[str, float]:
-    """Sections, vertices and the largest section's area (rad m) of a polygon set."""
-    polys = getattr(belief, "polygons", None)
-    if polys is None or not hasattr(polys, "areas"):
-        return {"n_sections": NAN, "n_vertices": NAN, "area_max_radm": NAN, "n_simplified": NAN}
-    areas = np.asarray(polys.areas(), dtype=float)
-    scale = float(getattr(belief, "alpha_scale_rad", 1.0)) * float(
-        getattr(belief, "w_scale_m", 1.0)
-    )
-    live = int(np.count_nonzero(np.asarray(polys.counts) > 0))
-    return {
-        "n_sections": float(getattr(belief, "n_sections", live)),
-        "n_vertices": float(np.sum(polys.counts)),
-        "area_max_radm": float(areas.max() * scale) if areas.size else 0.0,
-        # slices outer-simplified so far past the vertex cap (the node set's)
-        "n_simplified": float(getattr(belief, "n_simplified", 0)),
-    }
 
 
 def describe_channel(belief: Belief, model: ChannelModel) -> dict[str, Any]:
@@ -105,20 +89,17 @@ def describe_channel(belief: Belief, model: ChannelModel) -> dict[str, Any]:
     Returns
     -------
     dict
-        The keys of :data:`FIELDS`: the centre, the forecast-miss interval and the
+        The keys of :func:`fields`: the centre, the forecast-miss interval and the
         ranges ``x*``, ``x**`` where its ends are attained, the zero-effort-miss,
         bearing, rate and range intervals, status, and the size fields.
     """
-    out: dict[str, Any] = dict.fromkeys(FIELDS, NAN)
+    out: dict[str, Any] = dict.fromkeys(fields(), NAN)
     out.update(
         status=str(belief.status.value),
         contradictions=int(belief.contradictions),
         empty=bool(belief.is_empty),
     )
-    out.update(_size(belief))
-    if hasattr(belief, "n_sigma"):
-        out["n_sigma"] = float(belief.n_sigma)
-        out["innovation_outliers"] = float(getattr(belief, "innovation_outliers", NAN))
+    out.update(belief.trace_fields())
     if belief.is_empty:
         return out
     c = np.asarray(belief.centre(), dtype=float)

@@ -1,5 +1,6 @@
 """The Kalman filters of a channel (EKF, UKF), each read as its n-sigma ellipsoid."""
 
+from kalman_vs_infoset.estim.intercept.gaussian.belief import GATE_FIELDS
 from kalman_vs_infoset.estim.intercept.gaussian.options import KalmanOptions, UkfOptions
 from kalman_vs_infoset.estim.registry import declare
 
@@ -7,7 +8,8 @@ from kalman_vs_infoset.estim.registry import declare
 # the step costs (colours: Okabe & Ito 2008, vermillion and bluish green)
 REGISTRATIONS = (
     declare("ekf", "intercept", KalmanOptions, doc="EKF read as its n-sigma ellipsoid", rank=4,
-            roles=("baseline",), label="EKF", colour="#D55E00"),
+            roles=("baseline",), label="EKF", colour="#D55E00", trace_fields=GATE_FIELDS),
     declare("ukf", "intercept", UkfOptions, doc="UKF read as its n-sigma ellipsoid", rank=5,
-            roles=("baseline", "yardstick"), label="UKF", colour="#009E73"),
+            roles=("baseline", "yardstick"), label="UKF", colour="#009E73",
+            trace_fields=GATE_FIELDS),
 )  # fmt: skip

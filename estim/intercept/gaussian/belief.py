@@ -36,6 +36,9 @@ from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 
+#: what a filter's belief reports to a trace (:meth:`GaussianBelief.trace_fields`)
+GATE_FIELDS = ("n_sigma", "innovation_outliers")
+
 #: coordinate order of the stored Cholesky factor: (r, x, alpha)
 PERM = np.array([1, 2, 0])
 _PERM_IX = np.ix_(PERM, PERM)
@@ -164,6 +167,13 @@ class GaussianBelief(Belief):
     @property
     def is_empty(self) -> bool:
         return self.status is Status.TERMINAL
+
+    def trace_fields(self) -> dict[str, float]:
+        """The gate (``n_sigma``) and the innovations outside it so far."""
+        return {
+            "n_sigma": float(self.n_sigma),
+            "innovation_outliers": float(self.innovation_outliers),
+        }
 
     def centre(self) -> FloatArray:
         """The mean as a row ``(alpha, omega, x)``."""

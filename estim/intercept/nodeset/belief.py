@@ -122,6 +122,11 @@ class NodeSet(Belief):
     def n_vertices(self) -> int:
         return int(self.polygons.counts.sum())
 
+    def trace_fields(self) -> dict[str, float]:
+        """The set's size (:meth:`ConvexPolygons.size_fields`), with the slices
+        outer-simplified so far past the vertex cap."""
+        return self.polygons.size_fields(self.alpha_scale_rad, self.n_sections, self.n_simplified)
+
     # -- bounds between nodes --------------------------------------------------------
     @cached_property
     def _summary(self) -> dict[str, Any]:

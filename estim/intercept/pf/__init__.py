@@ -6,5 +6,6 @@ from kalman_vs_infoset.estim.registry import declare
 REGISTRATIONS = (
     declare("pf", "intercept", PfOptions,
             doc="bootstrap particle filter, bounded likelihood", rank=7,
-            label="particle filter", colour="#332288"),  # indigo (Tol's muted palette)
+            label="particle filter", colour="#332288",  # indigo (Tol's muted palette)
+            trace_fields=("n_sigma",)),
 )  # fmt: skip

@@ -111,6 +111,10 @@ class ParticleBelief(Belief):
         cov = (d * w[:, None]).T @ d
         return GaussianBelief(mean, cov, self.n_sigma, "zem", e)
 
+    def trace_fields(self) -> dict[str, float]:
+        """The gate (``n_sigma``) of the moments' ellipsoid."""
+        return {"n_sigma": float(self.n_sigma)}
+
     def centre(self) -> FloatArray:
         """The weighted mean of ``(alpha, w, x)`` as a row ``(alpha, omega, x)``."""
         return self.moments.centre()

@@ -75,6 +75,13 @@ class InformationSet(Belief):
             raise AttributeError(f"{type(self.sections).__name__} sections are not polygons")
         return self.sections.polygons
 
+    def trace_fields(self) -> dict[str, float]:
+        """The set's size (:meth:`ConvexPolygons.size_fields`) when its sections are
+        polygons; ellipsoids, zonotopes and boxes report none."""
+        if not isinstance(self.sections, PolygonSections):
+            return {}
+        return self.polygons.size_fields(self.alpha_scale_rad * self.w_scale_m, self.n_sections)
+
     # -- Belief interface ------------------------------------------------------------
     @property
     def is_empty(self) -> bool:
