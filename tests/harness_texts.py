@@ -14,6 +14,25 @@ from dataclasses import dataclass
 from kalman_vs_infoset.experiments.cli import main
 
 # an intercept started ~1000 km out: 35 steps of the Fig. 3 model
+# one guidance channel (lateral only) of a short engagement: the adversary tests
+ONE_CHANNEL = """
+name = "tiny"
+[model]
+nominal_range_km = 1000.0
+[estimator]
+x_km = [900.0, 1100.0]
+closing_speed_kmps = [57.9, 58.1]
+[truth]
+y_km = [-1.0, 1.0]
+z_km = [0.0, 0.0]
+x_km = [950.0, 1050.0]
+vy_kmps = [-0.05, 0.05]
+vz_kmps = [0.0, 0.0]
+vx_kmps = [-58.1, -57.9]
+[guidance]
+vertical = false
+"""
+
 SHORT = """
 name = "short"
 [model]

@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 import pytest
+from harness_texts import ONE_CHANNEL
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.gaussian.estimator import KalmanChannelEstimator
 from kalman_vs_infoset.estim.intercept.model import Bearing, ChannelModel, ChannelPrior
@@ -27,26 +28,13 @@ from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw
 MODEL = ChannelModel()
 PRIOR = ChannelPrior((-10e3, 10e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
 
-SHORT = """
-name = "tiny"
-[model]
-nominal_range_km = 1000.0
-[estimator]
-x_km = [900.0, 1100.0]
-closing_speed_kmps = [57.9, 58.1]
-[truth]
-y_km = [-1.0, 1.0]
-z_km = [0.0, 0.0]
-x_km = [950.0, 1050.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [0.0, 0.0]
-vx_kmps = [-58.1, -57.9]
-[guidance]
-vertical = false
-[reference]
+SHORT = (
+    ONE_CHANNEL
+    + """[reference]
 fuel_game_mps = 100.0
 miss_game_m = 9.5
 """
+)
 
 
 @pytest.fixture

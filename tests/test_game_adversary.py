@@ -12,29 +12,14 @@ keeping a copy changes no result, to the last digit.
 
 import numpy as np
 import pytest
+from harness_texts import ONE_CHANNEL
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.noise import GameNoise
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.intercept import Engagement, build_noise
 
-TINY = """
-name = "tiny"
-[model]
-nominal_range_km = 1000.0
-[estimator]
-x_km = [900.0, 1100.0]
-closing_speed_kmps = [57.9, 58.1]
-[truth]
-y_km = [-1.0, 1.0]
-z_km = [0.0, 0.0]
-x_km = [950.0, 1050.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [0.0, 0.0]
-vx_kmps = [-58.1, -57.9]
-[guidance]
-vertical = false
-"""
+TINY = ONE_CHANNEL
 
 RANGE = """
 [range_finder]
