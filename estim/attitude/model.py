@@ -195,6 +195,19 @@ class AttitudeBelief(Belief):
         """Per run: updates so far whose data contradicted the model."""
 
 
+class NeverEmptyBelief(AttitudeBelief):
+    """An attitude belief that no data can contradict (a point, a Kalman filter's
+    moments): never empty, no contradicted update in any run."""
+
+    @property
+    def is_empty(self) -> bool:
+        return False
+
+    @property
+    def empty_counts(self) -> NDArray[np.int_]:
+        return np.zeros(self.runs, dtype=int)
+
+
 def draw_measurement(
     state: ArrayLike, model: AttitudeModel, rng_or_rngs, bound_scale: float = 1.0
 ) -> AttitudeMeasurement:

@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.attitude.model import (
-    AttitudeBelief,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    NeverEmptyBelief,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -29,7 +29,7 @@ EQUAL_TOL = 1e-12
 
 
 @dataclass(frozen=True, eq=False)
-class AttitudePointBelief(AttitudeBelief):
+class AttitudePointBelief(NeverEmptyBelief):
     """Points ``(q, w)`` per run, ``(R, 7)``."""
 
     state: FloatArray
@@ -48,14 +48,6 @@ class AttitudePointBelief(AttitudeBelief):
     @property
     def runs(self) -> int:
         return self.state.shape[0]
-
-    @property
-    def is_empty(self) -> bool:
-        return False
-
-    @property
-    def empty_counts(self) -> NDArray[np.int_]:
-        return np.zeros(self.runs, dtype=int)
 
     def centre(self) -> FloatArray:
         return self.state.copy()

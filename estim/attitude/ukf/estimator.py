@@ -48,11 +48,11 @@ from typing import Any
 import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from kalman_vs_infoset.estim.attitude.model import (
-    AttitudeBelief,
     AttitudeControl,
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    NeverEmptyBelief,
     rk4_attitude,
 )
 from kalman_vs_infoset.estim.attitude.ukf.options import DEFAULTS
@@ -95,7 +95,7 @@ def tangent_mean(sigmas: FloatArray, wm: FloatArray) -> FloatArray:
 
 
 @dataclass(frozen=True, eq=False)
-class UkfAttitudeBelief(AttitudeBelief):
+class UkfAttitudeBelief(NeverEmptyBelief):
     """Reference quaternions ``(R, 4)``, error-state means ``(R, 9)``, covariances ``(R, 9, 9)``."""
 
     q_ref: FloatArray
@@ -119,14 +119,6 @@ class UkfAttitudeBelief(AttitudeBelief):
     @property
     def runs(self) -> int:
         return self.q_ref.shape[0]
-
-    @property
-    def is_empty(self) -> bool:
-        return False
-
-    @property
-    def empty_counts(self) -> NDArray[np.int_]:
-        return np.zeros(self.runs, dtype=int)
 
     def centre(self) -> FloatArray:
         """``(q, w)`` of the mean, ``(R, 7)``."""
