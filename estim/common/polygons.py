@@ -230,7 +230,9 @@ class ConvexPolygons:
     def size_fields(self, scale_radm: float, n_sections: int, n_simplified: int = 0) -> dict:
         """A polygon set's size for a trace (``Belief.trace_fields``): live sections,
         vertices, the largest section's area in rad m (``scale_radm``: the area of a
-        unit square of the stored coordinates) and the sections outer-simplified so far."""
+        unit square of the stored coordinates) and the sections outer-simplified so far
+        (the names: ``SIZE_FIELDS`` in :mod:`kalman_vs_infoset.estim.intercept.slabs.options`,
+        which the registrations declare)."""
         areas = self.areas()
         return {
             "n_sections": float(n_sections),
@@ -238,8 +240,3 @@ class ConvexPolygons:
             "area_max_radm": float(areas.max() * scale_radm) if areas.size else 0.0,
             "n_simplified": float(n_simplified),
         }
-
-
-#: the names :meth:`ConvexPolygons.size_fields` reports (a polygon set's registrations
-#: declare them as their trace fields)
-SIZE_FIELDS = ("n_sections", "n_vertices", "area_max_radm", "n_simplified")

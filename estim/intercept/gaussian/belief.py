@@ -36,9 +36,6 @@ from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 
-#: what a filter's belief reports to a trace (:meth:`GaussianBelief.trace_fields`)
-GATE_FIELDS = ("n_sigma", "innovation_outliers")
-
 #: coordinate order of the stored Cholesky factor: (r, x, alpha)
 PERM = np.array([1, 2, 0])
 _PERM_IX = np.ix_(PERM, PERM)

@@ -7,6 +7,11 @@ from typing import Annotated, ClassVar
 from kalman_vs_infoset.estim.intercept.options import InterceptOptions
 from pydantic import Field
 
+#: what a filter's belief reports to a trace (:meth:`GaussianBelief.trace_fields
+#: <kalman_vs_infoset.estim.intercept.gaussian.belief.GaussianBelief.trace_fields>`): here,
+#: beside the options, so that the registry's scan imports no filter
+GATE_FIELDS = ("n_sigma", "innovation_outliers")
+
 
 class KalmanOptions(InterceptOptions):
     """Options of the Kalman filters of a channel

@@ -1,6 +1,6 @@
 """The H-infinity filter of a channel (Simon's a-priori form), read as its n-sigma ellipsoid."""
 
-from kalman_vs_infoset.estim.intercept.gaussian.belief import GATE_FIELDS
+from kalman_vs_infoset.estim.intercept.gaussian.options import GATE_FIELDS
 from kalman_vs_infoset.estim.intercept.hinf.options import HinfOptions
 from kalman_vs_infoset.estim.registry import declare
 

@@ -5,8 +5,8 @@ Registered as ``infoset``, the problem's reference estimator (options:
 ``sections`` may run the slab or point sections instead).
 """
 
-from kalman_vs_infoset.estim.common.polygons import SIZE_FIELDS
 from kalman_vs_infoset.estim.intercept.nodeset.options import InfosetOptions
+from kalman_vs_infoset.estim.intercept.slabs.options import SIZE_FIELDS
 from kalman_vs_infoset.estim.registry import declare
 
 REGISTRATIONS = (

@@ -8,6 +8,12 @@ from typing import Annotated, Any
 from kalman_vs_infoset.estim.intercept.options import InterceptOptions
 from pydantic import Field, model_validator
 
+#: a polygon set's size in a trace, the names
+#: :meth:`~kalman_vs_infoset.estim.common.polygons.ConvexPolygons.size_fields` reports (the
+#: polygon sets' registrations declare them): here, beside the options, so that the
+#: registry's scan of the family folders imports no compiled kernel
+SIZE_FIELDS = ("n_sections", "n_vertices", "area_max_radm", "n_simplified")
+
 
 class SlabOptions(InterceptOptions):
     """Options of the slab information set
