@@ -22,12 +22,11 @@ import time
 from typing import Any
 
 import numpy as np
-import pandas as pd
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments import options, plots
-from kalman_vs_infoset.experiments.intercept_runs import run_grid
-from kalman_vs_infoset.experiments.report import write_tables, write_text
+from kalman_vs_infoset.experiments import options
 
+#: the runs use the compiled kernels (the command line announces their compilation)
+COMPILED_KERNELS = True
 RULES = ("game", "targeted", "lookahead")
 
 
@@ -52,6 +51,12 @@ def seed_fuel_share(fuel: np.ndarray, seed_fuel: float | None) -> float:
 
 
 def run(args) -> dict[str, Any]:
+    # here, not at import: declaring the arguments needs none of the runs' libraries
+    import pandas as pd
+    from kalman_vs_infoset.experiments import plots
+    from kalman_vs_infoset.experiments.intercept_runs import run_grid
+    from kalman_vs_infoset.experiments.report import write_tables, write_text
+
     if args.lookahead is not None:
         args.overrides = [*args.overrides, f"adversary.lookahead_steps={args.lookahead}"]
     sc, runs, seed, out = options.resolve(args)

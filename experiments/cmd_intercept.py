@@ -11,19 +11,25 @@ import argparse
 import time
 from typing import Any
 
-from kalman_vs_infoset.experiments import options, traces
-from kalman_vs_infoset.experiments.intercept_runs import run_grid, write_traces
-from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
+from kalman_vs_infoset.experiments import options
+from kalman_vs_infoset.experiments.noise import NOISES
+
+#: the runs use the compiled kernels (the command line announces their compilation)
+COMPILED_KERNELS = True
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     options.add_common(p)
-    traces.add_argument(p)
+    options.add_trace(p)
     options.add_estimators(p, "intercept", None, "the scenario's")
     options.add_noise(p, NOISES, None, "the scenario's")
 
 
 def run(args) -> dict[str, Any]:
+    # here, not at import: declaring the arguments needs none of the runs' libraries
+    from kalman_vs_infoset.experiments import traces
+    from kalman_vs_infoset.experiments.intercept_runs import run_grid, write_traces
+
     sc, runs, seed, out = options.resolve(args)
     estimators = args.estimators or [sc.experiment.estimator]
     noises = args.noise or [sc.experiment.noise]

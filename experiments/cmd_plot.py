@@ -19,7 +19,15 @@ from pathlib import Path
 from typing import Any
 
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.plots_traces import plot_files
+
+
+def plot_files(paths: list[Path], **kwargs: Any) -> list[Path]:
+    """The figures of the traces ``paths``
+    (:func:`kalman_vs_infoset.experiments.plots_traces.plot_files`)."""
+    # imported when drawing, not with the command: declaring its arguments needs no plots
+    from kalman_vs_infoset.experiments.plots_traces import plot_files as draw
+
+    return draw(paths, **kwargs)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

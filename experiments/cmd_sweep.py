@@ -20,13 +20,12 @@ import time
 import tomllib
 from typing import Any
 
-import pandas as pd
-from kalman_vs_infoset.experiments import options, plots
+from kalman_vs_infoset.experiments import options
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
-from kalman_vs_infoset.experiments.intercept_runs import run_grid
-from kalman_vs_infoset.experiments.report import summary_markdown, write_text
-from kalman_vs_infoset.experiments.scenario import load_scenario
+
+#: the runs use the compiled kernels (the command line announces their compilation)
+COMPILED_KERNELS = True
 
 
 def _canonical(value: Any) -> Any:
@@ -91,6 +90,13 @@ def _keys(text: str, overrides: list[str]) -> list[str]:
 
 
 def run(args) -> dict[str, Any]:
+    # here, not at import: declaring the arguments needs none of the runs' libraries
+    import pandas as pd
+    from kalman_vs_infoset.experiments import plots
+    from kalman_vs_infoset.experiments.intercept_runs import run_grid
+    from kalman_vs_infoset.experiments.report import summary_markdown, write_text
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
     keys = _keys(args.key, args.overrides)
     key = ",".join(keys)
     t0 = time.perf_counter()
@@ -129,6 +135,8 @@ _LABELS = ("value", "estimator", "noise")
 
 
 def render(result: dict[str, Any]) -> str:
+    from kalman_vs_infoset.experiments.report import summary_markdown
+
     return (
         f"{result['key']} swept over {result['values']}\n"
         + summary_markdown(result["rows"], _LABELS)

@@ -9,9 +9,14 @@ Every command takes its options from here, so a flag means the same everywhere:
   take it as an abbreviation of ``--estimators``).
 * ``--noise NAME[,NAME...]``: a comma list from the command's noise vocabulary.
 * ``--runs``, ``--seed``, ``--workers``, ``--run-cpu-limit-s``: bounded numbers.
+* ``--trace RUNS``: the runs whose per-step history is recorded (:mod:`.traces`).
 * :func:`add_common` and :func:`resolve`: a scenario's Monte Carlo options.
 
 Bad input is an ``argparse`` error: one line on stderr and exit status 2.
+
+This module stays light: declaring a command's arguments imports no numerical library
+beyond numpy (the registry's options models), so that ``kvi CMD --help`` starts fast;
+the runner, the simulations and the plots are imported by the commands' ``run``.
 """
 
 from __future__ import annotations
@@ -22,7 +27,19 @@ from pathlib import Path
 from typing import Any
 
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.runner import MAX_RUNS, MAX_SEED
+
+#: largest root seed (Parquet's int64 column; --seed is validated before any run); the
+#: runner checks it too (here, so that parsing does not import the runner)
+MAX_SEED = 2**63 - 1
+
+#: most runs a command may ask for (the runner holds their indices in memory)
+MAX_RUNS = 10**6
+
+#: most runs one --trace may name (each is replayed with every step recorded)
+MAX_TRACED = 20
+
+#: the help of a command's scenario argument
+SCENARIO_HELP = "a bundled scenario's name (`kvi scenarios` lists them) or a scenario TOML file"
 
 
 def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
@@ -158,6 +175,33 @@ def add_noise(
     )
 
 
+def parse_runs(text: str) -> list[int]:
+    """``--trace 0,3`` -> ``[0, 3]`` (non-negative run ids, no repeats)."""
+    items = [t.strip() for t in str(text).split(",") if t.strip()]
+    try:
+        runs = [int(t) for t in items]
+    except ValueError:
+        runs = []
+    if not runs or min(runs) < 0 or len(set(runs)) != len(runs) or len(runs) > MAX_TRACED:
+        raise argparse.ArgumentTypeError(
+            f"expected a comma-separated list of distinct run ids >= 0 (at most {MAX_TRACED}), "
+            f"e.g. 0,3; got {text!r}"
+        )
+    return runs
+
+
+def add_trace(p: argparse.ArgumentParser) -> None:
+    """``--trace RUNS``: record these runs' per-step history (:mod:`.traces`)."""
+    p.add_argument(
+        "--trace",
+        type=parse_runs,
+        default=None,
+        metavar="RUNS",
+        help="record the per-step history of these runs (e.g. 0,3) as <results>-trace.parquet "
+        "beside the run table and draw their figures",
+    )
+
+
 def add_limit(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--run-cpu-limit-s",
@@ -189,8 +233,6 @@ def add_overrides(p: argparse.ArgumentParser, example: str) -> None:
 
 def add_common(p: argparse.ArgumentParser) -> None:
     """A scenario's Monte Carlo options (the intercept commands)."""
-    from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP
-
     p.add_argument("scenario", help=SCENARIO_HELP)
     p.add_argument("--runs", type=runs_int, help="number of runs (default: the scenario's)")
     p.add_argument("--seed", type=seed_int, help="root seed (default: the scenario's)")
@@ -204,12 +246,11 @@ def add_grid(p: argparse.ArgumentParser, trace: bool = True) -> None:
     and ``--noise`` (default: random,game): the estimators x noises of ``compare`` and
     ``sweep``."""
     from kalman_vs_infoset.estim import registry
-    from kalman_vs_infoset.experiments import traces
-    from kalman_vs_infoset.experiments.sim.intercept_config import NOISES
+    from kalman_vs_infoset.experiments.noise import NOISES
 
     add_common(p)
     if trace:
-        traces.add_argument(p)
+        add_trace(p)
     add_estimators(p, "intercept", list(registry.names("intercept")), "all")
     add_noise(p, NOISES, ["random", "game"], "random,game")
 

@@ -43,6 +43,7 @@ from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exporte
     results,
 )
 from kalman_vs_infoset.experiments.files import atomic_write, exclusive
+from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the parser's bounds
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
@@ -53,13 +54,6 @@ SAVE_EVERY_S = 2.0
 def run_seed(seed: int, j: int) -> np.random.SeedSequence:
     """The seed of run ``j``: ``SeedSequence(seed).spawn(n)[j]`` for any ``n > j``."""
     return np.random.SeedSequence(seed, spawn_key=(j,))
-
-
-#: largest root seed (Parquet's int64 column; --seed is validated before any run)
-MAX_SEED = 2**63 - 1
-
-#: most runs a command may ask for (their indices are held in memory)
-MAX_RUNS = 10**6
 
 
 @dataclass(frozen=True)

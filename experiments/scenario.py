@@ -23,10 +23,6 @@ from kalman_vs_infoset import data as bundled
 M = TypeVar("M", bound=BaseModel)
 
 
-#: the help of a command's scenario argument
-SCENARIO_HELP = "a bundled scenario's name (`kvi scenarios` lists them) or a scenario TOML file"
-
-
 def scenario_folder(folder: str | Path | None) -> Path:
     """``--scenarios``: a folder of scenario files, the bundled one when ``None``."""
     if folder is None:

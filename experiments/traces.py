@@ -1,11 +1,12 @@
 """Traces: the per-step history of chosen runs, as long-format Parquet in ``_traces/``.
 
 ``--trace RUNS`` (``intercept``, ``compare``, ``attitude``) replays the runs ``RUNS`` of
-a job with the simulation layer's recorder on (:mod:`experiments.sim.trace`): run ``j``
-is seeded exactly as in the run table (:func:`experiments.runner.run_seed`), so its
-trace is the history of that table row (recording only observes; the tests check the
-final fuel and miss against the row). The runs themselves go through the runner as
-before; a trace is rewritten whenever it is asked for.
+a job with the simulation layer's recorder on (:mod:`experiments.sim.trace`; the option:
+:func:`experiments.options.add_trace`): run ``j`` is seeded exactly as in the run table
+(:func:`experiments.runner.run_seed`), so its trace is the history of that table row
+(recording only observes; the tests check the final fuel and miss against the row). The
+runs themselves go through the runner as before; a trace is rewritten whenever it is
+asked for.
 
 Files, in ``_traces/`` beside ``<job>.parquet`` (Parquet readers skip the folder):
 
@@ -21,7 +22,6 @@ Files, in ``_traces/`` beside ``<job>.parquet`` (Parquet readers skip the folder
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 from typing import Any
@@ -33,35 +33,6 @@ from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.results import TRACE_DIR
 from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 from kalman_vs_infoset.experiments.sim.trace import Recorder
-
-#: most runs one --trace may name (each is replayed with every step recorded)
-MAX_TRACED = 20
-
-
-def parse_runs(text: str) -> list[int]:
-    """``--trace 0,3`` -> ``[0, 3]`` (non-negative run ids, no repeats)."""
-    items = [t.strip() for t in str(text).split(",") if t.strip()]
-    try:
-        runs = [int(t) for t in items]
-    except ValueError:
-        runs = []
-    if not runs or min(runs) < 0 or len(set(runs)) != len(runs) or len(runs) > MAX_TRACED:
-        raise argparse.ArgumentTypeError(
-            f"expected a comma-separated list of distinct run ids >= 0 (at most {MAX_TRACED}), "
-            f"e.g. 0,3; got {text!r}"
-        )
-    return runs
-
-
-def add_argument(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--trace",
-        type=parse_runs,
-        default=None,
-        metavar="RUNS",
-        help="record the per-step history of these runs (e.g. 0,3) as <results>-trace.parquet "
-        "beside the run table and draw their figures",
-    )
 
 
 def check_runs(traced: list[int] | None, runs: int) -> list[int]:

@@ -1,6 +1,10 @@
 """The Kalman filters of a channel (EKF, UKF), each read as its n-sigma ellipsoid."""
 
-from kalman_vs_infoset.estim.intercept.gaussian.options import GATE_FIELDS, KalmanOptions, UkfOptions
+from kalman_vs_infoset.estim.intercept.gaussian.options import (
+    GATE_FIELDS,
+    KalmanOptions,
+    UkfOptions,
+)
 from kalman_vs_infoset.estim.registry import declare
 
 # the Kalman baselines the reference set is compared with; the UKF is the yardstick of
