@@ -14,10 +14,12 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
 from kalman_vs_infoset.experiments.errors import InputError
+
+if TYPE_CHECKING:  # the traces are tables; the command line imports this table to parse
+    import pandas as pd
 
 #: prepare(source, scenario, controller, noise) -> the validated set-up of the runs
 Prepare = Callable[[str, Mapping[str, Any], str, str], Any]
@@ -26,7 +28,7 @@ Task = Callable[..., list[dict[str, Any]]]
 #: summarise(setup, controller, noise, estimator, runs, seed, ok_rows, failures) -> JSON
 Summarise = Callable[..., dict[str, Any]]
 #: trace(setup, controller, noise, estimator, seed_seq) -> long-format rows of one run
-Trace = Callable[..., pd.DataFrame]
+Trace = Callable[..., "pd.DataFrame"]
 
 
 @dataclass(frozen=True)

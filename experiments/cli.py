@@ -169,10 +169,11 @@ def _on_sigint(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
-def _compile_notice(prog: str) -> CompileNotice | None:
-    """A notice of numba compilations during the command, for the commands whose modules
-    use the compiled kernels (numba imported with them)."""
-    if "numba" not in sys.modules:
+def _compile_notice(prog: str, module: Any) -> CompileNotice | None:
+    """A notice of numba compilations during the command, for the commands that use the
+    compiled kernels (``COMPILED_KERNELS = True`` in the module: it imports them in
+    ``run``, so that declaring its arguments stays light) or have numba imported."""
+    if not getattr(module, "COMPILED_KERNELS", False) and "numba" not in sys.modules:
         return None
     from kalman_vs_infoset.experiments import progress
 
@@ -209,7 +210,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from kalman_vs_infoset.experiments import progress
 
     progress.configure_logging()
-    notice = _compile_notice(parser.prog)
+    notice = _compile_notice(parser.prog, module)
     try:
         return _run(parser, module, args)
     finally:

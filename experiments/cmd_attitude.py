@@ -21,11 +21,9 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
-from kalman_vs_infoset.experiments import options, traces
-from kalman_vs_infoset.experiments.attitude_est import write_figure
+from kalman_vs_infoset.experiments import options
 from kalman_vs_infoset.experiments.attitude_loops import (
     LOOPS,
     AttitudeLoop,
@@ -34,14 +32,17 @@ from kalman_vs_infoset.experiments.attitude_loops import (
     same_loop,
 )
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.runner import Job, batched_task, job_path, run_job, run_seed
-from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, read
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
-from kalman_vs_infoset.experiments.sim.intercept_config import check_name
+
+if TYPE_CHECKING:  # the runs' libraries are imported by run(), not to parse
+    import pandas as pd
+
+#: the runs import the compiled kernels (the command line announces a compilation)
+COMPILED_KERNELS = True
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help=SCENARIO_HELP)
+    parser.add_argument("scenario", help=options.SCENARIO_HELP)
     parser.add_argument("--controller", default=None, help="one of " + ", ".join(LOOPS))
     options.add_noise(parser, NOISES, None, "none")
     parser.add_argument("--runs", type=options.runs_int, default=1,
@@ -55,7 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", default=None, help="output directory (default: results/attitude/<scenario>)"
     )
     options.add_runner(parser)
-    traces.add_argument(parser)
+    options.add_trace(parser)
     options.add_overrides(parser, "simulation.duration_s=60")
 
 
@@ -88,6 +89,9 @@ def _choice(value: Any, what: str, source: str) -> str | None:
 
 def request(args: argparse.Namespace) -> AttitudeRequest:
     """The command's :class:`AttitudeRequest` (``InputError`` of one line otherwise)."""
+    from kalman_vs_infoset.experiments.scenario import read
+    from kalman_vs_infoset.experiments.sim.intercept_config import check_name
+
     data, source = read(args.scenario, args.overrides)
     given = _choice(data.get("controller"), "controller", source)
     default_est = _choice(data.pop("estimator", None), "estimator", source)
@@ -138,6 +142,17 @@ def request(args: argparse.Namespace) -> AttitudeRequest:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    # here, not at import: declaring the arguments needs none of the runs' libraries
+    import pandas as pd
+    from kalman_vs_infoset.experiments import traces
+    from kalman_vs_infoset.experiments.runner import (
+        Job,
+        batched_task,
+        job_path,
+        run_job,
+        run_seed,
+    )
+
     req = request(args)
     # a single run is shown as its time histories (a CDF of one run is one step)
     traced = traces.check_runs(args.trace if args.trace is not None else
@@ -193,6 +208,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list[str]:
     """The CDFs of the runs and the time histories of the traced ones; their names
     carry what distinguishes them: controller, estimators, noises, seed."""
+    from kalman_vs_infoset.experiments.attitude_est import write_figure
+
     ok = table[table["status"] == "ok"] if len(table) else table
     # '+' joins several names: a comma is awkward in file names on every shell
     stem = (

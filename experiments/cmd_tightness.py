@@ -25,26 +25,24 @@ import math
 import time
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
-from kalman_vs_infoset.estim.intercept.exact_reference import (
-    ExactChannelSet,
-    History,
-    InconsistentHistory,
-    PriorBox,
-)
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
-from kalman_vs_infoset.experiments.options import add_estimators, seed_int
-from kalman_vs_infoset.experiments.scenario import SCENARIO_HELP, load_scenario
-from kalman_vs_infoset.experiments.sim.channel import (
-    NOISE_KINDS,
-    auxiliary_model_options,
-    run_channel,
-)
+from kalman_vs_infoset.experiments.noise import NOISE_KINDS
+from kalman_vs_infoset.experiments.options import SCENARIO_HELP, add_estimators, seed_int
+
+if TYPE_CHECKING:
+    from kalman_vs_infoset.estim.intercept.exact_reference import PriorBox
+
+# the exact reference (scipy's LP), the scenario and the channel loop (the compiled
+# kernels) are imported by the functions that use them: parsing needs none of them
+
+#: the sets run the compiled kernels (the command line announces their compilation)
+COMPILED_KERNELS = True
 
 INSIDE_REL_TOL = 1e-6
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
@@ -96,6 +94,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _prior(sc) -> PriorBox:
+    from kalman_vs_infoset.estim.intercept.exact_reference import PriorBox
+
     e = sc.estimator
 
     def metres(km: tuple[float, float]) -> tuple[float, float]:
@@ -109,6 +109,8 @@ def _prior(sc) -> PriorBox:
 def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
     """Run the channel to the last requested time: one record per requested time, and
     the fuel spent (m/s)."""
+    from kalman_vs_infoset.experiments.sim.channel import run_channel
+
     model, dt = sc.channel_model(), sc.model.dt_s
     steps = [round(t / dt) for t in args.times]
     off = [t for t, k in zip(args.times, steps, strict=True) if abs(k * dt - t) > 1e-9]
@@ -136,6 +138,12 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
 
 
 def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
+    from kalman_vs_infoset.estim.intercept.exact_reference import (
+        ExactChannelSet,
+        History,
+        InconsistentHistory,
+    )
+
     rec: dict[str, Any] = {"truth_w_m": truth_w, "reason": ""}
     # slices the set outer-simplified so far (sound, slightly wider than exact)
     rec["n_simplified"] = int(getattr(belief, "n_simplified", 0))
@@ -173,6 +181,9 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
 
 
 def run(args) -> dict[str, Any]:
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
+
     sc = auxiliary_model_options(
         load_scenario(args.scenario, args.overrides), args.kinematic_margin,
         names=sorted({registry.reference("intercept").name, args.estimators[0]}),

@@ -57,6 +57,9 @@ from kalman_vs_infoset.estim.intercept.model import (
 #: ``targeted`` and ``lookahead`` see the pursuer: :mod:`kalman_vs_infoset.experiments.adversary`)
 Noise = Literal["random", "game", "bias", "targeted", "lookahead"]
 NOISES: tuple[str, ...] = get_args(Noise)
+#: bearing-error kinds of the one-channel loop of ``kvi tightness``
+#: (:mod:`kalman_vs_infoset.experiments.sim.channel`; ``switch``: ``+a``, then ``-a``)
+NOISE_KINDS = ("random", "bias", "game", "switch")
 
 
 class ChannelSet(Protocol):

@@ -3,9 +3,9 @@
 The truth is drawn from the scenario's truth boxes (``y``, ``Vy``, ``x``, closing speed
 ``-Vx``) and moves by ``x -= e dt``, ``Y'' = v`` with ``v`` uniform in ``+-nu``,
 constant over each decision step, ``V += k`` per impulse; one channel, so the range is
-``x``. Bearing errors by kind (:data:`NOISE_KINDS`): ``random`` uniform in the bound;
-``bias`` held at ``+a`` (a hair inside); ``switch`` held at ``+a``, then at ``-a`` from
-``switch_s`` on; ``game`` the seed's adversary with its own set
+``x``. Bearing errors by kind (:data:`kalman_vs_infoset.experiments.noise.NOISE_KINDS`):
+``random`` uniform in the bound; ``bias`` held at ``+a`` (a hair inside); ``switch`` held
+at ``+a``, then at ``-a`` from ``switch_s`` on; ``game`` the seed's adversary with its own set
 (:class:`kalman_vs_infoset.experiments.noise.GameNoise`). Range measurements when the
 scenario's range finder is on (errors by the same kind). The estimator under test gets
 the same measurements; with ``guided`` the seed's law issues impulses from its belief,
@@ -21,11 +21,9 @@ import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.model import Bearing, Range
 from kalman_vs_infoset.estim.intercept.options import hooks
-from kalman_vs_infoset.experiments.noise import RandomNoise
+from kalman_vs_infoset.experiments.noise import NOISE_KINDS, RandomNoise  # noqa: F401 - its kinds
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator, build_noise
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
-
-NOISE_KINDS = ("random", "bias", "game", "switch")
 
 #: ``observe(belief, estimator, history, truth_w_m) -> record`` at a recorded step
 Observer = Callable[[Any, Any, dict[str, list[float]], float], dict[str, Any]]
