@@ -25,38 +25,60 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import Any
 
-from kalman_vs_infoset.experiments import figstyle as fs
-from kalman_vs_infoset.experiments import paper_figs_attitude as att
-from kalman_vs_infoset.experiments import paper_figs_kp as kp
-from kalman_vs_infoset.experiments import paper_figs_more as more
-from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
-from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.options import positive_int
-from kalman_vs_infoset.experiments.scenario import scenario_folder
 
-#: figure name -> group that draws it (a group draws all its figures at once)
-FIGURES: dict[str, str] = {
-    **{name: fn.__name__.replace("fig", "kp_fig") for name, fn in kp.FIGURES.items()},
-    **resurs.FIGURES,
-    **resurs_more.FIGURES,
-    **att.FIGURES,
-    **more.FIGURES,
-}
-GROUPS = {
-    "kp_fig3": kp.fig3,
-    "kp_fig4": kp.fig4,
-    "kp_fig5": kp.fig5,
-    **resurs.GROUPS,
-    **resurs_more.GROUPS,
-    **att.GROUPS,
-    **more.GROUPS,
-}
+#: the figures run engagements (the command line announces a compilation of the kernels)
+COMPILED_KERNELS = True
+
+
+@cache
+def _tables() -> tuple[dict[str, str], dict[str, Callable[[Context], dict[str, Any]]]]:
+    """:data:`FIGURES` and :data:`GROUPS`, from the modules that draw the figures: they
+    import matplotlib and the simulations, so they are imported on first use (drawing, or
+    these names), not to declare the command's arguments."""
+    from kalman_vs_infoset.experiments import paper_figs_attitude as att
+    from kalman_vs_infoset.experiments import paper_figs_kp as kp
+    from kalman_vs_infoset.experiments import paper_figs_more as more
+    from kalman_vs_infoset.experiments import paper_figs_resurs as resurs
+    from kalman_vs_infoset.experiments import paper_figs_resurs_more as resurs_more
+
+    figures: dict[str, str] = {
+        **{name: fn.__name__.replace("fig", "kp_fig") for name, fn in kp.FIGURES.items()},
+        **resurs.FIGURES,
+        **resurs_more.FIGURES,
+        **att.FIGURES,
+        **more.FIGURES,
+    }
+    groups = {
+        "kp_fig3": kp.fig3,
+        "kp_fig4": kp.fig4,
+        "kp_fig5": kp.fig5,
+        **resurs.GROUPS,
+        **resurs_more.GROUPS,
+        **att.GROUPS,
+        **more.GROUPS,
+    }
+    return figures, groups
+
+
+def __getattr__(name: str) -> Any:
+    """``FIGURES`` (figure name -> the group that draws it; a group draws all its figures
+    at once) and ``GROUPS`` (group -> its drawing function), built on first use."""
+    if name == "FIGURES":
+        return _tables()[0]
+    if name == "GROUPS":
+        return _tables()[1]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: names of --only that stand for several groups
 ALIASES = {
     "kp": ["kp_fig3", "kp_fig4", "kp_fig5"],
@@ -76,6 +98,8 @@ class Context:
     written: list[Path] = field(default_factory=list)
 
     def save(self, fig, name: str) -> None:
+        from kalman_vs_infoset.experiments import figstyle as fs
+
         if self.quick and fig._suptitle is not None:
             fig._suptitle.set_text(fig._suptitle.get_text() + " [--quick]")
         self.written += fs.save(fig, self.out / name)
@@ -103,24 +127,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _groups(only: str | None) -> list[str]:
+    figures, drawers = _tables()
     if only is None:
-        return list(GROUPS)
+        return list(drawers)
     wanted = [w.strip() for w in only.split(",") if w.strip()]
     if not wanted:  # would draw nothing and say so with exit status 0
         raise InputError(f"--only {only!r}: name at least one figure or group")
     groups = []
     for w in wanted:
-        if w in FIGURES:
-            g = FIGURES[w]
+        if w in figures:
+            g = figures[w]
         elif w in ALIASES:
             groups += ALIASES[w]
             continue
-        elif w in GROUPS:
+        elif w in drawers:
             g = w
         else:
             raise InputError(
                 f"--only: unknown figure or group '{w}' "
-                f"(figures: {', '.join(FIGURES)}; groups: kp, resurs, akimov, lqr, "
+                f"(figures: {', '.join(figures)}; groups: kp, resurs, akimov, lqr, "
                 "gyrostat)"
             )
         groups.append(g)
@@ -128,13 +153,16 @@ def _groups(only: str | None) -> list[str]:
 
 
 def run(args) -> dict[str, Any]:
+    from kalman_vs_infoset.experiments.scenario import scenario_folder
+
+    drawers = _tables()[1]
     scenarios = scenario_folder(args.scenarios)
     ctx = Context(Path(args.out), args.runs, args.quick, scenarios)
     numbers: dict[str, Any] = {}
     t0 = time.perf_counter()
     for group in _groups(args.only):
         t1 = time.perf_counter()
-        numbers.update(GROUPS[group](ctx))
+        numbers.update(drawers[group](ctx))
         print(f"paper-figures: {group} in {time.perf_counter() - t1:.1f} s", file=sys.stderr)
     path = ctx.out / "paper_figures.json"
     try:  # figures drawn by an earlier call (--only) keep their numbers
