@@ -22,7 +22,6 @@ import numpy as np
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
 from kalman_vs_infoset.guidance.attitude.pd import baseline_kq, term_scale
-from tqdm.auto import tqdm
 
 DEFAULT_FIT_ANGLES = (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
 
@@ -132,6 +131,8 @@ def _settings(args: argparse.Namespace) -> gs.StudySettings:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    from tqdm.auto import tqdm  # here, not at import: parsing draws no progress bar
+
     table = gs.load_f0_table()
     angles = _angles(args.angles_deg, table)
     settings = _settings(args)

@@ -40,7 +40,6 @@ from kalman_vs_infoset.guidance.attitude.pd import (
     term_scale,
 )
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import curve_fit, least_squares
 
 from kalman_vs_infoset import data as bundled
 
@@ -215,6 +214,8 @@ def fit_parabola(
     f_ls = float(x @ y / (x @ x))
     if loss == "linear":
         return f_ls
+    from scipy.optimize import least_squares  # here: the gain study's options stay light
+
     return float(least_squares(lambda f: f[0] * x - y, [f_ls], loss=loss, f_scale=scale).x[0])
 
 
@@ -243,6 +244,8 @@ def fit_f0_curve(
     ok = np.isfinite(y)
     if ok.sum() < 4:
         raise ValueError("need f0 at 4 or more angles to fit eq. (28)")
+    from scipy.optimize import curve_fit  # here: the gain study's options stay light
+
     s = 1.0 / term_scale(quaternion_term)
     p0 = [
         SEED_FIT_EQ28["c1"] * s,

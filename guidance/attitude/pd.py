@@ -29,7 +29,6 @@ import numpy as np
 from kalman_vs_infoset.estim.base import Belief
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from kalman_vs_infoset.numerics.rotations import cross, error_quaternion
 
@@ -169,6 +168,8 @@ def rest_to_rest_initial_state(
     axis: ArrayLike, angle_deg: float, q_target: ArrayLike = (0.0, 0.0, 0.0, 1.0)
 ) -> FloatArray:
     """Plant state at rest turned by ``angle_deg`` about ``axis`` from the target (eq. (11))."""
+    from scipy.spatial.transform import Rotation  # here: the gain study's options stay light
+
     axis = np.asarray(axis, dtype=float)
     rot = Rotation.from_quat(q_target) * Rotation.from_rotvec(
         np.radians(angle_deg) * axis / np.linalg.norm(axis)

@@ -15,14 +15,18 @@ body-to-inertial); conversions go through ``Rotation``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
-from scipy.spatial.transform import Rotation
 
 from kalman_vs_infoset.numerics.arrays import readonly
 from kalman_vs_infoset.numerics.rotations import cross, quaternion_rate
+
+# scipy is imported where it is used, so that importing the attitude models stays light
+# (``kvi pd-gains`` reads the gain study's settings to declare its options)
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 
 def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
@@ -78,6 +82,8 @@ class AttitudeState:
 
     @property
     def rotation(self) -> Rotation:
+        from scipy.spatial.transform import Rotation
+
         return Rotation.from_quat(self.q)
 
     def as_vector(self) -> NDArray[np.float64]:
@@ -116,6 +122,8 @@ def propagate(
 
     Integrates with ``solve_ivp`` (DOP853); the quaternion is renormalised at the end.
     """
+    from scipy.integrate import solve_ivp
+
     if not dt_s > 0:
         raise ValueError(f"dt_s must be positive, got {dt_s}")
     m_u = np.asarray(torque_Nm, dtype=float)
@@ -140,4 +148,6 @@ def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.floa
 
 def attitude_error(q: ArrayLike, q_target: ArrayLike) -> Rotation:
     """Error rotation ``q_target^-1 * q`` (body attitude relative to the target)."""
+    from scipy.spatial.transform import Rotation
+
     return Rotation.from_quat(q_target).inv() * Rotation.from_quat(q)
