@@ -85,3 +85,27 @@ def test_every_command_parses_without_the_heavy_libraries():
         assert seen["parsed"] == name, (name, seen)
         # modules accumulate over the loop: the first command to load one is named
         assert seen["loaded"] == [], f"kvi {name}: parsing imported {seen['loaded']}"
+
+
+def test_the_commands_that_compile_still_announce_it():
+    """The commands whose runs use the compiled kernels say so (``COMPILED_KERNELS``):
+    the command line installs the compilation notice for them although their modules no
+    longer import numba; a listing installs none and imports no numba."""
+    code = (
+        "import importlib, json, sys\n"
+        "from kalman_vs_infoset.experiments import cli\n"
+        "light = importlib.import_module(cli.COMMANDS['scenarios'][0])\n"
+        "quiet = cli._compile_notice('kvi', light) is None and 'numba' not in sys.modules\n"
+        "said = {}\n"
+        "for name in ('intercept', 'compare', 'fig5', 'bench', 'tightness'):\n"
+        "    notice = cli._compile_notice('kvi', importlib.import_module(cli.COMMANDS[name][0]))\n"
+        "    said[name] = notice is not None\n"
+        "    notice.uninstall()\n"
+        "print(json.dumps([quiet, said]))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    quiet, said = json.loads(out.stdout.strip().splitlines()[-1])
+    assert quiet
+    assert all(said.values()), said
