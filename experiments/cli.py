@@ -11,7 +11,11 @@ and SIGTERM save what finished and exit with 130 and 143.
 Command modules are imported lazily: the parser declares every command by name and
 one-line help, and imports (and asks for the arguments of) only the command named on
 the command line, so ``kvi --help`` imports no numerical library and ``kvi intercept``
-does not pay for the plotting or attitude commands.
+does not pay for the plotting or attitude commands. A command module in turn imports
+the runner, the simulations, the compiled kernels, pandas, scipy and matplotlib in its
+``run``, so that ``kvi CMD --help`` and the parsing of its arguments stay light; one
+whose runs use the compiled kernels says so (``COMPILED_KERNELS = True``), and their
+compilation is announced on stderr.
 """
 
 from __future__ import annotations
