@@ -40,7 +40,7 @@ COMPILED_KERNELS = True
 
 
 @cache
-def _tables() -> tuple[dict[str, str], dict[str, Callable[[Context], dict[str, Any]]]]:
+def _tables() -> tuple[dict[str, str], dict[str, Callable[..., dict[str, Any]]]]:
     """:data:`FIGURES` and :data:`GROUPS`, from the modules that draw the figures: they
     import matplotlib and the simulations, so they are imported on first use (drawing, or
     these names), not to declare the command's arguments."""
