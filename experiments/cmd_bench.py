@@ -33,6 +33,10 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   ``runs_per_cpu_s`` (``{"1": .., "2": ..}``): runs per CPU-second of this process and
   its workers together, i.e. runs/s per core; ``worker_peak_rss_mb``: the largest peak
   resident memory of a worker (Linux ``VmHWM``; else ``ru_maxrss`` of the workers);
+* ``help_cpu_s`` (``{command: CPU-s}``, ``"(none)"`` for ``kvi --help``) and its
+  largest value ``help_cpu_s_max``: ``kvi COMMAND --help`` in a fresh interpreter,
+  i.e. what starting the command line costs (``--quick``: the top level and
+  ``intercept`` only);
 * ``first_run_compile_s``: CPU time numba spends compiling the kernels one Fig. 3
   engagement uses, in a fresh process on an empty cache (a temporary
   ``NUMBA_CACHE_DIR``), with ``first_run_cpu_s`` that process's whole CPU time
@@ -50,7 +54,6 @@ import datetime
 import json
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
@@ -63,6 +66,8 @@ from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.options import positive_int
+from kalman_vs_infoset.experiments.usage import cpu_s as _cpu_s
+from kalman_vs_infoset.experiments.usage import peak_rss_mb
 
 # the scenarios, simulations and runner are imported where they are timed or run, not
 # to declare the arguments (kvi bench --help stays light)
@@ -193,13 +198,18 @@ def engagement_ms(sc, noise: str, repeat: int) -> float:
     return float(np.median(times))
 
 
-def _cpu_s() -> float:
-    """CPU time of this process and of its finished (waited-for) children."""
-    total = 0.0
-    for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN):
-        r = resource.getrusage(who)
-        total += r.ru_utime + r.ru_stime
-    return total
+def help_cpu_s(commands) -> dict[str, float]:
+    """CPU time (s) of ``kvi CMD --help`` for each of ``commands`` ("" for ``kvi
+    --help``), each in a fresh interpreter: what starting the command line costs."""
+    out = {}
+    for cmd in commands:
+        before = _cpu_s()
+        subprocess.run(
+            [sys.executable, "-m", "kalman_vs_infoset", *([cmd] if cmd else []), "--help"],
+            capture_output=True, check=True, timeout=600,
+        )  # fmt: skip
+        out[cmd or "(none)"] = _cpu_s() - before
+    return out
 
 
 def _peak_rss_mb(pids) -> float:
@@ -234,7 +244,7 @@ def throughput(sc, runs: int, workers: int) -> dict[str, float]:
         pool.shutdown(wait=True)  # the workers' CPU time counts once they are waited for
         wall, cpu = time.perf_counter() - wall0, _cpu_s() - cpu0
     if not np.isfinite(rss):
-        rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+        rss = peak_rss_mb(children=True)
     return {"runs_per_s": runs / wall, "runs_per_cpu_s": runs / cpu, "peak_rss_mb": rss}
 
 
@@ -297,6 +307,12 @@ def run(args) -> dict[str, Any]:
     result["runs_per_cpu_s"] = {w: t["runs_per_cpu_s"] for w, t in best.items()}
     result["worker_peak_rss_mb"] = {w: max(t["peak_rss_mb"] for t in m) for w, m in
                                     (("1", one), ("2", two))}  # fmt: skip
+    from kalman_vs_infoset.experiments.cli import COMMANDS
+
+    # --quick: the top level and one command (a test's preview); else every command
+    helps = help_cpu_s(["", "intercept"] if quick else ["", *COMMANDS])
+    result["help_cpu_s"] = helps
+    result["help_cpu_s_max"] = max(helps.values())
     first = None if quick else first_run_compile(root / "kp_fig3.toml")
     result["first_run_compile_s"] = first and first["compile_s"]
     result["first_run_cpu_s"] = first and first["cpu_s"]
@@ -357,6 +373,9 @@ def render(result: dict[str, Any]) -> str:
             + ", ".join(f"{v:.2f} ({w} workers)" for w, v in result["runs_per_cpu_s"].items())
             + "; worker peak memory "
             + ", ".join(f"{v:.0f} MB" for v in result["worker_peak_rss_mb"].values()),
+            "start-up, kvi COMMAND --help: "
+            + ", ".join(f"{c} {v:.2f}" for c, v in result["help_cpu_s"].items())
+            + " CPU-s",
             "first run on an empty numba cache: "
             + (
                 f"{compile_s:.1f} CPU-s compiling, {result['first_run_cpu_s']:.1f} CPU-s in all"

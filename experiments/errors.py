@@ -37,6 +37,11 @@ def clear_stop() -> None:
         _STOP.clear()
 
 
+def stop_requested() -> bool:
+    """Whether a stop was requested (and not cleared)."""
+    return bool(_STOP)
+
+
 def check_stop() -> None:
     """Raise the requested stop (:class:`Terminated`, ``KeyboardInterrupt``), if any."""
     if _STOP:

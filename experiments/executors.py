@@ -30,7 +30,7 @@ from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept import kinematic
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
-from kalman_vs_infoset.experiments.errors import InputError, check_stop
+from kalman_vs_infoset.experiments.errors import InputError, check_stop, stop_requested
 from kalman_vs_infoset.experiments.limits import limited
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.guidance.intercept._kepler import warm_up as kepler_warm_up
@@ -77,6 +77,11 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
     except BaseException:  # Ctrl-C, SIGTERM, an error: the running chunks are not waited for
         _stop_workers(pool)
         raise
+    else:
+        if not stop_requested():
+            # every chunk is done: the workers exit at once, and waiting for them counts
+            # their CPU time in this process's usage (experiments.usage: a variant's cpu_s)
+            pool.shutdown(wait=True)
     finally:
         pool.shutdown(wait=False, cancel_futures=True)
 

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.experiments import usage
 from kalman_vs_infoset.experiments.progress import step_progress
 from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
 from kalman_vs_infoset.experiments.sim.intercept import Engagement, EngagementResult
@@ -131,12 +132,17 @@ def run_grid(
     rows, frames = [], []
     for est in estimators:
         for noise in noises:
-            t1 = time.perf_counter()
+            t1, cpu1 = time.perf_counter(), usage.cpu_s()
             df = run_experiment(
                 sc, est, noise, runs, seed, out, args.workers, args.scheduler,
                 not args.no_progress, limit_s=args.run_cpu_limit_s,
             )  # fmt: skip
-            rows.append(summarise(df, sc, est, noise, seed, time.perf_counter() - t1))
+            row = summarise(df, sc, est, noise, seed, time.perf_counter() - t1)
+            # a remote cluster's workers are not this process's children: not counted
+            local = not args.scheduler
+            row["cpu_s"] = usage.cpu_s() - cpu1 if local else None
+            row["worker_peak_rss_mb"] = usage.peak_rss_mb(children=True) if local else None
+            rows.append(row)
             frames.append(df)
     return rows, frames
 

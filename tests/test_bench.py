@@ -54,6 +54,10 @@ def test_bench_reports_every_field_side_by_side(capsys):
         assert out["runs_per_cpu_s"][workers] > 0
         assert 10.0 < out["worker_peak_rss_mb"][workers] < 1e5
     assert out["first_run_compile_s"] is None  # --quick skips the fresh-cache run
+    # start-up in a fresh interpreter (--quick: the top level and one command)
+    assert set(out["help_cpu_s"]) == {"(none)", "intercept"}
+    assert all(v > 0 for v in out["help_cpu_s"].values())
+    assert out["help_cpu_s_max"] == max(out["help_cpu_s"].values())
 
 
 def test_bench_first_run_compiles_on_an_empty_cache(tmp_path):

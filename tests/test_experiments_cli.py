@@ -271,6 +271,8 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
         (e, n) for e in names for n in ("random", "game")
     }
     assert all(x["failures"] == 0 for x in out["rows"])
+    # each row's CPU time and the workers' peak memory (docs/models.md, the JSON objects)
+    assert all(x["cpu_s"] > 0 and x["worker_peak_rss_mb"] >= 0 for x in out["rows"])
     sets = ("infoset", "ellipsoid", "zonotope", "box")
     assert all(x["truth_outside"] == 0 for x in out["rows"] if x["estimator"] in sets)
     assert any(f.endswith(".parquet") for f in out["files"])
