@@ -7,6 +7,8 @@ kept under ``docs/results/``) are listed in ``docs/results/README.txt``.
 
 from __future__ import annotations
 
+import re
+
 README, FIGMD = "README.md", "docs/figures.md"
 ATT, INT, PERF = "docs/attitude.md", "docs/intercept.md", "docs/performance.md"
 FIGS = "docs/figures/paper_figures.json"
@@ -14,6 +16,7 @@ FIG5 = "docs/results/fig5.json"
 CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
+STUDY = "docs/results/study/fig5-"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
@@ -349,8 +352,17 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
              "cost_ms/1", "cost_ms/2")),
     (PERF, r"1 / 2 workers \| ([\d.]+) / ([\d.]+) \(peak (\d+) MB a worker\)", BENCH,
      ("runs_per_cpu_s/1", "runs_per_cpu_s/2", "worker_peak_rss_mb/1")),
+    (PERF, r"`kvi COMMAND --help`, costliest command \| ([\d.]+) CPU-s \|", BENCH,
+     ("help_cpu_s_max",)),
     (PERF, r"\| ([\d.]+) CPU-s compiling \(([\d.]+) CPU-s in all\)", BENCH,
      ("first_run_compile_s", "first_run_cpu_s")),
+    # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
+    *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",
+       (f"variants/{i}/cpu_s", f"{STUDY}w2.json::variants/{i}/cpu_s"))
+      for i, (v, n) in enumerate([("bearing only", "random"), ("bearing only", "game"),
+                                  ("bearing + range", "random"), ("bearing + range", "game")])],
+    (PERF, r"each worker peaked at (\d+) MB", STUDY + "w2.json",
+     ("variants/0/worker_peak_rss_mb",)),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),
