@@ -44,6 +44,9 @@ IN_FLIGHT = 2
 #: how long runs on a Dask cluster wait with no live worker before giving up (s)
 NO_WORKER_TIMEOUT_S = 60.0
 
+#: how long connecting to a Dask scheduler may take before it is refused (s)
+CONNECT_TIMEOUT_S = 10.0
+
 
 @contextmanager
 def make_executor(workers: int | None = None, scheduler: str | None = None) -> Iterator[Executor]:
@@ -56,7 +59,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
                 "--scheduler needs dask.distributed (pip install 'kalman-vs-infoset[cluster]')"
             ) from None
         try:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S:g}s")
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             why = (str(exc).splitlines() or [type(exc).__name__])[0]
             raise InputError(f"cannot reach the Dask scheduler at {scheduler!r}: {why}") from None

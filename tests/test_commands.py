@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from harness_texts import TINY_RW, one_line_error
 from harness_texts import run_cli as run
-from kalman_vs_infoset.experiments import progress
+from kalman_vs_infoset.experiments import executors, progress
 from kalman_vs_infoset.experiments.cli import COMMANDS, build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -146,7 +146,11 @@ def test_a_bad_scenario_estimator_of_an_attitude_scenario_is_one_line(tmp_path, 
         ["intercept", "{short}", "--scheduler", "tcp://127.0.0.1:1", "--runs", "1"],
     ],
 )
-def test_a_refused_command_leaves_no_folder_and_no_file(args, short, tiny_rw, tmp_path, capsys):
+def test_a_refused_command_leaves_no_folder_and_no_file(
+    args, short, tiny_rw, tmp_path, capsys, monkeypatch
+):
+    # nothing listens on port 1: the refusal is the same after 1 s as after 10 s
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
     out = tmp_path / "new" / "deeper"
     words = [a.format(short=short, tiny_rw=tiny_rw) for a in args]
     r = run(capsys, *words, "--no-progress", "--out", out)

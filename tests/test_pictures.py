@@ -232,29 +232,76 @@ def test_crowded_cdf_puts_one_legend_below_the_panels():
     assert not few.legends and few.axes[0].get_legend() is not None
 
 
-def test_paper_figures_writes_every_listed_file(tmp_path, capsys, checked):
-    """Every paper figure (reduced count and coarser steps), PNG and SVG, checked."""
-    from kalman_vs_infoset.experiments.cmd_paper_figures import FIGURES
-
-    out = tmp_path / "fig"
-    assert main(["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--json"]) == 0
-    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    for name in FIGURES:
-        for ext in ("png", "svg"):
-            assert (out / f"{name}.{ext}").is_file(), f"{name}.{ext}"
-    assert set(FIGURES) == set(result["figures"])
-    numbers = json.loads((out / "paper_figures.json").read_text())["numbers"]
-    assert numbers["kp_fig3"]["paper_miss_fuel"]["random"] == [4.3, 244.7]
-    assert numbers["resurs"]["Z_paper"] == {"energy": 2150.0, "euler": 11200.0}
-    assert {f.rsplit("/", 1)[-1] for f in checked} == set(FIGURES)
+def _fig8_peaks_on_the_formulas_side(fig8) -> None:
     # seed 001 eq. (24): the plant's turns reach each limit on the side the formula says
-    fig8 = numbers["akimov_fig8"]
     for angle, (torque, momentum) in fig8["peaks"].items():
         assert (torque >= 0.999) == (float(angle) >= fig8["phi10_deg"]), angle
         assert (momentum >= 0.999) == (float(angle) >= fig8["phi20_deg"]), angle
-    assert numbers["akimov_fig9"]["peak_torque_ratio"] < 1.0  # seed Fig. 9: unconstrained
-    assert numbers["lqr_lyapunov"]["monotone"]  # seed 002: V never increases
-    signs = numbers["resurs_inertia_signs"]["Z_energy"]
-    assert {"[-,-,-] standard", "[+,+,+] entries"} <= set(signs)
-    assert numbers["resurs_noisy"]["truth_inside_bound"]
-    assert set(numbers["kp_fig5"]["fig3_engagement"]) == {"random", "game"}
+
+
+def _inertia_signs(signs) -> None:
+    assert {"[-,-,-] standard", "[+,+,+] entries"} <= set(signs["Z_energy"])
+
+
+#: checks of the published numbers of ``paper_figures.json``, by key
+PAPER_NUMBERS = {
+    "kp_fig3": lambda n: n["paper_miss_fuel"]["random"] == [4.3, 244.7],
+    "resurs": lambda n: n["Z_paper"] == {"energy": 2150.0, "euler": 11200.0},
+    "akimov_fig8": lambda n: _fig8_peaks_on_the_formulas_side(n) is None,
+    "akimov_fig9": lambda n: n["peak_torque_ratio"] < 1.0,  # seed Fig. 9: unconstrained
+    "lqr_lyapunov": lambda n: n["monotone"],  # seed 002: V never increases
+    "resurs_inertia_signs": lambda n: _inertia_signs(n) is None,
+    "resurs_noisy": lambda n: n["truth_inside_bound"],
+    "kp_fig5": lambda n: set(n["fig3_engagement"]) == {"random", "game"},
+}
+#: the paper figures' groups in three parts of similar cost (about 16 CPU-s each), one
+#: test each, so that two xdist workers share them; with the numbers each part checks
+PAPER_PARTS = {
+    ("kp_fig3", "kp_fig4", "lqr"): {"kp_fig3", "lqr_lyapunov"},
+    ("kp_fig5", "resurs", "gyrostat"): {"kp_fig5", "resurs"},
+    ("resurs_more", "akimov", "akimov_more"): {
+        "resurs_inertia_signs", "resurs_noisy", "akimov_fig8", "akimov_fig9",
+    },
+}  # fmt: skip
+
+
+def test_paper_figures_parts_cover_every_group_and_number(tmp_path, capsys, monkeypatch):
+    """The parts below draw every group once and check every number; and without
+    ``--only`` the command draws every group, in order (fakes instead of the groups)."""
+    from kalman_vs_infoset.experiments import cmd_paper_figures as pf
+
+    parts = [g for part in PAPER_PARTS for g in part]
+    assert sorted(parts) == sorted(pf.GROUPS) and set(pf.FIGURES.values()) <= set(pf.GROUPS)
+    assert set().union(*PAPER_PARTS.values()) == set(PAPER_NUMBERS)
+    drawn: list[str] = []
+    fakes = {g: (lambda ctx, g=g: drawn.append(g) or {g: 1}) for g in pf.GROUPS}
+    monkeypatch.setattr(pf, "GROUPS", fakes)
+    out = tmp_path / "fig"
+    assert main(["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--json"]) == 0
+    assert drawn == list(fakes)
+    numbers = json.loads((out / "paper_figures.json").read_text())["numbers"]
+    assert numbers == {g: 1 for g in fakes}
+
+
+@pytest.mark.parametrize("part", list(PAPER_PARTS), ids=lambda p: "+".join(p))
+def test_paper_figures_writes_every_listed_file(part, tmp_path, capsys, checked):
+    """Every paper figure of a part of the groups (reduced count and coarser steps), PNG
+    and SVG, checked, and the published numbers they report."""
+    from kalman_vs_infoset.experiments.cmd_paper_figures import FIGURES
+
+    out = tmp_path / "fig"
+    # a group by the name of one of its figures ("resurs" and "akimov" name two groups)
+    only = ",".join(next(n for n, g in FIGURES.items() if g == group) for group in part)
+    argv = ["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--only", only]
+    assert main([*argv, "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    names = {name for name, group in FIGURES.items() if group in part}
+    for name in names:
+        for ext in ("png", "svg"):
+            assert (out / f"{name}.{ext}").is_file(), f"{name}.{ext}"
+    assert names == set(result["figures"])
+    assert {f.rsplit("/", 1)[-1] for f in checked} == names
+    numbers = json.loads((out / "paper_figures.json").read_text())["numbers"]
+    assert PAPER_PARTS[part] <= set(numbers)
+    for key in PAPER_PARTS[part]:
+        assert PAPER_NUMBERS[key](numbers[key]), key
