@@ -53,8 +53,35 @@ def _intercept(scenario, out, runs, *extra):
             "--out", out, *extra]  # fmt: skip
 
 
+def _as_from_a_terminal() -> None:
+    """In the child before it runs: Ctrl-C at its default, as a shell in a terminal
+    starts a command (a disposition of SIG_IGN is inherited, and the command rightly
+    leaves an ignored Ctrl-C ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _popen(args) -> subprocess.Popen:
-    return subprocess.Popen([str(a) for a in args], cwd=ROOT, stderr=subprocess.PIPE, text=True)
+    # faulthandler: a command that hangs is made to print every thread's stack
+    env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
+    return subprocess.Popen([str(a) for a in args], cwd=ROOT, stderr=subprocess.PIPE, text=True,
+                            env=env, preexec_fn=_as_from_a_terminal)  # fmt: skip
+
+
+def _stopped(proc: subprocess.Popen, sig: int, timeout_s: float = 60.0) -> tuple[str, float]:
+    """Send ``sig`` and wait for the command to exit: its stderr and how long it took.
+    A command still running after ``timeout_s`` fails the test with its signal masks
+    and every thread's stack (SIGABRT, caught by faulthandler)."""
+    t0 = time.monotonic()
+    proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        status = Path(f"/proc/{proc.pid}/status").read_text()
+        masks = [line for line in status.splitlines() if line.startswith(("SigIgn", "SigCgt"))]
+        proc.send_signal(signal.SIGABRT)
+        _, err = proc.communicate(timeout=30)
+        pytest.fail(f"still running {timeout_s:.0f} s after signal {sig}; {masks}\n{err}")
+    return err, time.monotonic() - t0
 
 
 # -- one writer per table -------------------------------------------------------------
@@ -109,8 +136,7 @@ def test_sigterm_saves_finished_runs_and_a_rerun_matches_an_uninterrupted_run(
     proc = _popen(_intercept(short, out, 10_000))
     try:
         _wait_for(lambda: any(out.glob("*.parquet")) or proc.poll() is not None)
-        proc.send_signal(signal.SIGTERM)
-        _, err = proc.communicate(timeout=60)
+        err, _ = _stopped(proc, signal.SIGTERM)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -140,10 +166,7 @@ def test_ctrl_c_of_attitude_saves_finished_chunks_and_returns_promptly(tmp_path,
     proc = _popen([*KVI, *args, "--runs", 800])
     try:
         _wait_for(lambda: any(out.glob("*.parquet")) or proc.poll() is not None)
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
-        latency_s = time.monotonic() - t0
+        err, latency_s = _stopped(proc, signal.SIGINT)
     finally:
         if proc.poll() is None:
             proc.kill()
