@@ -275,7 +275,8 @@ def test_paper_figures_parts_cover_every_group_and_number(tmp_path, capsys, monk
     assert set().union(*PAPER_PARTS.values()) == set(PAPER_NUMBERS)
     drawn: list[str] = []
     fakes = {g: (lambda ctx, g=g: drawn.append(g) or {g: 1}) for g in pf.GROUPS}
-    monkeypatch.setattr(pf, "GROUPS", fakes)
+    figures = pf.FIGURES
+    monkeypatch.setattr(pf, "_tables", lambda: (figures, fakes))  # the tables run() reads
     out = tmp_path / "fig"
     assert main(["paper-figures", "--out", str(out), "--runs", "1", "--quick", "--json"]) == 0
     assert drawn == list(fakes)
