@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
@@ -51,7 +51,9 @@ from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
 from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, rk4_step
 from pydantic import model_validator
-from scipy.spatial.transform import Rotation
+
+if TYPE_CHECKING:  # scipy's rotations are imported where a pointing loop runs
+    from scipy.spatial.transform import Rotation
 
 _POS = Annotated[float, float_bounds(0.0, open_lo=True)]
 _BOUND = Annotated[float, float_bounds(0.0, 1.0, open_lo=True)]
@@ -142,6 +144,8 @@ class PointingLoop:
             np.radians(t.meas_angle_bound_deg),
             np.radians(t.meas_rate_bound_degps),
         )
+        from scipy.spatial.transform import Rotation  # here: intercepts without the loop skip it
+
         x = np.zeros((1, 10))
         x[0, 0:4] = Rotation.from_rotvec(np.radians(t.initial_error_deg)).as_quat()
         x[0, 4:7] = np.radians(t.initial_rate_degps)
@@ -201,11 +205,15 @@ class PointingLoop:
     @property
     def true_error(self) -> Rotation:
         """True rotation body -> guidance frame."""
+        from scipy.spatial.transform import Rotation
+
         return Rotation.from_quat(self.x[0, 0:4])
 
     @property
     def estimated_error(self) -> Rotation:
         """The estimator's centre of :attr:`true_error`."""
+        from scipy.spatial.transform import Rotation
+
         return Rotation.from_quat(self.loop.centre(self.belief)[0, 0:4])
 
     @property

@@ -29,8 +29,6 @@ from dataclasses import dataclass
 import numpy as np
 from kalman_vs_infoset.guidance.intercept._kepler import kepler_step
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
-from scipy.optimize import minimize_scalar
 
 FloatArray = NDArray[np.float64]
 
@@ -84,6 +82,8 @@ class TwoBodyTruth:
 
     def propagate_numeric(self, state: ArrayLike, dt_s: float, dense: bool = False):
         """The same motion integrated with ``solve_ivp`` (DOP853), for checks."""
+        from scipy.integrate import solve_ivp  # here: the runs use the compiled Kepler step
+
         sol = solve_ivp(
             self.rhs,
             (0.0, dt_s),
@@ -118,8 +118,9 @@ class TwoBodyTruth:
         def range_km(t: float) -> float:
             return float(np.linalg.norm(self.propagate(state, t)[6:9])) if t > 0 else r0
 
-        r0 = float(np.linalg.norm(np.asarray(state, dtype=float)[6:9]))
+        from scipy.optimize import minimize_scalar
 
+        r0 = float(np.linalg.norm(np.asarray(state, dtype=float)[6:9]))
         res = minimize_scalar(
             range_km, bounds=(0.0, horizon_s), method="bounded", options={"xatol": 1e-9}
         )
