@@ -85,17 +85,39 @@ def pytest_sessionstart(session):
         proc.wait()
 
 
+#: node ids of the collected tests that use ``dask_cluster`` and have not finished here
+_DASK_USERS: set[str] = set()
+#: the open cluster, closed after the last of ``_DASK_USERS`` (or at the session's end)
+_DASK_OPEN: list = []
+
+
+def pytest_collection_finish(session):
+    _DASK_USERS.update(i.nodeid for i in session.items if "dask_cluster" in i.fixturenames)
+
+
+def pytest_runtest_logfinish(nodeid, location):
+    """An idle LocalCluster costs about 0.16 CPU-s per second (heartbeats of its
+    scheduler and two workers): close it once every test using it has run in this
+    process. (A user on another xdist worker keeps it open until the session's end.)"""
+    _DASK_USERS.discard(nodeid)
+    if _DASK_OPEN and not _DASK_USERS:
+        _DASK_OPEN.pop().close()
+
+
 @pytest.fixture(scope="session")
 def dask_cluster():
     """One Dask LocalCluster (two single-threaded worker processes) for the session:
     starting one costs seconds of CPU, and the tests only need a scheduler whose workers
     run this package. Tests using it carry ``xdist_group("dask")`` so that under
-    ``pytest -n`` one worker starts it."""
+    ``pytest -n`` one worker starts it (and closes it after the last of them)."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
+    cluster = distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
-    ) as cluster:
-        yield cluster
+    )
+    _DASK_OPEN.append(cluster)
+    yield cluster
+    if _DASK_OPEN:
+        _DASK_OPEN.pop().close()
 
 
 # scenario files of the command tests (a short engagement, a tiny reaction-wheel turn)

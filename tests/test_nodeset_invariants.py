@@ -31,15 +31,49 @@ CORNERS = {
 }
 
 
-@pytest.mark.parametrize("scenario", sorted(CORNERS))
-def test_corner_schedule_runs_to_the_threshold_convex_and_with_the_truth(scenario):
+#: the property tests' approach: from 801-951 km (~15 s) in 1 s steps (twice the
+#: scenarios' 0.5 s: a coarser schedule of the same shape, at two thirds of the CPU time)
+SHORT_APPROACH = ["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]", "model.dt_s=1.0"]
+
+
+#: the kp_fig5 corner run is shared by the corner test and the bounds-checking replay
+#: (one worker under xdist: both read one module-scoped run)
+_KP_FIG5_CORNER = pytest.mark.xdist_group("nodeset_kp_fig5_corner")
+
+
+@pytest.fixture(scope="module")
+def kp_fig5_corner_run():
+    """The kp_fig5 corner schedule (below), checked after every operation, with every
+    ``apply_ops`` call recorded: ``(result, [(input size, args, output), ...])``."""
+    calls = []
+    real = _nk.apply_ops
+
+    def record(*args):
+        out = real(*args)
+        calls.append((sum(int(np.size(a)) for a in args[:2]), args, out))
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_nk, "apply_ops", record)
+        r = run_schedule("kp_fig5", CORNERS["kp_fig5"], [80.0], [20.0, 90.0])
+    return r, calls
+
+
+@pytest.mark.parametrize(
+    "scenario",
+    [pytest.param(s, marks=[_KP_FIG5_CORNER] * (s == "kp_fig5")) for s in sorted(CORNERS)],
+)
+def test_corner_schedule_runs_to_the_threshold_convex_and_with_the_truth(scenario, request):
     """Seed 003's set from the box corner, bearing error -a until 80 s then +a, the
     disturbance -nu, +nu from 20 s, -nu from 90 s: this schedule once wrote past a
     kernel buffer (the interpreter aborted after the update at 80 s) and wound the
     slices 41 times around. Now every slice is convex and winds once after every
     operation, the slices stay within the vertex cap, the run reaches the threshold
     and the truth is never outside."""
-    r = run_schedule(scenario, CORNERS[scenario], [80.0], [20.0, 90.0])
+    if scenario == "kp_fig5":
+        r = request.getfixturevalue("kp_fig5_corner_run")[0]
+    else:
+        r = run_schedule(scenario, CORNERS[scenario], [80.0], [20.0, 90.0])
     x0, e = CORNERS[scenario][2], CORNERS[scenario][3]
     assert r["steps"] >= int((x0 - 5e3) / e / 0.5) - 1
     assert r["outside"] == 0
@@ -68,7 +102,7 @@ def test_slices_stay_convex_and_wind_once_after_every_operation(
     e = e_box[int(corner[3])]
     r = run_schedule(
         scenario, (y, v, x, e), error_switch_s, disturbance_switch_s, *signs,
-        overrides=["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]"],
+        overrides=SHORT_APPROACH,
     )  # fmt: skip
     assert r["outside"] == 0
     assert r["steps"] >= 12
@@ -93,7 +127,7 @@ def test_range_finder_schedules_keep_the_truth_while_bands_split(
     r = run_schedule(
         "kp_fig5_range", (y, v, x_box[int(corner[2])], e_box[int(corner[3])]),
         error_switch_s, disturbance_switch_s, *signs,
-        overrides=["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]"],
+        overrides=SHORT_APPROACH,
     )  # fmt: skip
     assert r["outside"] == 0
     assert r["steps"] >= 12
@@ -200,22 +234,14 @@ print(json.dumps({"replayed": n}))
 """
 
 
-def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, monkeypatch):
-    """The largest ``apply_ops`` calls of the corner schedule (kp_fig5), recorded here
-    and replayed in a fresh process compiled with ``NUMBA_BOUNDSCHECK=1`` (a write
-    past a buffer raises IndexError there), give the same polygons."""
-    calls = []
-    real = _nk.apply_ops
-
-    def record(*args):
-        out = real(*args)
-        calls.append((sum(int(np.size(a)) for a in args[:2]), args, out))
-        return out
-
-    monkeypatch.setattr(_nk, "apply_ops", record)
-    run_schedule("kp_fig5", CORNERS["kp_fig5"], [80.0], [20.0, 90.0], check=lambda b, w: None)
-    monkeypatch.undo()
-    calls.sort(key=lambda c: -c[0])
+@_KP_FIG5_CORNER
+def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, kp_fig5_corner_run):
+    """The largest ``apply_ops`` calls of the corner schedule (kp_fig5), recorded
+    (``kp_fig5_corner_run``) and replayed in a fresh process compiled with
+    ``NUMBA_BOUNDSCHECK=1`` (a write past a buffer raises IndexError there), give the
+    same polygons."""
+    calls = sorted(kp_fig5_corner_run[1], key=lambda c: -c[0])
+    assert calls
     keep = calls[:6] + calls[len(calls) // 2 : len(calls) // 2 + 2]
     arrays = {"n": np.array(len(keep))}
     for i, (_, args, out) in enumerate(keep):
@@ -225,6 +251,9 @@ def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, m
     path = tmp_path / "calls.npz"
     np.savez(path, **arrays)
     env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
+    # without LLVM's optimisation passes: a quarter less compile time, and no check is
+    # optimised away (numba emits the bounds checks before LLVM sees the code)
+    env["NUMBA_OPT"] = "0"
     proc = subprocess.run(
         [sys.executable, "-c", _REPLAY, str(path)], env=env, cwd=ROOT,
         capture_output=True, text=True, timeout=600,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -91,11 +92,21 @@ def short():
 
 
 # -- traces ------------------------------------------------------------------------------
+def _short_kp_fig3(tmp_path) -> Path:
+    """kp_fig3 (same name, so the same file names) started 290 km out (``SHORT``): the
+    trace commands draw and check every step of a 20-step approach instead of ~200."""
+    p = tmp_path / "short.toml"
+    text = open("data/scenarios/kp_fig3.toml").read()
+    text = text.replace("x_km = [5801.3, 5801.3]", "x_km = [290.0, 290.0]")
+    p.write_text(text.replace("x_km = [5301.3, 6301.3]", "x_km = [250.0, 330.0]"))
+    return p
+
+
 def test_intercept_trace_command(tmp_path, capsys, checked):
     """The judged command: one row per step with the fields; the set's traced forecast-miss
     interval holds the truth's forecast on every row; the trace is the table's run."""
     out = tmp_path / "out"
-    args = ["intercept", "data/scenarios/kp_fig3.toml", "--noise", "game", "--trace", "0"]
+    args = ["intercept", str(_short_kp_fig3(tmp_path)), "--noise", "game", "--trace", "0"]
     assert main([*args, "--json", "--out", str(out), "--workers", "1", "--no-progress"]) == 0
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     table = pd.read_parquet(out / "kp_fig3-infoset-game-s3.parquet")
@@ -151,10 +162,7 @@ def test_recorder_keeps_sets_when_asked():
 
 
 def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
-    p = tmp_path / "short.toml"
-    text = open("data/scenarios/kp_fig3.toml").read()
-    text = text.replace("x_km = [5801.3, 5801.3]", "x_km = [290.0, 290.0]")
-    p.write_text(text.replace("x_km = [5301.3, 6301.3]", "x_km = [250.0, 330.0]"))
+    p = _short_kp_fig3(tmp_path)
     args = ["compare", str(p), "--estimators", "infoset,ukf", "--noise", "game"]
     assert main([*args, "--trace", "0", "--out", str(tmp_path / "o"), "--workers", "1",
                  "--no-progress", "--json"]) == 0  # fmt: skip
