@@ -17,6 +17,7 @@ CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 STUDY = "docs/results/study/fig5-"
+SPEED = "docs/results/speed/kp_fig5-"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
@@ -356,6 +357,15 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      ("help_cpu_s_max",)),
     (PERF, r"\| ([\d.]+) CPU-s compiling \(([\d.]+) CPU-s in all\)", BENCH,
      ("first_run_compile_s", "first_run_cpu_s")),
+    # docs/performance.md, the node set's speed options: kvi compare kp_fig5 --estimators
+    # infoset --noise random,game --runs 50 --workers 2 [--set KEY=VALUE] --json
+    *[(PERF, rf"\| {re.escape(label)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \| ([\d.]+) \|",
+       f"{SPEED}{name}.json", tuple(f"rows/[noise={noise}]/{k}" for k in
+                                    ("miss_m/mean", "fuel_mps/mean", "truth_outside", "cpu_s")))
+      for label, name in (("(defaults)", "default"),
+                          ("`estimator.infoset.node_split_ratio=4`", "node_split_ratio_4"),
+                          ("`estimator.infoset.max_vertices=64`", "max_vertices_64"))
+      for noise in ("random", "game")],
     # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
     *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",
        (f"variants/{i}/cpu_s", f"{STUDY}w2.json::variants/{i}/cpu_s"))

@@ -34,3 +34,16 @@ def test_the_dask_run_drew_the_same_table_as_local_processes():
     for other in runs[1:]:
         assert [{k: v[k] for k in keys} for v in other] == first
     assert all(v["cpu_s"] is None for v in runs[2])  # a cluster's workers: not counted
+
+
+def test_the_speed_options_defaults_rows_are_the_published_runs():
+    """docs/performance.md's table of the node set's speed options: its defaults' rows are
+    the runs of the published comparison (the same seeds, the same numbers)."""
+    keys = ("runs", "seed", "miss_m", "fuel_mps", "truth_outside", "empty_set", "failures")
+    published = {
+        r["noise"]: {k: r[k] for k in keys}
+        for r in results("docs/results/compare_kp_fig5.json")["rows"]
+        if r["estimator"] == "infoset"
+    }
+    for row in results("docs/results/speed/kp_fig5-default.json")["rows"]:
+        assert {k: row[k] for k in keys} == published[row["noise"]], row["noise"]

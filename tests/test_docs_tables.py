@@ -132,6 +132,7 @@ BY_ROWS = [
     ("docs/infoset.md", "| scenario (seed) | errors | guidance | 10 s |"),  # and tightness test
     ("docs/performance.md", "| quantity | measured | target |"),
     ("docs/performance.md", "| variant | noise | CPU-s, 50 runs, 1 worker |"),
+    ("docs/performance.md", "| `--set` | noise | miss mean, m |"),
     (INT, "| | miss, m | fuel, m/s | truth outside | pointing error max |"),
 ]
 
