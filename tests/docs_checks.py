@@ -360,17 +360,16 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # docs/performance.md, the node set's speed options: kvi compare kp_fig5 --estimators
     # infoset --noise random,game --runs 50 --workers 2 [--set KEY=VALUE] --json
     *[(PERF, rf"\| {re.escape(label)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \| ([\d.]+) \|",
-       f"{SPEED}{name}.json", tuple(f"rows/[noise={noise}]/{k}" for k in
-                                    ("miss_m/mean", "fuel_mps/mean", "truth_outside", "cpu_s")))
+       f"{SPEED}{name}.json", _row("infoset", noise, "miss_m/mean", "fuel_mps/mean",
+                                   "truth_outside", "cpu_s", path=f"{SPEED}{name}.json"))
       for label, name in (("(defaults)", "default"),
                           ("`estimator.infoset.node_split_ratio=4`", "node_split_ratio_4"),
                           ("`estimator.infoset.max_vertices=64`", "max_vertices_64"))
       for noise in ("random", "game")],
     # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
     *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",
-       (f"variants/{i}/cpu_s", f"{STUDY}w2.json::variants/{i}/cpu_s"))
-      for i, (v, n) in enumerate([("bearing only", "random"), ("bearing only", "game"),
-                                  ("bearing + range", "random"), ("bearing + range", "game")])],
+       tuple(f"{f}variants/[variant={v},noise={n}]/cpu_s" for f in ("", f"{STUDY}w2.json::")))
+      for v in ("bearing only", "bearing + range") for n in ("random", "game")],
     (PERF, r"each worker peaked at (\d+) MB", STUDY + "w2.json",
      ("variants/0/worker_peak_rss_mb",)),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
