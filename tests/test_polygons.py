@@ -122,6 +122,28 @@ def test_select_and_bounds_and_negative_determinant_rejected():
         batch.affine(np.diag([1.0, -1.0]))
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=seeds, runs=st.integers(1, 20), negative=st.booleans())
+def test_select_equals_the_polygons_picked_one_by_one(seed, runs, negative):
+    """``select`` (copied in runs of consecutive polygons when there are few runs) keeps
+    exactly the chosen polygons in the order asked, for masks, runs, permutations,
+    repeats and negative indices alike: compared with the polygons picked one by one."""
+    rng = np.random.default_rng(seed)
+    polys = _random_convex(rng, 30, "polygon")
+    polys[3] = np.zeros((0, 2))  # an empty polygon among them
+    batch = ConvexPolygons.from_list(polys)
+    starts = rng.integers(0, 30, size=runs)
+    idx = np.concatenate([np.arange(a, min(a + rng.integers(1, 6), 30)) for a in starts])
+    if negative:
+        idx = idx - 30  # the same polygons, counted from the end
+    for chosen in (idx, rng.permutation(30), rng.random(30) < 0.5):
+        out = batch.select(chosen)
+        picked = np.arange(30)[chosen]
+        assert out.n == len(picked)
+        for k, i in enumerate(picked):
+            np.testing.assert_array_equal(out.polygon(k), polys[i])
+
+
 def test_all_sections_empty():
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     out = ConvexPolygons.from_list([square] * 4).clip_slab(0, 5.0, 6.0)

@@ -203,6 +203,16 @@ class ConvexPolygons:
         if idx.dtype == bool:
             idx = np.flatnonzero(idx)
         counts = self.counts[idx]
+        if len(idx) > 1:
+            # the usual selections (a mask, a split, an insert) are a few runs of
+            # consecutive polygons: copied as slices, not vertex by vertex
+            cut = np.flatnonzero(idx[1:] - idx[:-1] != 1) + 1
+            if len(cut) < 16 and idx.min() >= 0:
+                first = idx[np.concatenate(([0], cut))]
+                stop = idx[np.concatenate((cut - 1, [len(idx) - 1]))] + 1
+                off = self.offsets
+                parts = [self.xy[off[a] : off[b]] for a, b in zip(first, stop, strict=True)]
+                return ConvexPolygons._make(np.concatenate(parts), _offsets(counts))
         starts = self.offsets[:-1][idx]
         vert = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
         return ConvexPolygons._make(self.xy[vert], _offsets(counts))

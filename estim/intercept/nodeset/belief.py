@@ -109,8 +109,8 @@ class NodeSet(Belief):
     def live(self) -> NDArray[np.bool_]:
         return self.polygons.counts > 0
 
-    @property
-    def is_empty(self) -> bool:
+    @cached_property
+    def is_empty(self) -> bool:  # asked several times a step by the loop and guidance
         return not bool(self.live.any())
 
     @property

@@ -111,12 +111,11 @@ class OpLog:
     def with_copied_column(self, p: int) -> OpLog:
         """The log with piece ``p``'s parameters copied into a new last column (a
         piece split in two keeps its history in both halves)."""
-        # C order, as every other log (np.c_ gives Fortran order: another type for
-        # the compiled replay, compiled again in each worker)
+        # C order, as every other log (the compiled replay has one type per layout)
         return OpLog(
             self.kinds, self.pa, self.pb,
-            np.ascontiguousarray(np.c_[self.q_lo, self.q_lo[:, p]]),
-            np.ascontiguousarray(np.c_[self.q_hi, self.q_hi[:, p]]),
+            np.concatenate([self.q_lo, self.q_lo[:, p : p + 1]], axis=1),
+            np.concatenate([self.q_hi, self.q_hi[:, p : p + 1]], axis=1),
         )  # fmt: skip
 
     def parts(self) -> tuple:

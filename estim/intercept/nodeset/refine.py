@@ -356,18 +356,22 @@ def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:
     ``p``'s band, log columns and upper hard limit), node ``j`` to both."""
     new = len(s.u_lo)
     cut = float(s.label_s[j])
-    upper = (s.piece == p) & (s.label_s > cut)
-    piece = np.where(upper, new, s.piece)
-    piece = np.r_[piece, new]
-    label = np.r_[s.label_s, cut]
-    polys = _concat(s.polygons, s.polygons.select([j]))
-    order = np.lexsort((label, piece))
-    log = s.log.with_copied_column(p)
-    hard_hi = np.where(np.arange(new) == p, cut, s.hard_hi_s)
+    # nodes are sorted by piece, then label: piece p's nodes above the cut are one run
+    # [c, b), and the new piece (the last index) takes node j and that run at the end
+    idx = np.flatnonzero(s.piece == p)
+    b = int(idx[-1]) + 1
+    c = int(idx[0]) + int(np.searchsorted(s.label_s[idx], cut, side="right"))
+    n = len(s.piece)
+    order = np.concatenate([np.arange(c), np.arange(b, n), [j], np.arange(c, b)])
+    n_new = 1 + b - c
+    piece = np.concatenate([s.piece[:c], s.piece[b:], np.full(n_new, new, dtype=np.int64)])
+    hard_hi = s.hard_hi_s.copy()
+    hard_hi[p] = cut
     return replace(
-        s, piece=piece[order], label_s=label[order], polygons=polys.select(order),
-        u_lo=np.r_[s.u_lo, s.u_lo[p]], u_hi=np.r_[s.u_hi, s.u_hi[p]],
-        hard_lo_s=np.r_[s.hard_lo_s, cut], hard_hi_s=np.r_[hard_hi, s.hard_hi_s[p]], log=log,
+        s, piece=piece, label_s=s.label_s[order], polygons=s.polygons.select(order),
+        u_lo=np.append(s.u_lo, s.u_lo[p]), u_hi=np.append(s.u_hi, s.u_hi[p]),
+        hard_lo_s=np.append(s.hard_lo_s, cut), hard_hi_s=np.append(hard_hi, s.hard_hi_s[p]),
+        log=s.log.with_copied_column(p),
     )  # fmt: skip
 
 
