@@ -34,17 +34,11 @@ def _stumpff(z: float) -> tuple[float, float]:
 
 
 @njit(cache=True)
-def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
-    """Positions and velocities of ``n`` bodies after ``dt_s`` (arrays ``(n, 3)``).
-
-    Solves ``sqrt(mu) dt = r0 vr0/sqrt(mu) chi^2 C(a chi^2) + (1 - a r0) chi^3
-    S(a chi^2) + r0 chi`` for ``chi`` by Newton's method, all bodies iterating
-    together until every step is at round-off, then ``R = f R0 + g V0``,
-    ``V = fdot R0 + gdot V0``.
-    """
+def _solve_chi(r0v, v0v, dt_s, mu_km3ps2):
+    """Universal anomaly ``chi`` of each body after ``dt_s`` by Newton's method (with
+    ``|r0|``, the radial speed and ``alpha = 1/a``), all bodies iterating together
+    until every step is at round-off."""
     n = r0v.shape[0]
-    r1v = np.empty((n, 3))
-    v1v = np.empty((n, 3))
     sqmu = math.sqrt(mu_km3ps2)
     r0 = np.empty(n)
     vr0 = np.empty(n)
@@ -76,6 +70,23 @@ def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
                 done = False
         if done:
             break
+    return r0, alpha, chi
+
+
+@njit(cache=True)
+def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
+    """Positions and velocities of ``n`` bodies after ``dt_s`` (arrays ``(n, 3)``).
+
+    Solves ``sqrt(mu) dt = r0 vr0/sqrt(mu) chi^2 C(a chi^2) + (1 - a r0) chi^3
+    S(a chi^2) + r0 chi`` for ``chi`` by Newton's method, all bodies iterating
+    together until every step is at round-off, then ``R = f R0 + g V0``,
+    ``V = fdot R0 + gdot V0``.
+    """
+    n = r0v.shape[0]
+    r1v = np.empty((n, 3))
+    v1v = np.empty((n, 3))
+    sqmu = math.sqrt(mu_km3ps2)
+    r0, alpha, chi = _solve_chi(r0v, v0v, dt_s, mu_km3ps2)
     for i in range(n):
         ch = chi[i]
         z = alpha[i] * (ch * ch)
@@ -92,6 +103,63 @@ def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
     return r1v, v1v
 
 
+@njit(cache=True)
+def relative_step(sc_pos, sc_vel, rel_pos, rel_vel, dt_s, mu_km3ps2):
+    """A spacecraft's heliocentric state and a target's state *relative* to it after
+    ``dt_s``, both in exact two-body motion (arrays ``(3,)``, km and km/s).
+
+    The relative state is not the difference of the two heliocentric results: at 1 AU
+    that difference carries ~2e-8 km of rounding every step, a jitter of the
+    relative position far larger than the differential gravity moves it over a
+    short step. With ``f = 1 + F``, ``g = dt + G``, ``gdot = 1 + Gd`` (each small term
+    computed directly) the target's relative position is::
+
+        r1 = (1 + F_t) r + (dt + G_t) v + (F_t - F_s) R + (G_t - G_s) V
+
+    (``s``: spacecraft, ``t``: target, ``R, V`` the spacecraft's state): only small
+    terms are differenced, and the rounding left is that of ``r1`` itself. The
+    velocity is ``v1 = fdot_t r + (1 + Gd_t) v + (fdot_t - fdot_s) R + (Gd_t - Gd_s) V``.
+    """
+    r0v = np.empty((2, 3))
+    v0v = np.empty((2, 3))
+    for k in range(3):
+        r0v[0, k], v0v[0, k] = sc_pos[k], sc_vel[k]
+        # the target's own orbit: rounding of R + r moves its f and g by ~1e-16 of
+        # their small parts only
+        r0v[1, k], v0v[1, k] = sc_pos[k] + rel_pos[k], sc_vel[k] + rel_vel[k]
+    sqmu = math.sqrt(mu_km3ps2)
+    r0, alpha, chi = _solve_chi(r0v, v0v, dt_s, mu_km3ps2)
+    big_f, big_g, fdot, small_gd = np.empty(2), np.empty(2), np.empty(2), np.empty(2)
+    pos1 = np.empty((2, 3))
+    for i in range(2):
+        ch = chi[i]
+        z = alpha[i] * (ch * ch)
+        c, s = _stumpff(z)
+        big_f[i] = -(ch * ch) / r0[i] * c
+        big_g[i] = -math.pow(ch, 3.0) * s / sqmu
+        for k in range(3):
+            pos1[i, k] = (1.0 + big_f[i]) * r0v[i, k] + (dt_s + big_g[i]) * v0v[i, k]
+        r1 = math.sqrt(pos1[i, 0] * pos1[i, 0] + pos1[i, 1] * pos1[i, 1] + pos1[i, 2] * pos1[i, 2])
+        fdot[i] = sqmu / (r1 * r0[i]) * (alpha[i] * math.pow(ch, 3.0) * s - ch)
+        small_gd[i] = -(ch * ch) / r1 * c
+    sc_vel1 = np.empty(3)
+    rel_pos1 = np.empty(3)
+    rel_vel1 = np.empty(3)
+    d_f, d_g = big_f[1] - big_f[0], big_g[1] - big_g[0]
+    d_fdot, d_gd = fdot[1] - fdot[0], small_gd[1] - small_gd[0]
+    for k in range(3):
+        sc_vel1[k] = fdot[0] * sc_pos[k] + (1.0 + small_gd[0]) * sc_vel[k]
+        rel_pos1[k] = (
+            rel_pos[k] + (big_f[1] * rel_pos[k] + dt_s * rel_vel[k] + big_g[1] * rel_vel[k])
+        ) + (d_f * sc_pos[k] + d_g * sc_vel[k])
+        rel_vel1[k] = (rel_vel[k] + (fdot[1] * rel_pos[k] + small_gd[1] * rel_vel[k])) + (
+            d_fdot * sc_pos[k] + d_gd * sc_vel[k]
+        )
+    return pos1[0].copy(), sc_vel1, rel_pos1, rel_vel1
+
+
 def warm_up() -> None:
     """Load the compiled step in this process (forked workers then inherit it)."""
     kepler_step(np.array([[1.5e8, 0.0, 0.0]]), np.array([[0.0, 30.0, 0.0]]), 0.5, 1.3e11)
+    z3, r3 = np.zeros(3), np.array([1.5e8, 0.0, 0.0])
+    relative_step(r3, np.array([0.0, 30.0, 0.0]), z3 + 1e3, z3, 0.5, 1.3e11)
