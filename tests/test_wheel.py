@@ -22,6 +22,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+# one xdist worker builds the wheel and its environment (module fixtures) for all
+pytestmark = pytest.mark.xdist_group("wheel")
 LAYERS = ("estim", "guidance", "experiments")
 SOURCES = ("kalman_vs_infoset", "data", *LAYERS)
 IGNORE = shutil.ignore_patterns(
