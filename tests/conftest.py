@@ -55,6 +55,33 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "xdist_group(name): tests run by one xdist worker")
 
 
+def _xdist_group(item) -> str | None:
+    names = {m.args[0] if m.args else m.kwargs.get("name", "default")
+             for m in item.iter_markers("xdist_group")}  # fmt: skip
+    return "_".join(sorted(map(str, names))) or None
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """``--dist loadgroup`` sends the tests of one ``xdist_group`` to one worker by the
+    suffix ``@<group>`` that pytest-xdist appends to their node ids in each worker.
+    pytest-xdist 3.8 writes it into ``item._nodeid``, which pytest 9 no longer reads
+    (the id lives in ``item._id``): every group was silently split across the workers
+    (two Dask clusters, the kp_fig5 corner schedule run twice). Where the suffix is
+    missing, it is added here; a pytest where neither works stops the session."""
+    if not getattr(config.option, "loadgroup", False):  # set in an xdist worker
+        return
+    for item in items:
+        group = _xdist_group(item)
+        if group is None or item.nodeid.endswith(f"@{group}"):
+            continue
+        if not hasattr(item, "_id"):
+            raise pytest.UsageError(f"cannot mark {item.nodeid} as xdist group {group!r}")
+        from _pytest.nodeid import NodeId
+
+        item._id = NodeId.parse(f"{item.nodeid}@{group}")
+
+
 # The package's numba kernels, by the warm-ups that compile them (the Monte Carlo pool's
 # initializer calls the same four), in two groups of similar compile cost.
 _WARM_UPS = (

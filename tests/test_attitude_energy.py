@@ -32,6 +32,11 @@ SEED_U0_NM = np.array([-5.4, -1.1, -2.4])
 CONFIG = EnergySavingConfig()
 
 
+#: the users of the two simulated turns (module fixtures, ~2 CPU-s each) run in one
+#: xdist worker, which simulates each turn once
+TURNS = pytest.mark.xdist_group("attitude_energy_turns")
+
+
 @pytest.fixture(scope="module")
 def energy_turn():
     setup = setup_from_scenario("test", {"horizon_s": 330.0})
@@ -196,12 +201,14 @@ def test_min_energy_controls_beat_every_other_transfer():
         assert dt * u @ u > turn.energy_N2m2s
 
 
+@TURNS
 def test_energy_turn_trace_of_k_u_decreases_every_step_2_6(energy_turn):
     _, res = energy_turn
     assert np.all(np.diff(res.trace_k_u) < 0)
     assert np.all(res.trace_increment < 0)
 
 
+@TURNS
 def test_energy_turn_reaches_seed_accuracy_by_320s_and_stays(energy_turn):
     setup, res = energy_turn
     settle = res.settle_time_s()
@@ -215,6 +222,7 @@ def test_energy_turn_reaches_seed_accuracy_by_320s_and_stays(energy_turn):
     reason="seed data as printed (f1_i, f2_i of eq. 4.6) bring the error under 0.2 deg "
     "only at ~313-316 s; at 300 s it is ~0.34 deg per axis, 0.39 deg in total",
 )
+@TURNS
 def test_energy_turn_errors_within_seed_tolerance_at_300s(energy_turn):
     setup, res = energy_turn
     k = setup.n_turn_steps
@@ -292,6 +300,7 @@ def test_seed_000_300s_point_needs_f1_six_percent_above_the_print():
     assert printed > 0.35 and moved <= 0.2
 
 
+@TURNS
 def test_energy_turn_gyro_momentum_returns_to_zero(energy_turn):
     """Seed Fig. 9: K_G returns to zero. The total momentum J w + K_G is conserved (zero),
     so |K_G| at rest-within-tolerance is bounded by |J| * 0.02 deg/s."""
@@ -306,6 +315,7 @@ def test_energy_turn_gyro_momentum_returns_to_zero(energy_turn):
     assert res.singular_steps == 0
 
 
+@TURNS
 def test_energy_index_near_seed_2150_and_above_lower_bound(energy_turn):
     setup, res = energy_turn
     z = res.energy_N2m2s()
@@ -313,6 +323,7 @@ def test_energy_index_near_seed_2150_and_above_lower_bound(energy_turn):
     assert z > lower_bound_energy_N2m2s(setup)
 
 
+@TURNS
 def test_euler_baseline_tracks_profile_and_costs_3x_the_energy_law(euler_turn, energy_turn):
     setup, res = euler_turn
     k = setup.n_turn_steps

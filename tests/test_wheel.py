@@ -22,6 +22,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+# one xdist worker builds the wheel and its environment (module fixtures) for all
+pytestmark = pytest.mark.xdist_group("wheel")
 LAYERS = ("estim", "guidance", "experiments")
 SOURCES = ("kalman_vs_infoset", "data", *LAYERS)
 IGNORE = shutil.ignore_patterns(
@@ -77,14 +79,15 @@ def _seed_numba_cache(installed: Path) -> None:
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    """``(wheel, sdist)`` built from a copy of the sources, without build isolation."""
+    """``(wheel, sdist)`` built from a copy of the sources, without build isolation: the
+    PEP 517 hooks of the project's backend called in one process (what ``pip wheel
+    --no-deps --no-build-isolation`` calls, without pip's own start-up)."""
     src = _copy_sources(tmp_path_factory.mktemp("src"))
     dist = tmp_path_factory.mktemp("dist")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    _run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
-          src, "-w", dist], src, env)  # fmt: skip
-    build_sdist = f"from setuptools import build_meta as b; print(b.build_sdist({str(dist)!r}))"
-    _run([sys.executable, "-c", build_sdist], src, env)
+    build = (f"from setuptools import build_meta as b; d = {str(dist)!r}; "
+             "print(b.build_wheel(d), b.build_sdist(d))")  # fmt: skip
+    _run([sys.executable, "-c", build], src, env)
     (wheel,) = dist.glob("*.whl")
     (sdist,) = dist.glob("*.tar.gz")
     return wheel, sdist
@@ -194,13 +197,16 @@ def test_the_commands_work_from_an_empty_folder(venv, tmp_path):
     assert {"kp_fig4", "gyrostat_eta", "gyrostat_switching", "gyrostat_torques"} <= figures
 
 
-def _files(bin_dir: Path, env, dist: str) -> tuple[Path, set[str]]:
-    """``pip show -f``: the distribution's location and its files (relative paths)."""
-    out = _run([sys.executable, "-m", "pip", "--python", bin_dir / "python", "show", "-f", dist],
-               bin_dir, env).stdout  # fmt: skip
-    location = Path(next(s for s in out.splitlines() if s.startswith("Location:")).split(": ")[1])
-    files = out.split("Files:", 1)[1].split()
-    return location, {f for f in files if not f.startswith("..")}
+def _files(bin_dir: Path, env, *dists: str) -> list[tuple[Path, set[str]]]:
+    """Each distribution's location and its files (relative paths), as ``pip show -f``
+    lists them (its RECORD, through the environment's own ``importlib.metadata``; one
+    interpreter for all, instead of one pip start-up each)."""
+    code = (
+        "import importlib.metadata as m, json, sys; print(json.dumps([[str(d.locate_file('')), "
+        "[str(f) for f in d.files]] for d in map(m.distribution, sys.argv[1:])]))"
+    )
+    out = json.loads(_run([bin_dir / "python", "-c", code, *dists], bin_dir, env).stdout)
+    return [(Path(loc), {f for f in files if not f.startswith("..")}) for loc, files in out]
 
 
 def test_the_wheel_sits_beside_the_index_guidance_package(venv, tmp_path):
@@ -213,8 +219,7 @@ def test_the_wheel_sits_beside_the_index_guidance_package(venv, tmp_path):
     bin_dir, site, env, guidance_error = venv
     if guidance_error is not None:
         pytest.skip(f"the index's 'guidance' could not be installed: {guidance_error}")
-    where, theirs = _files(bin_dir, env, "guidance")
-    _, ours = _files(bin_dir, env, "kalman-vs-infoset")
+    (where, theirs), (_, ours) = _files(bin_dir, env, "guidance", "kalman-vs-infoset")
     assert "guidance/__init__.py" in theirs and "kalman_vs_infoset/guidance/__init__.py" in ours
     assert not theirs & ours
     (record,) = where.glob("guidance-*.dist-info/RECORD")
