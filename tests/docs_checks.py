@@ -331,6 +331,12 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      F3 + "game.json", (*MISS_FUEL, "truth_outside")),
     (INT, r"guaranteed knowledge bound, ([\d.]+) deg, to the bearing", E2E + "random-s3.parquet",
      ("0/pointing_knowledge_bound_deg",)),
+    # docs/infoset.md, fine steps: kvi intercept kp_fig3 --set model.dt_s=DT --noise NOISE
+    # --runs 1 --json
+    *[("docs/infoset.md", rf"\| {re.escape(dt)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",
+       f"docs/results/fine_steps/kp_fig3-dt{dt}-infoset-{noise}.json",
+       ("miss_m/mean", "fuel_mps/mean", "truth_outside"))
+      for dt, noise in (("0.1", "game"), ("0.075", "game"), ("0.05", "game"), ("0.05", "random"))],
     # docs/performance.md: ``kvi bench``
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),

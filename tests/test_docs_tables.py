@@ -130,6 +130,7 @@ BY_ROWS = [
     ("docs/attitude.md", "| quantity | ours | seed |"),
     ("docs/figures.md", "| reading | energy-saving law | Euler-axis baseline (calibrated) |"),
     ("docs/infoset.md", "| scenario (seed) | errors | guidance | 10 s |"),  # and tightness test
+    ("docs/infoset.md", "| step, s | errors | miss, m | fuel, m/s |"),
     ("docs/performance.md", "| quantity | measured | target |"),
     ("docs/performance.md", "| variant | noise | CPU-s, 50 runs, 1 worker |"),
     ("docs/performance.md", "| `--set` | noise | miss mean, m |"),
