@@ -25,6 +25,7 @@ NODES = "docs/results/sweeps/kp_fig5-n_nodes.json"
 FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
+VS = "docs/results/vs_35e3739.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -337,6 +338,13 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
        f"docs/results/fine_steps/kp_fig3-dt{dt}-infoset-{noise}.json",
        ("miss_m/mean", "fuel_mps/mean", "truth_outside"))
       for dt, noise in (("0.1", "game"), ("0.075", "game"), ("0.05", "game"), ("0.05", "random"))],
+    # docs/performance.md, side by side with 35e3739: /usr/bin/time of kvi fig5 --runs 20
+    # and, on that commit, python -m experiments fig5 --runs 20, alternately, twice
+    (PERF, r"today's `kvi fig5 --runs (\d+)`", VS, ("runs_per_variant",)),
+    (PERF, r"`docs/results/vs_35e3739.json`\): ([\d.]+) and ([\d.]+) CPU-s today against "
+     r"([\d.]+) and ([\d.]+), i\.e\. ([\d.]+) times the runs per CPU-second", VS,
+     ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
+      "runs_per_cpu_s_ratio_mean")),
     # docs/performance.md: ``kvi bench``
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
