@@ -80,7 +80,9 @@ def _limits_3d(ax, polys: list) -> None:
     allv = np.vstack(polys)
     for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
         lo, hi = allv[:, k].min(), allv[:, k].max()
-        pad = 0.05 * (hi - lo) + 1e-9
+        # a flat extent (a point range, say) still gets a width the projection can
+        # resolve: relative to the coordinate's size, not an absolute 1e-9
+        pad = 0.05 * (hi - lo) + 1e-6 * max(abs(lo), abs(hi), 1.0)
         setter(lo - pad, hi + pad)
 
 
