@@ -5,8 +5,10 @@ search; in numpy it cost about 220 us per call (10-12 % of a random-noise
 engagement), in numba a few microseconds. Every expression keeps the order of the
 numpy formulation it replaced, powers go through ``math.pow`` (libm ``pow``, as
 numpy's ``**`` with exponent 3) and squares are products (as numpy's ``**2``), and
-numba does not contract ``a * b + c`` into fused multiply-adds: results are
-bit-identical to that formulation (a test compares them on random states).
+numba does not contract ``a * b + c`` into fused multiply-adds, and ``1 + (-y)`` is
+``1 - y`` to the bit (the small parts ``F = f - 1`` are shared with
+:func:`relative_step`): results are bit-identical to that formulation (a test compares
+them on random states).
 """
 
 from __future__ import annotations
@@ -74,6 +76,21 @@ def _solve_chi(r0v, v0v, dt_s, mu_km3ps2):
 
 
 @njit(cache=True)
+def _fg(ch, alpha, r0, dt_s, sqmu):
+    """The small parts ``F = f - 1`` and ``G = g - dt`` of the Lagrange coefficients,
+    each computed directly (no cancellation), with the Stumpff values ``C, S``."""
+    c, s = _stumpff(alpha * (ch * ch))
+    return -(ch * ch) / r0 * c, -math.pow(ch, 3.0) * s / sqmu, c, s
+
+
+@njit(cache=True)
+def _rates(ch, alpha, r0, r1, c, s, sqmu):
+    """``fdot`` and the small part ``Gd = gdot - 1`` at the new radius ``r1``."""
+    fdot = sqmu / (r1 * r0) * (alpha * math.pow(ch, 3.0) * s - ch)
+    return fdot, -(ch * ch) / r1 * c
+
+
+@njit(cache=True)
 def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
     """Positions and velocities of ``n`` bodies after ``dt_s`` (arrays ``(n, 3)``).
 
@@ -88,16 +105,13 @@ def kepler_step(r0v, v0v, dt_s, mu_km3ps2):
     sqmu = math.sqrt(mu_km3ps2)
     r0, alpha, chi = _solve_chi(r0v, v0v, dt_s, mu_km3ps2)
     for i in range(n):
-        ch = chi[i]
-        z = alpha[i] * (ch * ch)
-        c, s = _stumpff(z)
-        f = 1 - (ch * ch) / r0[i] * c
-        g = dt_s - math.pow(ch, 3.0) * s / sqmu
+        big_f, big_g, c, s = _fg(chi[i], alpha[i], r0[i], dt_s, sqmu)
+        f, g = 1.0 + big_f, dt_s + big_g
         for k in range(3):
             r1v[i, k] = f * r0v[i, k] + g * v0v[i, k]
         r1 = math.sqrt(r1v[i, 0] * r1v[i, 0] + r1v[i, 1] * r1v[i, 1] + r1v[i, 2] * r1v[i, 2])
-        fdot = sqmu / (r1 * r0[i]) * (alpha[i] * math.pow(ch, 3.0) * s - ch)
-        gdot = 1 - (ch * ch) / r1 * c
+        fdot, small_gd = _rates(chi[i], alpha[i], r0[i], r1, c, s, sqmu)
+        gdot = 1.0 + small_gd
         for k in range(3):
             v1v[i, k] = fdot * r0v[i, k] + gdot * v0v[i, k]
     return r1v, v1v
@@ -132,16 +146,11 @@ def relative_step(sc_pos, sc_vel, rel_pos, rel_vel, dt_s, mu_km3ps2):
     big_f, big_g, fdot, small_gd = np.empty(2), np.empty(2), np.empty(2), np.empty(2)
     pos1 = np.empty((2, 3))
     for i in range(2):
-        ch = chi[i]
-        z = alpha[i] * (ch * ch)
-        c, s = _stumpff(z)
-        big_f[i] = -(ch * ch) / r0[i] * c
-        big_g[i] = -math.pow(ch, 3.0) * s / sqmu
+        big_f[i], big_g[i], c, s = _fg(chi[i], alpha[i], r0[i], dt_s, sqmu)
         for k in range(3):
             pos1[i, k] = (1.0 + big_f[i]) * r0v[i, k] + (dt_s + big_g[i]) * v0v[i, k]
         r1 = math.sqrt(pos1[i, 0] * pos1[i, 0] + pos1[i, 1] * pos1[i, 1] + pos1[i, 2] * pos1[i, 2])
-        fdot[i] = sqmu / (r1 * r0[i]) * (alpha[i] * math.pow(ch, 3.0) * s - ch)
-        small_gd[i] = -(ch * ch) / r1 * c
+        fdot[i], small_gd[i] = _rates(chi[i], alpha[i], r0[i], r1, c, s, sqmu)
     sc_vel1 = np.empty(3)
     rel_pos1 = np.empty(3)
     rel_vel1 = np.empty(3)
@@ -159,7 +168,7 @@ def relative_step(sc_pos, sc_vel, rel_pos, rel_vel, dt_s, mu_km3ps2):
 
 
 def warm_up() -> None:
-    """Load the compiled step in this process (forked workers then inherit it)."""
-    kepler_step(np.array([[1.5e8, 0.0, 0.0]]), np.array([[0.0, 30.0, 0.0]]), 0.5, 1.3e11)
+    """Load the compiled step the truth model calls in this process (forked workers
+    then inherit it; :func:`kepler_step`, for ``n`` independent bodies, is loaded on use)."""
     z3, r3 = np.zeros(3), np.array([1.5e8, 0.0, 0.0])
     relative_step(r3, np.array([0.0, 30.0, 0.0]), z3 + 1e3, z3, 0.5, 1.3e11)
