@@ -59,11 +59,27 @@ def _truth(steps: pd.DataFrame | None, run: int, step: int, channel=None, closin
     return r["x_true_m"] / 1e3, r["alpha_true_rad"] * 1e3, third
 
 
+def _equal_length(polys: list) -> np.ndarray:
+    """The polygons as one ``(n, max vertices, 3)`` array, each padded by repeating its
+    last vertex (a zero-length edge: the same closed outline).
+
+    Poly3DCollection pads a ragged list itself with uninitialised memory, which it
+    marks invalid but still projects: whatever the memory held can overflow the
+    projection's dot product (a RuntimeWarning that came and went with the state of
+    the process; matplotlib issue #32272). An equal-length array has no padding."""
+    n_max = max(len(p) for p in polys)
+    out = np.empty((len(polys), n_max, 3))
+    for i, p in enumerate(polys):
+        out[i, : len(p)] = p
+        out[i, len(p) :] = p[-1]
+    return out
+
+
 def _draw_3d(ax, polys: list, colour: str, shaded: bool, label: str) -> None:
     if not polys:
         return
     coll = Poly3DCollection(
-        polys,
+        _equal_length(polys),
         facecolor=colour if shaded else "none",
         edgecolor=colour,
         alpha=0.45 if shaded else 0.9,
