@@ -378,8 +378,13 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
                                    "truth_outside", "cpu_s", path=f"{SPEED}{name}.json"))
       for label, name in (("(defaults)", "default"),
                           ("`estimator.infoset.node_split_ratio=4`", "node_split_ratio_4"),
-                          ("`estimator.infoset.max_vertices=64`", "max_vertices_64"))
+                          ("`estimator.infoset.max_vertices=64`", "max_vertices_64"),
+                          ("`estimator.infoset.n_bands=2`", "n_bands_2"),
+                          ("`estimator.infoset.n_bands=1`", "n_bands_1"))
       for noise in ("random", "game")],
+    (PERF, r"with a repeat of the defaults \(([\d.]+) / ([\d.]+) CPU-s for random / game",
+     f"{SPEED}default-repeat.json",
+     tuple(f"rows/[noise={n}]/cpu_s" for n in ("random", "game"))),
     # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
     *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",
        tuple(f"{f}variants/[variant={v},noise={n}]/cpu_s" for f in ("", f"{STUDY}w2.json::")))
