@@ -158,6 +158,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
      FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
     (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
+    # README: the runs per CPU-second against release 35e3739
+    (README, r"Fig\. 5's Monte Carlo does ([\d.]+) times the runs per CPU-second of release "
+     r"(?:`35e3739` )?\((\d+) runs,", VS, ("runs_per_cpu_s_ratio_mean", "runs")),
     # README: the papers' numbers beside ours
     (README, r"Fig\. 3, random errors \| miss, fuel \| ([\d.]+) m, ([\d.]+) m/s \| ([\d.]+) m, "
      r"([\d.]+) m/s \|", FIGS,
