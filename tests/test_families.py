@@ -137,13 +137,8 @@ def test_each_family_declares_its_estimators_once(fresh):
 
 
 def test_the_harness_hooks_come_from_the_options():
-    """Range constraint, kinematic margin and the point sections' check floor are the
-    options' answers; a plug-in's plain model gets the neutral ones."""
-    ekf = registry.get("intercept", "ekf").validate({"range_constraint": True})
-    hinf = registry.get("intercept", "hinf").validate({"range_constraint": True})
-    assert hooks(ekf).closing_interval_option() == "range_constraint"
-    assert hooks(hinf).closing_interval_option() == "range_constraint"
-    assert hooks(registry.get("intercept", "ukf").validate(None)).closing_interval_option() is None
+    """Kinematic margin and the point sections' check floor are the options' answers;
+    a plug-in's plain model gets the neutral ones."""
     infoset = registry.get("intercept", "infoset")
     assert hooks(infoset.validate(None)).kinematic_margin_table(False) == {
         "kinematic_margin": False

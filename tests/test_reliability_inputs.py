@@ -47,6 +47,32 @@ def test_a_closing_speed_interval_holding_the_truth_is_taken(short):
     assert sc.closing_speed_kmps == (57.0, 59.0)
 
 
+def test_a_truth_faster_or_slower_than_a_known_closing_speed_is_refused(tmp_path, capsys):
+    """Fig. 5's truth closes at 57.9..58.1 km/s; a scenario that leaves out the
+    estimators' interval makes them assume 58 km/s exactly, and the sets then lose the
+    truth (by hundreds of steps): refused like an interval that misses the truth."""
+    text = (ROOT / "data/scenarios/kp_fig5.toml").read_text(encoding="utf-8")
+    lines = [ln for ln in text.splitlines() if not ln.startswith("closing_speed_kmps = [")]
+    assert len(lines) == len(text.splitlines()) - 1  # the estimator's interval went
+    path = tmp_path / "no_interval.toml"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    err = _refused(capsys, tmp_path / "out", "intercept", str(path), "--runs", "1")
+    assert "assume the closing speed known" in err and "estimator.closing_speed_kmps" in err
+
+
+def test_the_truths_default_closing_velocity_is_the_speeds_the_estimators_assume():
+    """Without a [truth] vx box the truth closes at the estimators' closing speeds: the
+    model's known speed, or the interval given; the a-priori vx box is not used."""
+    from kalman_vs_infoset.experiments.scenario import parse_scenario
+
+    assert parse_scenario({}).truth.vx_kmps == (-58.0, -58.0)
+    known = parse_scenario({"model": {"closing_speed_kmps": 57.5}})
+    assert known.truth.vx_kmps == (-57.5, -57.5)
+    given = parse_scenario({"estimator": {"closing_speed_kmps": [57.9, 58.1]}})
+    assert given.truth.vx_kmps == (-58.1, -57.9)
+    assert given.estimator.vx_kmps == (-59.0, -57.0)
+
+
 def test_the_same_set_key_twice_is_refused(short, tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", "intercept", short,
                    "--set", "model.nu_mps2=0.01", "--set", "model.nu_mps2=0.02")  # fmt: skip

@@ -22,12 +22,6 @@ class InterceptOptions(EstimatorOptions):
     #: ``{old key: option}`` (the scenario refuses the old key naming the new one)
     legacy_keys: ClassVar[Mapping[str, str]] = {}
 
-    def closing_interval_option(self) -> str | None:
-        """The option (set true) that makes the estimator's ranges move at the
-        closing-speed interval's speeds, so that the scenario's interval must hold the
-        truth; None when nothing does."""
-        return None
-
     def kinematic_margin_table(self, on: bool) -> dict[str, bool]:
         """The table entries that switch the bound of the kinematic term the auxiliary
         model neglects (``{}``: the estimator has no such bound)."""

@@ -35,10 +35,6 @@ class KalmanOptions(InterceptOptions):
         float, Field(ge=1.0, le=1e6, description="factor on every noise variance, R and Q")
     ] = 1.0
 
-    def closing_interval_option(self) -> str | None:
-        # the projected range moves at the interval's speeds
-        return "range_constraint" if self.range_constraint else None
-
     def build(self, setting):
         from kalman_vs_infoset.estim.intercept.gaussian.estimator import KalmanChannelEstimator
 

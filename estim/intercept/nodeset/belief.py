@@ -70,7 +70,7 @@ class NodeSet(Belief):
         Number of rejected measurements so far.
     n_simplified : int
         Number of node slices outer-simplified so far (a prediction left them with
-        more than the estimator's ``max_vertices``; sound, slightly wider).
+        more than the estimator's ``max_vertices``, when it has one).
     """
 
     model: ChannelModel

@@ -77,6 +77,9 @@ __all__ = ["NodeSet", "NodeSetEstimator"]
 
 FloatArray = NDArray[np.float64]
 
+#: the kernel's vertex cap when there is none (``max_vertices=None``)
+NO_CAP = np.iinfo(np.int64).max
+
 
 @dataclass(frozen=True)
 class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
@@ -111,12 +114,19 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         ``a = alpha / alpha_scale_rad`` in the stored polygons.
     kinematic_margin : bool
         Add the bound of the neglected kinematic term to ``nu`` (module docstring).
-    max_vertices : int
-        A slice that a prediction leaves with more vertices is outer-simplified to
-        this many (the edges whose removal adds the least area go; sound). Each
-        prediction adds up to four vertices to a slice that no bearing clips, so
-        without a cap a slice grows with the number of steps; the count of
-        simplified slices is the belief's ``n_simplified``.
+    max_vertices : int or None
+        ``None`` (the default): slices are never simplified. Each prediction adds up
+        to four vertices to a slice that no bearing clips, so a slice grows with the
+        number of steps (the bearings clip most of it; finer steps leave more). An
+        integer caps them: a slice
+        left with more vertices is outer-simplified to this many (the edges whose
+        removal adds the least area go), counted in the belief's ``n_simplified``.
+        Each simplified slice still holds its exact slice, but the slices are then
+        no longer the slices of one convex body, and the bounds between nodes
+        (:mod:`.bounds`) extrapolate secants whose value *falls* as the far node's
+        value grows: with a cap the truth can leave the set between nodes (with a
+        cap of 8 it did, in Fig. 3 and Fig. 5 runs). A cap is a speed option
+        without the guarantee.
     split_bands : bool
         When updates have emptied closing-speed bands, split the live ones in halves
         until as many bands are live as at the start
@@ -136,7 +146,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_inserts: int = 4
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = DEFAULTS.kinematic_margin
-    max_vertices: int = DEFAULTS.max_vertices
+    max_vertices: int | None = DEFAULTS.max_vertices
     split_bands: bool = DEFAULTS.split_bands
     max_bands: int = DEFAULTS.max_bands
 
@@ -157,8 +167,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             raise ValueError("max_pieces must be >= 1")
         if not (self.tighten_rtol > 0 and self.max_inserts >= 0):
             raise ValueError("need tighten_rtol > 0 and max_inserts >= 0")
-        if self.max_vertices < 8:
-            raise ValueError("max_vertices must be >= 8")
+        if self.max_vertices is not None and self.max_vertices < 8:
+            raise ValueError("max_vertices must be None or >= 8")
 
     # -- construction ----------------------------------------------------------------
     def bands(self) -> tuple[FloatArray, FloatArray]:
@@ -315,7 +325,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             np.ascontiguousarray(piece, dtype=np.int64), s.u_lo, s.u_hi, s.hard_lo_s,
             s.hard_hi_s, float(t), *ops.parts(), self.alpha_scale_rad, s.e_nom,
             self.model.eps_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
-            self.max_vertices,
+            NO_CAP if self.max_vertices is None else self.max_vertices,
         )  # fmt: skip
         return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi, n_simpl
 

@@ -48,14 +48,15 @@ class InfosetOptions(SlabOptions):
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
     ] = 0.01
     max_vertices: Annotated[
-        int,
+        int | None,
         Field(
             ge=8,
             le=100_000,
-            description="nodes: a slice with more vertices after a prediction is "
-            "outer-simplified to this many (sound)",
+            description="nodes: outer-simplify a slice left with more vertices by a "
+            "prediction (None: never; a cap voids the guarantee between nodes, "
+            "docs/infoset.md)",
         ),
-    ] = 128
+    ] = None
     split_bands: Annotated[
         bool,
         Field(description="nodes: split closing-speed bands where their width dominates"),
