@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import usage
+from kalman_vs_infoset.experiments.limits import reraise_timeout
 from kalman_vs_infoset.experiments.progress import step_progress
 from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
 from kalman_vs_infoset.experiments.sim.intercept import Engagement, EngagementResult
@@ -74,6 +75,7 @@ def timed_engagement(sc, estimator_name, noise_name, seed_seq) -> dict[str, Any]
     except MemoryError:
         raise
     except Exception as exc:  # a failing run is recorded, not fatal
+        reraise_timeout(exc)  # but a CPU limit's timeout is the limit's to report
         res = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
     res["wall_s"] = time.perf_counter() - t0
     return res

@@ -33,6 +33,20 @@ def _expired(signum, frame) -> None:
     raise RunTimeout
 
 
+def reraise_timeout(exc: BaseException) -> None:
+    """Raise the :class:`RunTimeout` behind ``exc``, if there is one. A timeout that
+    fires while a compiled (numba) kernel returns comes back as a ``SystemError``
+    ("returned a result with an exception set") caused by it; a run's own ``except
+    Exception`` must not record that as the run's error."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, RunTimeout):
+            raise cur
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+
+
 @contextmanager
 def cpu_limit(seconds: float | None) -> Iterator[None]:
     """Raise :class:`RunTimeout` in the block once it has used ``seconds`` of CPU time

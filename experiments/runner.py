@@ -43,6 +43,7 @@ from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exporte
     results,
 )
 from kalman_vs_infoset.experiments.files import atomic_write, exclusive
+from kalman_vs_infoset.experiments.limits import reraise_timeout
 from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the parser's bounds
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity
@@ -154,6 +155,7 @@ def batched_task(simulate, seed: int, runs: list[int]) -> list[tuple[int, dict[s
     except MemoryError:
         raise  # a resource, not the run: not recorded (the runner says so)
     except Exception as exc:
+        reraise_timeout(exc)  # a CPU limit's timeout is the limit's to report
         if len(runs) > 1:
             return [pair for j in runs for pair in batched_task(simulate, seed, [j])]
         failed = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}

@@ -264,6 +264,51 @@ def test_a_run_over_the_cpu_limit_is_recorded_as_failed(short, tmp_path, capsys,
 
 
 @linux
+def test_a_timeout_inside_a_compiled_kernel_is_recorded_as_the_timeout(
+    short, tmp_path, capsys, monkeypatch
+):
+    """A timeout that fires while a numba kernel returns reaches the run as a
+    SystemError ("returned a result with an exception set") caused by it: the row says
+    RunTimeout, not SystemError."""
+    from kalman_vs_infoset.experiments.limits import RunTimeout
+
+    real = intercept_runs.run_engagement
+
+    def wrapped_on_run_1(sc, est, noise, rng):
+        if rng.bit_generator.seed_seq.spawn_key == (1,):
+            try:
+                _spin()
+            except RunTimeout as exc:
+                raise SystemError("CPUDispatcher(apply_ops) returned a result with an "
+                                  "exception set") from exc  # fmt: skip
+        return real(sc, est, noise, rng)
+
+    monkeypatch.setattr(intercept_runs, "run_engagement", wrapped_on_run_1)
+    out = tmp_path / "out"
+    r = run(capsys, "intercept", short, "--runs", 3, "--workers", 1, "--no-progress",
+            "--out", out, "--run-cpu-limit-s", 0.3)  # fmt: skip
+    assert r.returncode == 1
+    df = _table(out)
+    assert list(df["status"]) == ["ok", "failed", "ok"]
+    assert df.loc[1, "error"].startswith("RunTimeout") and "SystemError" not in df.loc[1, "error"]
+
+
+def test_a_batched_task_passes_a_wrapped_timeout_on():
+    """The vectorised loops' chunks (``batched_task``) record an error per run, but a
+    wrapped CPU-limit timeout goes on to the limit."""
+    from kalman_vs_infoset.experiments.limits import RunTimeout
+    from kalman_vs_infoset.experiments.runner import batched_task
+
+    def simulate(seeds):
+        raise SystemError("returned a result with an exception set") from RunTimeout()
+
+    with pytest.raises(RunTimeout):
+        batched_task(simulate, 0, [0, 1])
+    plain = batched_task(lambda seeds: 1 / 0, 0, [0])
+    assert plain[0][1]["error"].startswith("ZeroDivisionError")
+
+
+@linux
 def test_a_chunk_over_its_limit_is_judged_run_by_run():
     """The chunk (3 runs, 0.6 s) is over; alone, runs 0 and 2 are within 0.2 s."""
 
