@@ -57,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     options.add_runner(parser)
     options.add_trace(parser)
-    options.add_overrides(parser, "simulation.duration_s=60")
+    options.add_overrides(parser, "simulation.control_period_s=0.02")
 
 
 @dataclass(frozen=True)

@@ -88,10 +88,11 @@ def cpu_limit_s(text: str) -> float:
 def split_list(text: str, allowed: Sequence[str], what: str) -> list[str]:
     """A comma list of names from ``allowed``: none missing, unknown or given twice
     (``ValueError`` of one line otherwise)."""
-    items = [t.strip() for t in str(text).split(",") if t.strip()]
+    parts = [t.strip() for t in str(text).split(",")]
+    items = [t for t in parts if t]
     bad = [t for t in items if t not in allowed]
-    if not items or bad:
-        got = f"unknown {', '.join(bad)}" if bad else "an empty list"
+    if not items or bad or len(items) < len(parts):
+        got = f"unknown {', '.join(bad)}" if bad else "an empty name" if items else "an empty list"
         raise ValueError(
             f"expected a comma-separated list of {what} from {', '.join(allowed)}; "
             f"got {got} in {text!r}"
@@ -177,9 +178,9 @@ def add_noise(
 
 def parse_runs(text: str) -> list[int]:
     """``--trace 0,3`` -> ``[0, 3]`` (non-negative run ids, no repeats)."""
-    items = [t.strip() for t in str(text).split(",") if t.strip()]
+    items = [t.strip() for t in str(text).split(",")]
     try:
-        runs = [int(t) for t in items]
+        runs = [int(t) for t in items]  # an empty item ("0,,3") is not a run id
     except ValueError:
         runs = []
     if not runs or min(runs) < 0 or len(set(runs)) != len(runs) or len(runs) > MAX_TRACED:

@@ -8,6 +8,7 @@ file and the field, which the command line prints with exit status 2.
 
 from __future__ import annotations
 
+import hashlib
 import tomllib
 from collections.abc import Sequence
 from pathlib import Path
@@ -109,12 +110,29 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
     return out
 
 
+#: longest override suffix of a scenario's name (the name is part of every result
+#: file's name, and a file name has at most 255 bytes)
+MAX_SUFFIX = 96
+
+
 def override_suffix(overrides: Sequence[str]) -> str:
     """``+key=value`` per override, file-name safe: appended to the scenario's name so
-    that results of an overridden scenario never land in the original's files."""
+    that results of an overridden scenario never land in the original's files. Past
+    :data:`MAX_SUFFIX` characters the overrides that do not fit are named by a hash of
+    all of them (``+N_more_<hash>``): distinct override lists keep distinct names."""
     squeezed = (o.replace(" ", "") for o in overrides)
-    safe = ("".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed)
-    return "".join(f"+{o}" for o in safe)
+    safe = ["".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed]
+    full = "".join(f"+{o}" for o in safe)
+    if len(full) <= MAX_SUFFIX:
+        return full
+    digest = hashlib.sha256("\n".join(overrides).encode()).hexdigest()[:12]
+    # the most leading overrides that fit beside the tail naming the rest (0 always do)
+    k = max(
+        k
+        for k in range(len(safe))
+        if sum(len(o) + 1 for o in safe[:k]) + len(f"+{len(safe) - k}_more_{digest}") <= MAX_SUFFIX
+    )
+    return "".join(f"+{o}" for o in safe[:k]) + f"+{len(safe) - k}_more_{digest}"
 
 
 def default_name(path: str | Path) -> str:

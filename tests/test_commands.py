@@ -62,8 +62,9 @@ def test_the_old_estimator_flag_is_refused_naming_the_new_one(command, tmp_path,
 @pytest.mark.parametrize("command", sorted(CHOOSERS))
 @pytest.mark.parametrize(
     ("value", "says"),
-    [("", "empty list"), ("ukf,ukf", "ukf given twice"), ("kalman9", "unknown kalman9")],
-)
+    [("", "empty list"), ("ukf,ukf", "ukf given twice"), ("kalman9", "unknown kalman9"),
+     (",ukf", "an empty name")],  # an empty name was dropped silently
+)  # fmt: skip
 def test_empty_duplicate_and_unknown_estimator_lists_are_refused(
     command, value, says, tmp_path, capsys
 ):
@@ -80,7 +81,9 @@ def test_tightness_studies_one_estimator_at_a_time(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["intercept", "compare", "sweep", "attitude"])
-@pytest.mark.parametrize(("value", "says"), [("", "empty list"), ("game,game", "given twice")])
+@pytest.mark.parametrize(
+    ("value", "says"), [("", "empty list"), ("game,game", "given twice"), ("game,", "empty name")]
+)
 def test_noise_lists_are_refused_when_empty_or_repeated(command, value, says, tmp_path, capsys):
     out = tmp_path / "out"
     r = run(capsys, command, *CHOOSERS[command], "--noise", value, "--out", out)

@@ -73,6 +73,34 @@ def test_the_truths_default_closing_velocity_is_the_speeds_the_estimators_assume
     assert given.estimator.vx_kmps == (-59.0, -57.0)
 
 
+def test_many_overrides_still_name_files_the_system_accepts(short, tmp_path, capsys):
+    """Seven --set overrides once made a result file's name longer than 255 bytes ("File
+    name too long", exit 2); past 96 characters the suffix names the rest by a hash."""
+    from kalman_vs_infoset.experiments.scenario import MAX_SUFFIX, override_suffix
+
+    sets = [f"estimator.infoset.{k}" for k in (
+        "n_nodes=6", "min_live_nodes=4", "max_pieces=4", "n_bands=2", "split_bands=false",
+        "tighten_rtol=0.5", "node_split_ratio=3.0")]  # fmt: skip
+    suffix = override_suffix(sets)
+    assert len(suffix) <= MAX_SUFFIX and suffix.startswith("+" + sets[0])
+    assert override_suffix(sets) == suffix  # stable: a rerun resumes the same files
+    assert override_suffix([*sets[:-1], "estimator.infoset.node_split_ratio=4.0"]) != suffix
+    assert override_suffix(sets[:2]) == "+" + "+".join(sets[:2])  # short: unchanged
+    out = tmp_path / "out"
+    args = [a for kv in sets for a in ("--set", kv)]
+    r = run(capsys, "intercept", short, "--runs", 1, "--workers", 1, "--no-progress",
+            "--out", out, *args)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert all(len(p.name.encode()) <= 255 for p in files_under(out))
+
+
+def test_a_scenario_name_too_long_for_file_names_is_refused(tmp_path, capsys):
+    p = tmp_path / "s.toml"
+    p.write_text(SHORT.replace('name = "short"', f'name = "{"n" * 200}"'))
+    err = _refused(capsys, tmp_path / "out", "intercept", p, "--runs", "1")
+    assert "field 'name' has 200 characters" in err
+
+
 def test_the_same_set_key_twice_is_refused(short, tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", "intercept", short,
                    "--set", "model.nu_mps2=0.01", "--set", "model.nu_mps2=0.02")  # fmt: skip

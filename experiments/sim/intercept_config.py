@@ -49,6 +49,9 @@ BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
 MAX_STEPS = 100_000
 #: a scenario's name names its result files: no path separators, no "..", no leading dot
 SAFE_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.,=+\-]*$")
+#: longest scenario name: 64 of its own and up to 96 of --set suffix; the longest
+#: result file adds about 70 characters, under the 255 bytes of a file name
+MAX_NAME = 160
 
 
 def legacy_options() -> dict[str, tuple[tuple[str, str], ...]]:
@@ -69,6 +72,11 @@ def check_name(name: str) -> str:
         raise ValueError(
             f"field 'name' {name!r} must use letters, digits and _ . , = + - only "
             "(no path separators, no '..', no leading dot): it names the result files"
+        )
+    if len(name) > MAX_NAME:
+        raise ValueError(
+            f"field 'name' has {len(name)} characters, at most {MAX_NAME} (with the "
+            "--set suffix): it names the result files"
         )
     return name
 
