@@ -17,6 +17,8 @@ from kalman_vs_infoset.estim.intercept.sections.box import BoxFamily, BoxSection
 from kalman_vs_infoset.estim.intercept.sections.ellipsoid import (
     EllipsoidFamily,
     EllipsoidSections,
+    covered,
+    fogel_huang_volume,
     segment_sum,
 )
 from kalman_vs_infoset.estim.intercept.sections.zonotope import (
@@ -219,24 +221,64 @@ def test_ellipsoid_segment_sums_are_estim_sets_minkowski_sum_schweppe1968(criter
 @pytest.mark.parametrize("criterion", ["volume", "trace"])
 def test_ellipsoid_strip_is_estim_sets_intersect_strip_fogel_huang1982(criterion):
     """The vectorised minimum-volume update (and the per-section minimum-trace one)
-    equal the library's, including segments (rank 1) and vanishing strips."""
+    equal the library's, including segments (rank 1) and vanishing strips; the
+    sections hold the result with its rounding covered (:func:`covered`)."""
     rng = np.random.default_rng(4)
     b = _random_batch("ellipsoid", rng, criterion=criterion)
     shape = b.shape.copy()
     shape[1] = np.outer(shape[1][:, 0], shape[1][:, 0])  # a segment
-    b = EllipsoidSections(b.family, b.centre.copy(), shape)
-    half = np.sqrt(b.shape[:, 0, 0])
+    half = np.sqrt(shape[:, 0, 0])
     lo = b.centre[:, 0] + rng.uniform(-1.2, 0.5, N) * half
     hi = lo + rng.uniform(0.1, 1.5, N) * half
     hi[2] = lo[2]  # a line
+    r = [((lo[j] + hi[j]) / 2, (hi[j] - lo[j]) / 2) for j in range(N)]
+    if criterion == "volume":  # the kernel itself, on the raw segment too
+        # the slab clipped to each ellipsoid's range of alpha first, as clip_alpha does
+        s_lo, s_hi, _ = clip_slabs(lo, hi, b.centre[:, 0] - half, b.centre[:, 0] + half)
+        c, p = fogel_huang_volume(b.centre, shape, s_lo, s_hi, np.ones(N, dtype=bool))
+        for j in range(N):
+            want = Ellipsoid(b.centre[j], shape[j]).intersect_strip([1.0, 0.0], *r[j], criterion)
+            np.testing.assert_allclose(c[j], want.centre, rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(p[j], want.shape, rtol=1e-8, atol=1e-9)
+    b = EllipsoidSections(b.family, b.centre.copy(), shape)  # the segment floored
     got, keep = b.clip_alpha(lo, hi)
     assert keep.all()
     for j in range(N):
-        want = b.ellipsoid(j).intersect_strip(
-            [1.0, 0.0], (lo[j] + hi[j]) / 2, (hi[j] - lo[j]) / 2, criterion
-        )
+        want = b.ellipsoid(j).intersect_strip([1.0, 0.0], *r[j], criterion)
         np.testing.assert_allclose(got.centre[j], want.centre, rtol=1e-9, atol=1e-12)
-        np.testing.assert_allclose(got.shape[j], want.shape, rtol=1e-8, atol=1e-9)
+        held = covered(b.shape[j : j + 1], want.shape[None])[0]  # its rounding covered
+        np.testing.assert_allclose(got.shape[j], held, rtol=1e-8, atol=1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    log_ratio=st.floats(-16.0, -6.0),
+    angle=st.floats(0.0, np.pi),
+    where=st.floats(-0.9, 0.9),
+    width=st.floats(1e-3, 0.5),
+    criterion=st.sampled_from(["volume", "trace"]),
+)
+def test_a_thin_section_cut_by_a_strip_holds_the_exact_intersection(
+    log_ratio, angle, where, width, criterion
+):
+    """A section far thinner than float64 resolves (eigenvalue ratio down to 1e-16) cut
+    by a bearing strip still holds every point of the exact intersection: the update of
+    a shape counted as flat (a segment's, exact for a segment) once cut such a section
+    twenty times thinner than the intersection (Fig. 5, targeted bearing errors)."""
+    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    p = rot @ np.diag([1.0, 10.0**log_ratio]) @ rot.T
+    b = EllipsoidSections(EllipsoidFamily(criterion=criterion), np.zeros((1, 2)), p[None])
+    half = np.sqrt(p[0, 0])
+    lo, hi = np.array([(where - width) * half]), np.array([(where + width) * half])
+    got, keep = b.clip_alpha(lo, hi)
+    assert keep.all()
+    # points of the original ellipsoid (the floored one holds it) inside the strip
+    chol = np.linalg.cholesky(b.shape[0])
+    t = np.linspace(0.0, 2.0 * np.pi, 4001)
+    ring = (chol @ np.vstack([np.cos(t), np.sin(t)])).T
+    pts = np.vstack([ring * s for s in (1.0 - 1e-9, 0.5, 0.0)])
+    pts = pts[(pts[:, 0] >= lo[0]) & (pts[:, 0] <= hi[0])]
+    assert got.ellipsoid(0).contains(pts, 1e-9).all()
 
 
 def test_enclosing_parallelograms_contain_the_polygons_and_fit_a_parallelogram():
