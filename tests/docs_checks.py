@@ -385,7 +385,8 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
                           ("`estimator.infoset.n_bands=2`", "n_bands_2"),
                           ("`estimator.infoset.n_bands=1`", "n_bands_1"))
       for noise in ("random", "game")],
-    (PERF, r"with a repeat of the defaults \(([\d.]+) / ([\d.]+) CPU-s for random / game",
+    (PERF, r"A repeat of the defaults right after the last row read ([\d.]+) / ([\d.]+) "
+     r"CPU-s for random / game",
      f"{SPEED}default-repeat.json",
      tuple(f"rows/[noise={n}]/cpu_s" for n in ("random", "game"))),
     # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
