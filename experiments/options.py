@@ -199,7 +199,7 @@ def add_trace(p: argparse.ArgumentParser) -> None:
         default=None,
         metavar="RUNS",
         help="record the per-step history of these runs (e.g. 0,3) as <results>-trace.parquet "
-        "beside the run table and draw their figures",
+        "in the _traces folder beside the run tables, and draw their figures",
     )
 
 
