@@ -1,10 +1,12 @@
-"""The range-finder tightness rows of ``docs/infoset.md`` against the results files written by the
-command that produced them (``kvi tightness data/scenarios/kp_fig5_range.toml --seed
-S --out docs/results/tightness``): a stale number fails here."""
+"""The tightness tables of ``docs/infoset.md`` and ``docs/intercept.md`` against the results
+files written by the commands that produced them (``kvi tightness ... --json``, in
+``docs/results/tightness/``): a stale number fails here."""
 
 import json
 import re
 from pathlib import Path
+
+from docs_numbers import agrees
 
 ROOT = Path(__file__).resolve().parents[1]
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
@@ -43,3 +45,43 @@ def test_infoset_page_tightness_table_matches_its_results_files():
         assert res["guided"] is (guidance == "law") and res["seed"] == int(seed)
         assert [float(c) for c in cells.split("|")] == [round(r, 3) for r in res["ratio"]], stem
         assert all(res["exact_inside"]) and res["times_s"] == [10.0, 30.0, 60.0, 90.0, 95.0]
+
+
+#: a row of docs/intercept.md's table of every set's width over the exact one
+FAMILY_ROW = re.compile(
+    r"^\| (infoset|zonotope|ellipsoid|box) \([^|]*\) \| ([\d.]+)-([\d.]+) \| ([\d.]+)-([\d.]+) \|$",
+    re.M,
+)
+
+
+def _ratio_ranges(paths: list[Path]) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(min, max) of the width ratios at 10-60 s and at 90-95 s over the files."""
+    early, late = [], []
+    for path in paths:
+        res = json.loads(path.read_text())
+        assert all(x is None or x for x in res["exact_inside"]), path.name
+        for t, r in zip(res["times_s"], res["ratio"], strict=True):
+            if r is not None:
+                (early if t <= 60.0 else late).append(r)
+    return (min(early), max(early)), (min(late), max(late))
+
+
+def test_intercept_page_family_widths_are_the_ranges_of_their_results_files():
+    """Each set's width over the exact one, as ranges over seeds 3 (Fig. 3) and 5 (Fig. 5)
+    and random / bias / switching / game errors: the families' files (``kvi tightness
+    ... --estimators NAME``) and, for the node set, its seeds-3/5 files with and without
+    guidance (the infoset page's main table)."""
+    rows = FAMILY_ROW.findall((ROOT / "docs" / "intercept.md").read_text(encoding="utf-8"))
+    assert {r[0] for r in rows} == {"infoset", "zonotope", "ellipsoid", "box"}
+    tight = ROOT / "docs/results/tightness"
+    for name, *printed in rows:
+        if name == "infoset":
+            paths = [p for p in [*tight.glob("kp_fig3-tightness-infoset-*-seed3*.json"),
+                                 *tight.glob("kp_fig5-tightness-infoset-*-seed5*.json")]
+                     if "slabs" not in p.name]  # fmt: skip
+        else:
+            paths = sorted((tight / "families").glob(f"*-tightness-{name}-*.json"))
+            assert len(paths) == 8, name  # 2 scenarios x 4 kinds of error
+        (e_lo, e_hi), (l_lo, l_hi) = _ratio_ranges(paths)
+        for text, value in zip(printed, (e_lo, e_hi, l_lo, l_hi), strict=True):
+            assert agrees(text, value), (name, text, value)
