@@ -107,6 +107,19 @@ def segment_sum(shape: FloatArray, d: FloatArray, criterion: Criterion) -> Float
     return np.where((t2 <= 0.0)[:, None, None], shape, out)
 
 
+def _trace(p: FloatArray) -> FloatArray:
+    return p[:, 0, 0] + p[:, 1, 1]
+
+
+def _eigenvalues(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Largest and smallest eigenvalue of each symmetric 2 x 2 in ``p`` (closed form; the
+    smallest carries an error of ~1e-16 of the largest and may come out negative)."""
+    tr = _trace(p)
+    det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
+    disc = np.sqrt(np.clip(0.25 * tr * tr - det, 0.0, None))
+    return 0.5 * tr + disc, 0.5 * tr - disc
+
+
 def fogel_huang_volume(
     c: FloatArray, p: FloatArray, lo: FloatArray, hi: FloatArray, cut: BoolArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -132,11 +145,9 @@ def fogel_huang_volume(
     pa = pp[:, :, 0]
     y, r = 0.5 * (lo[idx] + hi[idx]), 0.5 * (hi[idx] - lo[idx])
     e = y - cc[:, 0]
-    tr = pp[:, 0, 0] + pp[:, 1, 1]
-    det = pp[:, 0, 0] * pp[:, 1, 1] - pp[:, 0, 1] * pp[:, 1, 0]
-    # eigenvalues of a symmetric 2 x 2; rank as estim.common.sets.ellipsoid (relative 1e-12)
-    disc = np.sqrt(np.clip(0.25 * tr * tr - det, 0.0, None))
-    lam_max, lam_min = 0.5 * tr + disc, np.clip(0.5 * tr - disc, 0.0, None)
+    # rank as estim.common.sets.ellipsoid (relative 1e-12)
+    lam_max, lam_min = _eigenvalues(pp)
+    lam_min = np.clip(lam_min, 0.0, None)
     flat = lam_min <= 1e-12 * np.maximum(lam_max, 1e-300)
     n = np.where(flat, 1.0, 2.0)
     papa = pa[:, :, None] * pa[:, None, :]
@@ -176,10 +187,6 @@ MIN_EIGEN_RATIO = 1e-11
 ROUNDING_COVER = 1e-13
 
 
-def _trace(p: FloatArray) -> FloatArray:
-    return p[:, 0, 0] + p[:, 1, 1]
-
-
 def covered(p_in: FloatArray, p_out: FloatArray) -> FloatArray:
     """``p_out`` (an operation's result on ``p_in``) with its rounding covered and its
     conditioning floored (:func:`floor_eigenvalues`)."""
@@ -194,11 +201,7 @@ def floor_eigenvalues(p: FloatArray, cover: FloatArray | float = 0.0) -> FloatAr
     = 0``, ``P`` unchanged when already so conditioned."""
     if p.shape[0] == 0:
         return p
-    tr = p[:, 0, 0] + p[:, 1, 1]
-    det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
-    disc = np.sqrt(np.clip(0.25 * tr * tr - det, 0.0, None))
-    lam_max, lam_min = 0.5 * tr + disc, 0.5 * tr - disc
-    # the closed form's lam_min carries an error of ~1e-16 lam_max: covered by the floor
+    lam_max, lam_min = _eigenvalues(p)  # lam_min's error (~1e-16 lam_max): under the floor
     add = np.maximum(np.clip(MIN_EIGEN_RATIO * lam_max - lam_min, 0.0, None), cover)
     if not np.any(add > 0.0):
         return p
