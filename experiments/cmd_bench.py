@@ -33,6 +33,9 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   ``runs_per_cpu_s`` (``{"1": .., "2": ..}``): runs per CPU-second of this process and
   its workers together, i.e. runs/s per core; ``worker_peak_rss_mb``: the largest peak
   resident memory of a worker (Linux ``VmHWM``; else ``ru_maxrss`` of the workers);
+  ``runs_per_cpu_s_by_chunk`` (``{"1": .., "K": ..}``): the same runs on 2 workers
+  with 1 run a task (the default) and with ``K = mc_runs / 2`` runs a task (one task a
+  worker): whether batching runs into tasks pays;
 * ``help_cpu_s`` (``{command: CPU-s}``, ``"(none)"`` for ``kvi --help``) and its
   largest value ``help_cpu_s_max``: ``kvi COMMAND --help`` in a fresh interpreter,
   i.e. what starting the command line costs (``--quick``: the top level and
@@ -227,10 +230,10 @@ def _peak_rss_mb(pids) -> float:
     return max(peaks) if peaks else float("nan")
 
 
-def throughput(sc, runs: int, workers: int) -> dict[str, float]:
-    """Monte Carlo runs of Fig. 5 on a pool of ``workers`` processes: runs per second
-    (wall), runs per CPU-second (this process and the workers, which are waited for
-    before the clock stops) and the workers' largest peak memory."""
+def throughput(sc, runs: int, workers: int, chunk: int = 1) -> dict[str, float]:
+    """Monte Carlo runs of Fig. 5 on a pool of ``workers`` processes, ``chunk`` runs a
+    task: runs per second (wall), runs per CPU-second (this process and the workers,
+    which are waited for before the clock stops) and the workers' largest peak memory."""
     from kalman_vs_infoset.experiments.executors import make_executor
     from kalman_vs_infoset.experiments.intercept_runs import run_experiment
 
@@ -238,7 +241,7 @@ def throughput(sc, runs: int, workers: int) -> dict[str, float]:
         wall0, cpu0 = time.perf_counter(), _cpu_s()
         run_experiment(
             sc, compared()[0], "random", runs, 1, Path(tmp), workers=workers, progress=False,
-            executor=pool,
+            executor=pool, chunk=chunk,
         )  # fmt: skip
         rss = _peak_rss_mb(getattr(pool, "_processes", {}) or {})
         pool.shutdown(wait=True)  # the workers' CPU time counts once they are waited for
@@ -296,15 +299,22 @@ def run(args) -> dict[str, Any]:
     result.update(cost_exponent(fig3, COST_DT_S_QUICK if quick else COST_DT_S))
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
     # interleaved and best-of-repeat: the machine's speed drifts (shared host)
-    one, two = [], []
+    one, two, chunked = [], [], []
+    big = max(2, mc_runs // 2)  # two tasks, one a worker
     for _ in range(repeat):
         one.append(throughput(fig5, mc_runs, 1))
         two.append(throughput(fig5, mc_runs, 2))
+        chunked.append(throughput(fig5, mc_runs, 2, chunk=big))
     best = {w: max(m, key=lambda t: t["runs_per_cpu_s"]) for w, m in (("1", one), ("2", two))}
     result["runs_per_s"] = max(t["runs_per_s"] for t in one)
     result["runs_per_s_2"] = max(t["runs_per_s"] for t in two)
     result["speedup_2_workers"] = result["runs_per_s_2"] / result["runs_per_s"]
     result["runs_per_cpu_s"] = {w: t["runs_per_cpu_s"] for w, t in best.items()}
+    # batching runs into tasks, measured both ways (2 workers, the same runs)
+    result["runs_per_cpu_s_by_chunk"] = {
+        "1": best["2"]["runs_per_cpu_s"],
+        str(big): max(t["runs_per_cpu_s"] for t in chunked),
+    }
     result["worker_peak_rss_mb"] = {w: max(t["peak_rss_mb"] for t in m) for w, m in
                                     (("1", one), ("2", two))}  # fmt: skip
     from kalman_vs_infoset.experiments.cli import COMMANDS

@@ -50,6 +50,10 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert np.allclose(steps[1:] / steps[:-1], 2.0, rtol=0.1) and (cost > 0).all()
     slope = np.polyfit(np.log(steps), np.log(cost), 1)[0]
     assert out["cost_exponent"] == pytest.approx(slope)
+    # one run a task against two (--quick: 2 runs), on 2 workers
+    assert out["runs_per_cpu_s_by_chunk"]["1"] == out["runs_per_cpu_s"]["2"]
+    assert set(out["runs_per_cpu_s_by_chunk"]) == {"1", "2"}
+    assert out["runs_per_cpu_s_by_chunk"]["2"] > 0
     for workers in ("1", "2"):
         assert out["runs_per_cpu_s"][workers] > 0
         assert 10.0 < out["worker_peak_rss_mb"][workers] < 1e5

@@ -121,10 +121,13 @@ def _table(df):
 
 
 def test_same_results_with_one_and_two_workers_and_same_seed(short, tmp_path):
+    """The same table with 1 or 2 workers and 1 or 3 runs a task (``chunk``)."""
     sc = load_scenario(short)
     a = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "a", workers=1, progress=False)
     b = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "b", workers=2, progress=False)
-    c = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "c", workers=1, progress=False)
+    c = run_experiment(
+        sc, "infoset", "random", 4, 11, tmp_path / "c", workers=1, progress=False, chunk=3
+    )
     pd.testing.assert_frame_equal(_table(a), _table(b))
     pd.testing.assert_frame_equal(_table(a), _table(c))
     assert (a["status"] == "ok").all() and a["truth_outside"].sum() == 0
