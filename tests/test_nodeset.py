@@ -268,6 +268,31 @@ def test_forecast_extremes_bound_the_miss_of_every_node_vertex():
         assert ext.min_value <= vals.min() and vals.max() <= ext.max_value
 
 
+def test_compiled_forecast_attained_equals_the_general_path_bit_for_bit():
+    """``attained(MissForecast)`` (compiled, the game adversary's question) gives the
+    general path's values and rows exactly, on sets with several bands and pieces, a
+    range interval and impulses, from the a-priori box to the end of the approach."""
+    est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS)
+    forecast = MissForecast(MODEL)
+    rng = np.random.default_rng(7)
+    b, x, seen = est.initial(PRIOR), 5800e3, 0
+    while not b.is_empty and x > MODEL.eps_m + E * DT:
+        b = est.update(b, Bearing(rng.uniform(-2e-4, 2e-4)))
+        if rng.uniform() < 0.1:
+            b = est.update(b, Range(x, off_axis_rad=0.0))
+        if b.is_empty:
+            break
+        fast = b.attained(forecast)
+        general = b.attained(lambda pts: forecast(pts))  # not a MissForecast: numpy
+        assert (fast.min_value, fast.max_value) == (general.min_value, general.max_value)
+        assert np.array_equal(fast.argmin, general.argmin)
+        assert np.array_equal(fast.argmax, general.argmax)
+        seen += 1
+        b = est.predict(b, DT, Impulse(rng.uniform(-2.0, 2.0), 0.1))
+        x -= E * DT
+    assert seen > 150 and len(b.u_lo) > 1  # the whole approach, several pieces
+
+
 def test_beliefs_are_never_mutated():
     est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS)
     b = est.initial(PRIOR)

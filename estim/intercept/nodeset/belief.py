@@ -25,7 +25,7 @@ from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
-from kalman_vs_infoset.estim.intercept.nodeset import _contains
+from kalman_vs_infoset.estim.intercept.nodeset import _attained, _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
 from numpy.typing import ArrayLike, NDArray
@@ -206,6 +206,8 @@ class NodeSet(Belief):
         """
         if self.is_empty:
             raise ValueError(f"attained values of an empty node set (status {self.status})")
+        if type(fn) is MissForecast and fn.model == self.model:
+            return self._forecast_attained()
         own = self.polygons.owner()
         piece, lab = self.piece[own], self.label_s[own]
         tol = 1e-9 * np.abs(lab)
@@ -217,6 +219,18 @@ class NodeSet(Belief):
         vals = np.asarray(fn(pts), dtype=float)
         i_lo, i_hi = int(np.argmin(vals)), int(np.argmax(vals))
         return Extremes(float(vals[i_lo]), pts[i_lo], float(vals[i_hi]), pts[i_hi])
+
+    def _forecast_attained(self) -> Extremes:
+        """:meth:`attained` of the forecast miss, compiled (the game adversary's
+        question every step): the same rows and values as the general path."""
+        found, v_lo, row_lo, v_hi, row_hi = _attained.forecast_attained(
+            self.polygons.xy, self.polygons.offsets, self.piece, self.label_s,
+            float(self.t_s), self.hard_lo_s, self.hard_hi_s, self.u_lo, self.u_hi,
+            float(self.e_nom), float(self.model.nu_mps2), float(self.alpha_scale_rad),
+        )  # fmt: skip
+        if not found:
+            raise ValueError("the node set has live nodes but none within its hard limits")
+        return Extremes(float(v_lo), row_lo, float(v_hi), row_hi)
 
     def _speeds(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``u`` per piece at the fast end, the middle and the slow end."""

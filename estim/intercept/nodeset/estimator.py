@@ -344,9 +344,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
 
 def warm_up() -> None:
     """Load the node set's compiled kernels in this process (a few steps of a small
-    set with a closing-speed interval: bearings, ranges, an impulse, the extremes and
-    the containment test). Forked Monte Carlo workers then inherit them instead of
-    each loading or compiling them again."""
+    set with a closing-speed interval: bearings, ranges, an impulse, the extremes, the
+    forecast miss at the slices' vertices and the containment test). Forked Monte
+    Carlo workers then inherit them instead of each loading or compiling them again."""
     from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
 
     model = ChannelModel()
@@ -358,5 +358,6 @@ def warm_up() -> None:
         b = est.update(b, Range(x, off_axis_rad=0.0))
         b.extremes(MissForecast(model))
         b.extremes(ZeroEffortMiss(model))
+        b.attained(MissForecast(model))
         b.contains(np.array([1e-4, 0.0, x]))
         b = est.predict(b, 0.5, 1.0)
