@@ -80,7 +80,7 @@ def _node_lines(xy, off, tau, scale, e_nom):
             b_line[v] = xy[v, 1] / tau[j] - e_nom * a
         m = off[j + 1] - off[j]
         for v in range(m):
-            i, w = off[j] + v, off[j] + (v + 1) % m
+            i, w = off[j] + v, off[j] + (v + 1 if v + 1 < m else 0)
             db = b_line[i] - b_line[w]
             cross[i] = (a_line[w] - a_line[i]) / db if db != 0.0 else np.nan
     return a_line, b_line, cross

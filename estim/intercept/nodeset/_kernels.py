@@ -36,8 +36,9 @@ def _hull_into(src, m, dst, tol):
         if src[v, 0] < src[first, 0] or (src[v, 0] == src[first, 0] and src[v, 1] < src[first, 1]):
             first = v
     h = 0
-    for r in range(m + 1):
-        v = (first + r) % m
+    v = first - 1
+    for _ in range(m + 1):
+        v = v + 1 if v + 1 < m else 0  # (first + r) % m without a division a vertex
         px, py = src[v, 0], src[v, 1]
         while h >= 2:
             ax, ay = dst[h - 2, 0], dst[h - 2, 1]
@@ -69,7 +70,7 @@ def _clip1(src, m, nx, ny, bound, dst):
     ``ny`` zero: a strip's side; the rounding scale is taken from ``bound``)."""
     k = 0
     for j in range(m):
-        c = (j + 1) % m
+        c = j + 1 if j + 1 < m else 0
         sa = src[j, 0] * nx + src[j, 1] * ny - bound
         sb = src[c, 0] * nx + src[c, 1] * ny - bound
         if sa <= 0.0:
@@ -109,7 +110,7 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
     tol = 1e-14 * scale * max(abs(g0), abs(g1))
     flat = True
     for j in range(m):
-        c = (j + 1) % m
+        c = j + 1 if j + 1 < m else 0
         if abs(g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])) > tol:
             flat = False
             break
@@ -119,7 +120,7 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
         prev = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0]) > 0.0
         changes = 0
         for j in range(m):
-            c = (j + 1) % m
+            c = j + 1 if j + 1 < m else 0
             cur = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0]) > 0.0
             changes += cur != prev
             prev = cur
@@ -146,7 +147,7 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
             sp = 1.0 if (j - 1 - i_lo) % m < (i_hi - i_lo) % m else -1.0
             sc = 1.0 if (j - i_lo) % m < (i_hi - i_lo) % m else -1.0
         else:
-            c = (j + 1) % m
+            c = j + 1 if j + 1 < m else 0
             crp = crc
             crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
             sp = 1.0 if crp > 0.0 else -1.0
