@@ -106,7 +106,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         After each update, nodes are added (up to ``max_inserts`` rounds, times the
         live closing-speed bands over the initial ones) in the cells where the bounds
         of the zero-effort miss exceed the nodes' exact values by more than
-        ``tighten_rtol`` of the set's width (:meth:`NodeSetEstimator.tighten`).
+        ``tighten_rtol`` of the set's width (:meth:`NodeSetEstimator.tighten`). Late
+        in an unguided approach the end of the feasible interval moves fast, and 4
+        rounds (the default before 16) left the set up to 8 % wider than the exact one
+        (docs/infoset.md).
     min_live_nodes : int
         A piece with fewer live nodes is re-gridded (at least 4: the bounds between
         nodes need three live nodes in a row).
@@ -143,7 +146,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     split_ratio: float = DEFAULTS.node_split_ratio
     max_pieces: int = DEFAULTS.max_pieces
     tighten_rtol: float = DEFAULTS.tighten_rtol
-    max_inserts: int = 4
+    max_inserts: int = DEFAULTS.max_inserts
     alpha_scale_rad: float = 1.0e-4
     kinematic_margin: bool = DEFAULTS.kinematic_margin
     max_vertices: int | None = DEFAULTS.max_vertices

@@ -47,6 +47,16 @@ class InfosetOptions(SlabOptions):
         float,
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
     ] = 0.01
+    max_inserts: Annotated[
+        int,
+        Field(
+            ge=0,
+            le=256,
+            description="nodes: rounds of node insertion after an update where a bound "
+            "exceeds the nodes by more than tighten_rtol (times the live closing-speed "
+            "bands over the initial ones)",
+        ),
+    ] = 16
     max_vertices: Annotated[
         int | None,
         Field(
@@ -96,6 +106,7 @@ class InfosetOptions(SlabOptions):
             split_ratio=self.node_split_ratio,
             max_pieces=self.max_pieces,
             tighten_rtol=self.tighten_rtol,
+            max_inserts=self.max_inserts,
             max_vertices=self.max_vertices,
             split_bands=self.split_bands,
             max_bands=self.max_bands,
