@@ -164,6 +164,19 @@ class WorkerLost(RuntimeError):
     missing (a rerun computes them); the command exits with status 1."""
 
 
+def oom_kills(vmstat: str = "/proc/vmstat") -> int | None:
+    """How many processes the kernel's out-of-memory killer has ended since boot
+    (Linux ``oom_kill``; None where the system does not say)."""
+    try:
+        with open(vmstat) as fh:
+            for line in fh:
+                if line.startswith("oom_kill "):
+                    return int(line.split()[1])
+    except (OSError, ValueError):
+        return None
+    return None
+
+
 def _chunks(todo: list[int], size: int) -> list[list[int]]:
     chunks: dict[int, list[int]] = {}
     for j in todo:
@@ -182,6 +195,7 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
     task = job.task if limit_s is None else partial(limited, job.task, limit_s)
     n = min(workers or os.cpu_count() or 1, len(chunks))
     lost = {"dead": 0, "memory": 0}
+    oom_before = oom_kills()
     if executor is None and scheduler is None and n == 1:
         if limit_s is not None:
             warm_kernels()  # loaded before the limit: each run is judged by its own cost
@@ -198,6 +212,10 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
             window = len(chunks) if scheduler or executor else IN_FLIGHT * n
             yield from _pooled(ex, task, chunks, window, lost)
     why = [f"{lost['dead']} runs lost to a dead worker"] if lost["dead"] else []
+    if lost["dead"] and oom_before is not None and (oom_kills() or 0) > oom_before:
+        # a worker killed by the kernel for memory raises no MemoryError: it just dies
+        why[0] += " (the system's out-of-memory killer ended a process meanwhile: try "
+        why[0] += "fewer --workers or smaller options)"
     why += [f"{lost['memory']} runs out of memory (try fewer --workers)"] if lost["memory"] else []
     if why:
         raise WorkerLost(f"{'; '.join(why)}; finished runs are saved; rerun the same command")

@@ -199,11 +199,17 @@ def _dies_on_run_3(sc_, est, noise, ss):
 
 def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_path, monkeypatch):
     """A worker process killed mid-run (os._exit): finished runs are saved, the lost
-    ones are missing (not failed), and rerunning completes exactly those."""
+    ones are missing (not failed), and rerunning completes exactly those. When the
+    kernel's out-of-memory killer ended a process meanwhile (its counter rose, faked
+    here), the message says so."""
+    from kalman_vs_infoset.experiments import executors
+
     sc = load_scenario(short)
     real = intercept_runs.timed_engagement
     monkeypatch.setattr(intercept_runs, "timed_engagement", _dies_on_run_3)
-    with pytest.raises(runner.WorkerLost):
+    counts = iter(range(100))
+    monkeypatch.setattr(executors, "oom_kills", lambda: next(counts))
+    with pytest.raises(runner.WorkerLost, match=r"lost to a dead worker \(the system's out-of"):
         run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=2, progress=False)
     path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
     saved = pd.read_parquet(path) if path.exists() else pd.DataFrame({"run": []})
@@ -211,6 +217,17 @@ def test_killed_worker_loses_no_finished_run_and_resume_completes(short, tmp_pat
     monkeypatch.setattr(intercept_runs, "timed_engagement", real)
     done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
     assert sorted(done["run"]) == [0, 1, 2, 3] and (done["status"] == "ok").all()
+
+
+def test_oom_kill_counter_is_read_from_vmstat(tmp_path):
+    from kalman_vs_infoset.experiments.executors import oom_kills
+
+    vmstat = tmp_path / "vmstat"
+    vmstat.write_text("pgfault 12\noom_kill 3\n")
+    assert oom_kills(str(vmstat)) == 3
+    vmstat.write_text("pgfault 12\n")  # an older kernel: no counter
+    assert oom_kills(str(vmstat)) is None
+    assert oom_kills(str(tmp_path / "missing")) is None
 
 
 def test_run_seed_is_the_spawned_child():
