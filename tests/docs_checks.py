@@ -54,8 +54,16 @@ def _e2e_row(label: str, noise: str, more: str = r" \|", fields: tuple[str, ...]
     return (INT, pattern, E2E + noise + "-s3.parquet", keys)
 
 
+ROUNDS = "docs/results/tightness/rounds/kp_fig5-"
+
 #: (document, pattern with one group per number, results file, key per group)
 CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
+    # the tightening's rounds (docs/infoset.md)
+    ("docs/infoset.md", r"the set was at worst ([\d.]+) and ([\d.]+) times as wide as\s+the "
+     r"exact one with 4 rounds, and ([\d.]+) and ([\d.]+) with 16", ROUNDS
+     + "switch-seed41-max_inserts_4.json", ("max_ratio", *(
+         f"{ROUNDS}{f}.json::max_ratio" for f in ("game-seed5-max_inserts_4",
+         "switch-seed41-max_inserts_16", "game-seed5-max_inserts_16")))),
     # seed 003
     (FIGMD, r"random errors, miss ([\d.]+) m and fuel ([\d.]+) m/s against the "
      r"paper's 4.3", FIGS, (N + "kp_fig3/ours_miss_fuel/random/0",
