@@ -38,7 +38,13 @@ class InfosetOptions(SlabOptions):
         ),
     ] = None
     max_pieces: Annotated[
-        int, Field(ge=1, le=256, description="nodes: most pieces per closing-speed band")
+        int,
+        Field(
+            ge=1,
+            le=256,
+            description="nodes: most pieces per closing-speed band (1: the kinematic term "
+            "is sized over all ranges, and the set diverges near the target)",
+        ),
     ] = 16
     node_split_ratio: Annotated[
         float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
