@@ -58,6 +58,8 @@ ROUNDS = "docs/results/tightness/rounds/kp_fig5-"
 
 #: (document, pattern with one group per number, results file, key per group)
 CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
+    ("docs/infoset.md", r"kp_fig5 runs \(([\d.]+) at 95 s under switching errors, seed 5\)",
+     "docs/results/tightness/kp_fig5-tightness-infoset-switch-seed5.json", ("ratio/4",)),
     # the tightening's rounds (docs/infoset.md)
     ("docs/infoset.md", r"the set was at worst ([\d.]+) and ([\d.]+) times as wide as\s+the "
      r"exact one with 4 rounds, and ([\d.]+) and ([\d.]+) with 16", ROUNDS
@@ -378,6 +380,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
              "cost_ms/1", "cost_ms/2")),
     (PERF, r"1 / 2 workers \| ([\d.]+) / ([\d.]+) \(peak (\d+) MB a worker\)", BENCH,
      ("runs_per_cpu_s/1", "runs_per_cpu_s/2", "worker_peak_rss_mb/1")),
+    # (4 = half of bench's --mc-runs: the key of the second number)
+    (PERF, r"2 workers, 1 / 4 runs a task \| ([\d.]+) / ([\d.]+) \|", BENCH,
+     ("runs_per_cpu_s_by_chunk/1", "runs_per_cpu_s_by_chunk/4")),
     (PERF, r"`kvi COMMAND --help`, costliest command \| ([\d.]+) CPU-s \|", BENCH,
      ("help_cpu_s_max",)),
     (PERF, r"\| ([\d.]+) CPU-s compiling \(([\d.]+) CPU-s in all\)", BENCH,
