@@ -31,11 +31,13 @@ MIN_BAND_REL = 1e-6
 
 def live_bands(s: NodeSet) -> list[tuple[float, float]]:
     """The distinct ``(u_lo, u_hi)`` of the pieces that have live nodes."""
-    live = np.unique(s.piece[s.live])
-    return sorted({(float(s.u_lo[p]), float(s.u_hi[p])) for p in live})
+    lo, hi = s.u_lo.tolist(), s.u_hi.tolist()  # Python floats, as float(s.u_lo[p])
+    return sorted({(lo[p], hi[p]) for p in np.unique(s.piece[s.live]).tolist()})
 
 
-def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float] | None:
+def _loosest_band(
+    s: NodeSet, rtol: float, min_live: int, bands: list[tuple[float, float]] | None = None
+) -> tuple[float, float] | None:
     """The live band to split next, or None.
 
     While fewer than ``min_live`` bands are live, the widest. Otherwise one of the
@@ -44,7 +46,7 @@ def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float]
     set's width: the splits go where the interval's ends are decided, as the
     tightening's new nodes do (a band elsewhere gains nothing from a split but
     cells between fewer nodes)."""
-    bands = live_bands(s)
+    bands = live_bands(s) if bands is None else bands
     if len(bands) < min_live:
         wide = max(bands, key=lambda b: (b[1] - b[0]) / b[1])
         return wide if (wide[1] - wide[0]) > MIN_BAND_REL * wide[1] else None
@@ -54,12 +56,15 @@ def _loosest_band(s: NodeSet, rtol: float, min_live: int) -> tuple[float, float]
         return None
     width = float(np.nanmax(w[:, 1]) - np.nanmin(w[:, 0]))
     best, pick = 0.0, None
+    cell_lo, cell_hi, w_abs = s.u_lo[cell_piece], s.u_hi[cell_piece], np.abs(w)
     for ua, ub in bands:
         rel = (ub - ua) / ub
-        mine = (s.u_lo[cell_piece] == ua) & (s.u_hi[cell_piece] == ub)
-        if not (rel > MIN_BAND_REL and mine.any()):
+        if not rel > MIN_BAND_REL:
             continue
-        loss = 2.0 * float(np.nanmax(np.abs(w[mine]))) * rel
+        mine = (cell_lo == ua) & (cell_hi == ub)
+        if not mine.any():
+            continue
+        loss = 2.0 * float(np.nanmax(w_abs[mine])) * rel
         if loss > rtol * width and loss > best:
             best, pick = loss, (ua, ub)
     return pick
@@ -73,9 +78,10 @@ def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float
     if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
         return s  # a known closing speed (or bands already at their finest)
     for _ in range(2 * max_bands):
-        if len(live_bands(s)) >= max_bands:
+        bands = live_bands(s)
+        if len(bands) >= max_bands:
             break
-        band = _loosest_band(s, rtol, min_live)
+        band = _loosest_band(s, rtol, min_live, bands)
         if band is None:
             break
         out = _split_band(est, s, *band)

@@ -46,6 +46,7 @@ node has passed under eps the set is empty with status ``"terminal"``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Estimator, Status
@@ -183,6 +184,11 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         edges = np.linspace(1.0 / e_hi, 1.0 / e_lo, n + 1) if e_lo < e_hi else np.full(2, 1 / e_lo)
         return edges[:-1], edges[1:]
 
+    @cached_property
+    def start_bands(self) -> int:
+        """How many bands :meth:`bands` makes (asked every update: computed once)."""
+        return len(self.bands()[0])
+
     def initial(self, prior: ChannelPrior | None = None, **box) -> NodeSet:
         """The exact slices of the a-priori box at ``n_nodes`` labels per piece (the
         prior's closing speed is not used: the bands take ``closing_speed_mps``;
@@ -243,9 +249,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
         out = self.refine(self._record(belief, op), before=belief)
         if not out.is_empty and self.split_bands:
-            out = split_live_bands(
-                self, out, len(self.bands()[0]), self.max_bands, self.tighten_rtol
-            )
+            out = split_live_bands(self, out, self.start_bands, self.max_bands, self.tighten_rtol)
         if not out.is_empty:
             out = self.tighten(out)
         if out.is_empty:

@@ -59,6 +59,9 @@ class NodeRefinement:
 
         def bands(self) -> tuple[FloatArray, FloatArray]: ...
 
+        @property
+        def start_bands(self) -> int: ...
+
     def refine(self, s: NodeSet, before: NodeSet | None = None) -> NodeSet:
         """:meth:`_refine_pieces`, then drop the nodes and pieces that bound nothing
         (pieces are renumbered only here, after every piece was visited)."""
@@ -223,8 +226,8 @@ class NodeRefinement:
         """
         # the budget grows with the closing-speed bands split off since the start: each
         # live band has its own cells at the ends of the feasible interval to locate
-        n_bands = len({(a, b) for a, b in zip(s.u_lo, s.u_hi, strict=True)})
-        start = max(1, len(self.bands()[0]))
+        n_bands = len(set(zip(s.u_lo.tolist(), s.u_hi.tolist(), strict=True)))
+        start = max(1, self.start_bands)
         for _ in range(self.max_inserts * max(1, -(-n_bands // start))):
             sm = s._summary
             w = sm["w"]
@@ -269,14 +272,14 @@ class NodeRefinement:
         per-piece summary) and the pending ``ops`` get a copy of the split piece's row
         and column."""
         for p in range(len(per)):
-            if np.count_nonzero(s.u_lo == s.u_lo[p]) >= self.max_pieces:
-                continue  # this closing-speed band has its pieces
             if not np.isfinite(per[p, 4]):
                 continue
             lo = max(float(per[p, 4]), self.model.eps_m * float(s.u_lo[p]))
             hi = float(per[p, 5])
             if not hi > self.split_ratio * lo:
                 continue
+            if np.count_nonzero(s.u_lo == s.u_lo[p]) >= self.max_pieces:
+                continue  # this closing-speed band has its pieces
             idx = np.flatnonzero((s.piece == p) & s.live)
             if len(idx) < 3:
                 continue
