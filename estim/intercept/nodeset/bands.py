@@ -36,9 +36,9 @@ def live_bands(s: NodeSet) -> list[tuple[float, float]]:
 
 
 def _loosest_band(
-    s: NodeSet, rtol: float, min_live: int, bands: list[tuple[float, float]] | None = None
+    s: NodeSet, bands: list[tuple[float, float]], rtol: float, min_live: int
 ) -> tuple[float, float] | None:
-    """The live band to split next, or None.
+    """The live band of ``bands`` (:func:`live_bands`) to split next, or None.
 
     While fewer than ``min_live`` bands are live, the widest. Otherwise one of the
     (at most two) bands whose cells attain the set's extremes of ``w``, if its
@@ -46,7 +46,6 @@ def _loosest_band(
     set's width: the splits go where the interval's ends are decided, as the
     tightening's new nodes do (a band elsewhere gains nothing from a split but
     cells between fewer nodes)."""
-    bands = live_bands(s) if bands is None else bands
     if len(bands) < min_live:
         wide = max(bands, key=lambda b: (b[1] - b[0]) / b[1])
         return wide if (wide[1] - wide[0]) > MIN_BAND_REL * wide[1] else None
@@ -81,7 +80,7 @@ def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float
         bands = live_bands(s)
         if len(bands) >= max_bands:
             break
-        band = _loosest_band(s, rtol, min_live, bands)
+        band = _loosest_band(s, bands, rtol, min_live)
         if band is None:
             break
         out = _split_band(est, s, *band)
