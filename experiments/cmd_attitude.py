@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             )
             df = run_job(
                 job, req.runs, req.out, args.workers, args.scheduler, not args.no_progress,
-                limit_s=args.run_cpu_limit_s,
+                limits=options.run_limits(args),
             )  # fmt: skip
             ok = df[df["status"] == "ok"] if len(df) else df
             failures = int((df["status"] != "ok").sum()) if len(df) else 0

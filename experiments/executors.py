@@ -31,7 +31,7 @@ from kalman_vs_infoset.estim.intercept import kinematic
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import InputError, check_stop, stop_requested
-from kalman_vs_infoset.experiments.limits import limited
+from kalman_vs_infoset.experiments.limits import RunLimits, limited
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.guidance.intercept._kepler import warm_up as kepler_warm_up
 
@@ -184,7 +184,7 @@ def _chunks(todo: list[int], size: int) -> list[list[int]]:
     return list(chunks.values())
 
 
-def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
+def results(job, todo: list[int], executor, workers, scheduler, limits: RunLimits | None = None):
     """Yield each finished chunk's ``[(run, row), ...]`` whole: in order in this process
     for one local worker (so Ctrl-C stops between chunks), else as completed on the
     executor. A chunk is one value, so a command stopped while it takes the rows in
@@ -192,13 +192,13 @@ def results(job, todo: list[int], executor, workers, scheduler, limit_s=None):
     workers are capped at the number of chunks; runs lost to a dead worker or to memory
     are counted and raise :class:`WorkerLost` once the others are through."""
     chunks = _chunks(todo, job.chunk)
-    task = job.task if limit_s is None else partial(limited, job.task, limit_s)
+    task = partial(limited, job.task, limits) if limits else job.task
     n = min(workers or os.cpu_count() or 1, len(chunks))
     lost = {"dead": 0, "memory": 0}
     oom_before = oom_kills()
     if executor is None and scheduler is None and n == 1:
-        if limit_s is not None:
-            warm_kernels()  # loaded before the limit: each run is judged by its own cost
+        if limits:
+            warm_kernels()  # loaded before the limits: each run is judged by its own cost
         for chunk in chunks:
             check_stop()
             try:

@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import usage
-from kalman_vs_infoset.experiments.limits import reraise_timeout
+from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
+from kalman_vs_infoset.experiments.options import run_limits
 from kalman_vs_infoset.experiments.progress import step_progress
 from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
 from kalman_vs_infoset.experiments.sim.intercept import Engagement, EngagementResult
@@ -97,13 +98,13 @@ def run_experiment(
     scheduler: str | None = None,
     progress: bool = True,
     executor: Executor | None = None,
-    limit_s: float | None = None,
+    limits: RunLimits | None = None,
     chunk: int = 1,
 ) -> pd.DataFrame:
     """Run (or complete) an intercept experiment and return its per-run table
     (``chunk``: runs a task, :func:`intercept_job`; the table does not depend on it)."""
     job = intercept_job(sc, estimator, noise, check_seed(seed), chunk)
-    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limit_s)
+    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limits)
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
@@ -144,7 +145,7 @@ def run_grid(
             t1, cpu1 = time.perf_counter(), usage.cpu_s()
             df = run_experiment(
                 sc, est, noise, runs, seed, out, args.workers, args.scheduler,
-                not args.no_progress, limit_s=args.run_cpu_limit_s,
+                not args.no_progress, limits=run_limits(args),
             )  # fmt: skip
             row = summarise(df, sc, est, noise, seed, time.perf_counter() - t1)
             # a remote cluster's workers are not this process's children: not counted

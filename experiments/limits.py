@@ -1,4 +1,6 @@
-"""A CPU-time limit per run (``--run-cpu-limit-s``): a run over it is recorded as failed.
+"""Limits of one run: CPU time (``--run-cpu-limit-s``) and memory
+(``--run-memory-limit-mb``). A run over either is recorded as failed, with the reason,
+and the other runs go on; a rerun runs it again (with a larger limit, say).
 
 The limit is the process's CPU time (``setitimer(ITIMER_PROF)``, user + system), not the
 wall clock, so it does not depend on how loaded the machine is. When it expires,
@@ -8,21 +10,50 @@ no ``except Exception`` inside a simulation swallows it, and it is raised again 
 the limit times its length; a chunk over it is run again one run at a time, so each run
 is judged by its own cost. Signals reach only a process's main thread: in a thread (a
 Dask worker's, for one) the runs are not limited.
+
+The memory limit is the growth of the process's data segment during the run
+(``RLIMIT_DATA``, which on Linux counts the heap and private memory maps: numpy's and
+numba's arrays), set above what the process holds when the run starts and restored
+after it. An allocation over it raises ``MemoryError`` in the run, and the run fails
+instead of the machine's out-of-memory killer ending the worker (and every run it
+held). A process-wide limit would cap the other threads' runs too, so it is set in a
+process's main thread only, on Linux only (elsewhere the option is refused).
 """
 
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any
+
+try:
+    import resource
+except ImportError:  # not on Windows: the memory limit is refused there
+    resource = None  # type: ignore[assignment]
 
 #: CPU time between repeated timeouts of a run that has not stopped yet (s)
 REPEAT_S = 0.5
 
 Pairs = list[tuple[int, dict[str, Any]]]
+
+#: where the memory limit can be set (RLIMIT_DATA counts memory maps on Linux >= 4.7)
+MEMORY_LIMIT_SUPPORTED = sys.platform.startswith("linux") and resource is not None
+
+
+@dataclass(frozen=True)
+class RunLimits:
+    """What one run may use (None: no limit)."""
+
+    cpu_s: float | None = None  #: CPU time (user + system), s
+    memory_mb: float | None = None  #: growth of the data segment during the run, MiB
+
+    def __bool__(self) -> bool:
+        return self.cpu_s is not None or self.memory_mb is not None
 
 
 class RunTimeout(BaseException):
@@ -64,15 +95,58 @@ def cpu_limit(seconds: float | None) -> Iterator[None]:
         signal.signal(signal.SIGPROF, before)
 
 
-def limited(task: Callable[[list[int]], Pairs], limit_s: float, runs: list[int]) -> Pairs:
-    """``task(runs)`` under a CPU limit of ``limit_s`` per run; a run over it comes back
-    as a failed row with the reason (picklable with :func:`functools.partial`)."""
-    t0 = time.perf_counter()
+def _data_segment_bytes() -> int | None:
+    """The process's data segment now (``VmData``: what ``RLIMIT_DATA`` limits)."""
     try:
-        with cpu_limit(limit_s * len(runs)):
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmData:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+@contextmanager
+def memory_limit(mb: float | None) -> Iterator[None]:
+    """Let the block grow the data segment by at most ``mb`` MiB: an allocation over it
+    raises ``MemoryError`` (nothing when ``mb`` is None, outside the main thread or
+    where the limit cannot be set)."""
+    main = threading.current_thread() is threading.main_thread()
+    now = None if mb is None or not main or not MEMORY_LIMIT_SUPPORTED else _data_segment_bytes()
+    if mb is None or now is None:
+        yield
+        return
+    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    cap = now + int(mb * 2**20)
+    if hard != resource.RLIM_INFINITY:
+        cap = min(cap, hard)
+    resource.setrlimit(resource.RLIMIT_DATA, (cap, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
+
+
+def limited(task: Callable[[list[int]], Pairs], limits: RunLimits, runs: list[int]) -> Pairs:
+    """``task(runs)`` under ``limits`` per run; a run over one comes back as a failed row
+    with the reason (picklable with :func:`functools.partial`)."""
+    t0 = time.perf_counter()
+    n = len(runs)
+    cpu = None if limits.cpu_s is None else limits.cpu_s * n
+    mem = None if limits.memory_mb is None else limits.memory_mb * n
+    try:
+        with cpu_limit(cpu), memory_limit(mem):
             return task(runs)
     except RunTimeout:
-        if len(runs) > 1:  # judge each run by its own cost
-            return [pair for j in runs for pair in limited(task, limit_s, [j])]
-    error = f"RunTimeout: over the CPU-time limit of {limit_s:g} s a run (--run-cpu-limit-s)"
+        error = f"RunTimeout: over the CPU-time limit of {limits.cpu_s:g} s a run"
+        error += " (--run-cpu-limit-s)"
+    except MemoryError as exc:
+        if limits.memory_mb is None:
+            raise  # a resource, not the run: the runner reports it
+        why = str(exc).splitlines()[0] if str(exc) else "an allocation failed"
+        error = f"MemoryError: over the memory limit of {limits.memory_mb:g} MiB a run "
+        error += f"(--run-memory-limit-mb): {why}"
+    if n > 1:  # judge each run by its own cost
+        return [pair for j in runs for pair in limited(task, limits, [j])]
     return [(runs[0], {"status": "failed", "error": error, "wall_s": time.perf_counter() - t0})]

@@ -8,7 +8,8 @@ Every command takes its options from here, so a flag means the same everywhere:
   ``--estimator`` is refused in one line naming the new flag (argparse would otherwise
   take it as an abbreviation of ``--estimators``).
 * ``--noise NAME[,NAME...]``: a comma list from the command's noise vocabulary.
-* ``--runs``, ``--seed``, ``--workers``, ``--run-cpu-limit-s``: bounded numbers.
+* ``--runs``, ``--seed``, ``--workers``, ``--run-cpu-limit-s``,
+  ``--run-memory-limit-mb``: bounded numbers.
 * ``--trace RUNS``: the runs whose per-step history is recorded (:mod:`.traces`).
 * :func:`add_common` and :func:`resolve`: a scenario's Monte Carlo options.
 
@@ -82,6 +83,21 @@ def cpu_limit_s(text: str) -> float:
         value = float("nan")
     if not 0.0 < value <= 1e6:
         raise argparse.ArgumentTypeError(f"expected seconds in (0, 1e6], got {text!r}")
+    return value
+
+
+def memory_limit_mb(text: str) -> float:
+    """A memory limit of a run, in MiB: a number in [1, 1e7], on Linux only."""
+    from kalman_vs_infoset.experiments.limits import MEMORY_LIMIT_SUPPORTED
+
+    if not MEMORY_LIMIT_SUPPORTED:
+        raise argparse.ArgumentTypeError("a run's memory can be limited on Linux only")
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 1.0 <= value <= 1e7:
+        raise argparse.ArgumentTypeError(f"expected MiB in [1, 1e7], got {text!r}")
     return value
 
 
@@ -204,12 +220,27 @@ def add_trace(p: argparse.ArgumentParser) -> None:
 
 
 def add_limit(p: argparse.ArgumentParser) -> None:
+    """``--run-cpu-limit-s`` and ``--run-memory-limit-mb`` (:func:`run_limits`)."""
     p.add_argument(
         "--run-cpu-limit-s",
         type=cpu_limit_s,
         help="CPU-time limit of one run, s (a run over it is recorded as failed, with the "
         "reason; local runs only; default: none)",
     )
+    p.add_argument(
+        "--run-memory-limit-mb",
+        type=memory_limit_mb,
+        help="memory one run may add to its process, MiB (a run over it is recorded as "
+        "failed, with the reason, instead of the system ending the worker; local runs, "
+        "Linux only; default: none)",
+    )
+
+
+def run_limits(args: argparse.Namespace):
+    """The :class:`~experiments.limits.RunLimits` of :func:`add_limit`'s options."""
+    from kalman_vs_infoset.experiments.limits import RunLimits
+
+    return RunLimits(args.run_cpu_limit_s, args.run_memory_limit_mb)
 
 
 def add_runner(p: argparse.ArgumentParser) -> None:

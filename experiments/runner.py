@@ -43,7 +43,7 @@ from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exporte
     results,
 )
 from kalman_vs_infoset.experiments.files import atomic_write, exclusive
-from kalman_vs_infoset.experiments.limits import reraise_timeout
+from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the parser's bounds
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity
@@ -173,7 +173,7 @@ def run_job(
     scheduler: str | None = None,
     progress: bool = True,
     executor: Executor | None = None,
-    limit_s: float | None = None,
+    limits: RunLimits | None = None,
 ) -> pd.DataFrame:
     """Run (or complete) runs ``0..runs-1`` of ``job``; return their rows, by run.
 
@@ -181,8 +181,8 @@ def run_job(
     reports fewer); failed runs are run again; a file of another scenario or other
     sources is refused (one line). Complete results are only read (a read-only folder
     can be summarised again); otherwise the table is written by one command at a time
-    (:func:`experiments.files.exclusive`). ``limit_s`` is a CPU-time limit per run
-    (:mod:`experiments.limits`).
+    (:func:`experiments.files.exclusive`). ``limits`` are a run's CPU-time and memory
+    limits (:mod:`experiments.limits`).
     """
     check_seed(job.seed)
     check_runs(runs)
@@ -217,7 +217,7 @@ def run_job(
                 print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
             if todo:
                 _complete(job, runs, todo, table, path, meta, progress,
-                          executor, workers, scheduler, limit_s)  # fmt: skip
+                          executor, workers, scheduler, limits)  # fmt: skip
     except BaseException:
         if not path.exists():  # refused or stopped before any run finished: no leftovers
             if wrote_meta:
@@ -232,7 +232,7 @@ def run_job(
 
 
 def _complete(job, runs, todo, table, path, meta, progress, executor, workers, scheduler,
-              limit_s):  # fmt: skip
+              limits):  # fmt: skip
     """Run ``todo`` into ``table``, saving it every :data:`SAVE_EVERY_S` and at the end,
     also on Ctrl-C or SIGTERM (finished runs are kept)."""
     bar = progress_bar(runs, runs - len(todo), job.desc, progress)
@@ -240,7 +240,7 @@ def _complete(job, runs, todo, table, path, meta, progress, executor, workers, s
     changed = False
     try:
         with steps_shown(progress):  # a slow run in this process shows its steps
-            for pairs in results(job, todo, executor, workers, scheduler, limit_s):
+            for pairs in results(job, todo, executor, workers, scheduler, limits):
                 # one update per chunk: a signal between two bytecodes cannot leave
                 # part of a chunk in the table (a vectorised chunk is saved whole)
                 table.update({j: {**job.base, "run": j, **row} for j, row in pairs})

@@ -20,7 +20,7 @@ from harness_texts import SHORT, TINY_RW, one_line_error
 from harness_texts import run_cli as run
 from kalman_vs_infoset.experiments import executors, intercept_runs
 from kalman_vs_infoset.experiments.files import exclusive
-from kalman_vs_infoset.experiments.limits import limited
+from kalman_vs_infoset.experiments.limits import RunLimits, limited
 
 ROOT = Path(__file__).resolve().parents[1]
 KVI = [sys.executable, "-m", "kalman_vs_infoset"]
@@ -310,7 +310,7 @@ def test_a_chunk_over_its_limit_is_judged_run_by_run():
             _spin()
         return [(j, {"status": "ok", "error": ""}) for j in runs]
 
-    pairs = limited(task, 0.2, [0, 1, 2])
+    pairs = limited(task, RunLimits(cpu_s=0.2), [0, 1, 2])
     assert [j for j, _ in pairs] == [0, 1, 2]
     assert [row["status"] for _, row in pairs] == ["ok", "failed", "ok"]
 

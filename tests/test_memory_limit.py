@@ -1,0 +1,102 @@
+"""``--run-memory-limit-mb``: a run that allocates over its memory limit is recorded as
+failed with the reason, the other runs go on, and the process's limit is restored.
+
+The allocations are 2 GiB and never touched: with the limit they are refused at once,
+without it (a broken limit) the test fails on the rows, not on the machine's memory.
+"""
+
+from __future__ import annotations
+
+import resource
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from harness_texts import one_line_error
+from harness_texts import run_cli as run
+from kalman_vs_infoset.experiments import intercept_runs
+from kalman_vs_infoset.experiments.limits import RunLimits, limited
+from numba import njit
+
+pytestmark = pytest.mark.skipif(
+    not sys.platform.startswith("linux"), reason="RLIMIT_DATA counts memory maps on Linux"
+)
+
+BIG = 2**28  # float64 elements: 2 GiB
+
+
+def _table(out) -> pd.DataFrame:
+    (pq,) = out.rglob("*.parquet")
+    return pd.read_parquet(pq).sort_values("run")
+
+
+def _task(runs):
+    rows = []
+    for j in runs:
+        if j == 1:
+            np.empty(BIG)  # numpy's allocation
+        if j == 2:
+            _kernel_alloc(BIG)  # a compiled kernel's allocation (numba's runtime)
+        rows.append((j, {"status": "ok", "error": ""}))
+    return rows
+
+
+@njit(cache=False)
+def _kernel_alloc(n):
+    return np.empty(n).shape[0]
+
+
+def test_runs_over_the_limit_fail_one_by_one_and_the_limit_is_restored():
+    _kernel_alloc(1)  # compiled outside the limit
+    before = resource.getrlimit(resource.RLIMIT_DATA)
+    pairs = limited(_task, RunLimits(memory_mb=64), [0, 1, 2, 3])
+    assert resource.getrlimit(resource.RLIMIT_DATA) == before
+    assert [j for j, _ in pairs] == [0, 1, 2, 3]
+    assert [row["status"] for _, row in pairs] == ["ok", "failed", "failed", "ok"]
+    for _, row in (pairs[1], pairs[2]):
+        assert row["error"].startswith("MemoryError: over the memory limit of 64 MiB")
+        assert "--run-memory-limit-mb" in row["error"]
+
+
+def test_without_a_memory_limit_a_memory_error_is_the_runners_to_report():
+    def task(runs):
+        raise MemoryError
+
+    with pytest.raises(MemoryError):
+        limited(task, RunLimits(cpu_s=10.0), [0])
+
+
+@pytest.mark.parametrize("workers", [1, 2], ids=["in-process", "pool-workers"])
+def test_a_run_over_the_memory_limit_is_recorded_as_failed(
+    short, tmp_path, capsys, monkeypatch, workers
+):
+    """Run 1 allocates 2 GiB: under a 256 MiB limit it fails with the reason, in this
+    process and in pool workers (forked: they inherit the patched engagement); a rerun
+    without the allocation completes it."""
+    real = intercept_runs.run_engagement
+
+    def hungry_run_1(sc, est, noise, rng):
+        if rng.bit_generator.seed_seq.spawn_key == (1,):
+            np.ones(BIG)
+        return real(sc, est, noise, rng)
+
+    monkeypatch.setattr(intercept_runs, "run_engagement", hungry_run_1)
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 3, "--workers", workers, "--no-progress",
+            "--out", out, "--run-memory-limit-mb", 256]  # fmt: skip
+    r = run(capsys, *args)
+    assert r.returncode == 1, r.stderr
+    df = _table(out)
+    assert list(df["status"]) == ["ok", "failed", "ok"]
+    assert "--run-memory-limit-mb" in df["error"].iloc[1]
+    monkeypatch.setattr(intercept_runs, "run_engagement", real)
+    assert run(capsys, *args).returncode == 0
+    assert (_table(out)["status"] == "ok").all()
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "abc", "1e8", "nan"])
+def test_a_bad_memory_limit_is_refused_in_one_line(short, capsys, value):
+    r = run(capsys, "intercept", short, "--run-memory-limit-mb", value)
+    assert one_line_error(r), r.stderr
+    assert "--run-memory-limit-mb" in r.stderr
