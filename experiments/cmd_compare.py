@@ -28,6 +28,7 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments import plots, traces
     from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid, write_traces
     from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
+    from kalman_vs_infoset.experiments.stats import ok_mean
 
     sc, runs, seed, out = options.resolve(args)
     traced = traces.check_runs(args.trace, runs)
@@ -36,9 +37,10 @@ def run(args) -> dict[str, Any]:
     table = pd.concat(frames, ignore_index=True)
     stem = out / f"{sc.name}-compare"
     files = write_tables(table, stem)
+    floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
     marks = {
         "miss_m": [(miss_floor_m(sc), "bearing floor")],
-        "fuel_mps": [(float(table["fuel_perfect_info_mps"].mean()), "perfect info (mean)")],
+        "fuel_mps": [(floor, "perfect info (mean)")] if floor is not None else [],
     }
     fig = plots.cdf_figure(
         table, ["estimator", "noise"], f"{sc.name}: estimators x noise, {runs} paired runs", marks

@@ -52,6 +52,7 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid
     from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
     from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
+    from kalman_vs_infoset.experiments.stats import ok_mean
 
     t0 = time.perf_counter()
     out = options.out_folder(args.out, Path("results/fig5"))
@@ -72,7 +73,7 @@ def run(args) -> dict[str, Any]:
     table = pd.concat(frames, ignore_index=True)
     files = write_tables(table, out / f"{stem}_runs")
     ref = sc.reference
-    floor = float(table["fuel_perfect_info_mps"].mean())
+    floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
     given: dict[str, list[tuple[float | None, str]]] = {
         "miss_m": [
             (ref.miss_random_m, "seed Fig. 3 random"),
@@ -97,7 +98,8 @@ def run(args) -> dict[str, Any]:
     )
     files += plots.save(fig, out / f"{stem}_cdf")
     md = summary_markdown(rows, ["variant", "noise", "estimator"])
-    md += f"\nLower bounds: perfect-information fuel {floor:.1f} m/s (mean over runs), "
+    fuel = "n/a (no successful run)" if floor is None else f"{floor:.1f} m/s (mean over runs)"
+    md += f"\nLower bounds: perfect-information fuel {fuel}, "
     md += f"bearing-limited miss floor {miss_floor_m(sc):.2f} m.\n"
     files.append(write_text(out / f"{stem}_summary.md", md))
     return {

@@ -22,6 +22,7 @@ from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_intercept, plots_sets
 from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.stats import ok_mean
 from kalman_vs_infoset.experiments.traces import intercept_trace
 
 NOISES = ("random", "game")
@@ -195,14 +196,15 @@ def fig5(ctx) -> dict[str, Any]:
             )
             ax.set_xscale("log")
         else:
-            floor = float(table["fuel_perfect_info_mps"].mean())
-            ax.axvline(
-                floor,
-                color=fs.REFERENCE,
-                ls=":",
-                lw=1.0,
-                label=f"perfect-information fuel (mean) {floor:.1f} m/s",
-            )
+            floor = ok_mean(table, "fuel_perfect_info_mps")  # None: every run failed
+            if floor is not None:
+                ax.axvline(
+                    floor,
+                    color=fs.REFERENCE,
+                    ls=":",
+                    lw=1.0,
+                    label=f"perfect-information fuel (mean) {floor:.1f} m/s",
+                )
         ax.set_xlabel(xlabel)
         ax.set_ylabel("fraction of runs (CDF), -")
         ax.set_ylim(0, 1.17)

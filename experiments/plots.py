@@ -71,7 +71,10 @@ def cdf_figure(
             paper = label.startswith(("seed", "paper"))
             ax.axvline(value, color=fs.PAPER if paper else fs.REFERENCE, lw=1.0,
                        ls=":" if paper else "--", label=f"{label}: {value:.4g}")  # fmt: skip
-        if col == "miss_m" and log_miss and (ok[col] > 0).all() and len(ok):
+        if not len(ok):  # every run failed: the rows say why, the panel says so
+            ax.text(0.5, 0.5, "no successful run", ha="center", va="center",
+                    transform=ax.transAxes)  # fmt: skip
+        elif col == "miss_m" and log_miss and (ok[col] > 0).all():
             ax.set_xscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel(CDF_LABEL)

@@ -29,3 +29,14 @@ def summary_stats(values: Iterable[float], finite_only: bool = True) -> dict[str
             "p90": float(np.percentile(v, 90)),
             "max": float(np.max(v)),
         }
+
+
+def ok_mean(table, column: str) -> float | None:
+    """Mean of ``column`` over a results table's successful runs (finite values), or
+    None when no run succeeded (a failed run's row has no such column)."""
+    ok = table[table["status"] == "ok"] if "status" in table else table
+    if column not in ok:
+        return None
+    values = ok[column].astype(float)
+    values = values[np.isfinite(values)]
+    return float(values.mean()) if len(values) else None  # pandas' mean, as before

@@ -1,0 +1,38 @@
+"""A command whose every run failed (an error, a CPU or memory limit) says so and exits
+1, with the failed rows saved: no traceback from the summaries, tables or plots that
+have no successful run to show."""
+
+from __future__ import annotations
+
+import pytest
+from harness_texts import run_cli as run
+from kalman_vs_infoset.experiments import intercept_runs
+
+
+def _always_fails(sc, est, noise, rng):
+    raise ArithmeticError("every run fails")
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["intercept", "--estimators", "ekf", "--noise", "random"],
+        ["compare", "--estimators", "ekf,infoset", "--noise", "random"],
+        ["sweep", "--estimators", "ekf", "--noise", "random", "--key",
+         "guidance.max_impulse_mps", "--values", "[50, 60]"],
+        ["adversaries", "--estimators", "ekf"],
+        ["fig5", "--estimators", "ekf"],
+    ],
+    ids=lambda c: c[0],
+)  # fmt: skip
+def test_every_run_failed_is_reported_not_a_traceback(
+    command, short, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.setattr(intercept_runs, "run_engagement", _always_fails)
+    name, *rest = command
+    where = [] if name == "fig5" else [short]  # fig5 runs its bundled variants
+    r = run(capsys, name, *where, "--runs", 2, "--workers", 1, "--no-progress",
+            "--out", tmp_path / "out", *rest)  # fmt: skip
+    assert "Traceback" not in r.stderr, r.stderr
+    assert r.returncode == 1, r.stderr
+    assert "runs failed" in r.stderr.strip().splitlines()[-1]
