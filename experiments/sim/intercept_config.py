@@ -309,12 +309,10 @@ class InterceptScenario(Table):
             # the truth closes at the speeds the estimators assume: their interval, or
             # the model's known speed (not the a-priori vx box, which the set does not
             # use: a truth closing at 57 km/s would leave a set that assumes 58)
-            speeds = est.get("closing_speed_kmps")
-            if speeds is None:
-                model = data.get("model")
-                e = (model if isinstance(model, dict) else {}).get("closing_speed_kmps")
-                e = ModelTable.model_fields["closing_speed_kmps"].default if e is None else e
-                speeds = (e, e)
+            model = data.get("model")
+            e = (model if isinstance(model, dict) else {}).get("closing_speed_kmps")
+            e = ModelTable.model_fields["closing_speed_kmps"].default if e is None else e
+            speeds = closing_interval_kmps(est.get("closing_speed_kmps"), e)
             if isinstance(speeds, list | tuple) and len(speeds) == 2:
                 try:
                     base["vx_kmps"] = [-float(speeds[1]), -float(speeds[0])]
@@ -384,8 +382,8 @@ class InterceptScenario(Table):
     @property
     def closing_speed_kmps(self) -> tuple[float, float]:
         """The estimators' closing-speed interval (``[e, e]`` when not given)."""
-        given = self.estimator.closing_speed_kmps
-        return given if given is not None else (self.model.closing_speed_kmps,) * 2
+        return closing_interval_kmps(self.estimator.closing_speed_kmps,
+                                     self.model.closing_speed_kmps)  # fmt: skip
 
     @property
     def max_steps(self) -> int:
@@ -405,6 +403,14 @@ class InterceptScenario(Table):
         lo, hi = self.closing_speed_kmps
         speed = (lo * 1e3, hi * 1e3)
         return ChannelSetting(model or self.channel_model(), speed)
+
+
+def closing_interval_kmps(given: Any, model_kmps: Any) -> Any:
+    """The estimators' closing-speed interval: ``given`` (``estimator.closing_speed_kmps``),
+    else the model's known speed ``[e, e]``. One rule for the validated scenario and for
+    the truth's default closing velocity, which is filled in before validation (so
+    ``given`` may still be raw, even malformed, data there: its field reports it)."""
+    return given if given is not None else (model_kmps, model_kmps)
 
 
 def _check_options(name: str, table: dict[str, Any]) -> None:
