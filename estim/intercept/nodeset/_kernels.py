@@ -108,25 +108,46 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
             dst[j, 0], dst[j, 1] = src[j, 0], src[j, 1]
         return m, scale
     tol = 1e-14 * scale * max(abs(g0), abs(g1))
+    # one pass for the usual polygon (two sign runs, not flat); it also finds out
+    # whether the polygon is flat along g or its signs break into more runs, and then
+    # the sum is written again by _segment1_rare (the same output as three passes)
+    crc = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0])
+    prev = crc > 0.0
+    changes = 0
     flat = True
+    k = 0
+    out_scale = 0.0
     for j in range(m):
         c = j + 1 if j + 1 < m else 0
-        if abs(g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])) > tol:
-            flat = False
-            break
-    # sign changes of the edges' cross products around the polygon
-    robust = False
-    if not flat:
-        prev = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0]) > 0.0
-        changes = 0
-        for j in range(m):
-            c = j + 1 if j + 1 < m else 0
-            cur = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0]) > 0.0
-            changes += cur != prev
-            prev = cur
-        robust = changes != 2
+        crp = crc
+        crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
+        flat = flat and not abs(crc) > tol
+        cur = crc > 0.0
+        changes += cur != prev
+        prev = cur
+        sp = 1.0 if crp > 0.0 else -1.0
+        sc = 1.0 if crc > 0.0 else -1.0
+        dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
+        if want_scale:
+            out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+        k += 1
+        if sc != sp:
+            dst[k, 0], dst[k, 1] = src[j, 0] + sc * g0, src[j, 1] + sc * g1
+            if want_scale:
+                out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+            k += 1
+    if flat or changes != 2:
+        return _segment1_rare(src, m, g0, g1, dst, flat, want_scale)
+    return k, out_scale
+
+
+@njit(cache=True)
+def _segment1_rare(src, m, g0, g1, dst, flat, want_scale):
+    """:func:`_segment1` for a polygon flat along ``g`` (every vertex takes both ends)
+    or whose edge signs break into more than two runs (the runs taken from the extremes
+    of ``g x p``)."""
     i_lo, i_hi = 0, 0
-    if robust:
+    if not flat:
         s_lo, s_hi = np.inf, -np.inf
         for j in range(m):
             sj = g0 * src[j, 1] - g1 * src[j, 0]
@@ -134,24 +155,15 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
                 s_lo, i_lo = sj, j
             if sj > s_hi:
                 s_hi, i_hi = sj, j
-    # the cross product of edge j-1 -> j (its sign: which end of the segment the
-    # vertex takes before it); each edge's is computed once
-    crc = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0])
     k = 0
     out_scale = 0.0
     for j in range(m):
         if flat:
             sp, sc = -1.0, 1.0
-        elif robust:
+        else:
             # edges i_lo .. i_hi - 1 (cyclically) rise in g x p: their vertices take +g
             sp = 1.0 if (j - 1 - i_lo) % m < (i_hi - i_lo) % m else -1.0
             sc = 1.0 if (j - i_lo) % m < (i_hi - i_lo) % m else -1.0
-        else:
-            c = j + 1 if j + 1 < m else 0
-            crp = crc
-            crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
-            sp = 1.0 if crp > 0.0 else -1.0
-            sc = 1.0 if crc > 0.0 else -1.0
         dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
         if want_scale:
             out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
