@@ -45,6 +45,24 @@ def strip_bounds(b: float, r: float) -> tuple[float, float]:
     return b - r, b + r
 
 
+def halfspace_bound(b: float) -> float:
+    """The bound of ``{x : a.x <= b}``: a number, ``+inf`` (no cut) included, not NaN."""
+    b = float(b)
+    if np.isnan(b):
+        raise ValueError("a halfspace needs a bound that is a number (or +inf), got nan")
+    return b
+
+
+def flat_along(half: float, m: float, rounding: float) -> bool:
+    """Whether a set whose ``a.x`` spans ``m +- half`` is flat along ``a`` (a point, or a
+    segment or section normal to ``a``): ``half`` is within ``rounding`` (the absolute
+    rounding of ``half`` as the family computes it) plus :data:`TOUCH_RTOL` of ``|m|``.
+    A slab that :func:`clip_slab` found touching such a set holds it to rounding, and
+    the update formulas, which divide by ``half``, would return NaN or a set moved by
+    rounding noise divided by ``half``."""
+    return not half > TOUCH_RTOL * abs(m) + rounding
+
+
 def clip_slab(lo: float, hi: float, set_lo: float, set_hi: float) -> tuple[float, float]:
     """The slab ``[lo, hi]`` clipped to the set's range ``[set_lo, set_hi]`` of ``a.x``.
 

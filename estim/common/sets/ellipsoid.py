@@ -62,6 +62,8 @@ from kalman_vs_infoset.estim.common.sets._common import (
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
+    flat_along,
+    halfspace_bound,
     matrix,
     strip_bounds,
     vector,
@@ -76,6 +78,8 @@ __all__ = ["Ellipsoid", "EmptyIntersectionError"]
 
 Criterion = Literal["volume", "trace"]
 _RANK_RTOL = 1e-12
+#: a.P a under this fraction of |a|^2 tr P is rounding (the ellipsoid is flat along a)
+FLAT_G_RTOL = 1e-13
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,7 +118,10 @@ class Ellipsoid:
     @classmethod
     def ball(cls, centre: ArrayLike, radius: float) -> Ellipsoid:
         c = vector(centre, name="centre")
-        return cls(c, float(radius) ** 2 * np.eye(c.size))
+        radius = float(radius)
+        if not (np.isfinite(radius) and radius >= 0.0):
+            raise ValueError(f"a ball needs a finite radius >= 0, got {radius}")
+        return cls(c, radius**2 * np.eye(c.size))
 
     @classmethod
     def from_box(cls, lo: ArrayLike, hi: ArrayLike) -> Ellipsoid:
@@ -228,7 +235,9 @@ class Ellipsoid:
         self, a: ArrayLike, b: float, criterion: Criterion = "volume"
     ) -> Ellipsoid:
         """An ellipsoid containing ``E ∩ {x : a.x <= b}`` (same update)."""
-        return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, float(b), criterion)
+        return self._intersect_slab(
+            vector(a, self.dim, "a"), -np.inf, halfspace_bound(b), criterion
+        )
 
     def _intersect_slab(self, a: FloatArray, lo: float, hi: float, criterion: str) -> Ellipsoid:
         if criterion not in ("volume", "trace"):
@@ -238,8 +247,11 @@ class Ellipsoid:
         g = max(float(a @ pa), 0.0)
         m, half = float(a @ c), np.sqrt(g)
         lo, hi = clip_slab(lo, hi, m - half, m + half)
-        if lo <= m - half and hi >= m + half:
-            return self  # the slab holds the whole ellipsoid
+        # g = a.P a is rounded to about 1e-16 |a|^2 tr P, and half = sqrt(g) takes the
+        # square root of that: 1e-13 |a|^2 tr P covers it (dimensions up to ~30)
+        rounding = float(np.sqrt(FLAT_G_RTOL * float(a @ a) * max(float(np.trace(p)), 0.0)))
+        if (lo <= m - half and hi >= m + half) or flat_along(half, m, rounding):
+            return self  # the slab holds the ellipsoid (or touches it where it is flat)
         y, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
         e = y - m
         if self.rank == 1:  # a segment: its part in the slab is a sub-segment (exact)

@@ -34,6 +34,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
+    halfspace_bound,
     matrix,
     strip_bounds,
     vector,
@@ -136,7 +137,7 @@ class Box:
 
     def intersect_halfspace(self, a: ArrayLike, b: float) -> Box:
         """The interval hull of ``box ∩ {x : a.x <= b}``."""
-        return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, float(b))
+        return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, halfspace_bound(b))
 
     def _intersect_slab(self, a: FloatArray, lo: float, hi: float) -> Box:
         # forward: the range of each term a_i x_i and of their sum

@@ -48,9 +48,12 @@ from typing import Literal
 
 import numpy as np
 from kalman_vs_infoset.estim.common.sets._common import (
+    TOUCH_RTOL,
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
+    flat_along,
+    halfspace_bound,
     matrix,
     strip_bounds,
     vector,
@@ -235,15 +238,17 @@ class Zonotope:
     def intersect_halfspace(self, a: ArrayLike, b: float) -> Zonotope:
         """A zonotope containing ``Z ∩ {x : a.x <= b}`` (the same update on the slab
         between the zonotope's minimum of ``a.x`` and ``b``)."""
-        return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, float(b))
+        return self._intersect_slab(vector(a, self.dim, "a"), -np.inf, halfspace_bound(b))
 
     def _intersect_slab(self, a: FloatArray, lo: float, hi: float) -> Zonotope:
         c, g = self.centre, self.generators
         ga = g.T @ a
         m, half = float(a @ c), float(np.abs(ga).sum())
         lo, hi = clip_slab(lo, hi, m - half, m + half)
-        if lo <= m - half and hi >= m + half:
-            return self
+        # |a.g_i| is rounded to about 1e-16 |a| |g_i|: generously, TOUCH_RTOL of the sum
+        rounding = TOUCH_RTOL * float(np.linalg.norm(a)) * float(np.linalg.norm(g, axis=0).sum())
+        if (lo <= m - half and hi >= m + half) or flat_along(half, m, rounding):
+            return self  # the slab holds the zonotope (or touches it where it is flat)
         y, s = 0.5 * (lo + hi), 0.5 * (hi - lo)
         gga = g @ ga
         lam = gga / (float(ga @ ga) + s * s)
