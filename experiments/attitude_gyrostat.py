@@ -77,6 +77,7 @@ def task(setup: GyrostatSetup, controller: str, noise: str, estimator: str, seed
             "max_rotor_rate_radps": float(r.max_rotor_rate_radps[i]),
             "truth_outside": int(r.truth_outside[i]),
             "empty_steps": int(r.empty_steps[i]),
+            "unbounded_steps": int(r.unbounded_steps[i]),
             "mean_knowledge_bound_deg": float(r.mean_knowledge_bound_deg[i]),
         }
         for i in range(len(seeds))
@@ -111,6 +112,7 @@ def summarise(
         "estimator": estimator,
         "truth_outside": int(col("truth_outside").sum()),
         "empty_steps": int(col("empty_steps").sum()),
+        "unbounded_steps": int(col("unbounded_steps").sum()),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
         "unsettled_runs": int(np.sum(~np.isfinite(settle))),

@@ -98,6 +98,7 @@ def summarise(
         "estimator": estimator,
         "truth_outside": int(np.sum(col("truth_outside"))),
         "empty_steps": int(np.sum(col("empty_steps"))),
+        "unbounded_steps": int(np.sum(col("unbounded_steps"))),
         "not_settled": int(np.sum(~np.isfinite(settle))),
     }
     jd = config.body.inertia_kgm2

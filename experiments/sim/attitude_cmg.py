@@ -74,6 +74,7 @@ class TurnResult:
     rate_tol_degps: float
     truth_outside: int = 0
     empty_steps: int = 0
+    unbounded_steps: int = 0  # predictions whose set was the whole space
     mean_knowledge_bound_deg: float = 0.0
 
     @property
@@ -264,6 +265,7 @@ def simulate_turn(
         rate_tol_degps=setup.rate_tol_degps,
         truth_outside=outside,
         empty_steps=int(np.sum(loop.empty_steps(belief))),
+        unbounded_steps=int(np.sum(loop.unbounded_steps(belief))),
         mean_knowledge_bound_deg=float(np.degrees(bound_sum / max(n, 1))),
     )
 
@@ -298,5 +300,6 @@ def one_run(setup: TurnSetup, controller: str, noise: str, child, estimator: str
         "singular": res.singular_steps,
         "truth_outside": res.truth_outside,
         "empty_steps": res.empty_steps,
+        "unbounded_steps": res.unbounded_steps,
         "mean_knowledge_bound_deg": res.mean_knowledge_bound_deg,
     }

@@ -141,8 +141,8 @@ def simulate_runs(
     dict of str to ndarray
         Per-run metrics ``(runs,)``: ``settle_time_s`` (inf if not settled),
         ``energy_N2m2s``, ``final_angle_deg``, ``final_rate_degps``, ``max_torque_Nm``,
-        ``truth_outside``, ``empty_steps``, ``mean_knowledge_bound_deg`` and, for the LQR,
-        ``lyapunov_max_increase``.
+        ``truth_outside``, ``empty_steps``, ``unbounded_steps``,
+        ``mean_knowledge_bound_deg`` and, for the LQR, ``lyapunov_max_increase``.
 
     Notes
     -----
@@ -232,6 +232,7 @@ def simulate_runs(
         "max_torque_Nm": np.max(np.abs(u), axis=(0, 2)),
         "truth_outside": state.outside,
         "empty_steps": loop.empty_steps(state.belief),
+        "unbounded_steps": loop.unbounded_steps(state.belief),
         "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
     }
     if isinstance(law, LQRController):

@@ -70,5 +70,14 @@ class EstimatorLoop:
         return belief.empty_counts
 
     @staticmethod
+    def unbounded_steps(belief: AttitudeBelief) -> np.ndarray:
+        """Per run: predictions whose set was the whole space (the set estimators'
+        ``n_unbounded``; zero for the others). The truth is inside such a set, so these
+        steps are reported beside ``truth_outside`` rather than hidden in it."""
+        runs = np.atleast_2d(belief.centre()).shape[0]
+        n = getattr(belief, "n_unbounded", None)
+        return np.zeros(runs, dtype=int) if n is None else np.asarray(n, dtype=int)
+
+    @staticmethod
     def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:
         return belief.attitude_bound_rad()

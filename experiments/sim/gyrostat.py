@@ -97,6 +97,7 @@ class LoopResult:
     max_rotor_rate_radps: Array
     truth_outside: Array  # steps with the truth outside the estimator's belief
     empty_steps: Array  # updates that contradicted the model
+    unbounded_steps: Array  # predictions whose set was the whole space
     mean_knowledge_bound_deg: Array
     time_s: Array | None = None
     states: Array | None = None  # (R, n+1, 10) true states
@@ -272,6 +273,7 @@ def simulate_turn(
         max_rotor_rate_radps=max_rotor,
         truth_outside=outside,
         empty_steps=loop.empty_steps(belief),
+        unbounded_steps=loop.unbounded_steps(belief),
         mean_knowledge_bound_deg=np.degrees(bound_sum / n),
         **extra,
     )

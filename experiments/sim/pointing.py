@@ -235,6 +235,7 @@ class PointingLoop:
             "energy_N2m2s": self.energy_N2m2s,
             "truth_outside": self.truth_outside,
             "empty_steps": int(np.sum(self.loop.empty_steps(self.belief))),
+            "unbounded_steps": int(np.sum(self.loop.unbounded_steps(self.belief))),
         }
 
 

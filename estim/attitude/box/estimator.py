@@ -124,9 +124,29 @@ def bch(ca, ra, cb, rb):
         raise FloatingPointError(
             f"attitude box too large for the BCH enclosure (|a| + |b| = {np.max(na + nb):.3g})"
         )
+    return _bch_terms(ca, ra, cb, rb, na, nb)
+
+
+def _bch_terms(ca, ra, cb, rb, na, nb):
     xr = _norm(ra) * nb + _norm(ca) * _norm(rb)
     rem = BCH_K * na * nb * (na + nb)
     return ca + cb + 0.5 * cross(ca, cb), ra + rb + (0.5 * xr + rem)[..., None]
+
+
+def bch_or_ball(ca, ra, cb, rb):
+    """:func:`bch` for the runs within its radius; for the others the ball
+    ``|log(exp(a) exp(b))| <= min(|a| + |b|, pi)`` (the angle of a product of two
+    rotations is at most the sum of their angles, and a principal rotation vector is at
+    most pi long), as a box about zero. Coarse, but sound at any size: the measurement
+    and the re-centring use it, so a large measurement error bound gives a large box
+    instead of an error."""
+    na, nb = inorm_max(ca, ra), inorm_max(cb, rb)
+    ok = na + nb <= BCH_MAX
+    if np.all(ok):
+        return _bch_terms(ca, ra, cb, rb, na, nb)
+    c, r = _bch_terms(ca, ra, cb, rb, np.where(ok, na, 0.0), np.where(ok, nb, 0.0))
+    ball = np.broadcast_to(np.minimum(na + nb, np.pi)[..., None], r.shape)
+    return np.where(ok[..., None], c, 0.0), np.where(ok[..., None], r, ball)
 
 
 def _inflate(c, r, abs_r: float):
@@ -179,9 +199,11 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     """Reference quaternions ``(R, 4)`` and boxes (centre, radius) of ``e`` and ``w`` ``(R, 3)``.
 
     ``n_empty`` counts, per run, the updates whose intersection was empty; ``last_empty`` flags
-    the runs whose last update was; ``n_unbounded`` counts the predictions whose
-    enclosure could not be closed (step far too long for the rates): the set then is
-    the whole space until the next measurement (still guaranteed, and reported).
+    the runs whose last update was; ``n_unbounded`` counts, per run, the predictions
+    whose enclosure could not be closed (a step far too long for the rates, or a box
+    too large for the BCH enclosure): the set then is the whole space until the next
+    measurement (still guaranteed; the results report it as ``unbounded_steps``). The
+    whole batch goes to the whole space together, so every run of it counts the step.
     """
 
     q_ref: FloatArray
@@ -191,7 +213,7 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     w_r: FloatArray
     n_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
     last_empty: FloatArray = field(default=None)  # type: ignore[arg-type]  # None: filled in __post_init__
-    n_unbounded: int = 0
+    n_unbounded: NDArray[np.int_] = field(default=None)  # type: ignore[arg-type]  # None: zeros
 
     def __post_init__(self) -> None:
         for name in ("q_ref", "e_c", "e_r", "w_c", "w_r"):
@@ -201,6 +223,8 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
             object.__setattr__(self, "n_empty", readonly(np.zeros(runs, dtype=int)))
         if self.last_empty is None:
             object.__setattr__(self, "last_empty", readonly(np.zeros(runs, dtype=bool)))
+        if self.n_unbounded is None:
+            object.__setattr__(self, "n_unbounded", readonly(np.zeros(runs), dtype=int))
 
     @property
     def runs(self) -> int:
@@ -269,7 +293,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
         """``(e_c, e_r, w_c, w_r)`` of all states compatible with ``meas`` alone."""
         z = qlog(qmul(qinv(q_ref), meas.quat))
         n_r = np.broadcast_to(self.model.meas_angle_bound_rad, z.shape)
-        e_c, e_r = bch(z, np.zeros_like(z), np.zeros_like(z), n_r)
+        e_c, e_r = bch_or_ball(z, np.zeros_like(z), np.zeros_like(z), n_r)
         w_r = np.broadcast_to(self.model.meas_rate_bound_radps, z.shape)
         return e_c, _inflate(e_c, e_r, 0.0), meas.rate_radps, w_r.copy()
 
@@ -402,7 +426,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
 
     def _recentre(self, belief: BoxAttitudeBelief) -> BoxAttitudeBelief:
         c = belief.e_c
-        ec, er = bch(-c, np.zeros_like(c), c, belief.e_r)
+        ec, er = bch_or_ball(-c, np.zeros_like(c), c, belief.e_r)
         er = _inflate(ec, er, 0.0)
         q_ref = qmul(belief.q_ref, qexp(c))
         return _with(belief, q_ref=q_ref, e_c=ec, e_r=er)

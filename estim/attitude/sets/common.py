@@ -127,7 +127,9 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         return 0.5 * (lo + hi), 0.5 * (hi - lo)
 
     @property
-    def n_unbounded(self) -> int:
+    def n_unbounded(self) -> NDArray[np.int_]:
+        """Per run: the box's predictions that were the whole space (its
+        ``n_unbounded``)."""
         return self.box.n_unbounded
 
     def centre(self) -> FloatArray:
