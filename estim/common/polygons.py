@@ -15,7 +15,9 @@ compiled kernel (:mod:`kalman_vs_infoset.estim.common._kernels`) over the concat
 
 Vertices are counter-clockwise. Degenerate polygons (a segment, a point) are
 allowed and handled by every kernel; an emptied polygon has zero vertices
-(:meth:`nonempty`, :meth:`select`). The kernels are tested against shapely.
+(:meth:`nonempty`, :meth:`select`). The kernels are tested against shapely. The public
+constructor copies and checks its input (finite, counter-clockwise, convex); the
+kernels' outputs are built without either (``ConvexPolygons._make``: the hot path).
 """
 
 from __future__ import annotations
@@ -41,9 +43,122 @@ def _offsets(counts: IntArray) -> IntArray:
     return out
 
 
+#: Rounding tolerance of the public constructor's checks, relative to a polygon's
+#: largest coordinate ``scale``: a turn is to the right when its cross product is below
+#: ``-RTOL_SHAPE * scale * (|e_in| + |e_out|)`` (an edge is a difference of coordinates,
+#: so its rounding grows with their magnitude, not with the polygon's size), and an
+#: edge shorter than ``RTOL_SHAPE * scale`` has no direction (a repeated vertex). The
+#: kernels' outputs turn right nowhere (measured over the polygon, section and node-set
+#: tests and Fig. 3/5 engagements); the margin is for the caller's own rounding, e.g. of
+#: anisotropic maps (about 1e-16 times their condition number).
+RTOL_SHAPE = 1e-10
+
+
+def _check_shape(xy: FloatArray, offsets: IntArray) -> None:
+    """Check that every polygon of a batch is counter-clockwise and convex.
+
+    Vectorised over all vertices: edges shorter than the rounding tolerance
+    (:data:`RTOL_SHAPE`) are dropped; then at every remaining vertex the turn from
+    the incoming to the outgoing edge must be left or straight (cross product not
+    below the tolerance), and the turns of one polygon must add up to one revolution
+    at most (a star polygon turns left everywhere but winds around twice). Points,
+    segments, collinear and repeated vertices pass: clipping and the Minkowski sums
+    produce them, and a polygon whose vertices are all collinear stands for their
+    hull in every kernel, in any order (``minkowski_segment`` of a segment along
+    ``g`` emits ``a - g, a + g, b - g, b + g``).
+
+    Parameters
+    ----------
+    xy : numpy.ndarray, shape (m, 2)
+        Finite vertices.
+    offsets : numpy.ndarray of int64, shape (n + 1,)
+        Valid offsets (non-decreasing from 0 to ``m``).
+
+    Raises
+    ------
+    ValueError
+        Naming the first polygon that is clockwise or not convex.
+    """
+    counts = offsets[1:] - offsets[:-1]
+    n_poly = len(counts)
+    nonempty = counts > 0
+    if not nonempty.any():
+        return
+    owner = np.repeat(np.arange(n_poly), counts)
+    scale = np.zeros(n_poly)
+    scale[nonempty] = np.maximum.reduceat(np.abs(xy).max(axis=1), offsets[:-1][nonempty])
+    edge = xy[_next_within(offsets, counts)] - xy  # edge k: vertex k -> its successor
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    keep = length > RTOL_SHAPE * scale[owner]
+    edge, length, owner = edge[keep], length[keep], owner[keep]
+    kept_counts = np.bincount(owner, minlength=n_poly)
+    nxt = _next_within(_offsets(kept_counts), kept_counts)
+    # turn from edge j to the next kept edge of its polygon (at the vertex between them)
+    cross = edge[:, 0] * edge[nxt, 1] - edge[:, 1] * edge[nxt, 0]
+    dot = edge[:, 0] * edge[nxt, 0] + edge[:, 1] * edge[nxt, 1]
+    tol = RTOL_SHAPE * scale[owner] * (length + length[nxt])
+    right = np.flatnonzero(cross < -tol)
+    if right.size:
+        i = int(owner[right[0]])
+        if _signed_area(xy[offsets[i] : offsets[i + 1]]) < 0:
+            raise ValueError(
+                f"polygon {i} is clockwise; vertices must be counter-clockwise "
+                "(reverse its vertex order)"
+            )
+        raise ValueError(f"polygon {i} is not convex (it turns right at a vertex)")
+    # straight turns (within rounding) are 0 forwards and pi backwards (a segment's ends)
+    straight = np.abs(cross) <= tol
+    turn = np.where(straight, np.where(dot < 0, np.pi, 0.0), np.arctan2(cross, dot))
+    # a convex polygon turns around once (2 pi), a star polygon twice or more (4 pi);
+    # a collinear one (no turn but straight ones) turns back and forth freely
+    winding = np.bincount(owner, weights=turn, minlength=n_poly) / (2 * np.pi)
+    bends = np.bincount(owner, weights=~straight, minlength=n_poly) > 0
+    twice = np.flatnonzero((winding > 1.5) & bends)
+    if twice.size:
+        i = int(twice[0])
+        raise ValueError(f"polygon {i} is not convex (it winds around {winding[i]:.0f} times)")
+
+
+def _next_within(offsets: IntArray, counts: IntArray) -> IntArray:
+    """Index of each vertex's successor (cyclically) within its polygon."""
+    nxt = np.arange(1, offsets[-1] + 1)
+    nonempty = counts > 0
+    nxt[offsets[1:][nonempty] - 1] = offsets[:-1][nonempty]
+    return nxt
+
+
+def _signed_area(ring: FloatArray) -> float:
+    """Shoelace area of one polygon, relative to its first vertex (less rounding)."""
+    d = ring - ring[0]
+    return 0.5 * float(np.sum(d[:-1, 0] * d[1:, 1] - d[1:, 0] * d[:-1, 1]))
+
+
 @dataclass(frozen=True, eq=False)
 class ConvexPolygons:
-    """``n`` convex polygons; polygon ``i`` is ``xy[offsets[i]:offsets[i + 1]]`` (CCW)."""
+    """``n`` convex polygons; polygon ``i`` is ``xy[offsets[i]:offsets[i + 1]]`` (CCW).
+
+    Parameters
+    ----------
+    xy : array_like, shape (m, 2)
+        The vertices of all polygons, one after the other; copied, so the batch does
+        not change when the caller's array does.
+    offsets : array_like of int, shape (n + 1,)
+        Where each polygon's vertices start, then ``m``; copied.
+
+    Raises
+    ------
+    ValueError
+        When a vertex is not finite, the offsets do not rise from 0 to ``m`` (each
+        polygon's vertex count is ``offsets[i + 1] - offsets[i] >= 0``), or a polygon is
+        clockwise or not convex, beyond a rounding tolerance relative to its largest
+        coordinate (:data:`RTOL_SHAPE`). Empty polygons, points, segments and
+        collinear or repeated vertices are allowed.
+
+    Notes
+    -----
+    The kernels' outputs are built by :meth:`_make`, which neither copies nor checks
+    (their arrays are fresh and valid by construction): the checks cost only here.
+    """
 
     xy: FloatArray
     offsets: IntArray
@@ -51,18 +166,41 @@ class ConvexPolygons:
     def __post_init__(self) -> None:
         if getattr(self, "_trusted", False):
             return
-        xy = np.ascontiguousarray(self.xy, dtype=float).reshape(-1, 2)
-        offsets = np.asarray(self.offsets, dtype=np.int64)
-        if offsets.ndim != 1 or offsets.size < 1 or offsets[0] != 0 or offsets[-1] != len(xy):
-            raise ValueError("offsets must start at 0 and end at the number of vertices")
+        # a copy (C order, as the kernels want): the caller's array may change later
+        xy = np.array(self.xy, dtype=np.float64, order="C")
+        if xy.size == 0:
+            xy = xy.reshape(0, 2)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f"xy must have shape (m, 2), got {xy.shape}")
+        given = np.asarray(self.offsets)
+        if given.ndim != 1 or given.size < 1:
+            raise ValueError("offsets must be a 1-D array of n + 1 vertex indices")
+        if given.dtype.kind not in "iu" and not (
+            given.dtype.kind == "f" and np.all(np.isfinite(given) & (given == np.round(given)))
+        ):
+            raise ValueError(f"offsets must be integers, got {given.dtype}")
+        offsets = np.array(given, dtype=np.int64)
+        if offsets[0] != 0 or offsets[-1] != len(xy):
+            raise ValueError(
+                f"offsets must start at 0 and end at the number of vertices ({len(xy)}), "
+                f"got {offsets[0]} and {offsets[-1]}"
+            )
         if np.any(np.diff(offsets) < 0):
             raise ValueError("offsets must be non-decreasing")
-        object.__setattr__(self, "xy", readonly(xy, copy=False))
-        object.__setattr__(self, "offsets", readonly(offsets, copy=False))
+        bad = np.flatnonzero(~np.isfinite(xy).all(axis=1))
+        if bad.size:
+            i = int(np.searchsorted(offsets, bad[0], side="right")) - 1
+            raise ValueError(f"vertex {bad[0]} (polygon {i}) is not finite: {xy[bad[0]]}")
+        _check_shape(xy, offsets)
+        xy.setflags(write=False)
+        offsets.setflags(write=False)
+        object.__setattr__(self, "xy", xy)
+        object.__setattr__(self, "offsets", offsets)
 
     @classmethod
     def _make(cls, xy: FloatArray, offsets: IntArray) -> ConvexPolygons:
-        """Internal constructor for kernel outputs: arrays already valid, no checks."""
+        """Internal constructor for kernel outputs: arrays already valid and fresh, so
+        neither checked nor copied (the hot path; the public constructor does both)."""
         obj = object.__new__(cls)
         object.__setattr__(obj, "_trusted", True)
         object.__setattr__(obj, "xy", readonly(xy, copy=False))
@@ -97,10 +235,7 @@ class ConvexPolygons:
 
     @cached_property
     def _next(self) -> IntArray:
-        nxt = np.arange(1, len(self.xy) + 1)
-        nonempty = self.counts > 0
-        nxt[self.offsets[1:][nonempty] - 1] = self.offsets[:-1][nonempty]
-        return readonly(nxt, copy=False)
+        return readonly(_next_within(self.offsets, self.counts), copy=False)
 
     def next_index(self) -> IntArray:
         """Index of the next vertex (cyclically) within the same polygon."""

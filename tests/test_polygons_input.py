@@ -1,0 +1,110 @@
+"""The public constructor of ConvexPolygons: an independent copy of checked input.
+
+The kernels build their outputs through the unchecked ``ConvexPolygons._make``; a
+caller's arrays go through ``ConvexPolygons(xy, offsets)``, which copies them and
+refuses non-finite vertices, bad offsets, clockwise and non-convex polygons.
+"""
+
+import numpy as np
+import pytest
+import shapely
+from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+
+SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # CCW, area 1
+
+
+def test_the_polygons_do_not_change_with_the_callers_arrays():
+    xy = SQUARE.copy()
+    offsets = np.array([0, 4])
+    p = ConvexPolygons(xy, offsets)
+    xy[0, 0] = 99.0
+    offsets[1] = 3
+    np.testing.assert_array_equal(p.xy, SQUARE)
+    np.testing.assert_array_equal(p.offsets, [0, 4])
+    assert p.areas()[0] == pytest.approx(1.0)
+    assert not p.xy.flags.writeable and not p.offsets.flags.writeable
+
+
+def test_the_internal_constructor_neither_copies_nor_checks():
+    """``_make`` (the kernels' hot path) keeps the arrays it is given, unchecked."""
+    xy = SQUARE[::-1].copy()  # clockwise: refused by the public constructor
+    p = ConvexPolygons._make(xy, np.array([0, 4]))
+    assert np.shares_memory(p.xy, xy)
+    assert p.areas()[0] == pytest.approx(-1.0)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_vertex_that_is_not_finite_is_refused(bad):
+    xy = np.vstack([SQUARE, [[5.0, 5.0], [6.0, bad]]])
+    with pytest.raises(ValueError, match=r"vertex 5 \(polygon 1\) is not finite"):
+        ConvexPolygons(xy, np.array([0, 4, 6]))
+
+
+def test_a_clockwise_square_is_refused_and_the_message_says_so():
+    with pytest.raises(ValueError, match="polygon 1 is clockwise.*counter-clockwise"):
+        ConvexPolygons.from_list([SQUARE, SQUARE[::-1]])
+
+
+def test_a_non_convex_quadrilateral_is_refused():
+    # counter-clockwise (positive area) but turning right at (1, 0.5)
+    dart = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.5], [1.0, 2.0]])
+    assert shapely.Polygon(dart).exterior.is_ccw
+    with pytest.raises(ValueError, match="polygon 0 is not convex"):
+        ConvexPolygons.from_list([dart])
+
+
+def test_a_star_polygon_turning_left_everywhere_is_refused():
+    """A pentagram turns left at every vertex but winds around twice."""
+    t = np.arange(5) * 4 * np.pi / 5
+    star = np.column_stack([np.cos(t), np.sin(t)])
+    with pytest.raises(ValueError, match="winds around 2 times"):
+        ConvexPolygons.from_list([star])
+
+
+@pytest.mark.parametrize(
+    ("offsets", "what"),
+    [([0, 3], "end at the number of vertices"), ([1, 4], "start at 0"),
+     ([0, 3, 1, 4], "non-decreasing"), ([0.0, 2.5, 4.0], "integers")],
+)  # fmt: skip
+def test_bad_offsets_are_refused(offsets, what):
+    with pytest.raises(ValueError, match=what):
+        ConvexPolygons(SQUARE, np.array(offsets))
+
+
+def test_valid_ccw_convex_polygons_with_a_point_a_segment_and_an_empty_one_are_accepted():
+    triangle = np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 2.0]])
+    collinear = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])  # a degenerate polygon
+    # a square far from the origin with a repeated vertex and rounding in its corners
+    rotated = SQUARE @ np.array([[np.cos(0.3), np.sin(0.3)], [-np.sin(0.3), np.cos(0.3)]])
+    far = np.insert(rotated * 1e-3 + 1e6, 1, rotated[0] * 1e-3 + 1e6, axis=0)
+    polys = [SQUARE, np.zeros((0, 2)), [[5.0, 5.0]], [[1.0, 1.0], [4.0, 2.0]], triangle,
+             collinear, far]  # fmt: skip
+    batch = ConvexPolygons.from_list(polys)
+    assert batch.n == 7
+    np.testing.assert_array_equal(batch.counts, [4, 0, 1, 2, 3, 3, 5])
+    np.testing.assert_allclose(batch.areas()[:6], [1.0, 0.0, 0.0, 0.0, 3.0, 0.0])
+    for i, p in enumerate(polys):
+        np.testing.assert_array_equal(batch.polygon(i), np.reshape(p, (-1, 2)))
+    # the tolerance is relative to the coordinates, yet far below this square's size
+    with pytest.raises(ValueError, match="polygon 0 is clockwise"):
+        ConvexPolygons.from_list([far[::-1]])
+
+
+def test_a_kernels_output_is_accepted_by_the_public_constructor():
+    """Degenerate outputs (a segment summed along itself emits a - g, a + g, b - g,
+    b + g: collinear points out of order) pass the checks as they come."""
+    seg = np.array([[0.0, 0.0], [2.0, 0.0]])
+    out = ConvexPolygons.from_list([seg, [[3.0, 4.0]], SQUARE]).minkowski_segment(
+        [[1.5, 0.0], [1.0, 1.0], [0.5, 0.0]]
+    )
+    again = ConvexPolygons(out.xy, out.offsets)
+    np.testing.assert_array_equal(again.xy, out.xy)
+
+
+def test_the_minkowski_sum_of_a_valid_square_has_shapelys_area():
+    g = np.array([0.5, 0.0])
+    out = ConvexPolygons.from_list([SQUARE]).minkowski_segment(g)
+    expected = shapely.MultiPoint(np.vstack([SQUARE - g, SQUARE + g])).convex_hull
+    assert expected.area == pytest.approx(2.0)
+    assert out.areas()[0] == pytest.approx(expected.area, rel=1e-12)
+    assert shapely.Polygon(out.polygon(0)).is_valid
