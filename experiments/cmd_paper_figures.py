@@ -33,7 +33,7 @@ from typing import Any
 
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
-from kalman_vs_infoset.experiments.options import positive_int
+from kalman_vs_infoset.experiments.options import out_folder, positive_int
 
 #: the figures run engagements (the command line announces a compilation of the kernels)
 COMPILED_KERNELS = True
@@ -157,7 +157,9 @@ def run(args) -> dict[str, Any]:
 
     drawers = _tables()[1]
     scenarios = scenario_folder(args.scenarios)
-    ctx = Context(Path(args.out), args.runs, args.quick, scenarios)
+    # refused before any figure is drawn, as every command does
+    out = out_folder(args.out, Path("results") / "figures")
+    ctx = Context(out, args.runs, args.quick, scenarios)
     numbers: dict[str, Any] = {}
     t0 = time.perf_counter()
     for group in _groups(args.only):

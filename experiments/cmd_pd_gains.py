@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.options import out_folder
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
 from kalman_vs_infoset.guidance.attitude.pd import baseline_kq, term_scale
 
@@ -138,6 +139,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     settings = _settings(args)
     if not 0 < args.map_angle_deg <= 180 or not args.fig15_kw > 0:
         raise InputError("--map-angle-deg must be in (0, 180] and --fig15-kw positive")
+    # refused before the study, as every command does (not when the figures are saved)
+    out = out_folder(args.out, Path("results") / "pd_gains")
     values = sorted({v for _, v in angles})
     fit_angles = values if len(values) >= 4 else sorted(set(values) | set(DEFAULT_FIT_ANGLES))
     f0_by_angle: dict[float, float] = {}
@@ -165,7 +168,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     result["map"] = _map_summary(smap)
     if not args.no_figures:
         result["figures"] = write_figures(
-            Path(args.out), smap, f0_by_angle, fit, table, settings, args.fig15_kw
+            out, smap, f0_by_angle, fit, table, settings, args.fig15_kw
         )
     return result
 

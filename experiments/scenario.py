@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import hashlib
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.fields import first_error
@@ -22,6 +22,19 @@ from pydantic import BaseModel, ValidationError
 from kalman_vs_infoset import data as bundled
 
 M = TypeVar("M", bound=BaseModel)
+
+Kind = Literal["intercept", "attitude"]
+
+#: top-level tables only an intercept scenario has: the attitude loops' scenario tables
+#: (RwScenario, CmgScenario, GyrostatScenario, which refuse unknown keys) share only
+#: these three with it, and their ``estimator`` is a string, not a table
+INTERCEPT_ONLY = frozenset(InterceptScenario.model_fields) - {"name", "description", "estimator"}
+
+#: the commands that run a scenario of each kind (messages)
+RUN_WITH: dict[Kind, str] = {
+    "intercept": "`kvi intercept` (or compare, sweep, adversaries, tightness)",
+    "attitude": "`kvi attitude`",
+}
 
 
 def scenario_folder(folder: str | Path | None) -> Path:
@@ -70,6 +83,39 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     if not data:  # an empty file would silently run the built-in defaults
         raise InputError(f"{p}: the scenario is empty (no key, no table)")
     return data
+
+
+def scenario_kind(data: Mapping[str, Any]) -> Kind | None:
+    """The kind of scenario a file's tables describe, None when they do not say.
+
+    Parameters
+    ----------
+    data : mapping
+        The file's top-level keys and tables (before any ``--set``).
+
+    Returns
+    -------
+    {"intercept", "attitude"} or None
+        ``"attitude"`` when there is a top-level ``controller`` (every attitude loop's
+        scenario has that key, which selects the loop; the intercept's has none),
+        ``"intercept"`` when there is an intercept-only table (:data:`INTERCEPT_ONLY`)
+        or the ``estimator`` is a table, else None (a file this small is judged by
+        the loader's own field checks).
+    """
+    if "controller" in data:
+        return "attitude"
+    if isinstance(data.get("estimator"), dict) or not INTERCEPT_ONLY.isdisjoint(data):
+        return "intercept"
+    return None
+
+
+def check_kind(data: Mapping[str, Any], expected: Kind, source: str | Path) -> None:
+    """Refuse (InputError of one line) a scenario of the other kind than ``expected``,
+    naming the command that runs it; its fields would otherwise be refused one by one
+    (an attitude scenario's ``controller`` is an unknown key of the intercept's)."""
+    kind = scenario_kind(data)
+    if kind is not None and kind != expected:
+        raise InputError(f"{source} is an {kind} scenario: run it with {RUN_WITH[kind]}")
 
 
 def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
@@ -152,10 +198,19 @@ def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = ""
         raise InputError(f"{source}: {exc}") from None
 
 
-def read(path: str | Path, overrides: Sequence[str] = ()) -> tuple[dict[str, Any], str]:
+def read(
+    path: str | Path, overrides: Sequence[str] = (), kind: Kind = "attitude"
+) -> tuple[dict[str, Any], str]:
     """The file's tables with the overrides applied, the scenario's name set (the file's
-    stem unless given; ``+key=value`` per override) and the source for messages."""
+    stem unless given; ``+key=value`` per override) and the source for messages.
+
+    ``kind`` is the kind of scenario the caller runs: a file of the other kind is
+    refused in one line naming its command (:func:`check_kind`, judged on the file
+    itself, not on the overrides). The attitude loops read their tables here as they
+    are (the default); :func:`load_scenario` reads the intercept's.
+    """
     data = load_toml(path)
+    check_kind(data, kind, path)
     data.setdefault("name", default_name(path))
     if not isinstance(data["name"], str):
         raise InputError(f"{path}: field 'name' must be a string")
@@ -170,10 +225,11 @@ def load_scenario(path: str | Path, overrides: Sequence[str] = ()) -> InterceptS
     """Read and validate an intercept scenario file (or a bundled scenario by name),
     with optional ``TABLE.KEY=VALUE`` overrides (:func:`apply_overrides`; the name gets a
     ``+key=value`` suffix each)."""
-    data, source = read(path, overrides)
+    data, source = read(path, overrides, kind="intercept")
     return validate(InterceptScenario, data, source)
 
 
 def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> InterceptScenario:
     """An intercept scenario from tables already read (name "scenario" unless given)."""
+    check_kind(data, "intercept", source)
     return validate(InterceptScenario, {"name": "scenario", **data}, source)
