@@ -138,7 +138,13 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
     for item in overrides:
         key, sep, text = item.partition("=")
         parts = key.strip().split(".")
-        if not sep or not all(parts) or len(parts) > 3 or parts == ["name"]:
+        if parts == ["name"]:
+            raise InputError(
+                f"--set {item!r}: the name is not set: it is the scenario's, with a "
+                "+key=value suffix per override (results of an override never land in "
+                "the original's files)"
+            )
+        if not sep or not all(parts) or len(parts) > 3:
             raise InputError(f"--set {item!r}: expected TABLE.KEY=VALUE (e.g. model.nu_mps2=0.01)")
         try:
             value = tomllib.loads(f"v = {text.strip()}")["v"]

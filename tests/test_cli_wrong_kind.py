@@ -135,3 +135,11 @@ def test_out_naming_a_file_is_not_a_directory_as_for_every_command(capsys, in_tm
     assert f"--out {out}: not a directory" in r.stderr
     assert "File exists" not in r.stderr
     assert out.read_text() == "keep me" and files_under(in_tmp) == [out]
+
+
+def test_setting_the_name_says_why_it_cannot_be_set(capsys):
+    """``--set name=...`` is refused (the name is derived), saying so, not "expected
+    TABLE.KEY=VALUE" as if the syntax were wrong."""
+    r = run(capsys, "intercept", "kp_fig3", "--set", 'name="other"')
+    assert one_line_error(r), r.stderr
+    assert "the name is not set" in r.stderr
