@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
 
@@ -33,12 +33,15 @@ def _flat_sets(rng, n: int):
     ]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(SEEDS, st.integers(2, 4), st.sampled_from([0.0, 1e-14, -1e-14, 3e-13]))
+@example(3951, 2, 0.0)  # once a false "empty": the strip through the segment's end missed
 def test_a_strip_touching_a_flat_set_within_rounding_keeps_it(seed, n, off_rel):
     """A strip of width 0 (and one of positive width whose edge touches the set) at
     ``a.x`` off by ``off_rel`` of its value: the result is finite and holds the set's
-    points (Box was always right: it is the brute-force reference here)."""
+    points (Box was always right: it is the brute-force reference here). The strip is
+    computed from a point of the set, so it misses the set's computed range by rounding
+    only: never empty."""
     rng = np.random.default_rng(seed)
     a, sets = _flat_sets(rng, n)
     for s, pts in sets:

@@ -63,17 +63,22 @@ def flat_along(half: float, m: float, rounding: float) -> bool:
     return not half > TOUCH_RTOL * abs(m) + rounding
 
 
-def clip_slab(lo: float, hi: float, set_lo: float, set_hi: float) -> tuple[float, float]:
+def clip_slab(
+    lo: float, hi: float, set_lo: float, set_hi: float, rounding: float = 0.0
+) -> tuple[float, float]:
     """The slab ``[lo, hi]`` clipped to the set's range ``[set_lo, set_hi]`` of ``a.x``.
 
     The set's intersection with the clipped slab is the same set, and the clipped slab
     is the tighter measurement to feed an outer update. Raises
-    :class:`EmptyIntersectionError` when the ranges are disjoint by more than rounding.
+    :class:`EmptyIntersectionError` when the ranges are disjoint by more than rounding:
+    :data:`TOUCH_RTOL` of their scale, plus ``rounding``, the absolute rounding of the
+    set's range as its family computes it (a strip through a point of a set flat along
+    ``a`` may miss its computed range by that much).
     """
     new_lo, new_hi = max(lo, set_lo), min(hi, set_hi)
     if new_lo > new_hi:
         scale = max(abs(set_lo), abs(set_hi), set_hi - set_lo, 1e-300)
-        if new_lo - new_hi > TOUCH_RTOL * scale:
+        if new_lo - new_hi > TOUCH_RTOL * scale + rounding:
             raise EmptyIntersectionError(
                 f"slab [{lo:.6g}, {hi:.6g}] misses the set's range [{set_lo:.6g}, {set_hi:.6g}]"
             )

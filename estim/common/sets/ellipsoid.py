@@ -246,10 +246,12 @@ class Ellipsoid:
         pa = p @ a
         g = max(float(a @ pa), 0.0)
         m, half = float(a @ c), np.sqrt(g)
-        lo, hi = clip_slab(lo, hi, m - half, m + half)
-        # g = a.P a is rounded to about 1e-16 |a|^2 tr P, and half = sqrt(g) takes the
-        # square root of that: 1e-13 |a|^2 tr P covers it (dimensions up to ~30)
-        rounding = float(np.sqrt(FLAT_G_RTOL * float(a @ a) * max(float(np.trace(p)), 0.0)))
+        # g = a.P a is rounded to about 1e-16 |a|^2 tr P (dg: 1e-13 |a|^2 tr P covers it
+        # up to ~30 dimensions), so half = sqrt(g) by sqrt(g + dg) - sqrt(g): as large as
+        # sqrt(dg) for a set flat along a, tiny for a thick one
+        dg = FLAT_G_RTOL * float(a @ a) * max(float(np.trace(p)), 0.0)
+        rounding = dg / (float(np.sqrt(g + dg)) + half) if dg > 0.0 else 0.0
+        lo, hi = clip_slab(lo, hi, m - half, m + half, rounding)
         if (lo <= m - half and hi >= m + half) or flat_along(half, m, rounding):
             return self  # the slab holds the ellipsoid (or touches it where it is flat)
         y, r = 0.5 * (lo + hi), 0.5 * (hi - lo)

@@ -244,9 +244,9 @@ class Zonotope:
         c, g = self.centre, self.generators
         ga = g.T @ a
         m, half = float(a @ c), float(np.abs(ga).sum())
-        lo, hi = clip_slab(lo, hi, m - half, m + half)
         # |a.g_i| is rounded to about 1e-16 |a| |g_i|: generously, TOUCH_RTOL of the sum
         rounding = TOUCH_RTOL * float(np.linalg.norm(a)) * float(np.linalg.norm(g, axis=0).sum())
+        lo, hi = clip_slab(lo, hi, m - half, m + half, rounding)
         if (lo <= m - half and hi >= m + half) or flat_along(half, m, rounding):
             return self  # the slab holds the zonotope (or touches it where it is flat)
         y, s = 0.5 * (lo + hi), 0.5 * (hi - lo)
