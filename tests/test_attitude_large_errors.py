@@ -7,6 +7,7 @@ per run as ``unbounded_steps``."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.attitude.box.estimator import (
@@ -121,3 +122,38 @@ def test_attitude_command_at_the_largest_measurement_error_reports_not_fails(tmp
     row = json.loads(r.stdout.strip().splitlines()[-1])
     assert row["failures"] == 0 and row["truth_outside"] == 0
     assert row["unbounded_steps"] > 0
+
+
+def _batch_with_a_runaway(runs: int = 3, runaway: int = 1):
+    """Measurements of ``runs`` runs at rest but for run ``runaway``, which spins at
+    50 rad/s: a 1-s step cannot be enclosed for it (six halvings fail)."""
+    rng = np.random.default_rng(5)
+    q = Rotation.random(runs, rng=rng).as_quat()
+    w = rng.uniform(-0.01, 0.01, (runs, 3))
+    w[runaway] = [50.0, -40.0, 30.0]
+    return AttitudeMeasurement(q, w)
+
+
+@pytest.mark.parametrize("family", ["box", "zonotope", "ellipsoid"])
+def test_a_run_that_cannot_be_enclosed_leaves_the_others_as_if_alone(family):
+    """Batched runs are independent: the runaway run's prediction is the whole space
+    (counted for it alone) and every other run's set is, to the last bit, what it is
+    when predicted on its own; the next update restarts the runaway from its
+    measurement."""
+    from kalman_vs_infoset.estim.attitude.sets.ellipsoid import EllipsoidAttitudeEstimator
+    from kalman_vs_infoset.estim.attitude.sets.zonotope import ZonotopeAttitudeEstimator
+
+    model = AttitudeModel(np.diag([1.0, 2.0, 3.0]), 1e-3, 1e-3, 1e-3)
+    est = {"box": BoxAttitudeEstimator, "zonotope": ZonotopeAttitudeEstimator,
+           "ellipsoid": EllipsoidAttitudeEstimator}[family](model)  # fmt: skip
+    meas = _batch_with_a_runaway()
+    batch = est.predict(est.initial(AttitudePrior(meas)), 1.0, AttitudeControl.zero(3))
+    assert batch.n_unbounded.tolist() == [0, 1, 0]
+    for i in (0, 2):
+        one = AttitudeMeasurement(meas.quat[i : i + 1], meas.rate_radps[i : i + 1])
+        alone = est.predict(est.initial(AttitudePrior(one)), 1.0, AttitudeControl.zero(1))
+        assert np.array_equal(batch.centre()[i], alone.centre()[0])
+        assert np.array_equal(batch.attitude_bound_rad()[i], alone.attitude_bound_rad()[0])
+    assert batch.inside(np.concatenate([meas.quat, meas.rate_radps], -1))[1]  # whole space
+    after = est.update(batch, meas)
+    assert np.all(np.isfinite(after.attitude_bound_rad()))

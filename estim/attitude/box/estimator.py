@@ -168,6 +168,30 @@ def _with(belief: BoxAttitudeBelief, **changes: Any) -> BoxAttitudeBelief:
     return new
 
 
+#: the per-run fields of a box belief (rows of a batch)
+_PER_RUN = ("q_ref", "e_c", "e_r", "w_c", "w_r", "n_empty", "last_empty", "n_unbounded")
+
+
+def _runs_of(belief: BoxAttitudeBelief, idx) -> BoxAttitudeBelief:
+    """The runs ``idx`` of a batched belief, as a batch of their own."""
+    return _with(belief, **{name: getattr(belief, name)[idx] for name in _PER_RUN})
+
+
+def _control_of(ctrl: AttitudeControl, idx) -> AttitudeControl:
+    """The runs ``idx`` of batched inputs (a single row is shared by every run)."""
+    rows = (ctrl.torque_Nm, ctrl.h_lo_Nms, ctrl.h_hi_Nms)
+    return AttitudeControl(*(a if a.shape[0] == 1 else a[idx] for a in rows))
+
+
+def _joined(belief: BoxAttitudeBelief, parts) -> BoxAttitudeBelief:
+    """``belief`` with the runs of each ``(idx, sub)`` of ``parts`` replaced by ``sub``'s."""
+    out = {name: np.array(getattr(belief, name)) for name in _PER_RUN}
+    for idx, sub in parts:
+        for name in _PER_RUN:
+            out[name][idx] = getattr(sub, name)
+    return _with(belief, **out)
+
+
 class EmptyRunCounts:
     """The status of a batched attitude set from its per-run counters ``n_empty`` (updates
     whose intersection was empty) and ``last_empty`` (the last update was): shared by the
@@ -257,7 +281,9 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         """
         ne = inorm_max(self.e_c, self.e_r)
         nc = np.linalg.norm(self.e_c, axis=-1)
-        return np.linalg.norm(self.e_r, axis=-1) + nc * ne
+        with np.errstate(invalid="ignore"):  # 0 * inf of a run that is the whole space
+            bound = np.linalg.norm(self.e_r, axis=-1) + nc * ne
+        return np.where(np.all(np.isfinite(self.e_r), axis=-1), bound, np.inf)
 
     def vertices(self) -> FloatArray:
         """The 64 vertices of the box of run 0 as states ``(64, 7)``."""
@@ -332,12 +358,26 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
     def _predict(
         self, belief: BoxAttitudeBelief, dt_s: float, ctrl: AttitudeControl, depth: int
     ) -> BoxAttitudeBelief:
-        if not np.all(np.isfinite(belief.e_r)):
+        lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
+        if lost.all():
             return belief  # already "any state": stays so until the next measurement
+        if lost.any():  # the others are predicted; a lost run stays the whole space
+            keep = np.flatnonzero(~lost)
+            sub = self._predict(_runs_of(belief, keep), dt_s, _control_of(ctrl, keep), depth)
+            return _joined(belief, [(keep, sub)])
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 return self._predict_once(belief, dt_s, ctrl)
         except (NoEnclosure, FloatingPointError):
+            if belief.runs > 1:
+                # each run on its own: a run's set must not depend on the runs batched
+                # with it (one run too fast to enclose would halve, or lose, them all)
+                parts = [
+                    (np.array([i]), self._predict(_runs_of(belief, [i]), dt_s,
+                                                  _control_of(ctrl, [i]), depth))
+                    for i in range(belief.runs)
+                ]  # fmt: skip
+                return _joined(belief, parts)
             if depth >= 6:
                 # no enclosure: the guaranteed set is the whole state space (the next
                 # update restarts from the measurement); counted in n_unbounded

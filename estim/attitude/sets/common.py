@@ -124,7 +124,10 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
             hi = np.minimum(bc + br, self.z_c + zr)
         lost = self.lost[:, None] | ~(lo <= hi)
         lo, hi = np.where(lost, bc - br, lo), np.where(lost, bc + br, hi)
-        return 0.5 * (lo + hi), 0.5 * (hi - lo)
+        with np.errstate(invalid="ignore"):  # -inf + inf of a run that is the whole space
+            hc, hr = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        whole = ~np.isfinite(br)  # the box's centre and its infinite radius
+        return np.where(whole, bc, hc), np.where(whole, br, hr)
 
     @property
     def n_unbounded(self) -> NDArray[np.int_]:
@@ -158,7 +161,9 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         the hull: :math:`|r_e| + |h_e| \\max|e|`)."""
         hc, hr = self.hull()
         ne = inorm_max(hc[:, :3], hr[:, :3])
-        return np.linalg.norm(hr[:, :3], axis=-1) + np.linalg.norm(hc[:, :3], axis=-1) * ne
+        with np.errstate(invalid="ignore"):  # 0 * inf of a run that is the whole space
+            bound = np.linalg.norm(hr[:, :3], axis=-1) + np.linalg.norm(hc[:, :3], axis=-1) * ne
+        return np.where(np.all(np.isfinite(hr[:, :3]), axis=-1), bound, np.inf)
 
     def extremes(self, fn: StateFunction) -> Extremes:
         """Min and max of ``fn`` over the 64 vertices of run 0's hull (an outer range of
@@ -221,11 +226,16 @@ class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
         if control is None:
             control = AttitudeControl.zero(belief.runs)
         bc, br = box_cr(box)
-        if not np.all(np.isfinite(br)):  # the box is the whole space (all runs)
+        lost = ~np.all(np.isfinite(br), -1)  # runs whose box is the whole space
+        if lost.all():
             return self._belief(box, 0 * bc, 0 * belief.z_m, **_counts(belief))
-        fall_c, fall_m = self.from_box(bc - br, bc + br)
+        with np.errstate(invalid="ignore"):  # a lost run's box: its set is not used
+            fall_c, fall_m = self.from_box(bc - br, bc + br)
         c = qlog(qmul(qinv(belief.q_ref), box.q_ref))
         hc, hr = belief.hull()
+        # a lost run (its box the whole space; a lost run stays lost in a prediction)
+        # gets a dummy hull, so that its infinite box does not fail the others' maps
+        hc, hr = np.where(lost[:, None], 0.0, hc), np.where(lost[:, None], 0.0, hr)
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 A, b, rho = predict_map(self.box, hc, hr, c, control, dt_s)
@@ -235,6 +245,9 @@ class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
             z_c, z_m, bad = fall_c, fall_m, np.ones(belief.runs, bool)
         z_c = np.where(bad[:, None], fall_c, z_c)
         z_m = np.where(bad[:, None, None], fall_m, z_m)
+        if lost.any():  # the whole space (the box says so); the set restarts at the update
+            z_c = np.where(lost[:, None], 0.0, z_c)
+            z_m = np.where(lost[:, None, None], 0.0, z_m)
         return self._belief(box, z_c, z_m, **_counts(belief))
 
     def update(self, belief: SetAttitudeBelief, measurement: Any) -> SetAttitudeBelief:
