@@ -122,6 +122,29 @@ def _resolve(scenario: InterceptScenario | str | Path) -> InterceptScenario:
     return scenario if isinstance(scenario, InterceptScenario) else load_scenario(scenario)
 
 
+def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
+    """The estimator and noise names (the scenario's by default), checked before any
+    run: an unknown name is a ``ValueError`` naming the allowed ones, as the command
+    line refuses it, not a table of failed runs."""
+    estimator = estimator or sc.experiment.estimator
+    noise = noise or sc.experiment.noise
+    known = registry.names("intercept")
+    if estimator not in known:
+        raise ValueError(f"unknown intercept estimator {estimator!r} (allowed: {', '.join(known)})")
+    if noise not in NOISES:
+        raise ValueError(f"unknown noise {noise!r} (allowed: {', '.join(NOISES)})")
+    return estimator, noise
+
+
+def _index(value: Any, name: str, least: int) -> int:
+    """An integer argument (a Python or numpy integer, not a bool or a float) >= ``least``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise TypeError(f"{name} must be an integer, got {value!r}")
+    if value < least:
+        raise ValueError(f"{name} must be at least {least}, got {value}")
+    return int(value)
+
+
 def run_engagement(
     scenario: InterceptScenario | str | Path,
     estimator: str | None = None,
@@ -163,13 +186,11 @@ def run_engagement(
     True
     """
     sc = _resolve(scenario)
+    estimator, noise = _choice(sc, estimator, noise)
+    run = _index(run, "run", 0)
     seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
-    if run < 0:
-        raise ValueError(f"run must be a non-negative index, got {run}")
     rng = np.random.default_rng(runner.run_seed(seed, run))
-    return _intercept.run_engagement(
-        sc, estimator or sc.experiment.estimator, noise or sc.experiment.noise, rng
-    )
+    return _intercept.run_engagement(sc, estimator, noise, rng)
 
 
 def run_experiment(
@@ -223,12 +244,9 @@ def run_experiment(
     ([0, 1], True)
     """
     sc = _resolve(scenario)
-    estimator = estimator or sc.experiment.estimator
-    noise = noise or sc.experiment.noise
-    runs = sc.experiment.runs if runs is None else int(runs)
+    estimator, noise = _choice(sc, estimator, noise)
+    runs = sc.experiment.runs if runs is None else _index(runs, "runs", 1)
     seed = sc.experiment.seed if seed is None else seed
-    if runs < 1:
-        raise ValueError(f"runs must be at least 1, got {runs}")
     if out is not None:
         return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
@@ -284,15 +302,11 @@ def trace(
     (0, 0)
     """
     sc = _resolve(scenario)
+    estimator, noise = _choice(sc, estimator, noise)
     seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
-    steps, sets, _ = _traces.intercept_trace(
-        sc,
-        estimator or sc.experiment.estimator,
-        noise or sc.experiment.noise,
-        seed,
-        [int(j) for j in runs],
-        sets_every,
-    )
+    runs = [_index(j, "a run index", 0) for j in runs]
+    sets_every = _index(sets_every, "sets_every", 1)
+    steps, sets, _ = _traces.intercept_trace(sc, estimator, noise, seed, runs, sets_every)
     return steps, sets
 
 
@@ -305,6 +319,8 @@ def estimators(problem: str = "intercept") -> tuple[str, ...]:
     >>> {"infoset", "ekf", "ukf"} <= set(estimators())
     True
     """
+    if problem not in registry.PROBLEMS:
+        raise ValueError(f"problem must be one of {registry.PROBLEMS}, got {problem!r}")
     return registry.names(problem)
 
 

@@ -1,0 +1,51 @@
+"""The Python front door refuses bad arguments before any run, as the command line
+does: an unknown estimator or noise writes no results table, a run count or index must
+be an integer (2.7 runs used to run 2), ``sets_every`` at least 1."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from kalman_vs_infoset import api
+
+
+@pytest.mark.parametrize("estimator, noise", [("nope", "random"), ("ekf", "nope")])
+def test_unknown_names_are_refused_and_nothing_is_written(tmp_path, estimator, noise):
+    for call in (
+        lambda: api.run_experiment("kp_fig3", estimator, noise, runs=2, out=tmp_path / "o"),
+        lambda: api.run_experiment("kp_fig3", estimator, noise, runs=2),
+        lambda: api.run_engagement("kp_fig3", estimator, noise),
+        lambda: api.trace("kp_fig3", estimator, noise),
+    ):
+        with pytest.raises(ValueError, match="unknown .*'nope'.*allowed"):
+            call()
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: api.run_experiment("kp_fig3", "ekf", "random", runs=2.7), "runs"),
+        (lambda: api.run_experiment("kp_fig3", "ekf", "random", runs=True), "runs"),
+        (lambda: api.run_engagement("kp_fig3", "ekf", "random", run=1.5), "run"),
+        (lambda: api.trace("kp_fig3", "ekf", "random", runs=[0.5]), "run index"),
+    ],
+)  # fmt: skip
+def test_counts_and_indices_must_be_integers(call, name):
+    with pytest.raises(TypeError, match=f"{name} must be an integer"):
+        call()
+
+
+def test_bounds_of_counts_and_problems():
+    with pytest.raises(ValueError, match="runs must be at least 1"):
+        api.run_experiment("kp_fig3", "ekf", "random", runs=0)
+    with pytest.raises(ValueError, match="run must be at least 0"):
+        api.run_engagement("kp_fig3", "ekf", "random", run=-1)
+    with pytest.raises(ValueError, match="sets_every must be at least 1"):
+        api.trace("kp_fig3", "ekf", "random", sets_every=0)
+    with pytest.raises(ValueError, match="problem must be one of"):
+        api.estimators("foo")
+    # numpy integers are integers
+    r = api.run_engagement("kp_fig3", "ekf", "random", run=np.int64(0))
+    assert r.truth_outside >= 0
