@@ -62,6 +62,26 @@ def _times(text: str) -> list[float]:
     return sorted(set(values))
 
 
+#: the switch noise's default switch time (s)
+DEFAULT_SWITCH_S = 50.0
+
+
+def switch_s(args) -> float:
+    """The switch time of ``--noise switch`` (:data:`DEFAULT_SWITCH_S` unless given);
+    ``--switch-s`` with another noise, or after the last requested time (the noise
+    would never switch), is refused in one line."""
+    if args.switch_s is None:
+        return DEFAULT_SWITCH_S
+    if args.noise != "switch":
+        raise InputError(f"--switch-s applies to --noise switch only (got --noise {args.noise})")
+    if args.switch_s >= max(args.times):
+        raise InputError(
+            f"--switch-s {args.switch_s:g} s is not before the last time {max(args.times):g} s: "
+            "the errors would never switch"
+        )
+    return args.switch_s
+
+
 def _positive(text: str) -> float:
     try:
         value = float(text)
@@ -82,8 +102,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--guided", action="store_true", help="the seed's law issues impulses")
     reference = registry.reference("intercept").name
     add_estimators(p, "intercept", [reference], f"{reference}; one estimator under test", most=1)
-    add("--switch-s", type=_positive, default=50.0,
-        help="switch noise: time of the switch from +a to -a, s (default 50)")  # fmt: skip
+    add("--switch-s", type=_positive, default=None,
+        help=f"--noise switch only: time of the switch from +a to -a, s (default "
+        f"{DEFAULT_SWITCH_S:g}; another time is in the JSON and the file names)")  # fmt: skip
     add("--kinematic-margin", action="store_true",
         help="keep the set's kinematic margin (off by default: the truth here is the "
         "auxiliary model, which has no kinematic term; with it on, the set models the "
@@ -129,7 +150,7 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
         return _evaluate(model, prior, est, belief, hist, truth_w)
 
     records, fuel = run_channel(
-        sc, args.estimators[0], args.noise, seed, steps, observe, args.guided, args.switch_s
+        sc, args.estimators[0], args.noise, seed, steps, observe, args.guided, switch_s(args)
     )
     return [
         records.get(k, {"truth_w_m": None, "reason": "truth under eps"}) | {"time_s": t}
@@ -202,6 +223,7 @@ def run(args) -> dict[str, Any]:
         "estimator": args.estimators[0],
         "guided": bool(args.guided),
         "kinematic_margin": bool(args.kinematic_margin),
+        **({"switch_s": switch_s(args)} if args.noise == "switch" else {}),
         "times_s": [r["time_s"] for r in recs],
         **{f: [r.get(f) for r in recs] for f in FIELDS},
         "max_ratio": max(ratios) if ratios else None,
@@ -210,6 +232,9 @@ def run(args) -> dict[str, Any]:
     stem = out / (
         f"{sc.name}-tightness-{args.estimators[0]}-{args.noise}-seed{seed}"
         + ("-guided" if args.guided else "")
+        # another switch time is another experiment: its own files (the default's keep
+        # their names)
+        + (f"-switch{switch_s(args):g}s" if switch_s(args) != DEFAULT_SWITCH_S else "")
     )
     result["files"] = [str(p) for p in _write(result, stem)]
     result["wall_s"] = time.perf_counter() - t0

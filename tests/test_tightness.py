@@ -50,6 +50,9 @@ def test_tightness_reports_the_exact_interval_inside_the_set(capsys, tmp_path, s
         assert res["exact_outer_lo_m"][i] <= w <= res["exact_outer_hi_m"][i]
     assert sorted(Path(f).suffix for f in res["files"]) == [".json", ".png", ".svg"]
     assert all(Path(f).stat().st_size > 0 for f in res["files"])
+    if "switch" in extra:  # another switch time: recorded, and in the file names
+        assert res["switch_s"] == 4.0
+        assert all("-switch4s" in Path(f).name for f in res["files"])
 
 
 def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_path):
@@ -70,6 +73,8 @@ def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_pat
         ["--times", "5.3"],  # not a decision time (0.5 s steps)
         ["--noise", "pink"],
         ["--switch-s", "soon"],
+        ["--switch-s", "20"],  # without --noise switch
+        ["--noise", "switch", "--times", "10,30", "--switch-s", "30"],  # never switches
         ["--estimators", "kalman9"],
     ],
 )
