@@ -162,10 +162,11 @@ def figure_legend(fig, axes: Iterable, **kw) -> None:
         )
 
 
-def paper_line(ax, value: float, text: str, axis: str = "y") -> None:
-    """The paper's printed number as a black dotted line labelled ``paper: text``."""
+def paper_line(ax, value: float, text: str, axis: str = "y", who: str = "paper") -> None:
+    """The paper's printed number as a black dotted line labelled ``who: text`` (``who``
+    says which figure's number it is when not the plotted one's)."""
     draw = ax.axhline if axis == "y" else ax.axvline
-    draw(value, color=PAPER, ls=":", lw=1.2, label=f"paper: {text}")
+    draw(value, color=PAPER, ls=":", lw=1.2, label=f"{who}: {text}")
 
 
 def save(fig, stem: Path, formats: tuple[str, ...] = ("png", "svg")) -> list[Path]:

@@ -163,11 +163,11 @@ def miss_floor_m(sc: InterceptScenario) -> float:
     return m.bearing_bound_end_rad * m.eps_km * 1e3
 
 
-def paper_marks(sc: InterceptScenario) -> dict[str, tuple[float | None, float | None]]:
-    """The scenario's ``[reference]`` as ``{noise: (miss_m, fuel_mps)}``."""
+def paper_marks(sc: InterceptScenario) -> dict[str, tuple[float | None, float | None, str]]:
+    """The scenario's ``[reference]`` as ``{noise: (miss_m, fuel_mps, label)}``."""
     ref = sc.reference
-    return {"random": (ref.miss_random_m, ref.fuel_random_mps),
-            "game": (ref.miss_game_m, ref.fuel_game_mps)}  # fmt: skip
+    return {"random": (ref.miss_random_m, ref.fuel_random_mps, ref.label),
+            "game": (ref.miss_game_m, ref.fuel_game_mps, ref.label)}  # fmt: skip
 
 
 def draw_traces(files, sc: InterceptScenario) -> list:

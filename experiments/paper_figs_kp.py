@@ -20,7 +20,7 @@ import pandas as pd
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments import plots_intercept, plots_sets
-from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_experiment
+from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, paper_marks, run_experiment
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.stats import ok_mean
 from kalman_vs_infoset.experiments.traces import intercept_trace
@@ -39,11 +39,8 @@ def _baselines() -> tuple[str, ...]:
 
 
 def _paper(sc) -> dict[str, tuple[Any, Any]]:
-    ref = sc.reference
-    return {
-        "random": (ref.miss_random_m, ref.fuel_random_mps),
-        "game": (ref.miss_game_m, ref.fuel_game_mps),
-    }
+    """The scenario's printed ``(miss_m, fuel_mps)`` per noise (the results file's form)."""
+    return {noise: marks[:2] for noise, marks in paper_marks(sc).items()}
 
 
 def fig3(ctx) -> dict[str, Any]:
@@ -63,7 +60,7 @@ def fig3(ctx) -> dict[str, Any]:
         for n in NOISES
     }
     fig = plots_intercept.control_processes(
-        steps[steps["estimator"] == ref], 0, ref, list(NOISES), paper=_paper(sc)
+        steps[steps["estimator"] == ref], 0, ref, list(NOISES), paper=paper_marks(sc)
     )
     ctx.save(fig, "kp_fig3")
     fig, axes = fs.figure(3, 2, size=(12.0, 8.0), sharex="col")

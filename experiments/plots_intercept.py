@@ -16,6 +16,7 @@ Style (colour = estimator, line style = noise): :mod:`kalman_vs_infoset.experime
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -35,9 +36,11 @@ def control_processes(
     estimator: str,
     noises: list[str],
     channel: str | None = None,
-    paper: Mapping[str, tuple[float | None, float | None]] | None = None,
+    paper: Mapping[str, tuple[Any, ...]] | None = None,
 ):
-    """Fig. 3-style panels; ``paper`` maps a noise to its printed ``(miss_m, fuel_mps)``."""
+    """Fig. 3-style panels; ``paper`` maps a noise to its printed ``(miss_m, fuel_mps)``
+    or ``(miss_m, fuel_mps, label)``, the label naming whose numbers they are (default
+    "paper"; e.g. "paper Fig. 3, one run" on the Fig. 5 scenarios)."""
     fig, axes = fs.figure(5, len(noises), size=(5.2 * len(noises), 10.5), sharex="col")
     for col, noise in enumerate(noises):
         d = _one(steps[(steps["estimator"] == estimator) & (steps["noise"] == noise)], run, channel)
@@ -92,11 +95,14 @@ def control_processes(
         ax[2].plot(
             [t[-1]], [miss], "o", color=style["color"], ms=6, label=f"ours: miss {miss:.1f} m"
         )
-        p_miss, p_fuel = (paper or {}).get(noise, (None, None))
+        # (miss, fuel) or (miss, fuel, label): the label says whose numbers they are
+        marks = tuple((paper or {}).get(noise, (None, None)))
+        p_miss, p_fuel = marks[0], marks[1]
+        who = str(marks[2]) if len(marks) > 2 else "paper"
         if p_miss is not None:
-            ax[2].plot([t[-1]], [p_miss], **fs.PAPER_MARKER, label=f"paper: miss {p_miss:g} m")
+            ax[2].plot([t[-1]], [p_miss], **fs.PAPER_MARKER, label=f"{who}: miss {p_miss:g} m")
         if p_fuel is not None:
-            fs.paper_line(ax[4], p_fuel, f"fuel {p_fuel:g} m/s")
+            fs.paper_line(ax[4], p_fuel, f"fuel {p_fuel:g} m/s", who=who)
         ax[0].set_title(
             f"{noise} errors: miss {miss:.1f} m, fuel {float(d['fuel_mps'].iloc[-1]):.1f} m/s"
         )

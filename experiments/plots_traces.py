@@ -31,7 +31,7 @@ def _read(path: Path) -> pd.DataFrame:
     return df
 
 
-def _paper_from_json(path: Path) -> dict[str, tuple[Any, Any]] | None:
+def _paper_from_json(path: Path) -> dict[str, tuple[Any, ...]] | None:
     table = path.with_name(path.name.replace("-trace.parquet", ".parquet"))
     if path.parent.name == TRACE_DIR:  # the results table is in the folder above
         table = path.parent.parent / table.name
@@ -39,9 +39,10 @@ def _paper_from_json(path: Path) -> dict[str, tuple[Any, Any]] | None:
         ref = json.loads(existing_sidecar(table).read_text())["scenario"]["reference"]
     except (OSError, ValueError, KeyError, TypeError):
         return None
+    label = ref.get("label") or "paper"
     return {
-        "random": (ref.get("miss_random_m"), ref.get("fuel_random_mps")),
-        "game": (ref.get("miss_game_m"), ref.get("fuel_game_mps")),
+        "random": (ref.get("miss_random_m"), ref.get("fuel_random_mps"), label),
+        "game": (ref.get("miss_game_m"), ref.get("fuel_game_mps"), label),
     }
 
 

@@ -274,6 +274,9 @@ class ReferenceTable(Table):
     miss_game_m: NONNEGATIVE | None = field(None, "paper's miss, game noise, m")
     fuel_game_mps: NONNEGATIVE | None = field(None, "paper's fuel, game noise, m/s")
     source: str = field("", "where the numbers come from")
+    label: str = field(
+        "paper", "how the figures name these numbers (e.g. another figure's single run)"
+    )
 
 
 class InterceptScenario(Table):
