@@ -49,3 +49,15 @@ def test_bounds_of_counts_and_problems():
     # numpy integers are integers
     r = api.run_engagement("kp_fig3", "ekf", "random", run=np.int64(0))
     assert r.truth_outside >= 0
+
+
+def test_a_non_finite_measurement_is_refused_where_it_is_made():
+    """NaN or inf bearings and ranges are refused by the measurement itself (a filter
+    fed one reported its own belief as not finite)."""
+    from kalman_vs_infoset.estim.intercept.model import Bearing, Range
+
+    for bad in (float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="bearing measurement must be finite"):
+            Bearing(bad)
+        with pytest.raises(ValueError, match="range measurement must be finite"):
+            Range(bad)
