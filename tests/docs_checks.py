@@ -95,6 +95,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       N + "kp_fig5/mean_miss_fuel/bearings + range, random/1",
       N + "kp_fig5/mean_miss_fuel/bearings + range, game/0",
       N + "kp_fig5/mean_miss_fuel/bearings + range, game/1")),
+    (FIGMD, r"our game miss is larger, ([\d.]+) m against ([\d.]+) m \(curve 4", FIGS,
+     (N + "kp_fig5/mean_miss_fuel/bearings + range, game/0",
+      N + "kp_fig5/mean_miss_fuel/bearings only, game/0")),
     # seed 000
     (FIGMD, r"at 300 s the error is ([\d.]+) deg and ([\d.]+) deg/s", FIGS,
      (N + "resurs/angle_at_300s_deg", N + "resurs/rate_at_300s_degps")),
