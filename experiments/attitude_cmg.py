@@ -75,6 +75,7 @@ def summarise(
         "truth_outside": int(sum(col("truth_outside"))),
         "empty_steps": int(sum(col("empty_steps"))),
         "unbounded_steps": int(sum(col("unbounded_steps"))),
+        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
         "lower_bound_energy_N2m2s": lower_bound_energy_N2m2s(setup),
         "seed_energy_N2m2s": SEED_ENERGY_N2M2S[controller],
         "turn_time_s": setup.duration_s,

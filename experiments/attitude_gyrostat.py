@@ -113,6 +113,7 @@ def summarise(
         "truth_outside": int(col("truth_outside").sum()),
         "empty_steps": int(col("empty_steps").sum()),
         "unbounded_steps": int(col("unbounded_steps").sum()),
+        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
         "unsettled_runs": int(np.sum(~np.isfinite(settle))),

@@ -99,6 +99,7 @@ def summarise(
         "truth_outside": int(np.sum(col("truth_outside"))),
         "empty_steps": int(np.sum(col("empty_steps"))),
         "unbounded_steps": int(np.sum(col("unbounded_steps"))),
+        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
         "not_settled": int(np.sum(~np.isfinite(settle))),
     }
     jd = config.body.inertia_kgm2
