@@ -61,3 +61,23 @@ def test_a_non_finite_measurement_is_refused_where_it_is_made():
             Bearing(bad)
         with pytest.raises(ValueError, match="range measurement must be finite"):
             Range(bad)
+
+
+@pytest.mark.parametrize("name", ["infoset", "ekf", "ukf", "hinf", "pf"])
+def test_estimators_pickle_and_the_copy_updates_alike(name):
+    """An estimator sent to a process pool of one's own (pickled) gives the same belief
+    as the original, to the last bit (the UKF's sigma points held a lambda)."""
+    import pickle
+
+    from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+    from kalman_vs_infoset.estim.intercept.model import Bearing
+
+    sc = api.load_scenario("kp_fig3")
+    est = api.get_estimator(name).build(sc.estimator.options_for(name), sc.setting())
+    copy = pickle.loads(pickle.dumps(est))
+    prior = sc.estimator.prior("lateral")
+    a = est.update(est.initial(prior), Bearing(-1.3e-3))
+    b = copy.update(copy.initial(prior), Bearing(-1.3e-3))
+    miss = ZeroEffortMiss(sc.channel_model())
+    ea, eb = a.extremes(miss), b.extremes(miss)
+    assert (ea.min_value, ea.max_value) == (eb.min_value, eb.max_value)

@@ -121,6 +121,12 @@ KINDS = ("ekf", "ukf")
 _H_BEARING = np.array([[1.0, 0.0, 0.0]])
 
 
+def _psd_sqrt(p):
+    """The sigma points' matrix square root (upper factor), a module function so that
+    the estimator pickles (to a process pool of one's own)."""
+    return psd_cholesky(p).T
+
+
 @dataclass(frozen=True)
 class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior]):
     """EKF or UKF of one guidance channel behind the estimator interface.
@@ -184,7 +190,7 @@ class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior
             self.ukf_alpha,
             self.ukf_beta,
             self.ukf_kappa,
-            sqrt_method=lambda p: psd_cholesky(p).T,
+            sqrt_method=_psd_sqrt,
         )
         object.__setattr__(self, "_points", points)
 
