@@ -151,8 +151,10 @@ def stacked_3d(
                 _draw_3d(ax, polys, colour, shaded, f"{fs.words(est)}: {label}")
             if before or after:
                 _limits_3d(ax, before + after)
-            if truth is not None:
-                ax.plot(*[[v] for v in truth], "o", color=fs.TRUTH, ms=5, label="truth")
+            if truth is not None:  # drawn last and on top: not hidden behind a surface
+                ax.computed_zorder = False
+                ax.plot(*[[v] for v in truth], "o", color=fs.TRUTH, ms=5, label="truth",
+                        zorder=10)  # fmt: skip
             _labels_3d(ax, e is not None)
             when = "before" if col == 0 else "after"
             ax.set_title(
@@ -185,12 +187,14 @@ def slices(sets: pd.DataFrame, run: int, steps_df=None, times=None, channel=None
         d = post[post["step"] == step]
         _draw_2d(ax, d, colour, est)
         tr = _truth(steps_df, run, int(step), channel)
-        if tr is not None:
-            ax.plot([tr[1]], [tr[2] * 1e3], "o", color=fs.TRUTH, ms=4, label="truth")
+        if tr is not None:  # above the sections' fill
+            ax.plot([tr[1]], [tr[2] * 1e3], "o", color=fs.TRUTH, ms=4, label="truth", zorder=5)
         ax.set_title(f"t = {float(d['t_s'].iloc[0]):g} s, {d['section'].nunique()} sections")
-        fs.legend(ax, loc="best")
     for ax in axes.flat[len(chosen) :]:
         ax.set_visible(False)
+    # one legend below the panels: early sets fill their whole panel, where a legend
+    # inside would hide the truth
+    fs.figure_legend(fig, axes.flat[: len(chosen)], fontsize=8)
     fig.suptitle(f"{sets['scenario'].iloc[0]}: the set projected on (bearing, miss), run {run}")
     return fig
 
