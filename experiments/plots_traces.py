@@ -91,7 +91,8 @@ def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> li
             d = df[df["estimator"] == est]
             noises = _noises(d)
             fig = plots_intercept.control_processes(d, int(run), str(est), noises, paper=paper)
-            stem = f"{name}-{est}-{','.join(noises)}{tag}-run{run}-processes"
+            # '+' between noises, as the other figure names (a comma is awkward in a shell)
+            stem = f"{name}-{est}-{'+'.join(noises)}{tag}-run{run}-processes"
             files += fs.save(fig, out / stem)
         if df["estimator"].nunique() > 1:
             for noise in _noises(df):
