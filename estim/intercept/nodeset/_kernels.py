@@ -112,8 +112,7 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
     # whether the polygon is flat along g or its signs break into more runs, and then
     # the sum is written again by _segment1_rare (the same output as three passes)
     crc = g0 * (src[0, 1] - src[m - 1, 1]) - g1 * (src[0, 0] - src[m - 1, 0])
-    prev = crc > 0.0
-    changes = 0
+    changes = 0  # sign changes between consecutive edges, cyclically
     flat = True
     k = 0
     out_scale = 0.0
@@ -122,11 +121,9 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
         crp = crc
         crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
         flat = flat and not abs(crc) > tol
-        cur = crc > 0.0
-        changes += cur != prev
-        prev = cur
         sp = 1.0 if crp > 0.0 else -1.0
         sc = 1.0 if crc > 0.0 else -1.0
+        changes += sc != sp
         dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
         if want_scale:
             out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
