@@ -226,8 +226,9 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     the runs whose last update was; ``n_unbounded`` counts, per run, the predictions
     whose enclosure could not be closed (a step far too long for the rates, or a box
     too large for the BCH enclosure): the set then is the whole space until the next
-    measurement (still guaranteed; the results report it as ``unbounded_steps``). The
-    whole batch goes to the whole space together, so every run of it counts the step.
+    measurement (still guaranteed; the results report it as ``unbounded_steps``). A
+    batch that does not close is predicted run by run, so only the runs that cannot be
+    enclosed go to the whole space and count the step.
     """
 
     q_ref: FloatArray
