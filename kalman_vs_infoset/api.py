@@ -127,13 +127,8 @@ def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
     run: an unknown name is a ``ValueError`` naming the allowed ones, as the command
     line refuses it, not a table of failed runs."""
     estimator = estimator or sc.experiment.estimator
-    noise = noise or sc.experiment.noise
-    known = registry.names("intercept")
-    if estimator not in known:
-        raise ValueError(f"unknown intercept estimator {estimator!r} (allowed: {', '.join(known)})")
-    if noise not in NOISES:
-        raise ValueError(f"unknown noise {noise!r} (allowed: {', '.join(NOISES)})")
-    return estimator, noise
+    _intercept.registration(estimator)  # the engagement's own checks, before any run
+    return estimator, _intercept.check_noise(noise or sc.experiment.noise)
 
 
 def _index(value: Any, name: str, least: int) -> int:

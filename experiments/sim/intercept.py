@@ -51,14 +51,26 @@ from kalman_vs_infoset.guidance.intercept.truth import TwoBodyTruth
 AXIS = {"lateral": 1, "vertical": 2}
 
 
+def registration(name: str) -> registry.Registration:
+    """The intercept estimator registered as ``name`` (ValueError naming the allowed
+    ones if unknown)."""
+    try:
+        return registry.get("intercept", name)
+    except KeyError as exc:
+        raise ValueError(exc.args[0]) from None
+
+
+def check_noise(name: str) -> str:
+    """``name`` if it is a noise of :data:`NOISES` (ValueError naming them otherwise)."""
+    if name not in NOISES:
+        raise ValueError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
+    return name
+
+
 def make_estimator(name: str, sc: InterceptScenario, model: ChannelModel) -> Estimator:
     """The estimator registered as ``name`` with the scenario's options (ValueError if
     unknown)."""
-    try:
-        reg = registry.get("intercept", name)
-    except KeyError as exc:
-        raise ValueError(exc.args[0]) from None
-    return reg.build(sc.estimator.options_for(name), sc.setting(model))
+    return registration(name).build(sc.estimator.options_for(name), sc.setting(model))
 
 
 def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, channel: str):
@@ -101,7 +113,8 @@ def build_noise(
             sensor, sc.model.dt_s, adv.lookahead_steps, adv.lookahead_candidates,
             adv.candidates, adv.lookahead_objective,
         )  # fmt: skip
-    raise ValueError(f"unknown noise '{name}' (allowed: {', '.join(NOISES)})")
+    check_noise(name)  # an unknown name: the error says which are known
+    raise NotImplementedError(f"noise '{name}' has no generator")
 
 
 def draw_truth(sc: InterceptScenario, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
