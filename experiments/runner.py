@@ -86,16 +86,21 @@ def job_path(out_dir: Path, job: Job) -> Path:
     return Path(out_dir) / f"{job.name}-{job.label}-s{job.seed}.parquet"
 
 
+def _whole(value: Any, flag: str, lo: int, hi: int) -> int:
+    """``value`` if it is an integer (Python or numpy; not a bool, not a float, which
+    ``int()`` would truncate: 1.5 was run as seed 1) in ``[lo, hi]``; else InputError."""
+    whole = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if not (whole and lo <= value <= hi):
+        raise InputError(f"{flag} {value!r}: must be an integer in [{lo}, {hi}]")
+    return int(value)
+
+
 def check_seed(seed: int) -> int:
-    if not 0 <= int(seed) <= MAX_SEED:
-        raise InputError(f"--seed {seed}: must be an integer in [0, {MAX_SEED}]")
-    return int(seed)
+    return _whole(seed, "--seed", 0, MAX_SEED)
 
 
 def check_runs(runs: int) -> int:
-    if not 1 <= int(runs) <= MAX_RUNS:
-        raise InputError(f"--runs {runs}: must be an integer in [1, {MAX_RUNS}]")
-    return int(runs)
+    return _whole(runs, "--runs", 1, MAX_RUNS)
 
 
 def _write_rows(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:

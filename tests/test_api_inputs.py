@@ -81,3 +81,12 @@ def test_estimators_pickle_and_the_copy_updates_alike(name):
     miss = ZeroEffortMiss(sc.channel_model())
     ea, eb = a.extremes(miss), b.extremes(miss)
     assert (ea.min_value, ea.max_value) == (eb.min_value, eb.max_value)
+
+
+@pytest.mark.parametrize("seed", [1.5, True, "3"])
+def test_a_seed_must_be_an_integer_not_truncated(seed):
+    """``int(1.5)`` ran seed 1: the runner's seed check takes integers only."""
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    with pytest.raises(InputError, match="must be an integer"):
+        api.run_engagement("kp_fig3", "ekf", "random", seed=seed)
