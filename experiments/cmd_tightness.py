@@ -33,7 +33,12 @@ from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.noise import NOISE_KINDS
-from kalman_vs_infoset.experiments.options import SCENARIO_HELP, add_estimators, seed_int
+from kalman_vs_infoset.experiments.options import (
+    SCENARIO_HELP,
+    add_estimators,
+    out_folder,
+    seed_int,
+)
 
 if TYPE_CHECKING:
     from kalman_vs_infoset.estim.intercept.exact_reference import PriorBox
@@ -127,7 +132,7 @@ def _prior(sc) -> PriorBox:
     )
 
 
-def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
+def simulate(sc, args, seed: int, switch: float) -> tuple[list[dict[str, Any]], float]:
     """Run the channel to the last requested time: one record per requested time, and
     the fuel spent (m/s)."""
     from kalman_vs_infoset.experiments.sim.channel import run_channel
@@ -150,7 +155,7 @@ def simulate(sc, args, seed: int) -> tuple[list[dict[str, Any]], float]:
         return _evaluate(model, prior, est, belief, hist, truth_w)
 
     records, fuel = run_channel(
-        sc, args.estimators[0], args.noise, seed, steps, observe, args.guided, switch_s(args)
+        sc, args.estimators[0], args.noise, seed, steps, observe, args.guided, switch
     )
     return [
         records.get(k, {"truth_w_m": None, "reason": "truth under eps"}) | {"time_s": t}
@@ -210,11 +215,10 @@ def run(args) -> dict[str, Any]:
         names=sorted({registry.reference("intercept").name, args.estimators[0]}),
     )  # fmt: skip
     seed = sc.experiment.seed if args.seed is None else args.seed
-    out = Path(args.out) if args.out else Path("results") / "tightness"
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: not a directory")
+    out = out_folder(args.out, Path("results") / "tightness")
+    switch = switch_s(args)  # checked before any run
     t0 = time.perf_counter()
-    recs, fuel = simulate(sc, args, seed)
+    recs, fuel = simulate(sc, args, seed, switch)
     ratios = [r["ratio"] for r in recs if r.get("ratio") is not None]
     result: dict[str, Any] = {
         "scenario": sc.name,
@@ -223,7 +227,7 @@ def run(args) -> dict[str, Any]:
         "estimator": args.estimators[0],
         "guided": bool(args.guided),
         "kinematic_margin": bool(args.kinematic_margin),
-        **({"switch_s": switch_s(args)} if args.noise == "switch" else {}),
+        **({"switch_s": switch} if args.noise == "switch" else {}),
         "times_s": [r["time_s"] for r in recs],
         **{f: [r.get(f) for r in recs] for f in FIELDS},
         "max_ratio": max(ratios) if ratios else None,
@@ -234,7 +238,7 @@ def run(args) -> dict[str, Any]:
         + ("-guided" if args.guided else "")
         # another switch time is another experiment: its own files (the default's keep
         # their names)
-        + (f"-switch{switch_s(args):g}s" if switch_s(args) != DEFAULT_SWITCH_S else "")
+        + (f"-switch{switch:g}s" if switch != DEFAULT_SWITCH_S else "")
     )
     result["files"] = [str(p) for p in _write(result, stem)]
     result["wall_s"] = time.perf_counter() - t0
