@@ -27,7 +27,9 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   about 100, 200 and 400 steps (``cost_steps``, ``cost_ms``). The approach is the same
   (from 5801.3 km to the blind range); the step count is varied through the time step,
   ``dt`` = 1, 0.5 and 0.25 s (``--quick``: 4, 2 and 1 s, about 25, 50 and 100 steps).
-  1 means a cost linear in the approach length;
+  1 means a cost linear in the approach length. ``cost_mean_vertices`` and
+  ``cost_max_vertices``: the mean and largest vertex count of the set's slices over
+  each of those approaches (``null`` for a set without polygon slices);
 * ``runs_per_s`` (1 worker) and ``runs_per_s_2`` (2 worker processes): Monte Carlo
   throughput on Fig. 5's scenario (wall clock) and their ratio ``speedup_2_workers``;
   ``runs_per_cpu_s`` (``{"1": .., "2": ..}``): runs per CPU-second of this process and
@@ -177,14 +179,48 @@ def step_cost_us(name: str, sc, steps: int, repeat: int) -> tuple[float, int]:
 
 def cost_exponent(sc, dts: tuple[float, ...]) -> dict[str, Any]:
     """Slope of log(CPU of the information set over the whole approach) against
-    log(steps), the approach cut into as many steps as each ``dt`` gives."""
-    cost_ms, steps = [], []
+    log(steps), the approach cut into as many steps as each ``dt`` gives; with the
+    mean and largest vertex count of its slices over each approach
+    (:func:`_approach_vertices`, untimed)."""
+    name = compared()[0]
+    cost_ms, steps, mean_v, max_v = [], [], [], []
     for dt in dts:
-        cpu_s, done = _approach_cpu_s(compared()[0], sc, _ALL_STEPS, dt)
+        cpu_s, done = _approach_cpu_s(name, sc, _ALL_STEPS, dt)
         cost_ms.append(cpu_s * 1e3)
         steps.append(done)
+        mean, largest = _approach_vertices(name, sc, dt)
+        mean_v.append(mean)
+        max_v.append(largest)
     slope = float(np.polyfit(np.log(steps), np.log(cost_ms), 1)[0])
-    return {"cost_exponent": slope, "cost_steps": steps, "cost_ms": cost_ms, "cost_dt_s": dts}
+    return {
+        "cost_exponent": slope, "cost_steps": steps, "cost_ms": cost_ms, "cost_dt_s": dts,
+        "cost_mean_vertices": mean_v, "cost_max_vertices": max_v,
+    }  # fmt: skip
+
+
+def _approach_vertices(name: str, sc, dt: float) -> tuple[float | None, int | None]:
+    """Mean vertices per live slice over the steps of :func:`_approach_cpu_s`'s approach
+    (after each prediction), and the most any slice had; ``None`` for a belief that
+    has no polygon slices. A step's cost grows with its slices' vertices, so this is
+    what makes the cost grow faster than the approach (docs/performance.md)."""
+    from kalman_vs_infoset.experiments.sim.intercept import build_estimator
+
+    model = sc.channel_model()
+    est, b = build_estimator(name, sc, model, "lateral")
+    if not hasattr(b, "polygons"):
+        return None, None
+    per_slice, largest = [], 0
+    for a in _bearings(model, _ALL_STEPS, dt, np.random.default_rng(7)):
+        b = est.update(b, Bearing(a))
+        if b.is_empty:
+            break
+        b = est.predict(b, dt, BENCH_IMPULSE_MPS)
+        counts = b.polygons.counts
+        live = counts[counts > 0]
+        if len(live):
+            per_slice.append(float(live.mean()))
+            largest = max(largest, int(live.max()))
+    return (float(np.mean(per_slice)) if per_slice else None), largest
 
 
 def engagement_ms(sc, noise: str, repeat: int) -> float:
@@ -356,9 +392,11 @@ def render(result: dict[str, Any]) -> str:
         + (f"   over {timed[name]} steps" if name in timed else "")
         for name, us in result["step_us"].items()
     ]
+    # the slices' vertices beside each approach's cost (absent: files of older releases)
+    verts = result.get("cost_mean_vertices") or [None] * len(result["cost_steps"])
     cost = ", ".join(
-        f"{n} steps {ms:.0f} ms"
-        for n, ms in zip(result["cost_steps"], result["cost_ms"], strict=True)
+        f"{n} steps {ms:.0f} ms" + (f" ({v:.0f} vertices a slice)" if v is not None else "")
+        for n, ms, v in zip(result["cost_steps"], result["cost_ms"], verts, strict=True)
     )
     compile_s = result["first_run_compile_s"]
     return "\n".join(

@@ -50,6 +50,10 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert np.allclose(steps[1:] / steps[:-1], 2.0, rtol=0.1) and (cost > 0).all()
     slope = np.polyfit(np.log(steps), np.log(cost), 1)[0]
     assert out["cost_exponent"] == pytest.approx(slope)
+    # the node set's slices: a mean vertex count per approach, at most the largest
+    mean_v, max_v = out["cost_mean_vertices"], out["cost_max_vertices"]
+    assert len(mean_v) == len(max_v) == len(steps)
+    assert all(3.0 <= m <= big for m, big in zip(mean_v, max_v, strict=True))
     # one run a task against two (--quick: 2 runs), on 2 workers
     assert out["runs_per_cpu_s_by_chunk"]["1"] == out["runs_per_cpu_s"]["2"]
     assert set(out["runs_per_cpu_s_by_chunk"]) == {"1", "2"}
