@@ -381,6 +381,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (PERF, r"\((\d+) / (\d+) / (\d+) steps\) \| ([\d.]+) \((\d+) / (\d+) / (\d+) ms\)",
      BENCH, ("cost_steps/0", "cost_steps/1", "cost_steps/2", "cost_exponent", "cost_ms/0",
              "cost_ms/1", "cost_ms/2")),
+    (PERF, r"a slice has (\d+) / (\d+) /\s+(\d+) vertices on average \(at most (\d+) / (\d+) / "
+     r"(\d+);", BENCH, ("cost_mean_vertices/0", "cost_mean_vertices/1", "cost_mean_vertices/2",
+                       "cost_max_vertices/0", "cost_max_vertices/1", "cost_max_vertices/2")),
     (PERF, r"1 / 2 workers \| ([\d.]+) / ([\d.]+) \(peak (\d+) MB a worker\)", BENCH,
      ("runs_per_cpu_s/1", "runs_per_cpu_s/2", "worker_peak_rss_mb/1")),
     # (4 = half of bench's --mc-runs: the key of the second number)
