@@ -88,14 +88,16 @@ def test_bad_input_exits_2_with_one_line(capsys, tmp_path, args):
 FIG5_RANGE = ROOT / "data" / "scenarios" / "kp_fig5_range.toml"
 
 
-def test_range_finder_set_within_five_percent_of_exact_seed003_fig5(capsys, tmp_path):
+@pytest.mark.parametrize(("seed", "times"), [("90001", "60,95"), ("103", "90,95")])
+def test_range_finder_set_within_five_percent_of_exact_seed003_fig5(capsys, tmp_path, seed, times):
     """Seed 003 section 6 with the range finder: ranges pin the closing speed and the
     miss to tens of metres while the unguided miss is ~8 km, where a closing-speed
     band's width once made the set 1.24-1.38 times the exact width (seed 90001 at
     60-95 s). With bands that split where their width dominates, the set is within
-    1.05 of the exact interval, which stays inside."""
+    1.05 of the exact interval, which stays inside. Seed 103 needs more than 32 live
+    bands late in the approach (1.058 at 95 s with 32)."""
     code, out = _run(
-        capsys, FIG5_RANGE, "--json", "--out", tmp_path, "--seed", "90001", "--times", "60,95"
+        capsys, FIG5_RANGE, "--json", "--out", tmp_path, "--seed", seed, "--times", times
     )
     assert code == 0, out.err
     res = json.loads(out.out.strip().splitlines()[-1])
