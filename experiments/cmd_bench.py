@@ -220,7 +220,9 @@ def _approach_vertices(name: str, sc, dt: float) -> tuple[float | None, int | No
         if len(live):
             per_slice.append(float(live.mean()))
             largest = max(largest, int(live.max()))
-    return (float(np.mean(per_slice)) if per_slice else None), largest
+    if not per_slice:  # emptied at the first update: no slice to count
+        return None, None
+    return float(np.mean(per_slice)), largest
 
 
 def engagement_ms(sc, noise: str, repeat: int) -> float:
