@@ -8,11 +8,10 @@ the README under random exploration; ``make fuzz`` is how to keep looking.
 """
 
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from compile_kernels import compile_kernels
 from harness_texts import SHORT, TINY_RW
 from hypothesis import settings
 
@@ -82,34 +81,14 @@ def pytest_collection_modifyitems(config, items):
         item._id = NodeId.parse(f"{item.nodeid}@{group}")
 
 
-# The package's numba kernels, by the warm-ups that compile them (the Monte Carlo pool's
-# initializer calls the same four), in two groups of similar compile cost.
-_WARM_UPS = (
-    ("estim.intercept.nodeset.estimator",),
-    ("estim.common._kernels", "estim.intercept.kinematic", "guidance.intercept._kepler"),
-)
-
-
 def pytest_sessionstart(session):
     """Under ``pytest -n``, compile the kernels into numba's on-disk cache once, before
-    the workers start. Otherwise each worker compiles all of them (about 40 CPU-s each
-    on a clean clone, the same work twice); with the cache filled they load in well
-    under a second. Two processes compile the two groups side by side. The cache is the
-    one a user's second run reads (the package's own ``cache=True``); tests about
-    compiling set their own empty ``NUMBA_CACHE_DIR``. A failure here is not reported:
-    the workers then compile, and fail, where it is tested."""
+    the workers start (:mod:`compile_kernels`; ``make test`` has already done it while
+    mypy ran, and then this only loads them)."""
     config = session.config
     if hasattr(config, "workerinput") or not config.getoption("numprocesses", None):
         return  # an xdist worker (the controller did it), or one process (compiles on use)
-    code = "import importlib, sys\nfor m in sys.argv[1:]:\n"
-    code += "    importlib.import_module('kalman_vs_infoset.' + m).warm_up()\n"
-    procs = [
-        subprocess.Popen([sys.executable, "-c", code, *group], stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL)
-        for group in _WARM_UPS
-    ]  # fmt: skip
-    for proc in procs:
-        proc.wait()
+    compile_kernels()
 
 
 #: node ids of the collected tests that use ``dask_cluster`` and have not finished here
