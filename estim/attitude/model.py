@@ -194,6 +194,12 @@ class AttitudeBelief(Belief):
     def empty_counts(self) -> NDArray[np.int_]:
         """Per run: updates so far whose data contradicted the model."""
 
+    @property
+    def unbounded_counts(self) -> NDArray[np.int_]:
+        """Per run: predictions so far whose set was the whole space (a set estimator
+        whose enclosure could not be closed); none for the other beliefs."""
+        return np.zeros(self.runs, dtype=int)
+
 
 class NeverEmptyBelief(AttitudeBelief):
     """An attitude belief that no data can contradict (a point, a Kalman filter's

@@ -74,9 +74,7 @@ class EstimatorLoop:
         """Per run: predictions whose set was the whole space (the set estimators'
         ``n_unbounded``; zero for the others). The truth is inside such a set, so these
         steps are reported beside ``truth_outside`` rather than hidden in it."""
-        runs = np.atleast_2d(belief.centre()).shape[0]
-        n = getattr(belief, "n_unbounded", None)
-        return np.zeros(runs, dtype=int) if n is None else np.asarray(n, dtype=int)
+        return belief.unbounded_counts
 
     @staticmethod
     def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:

@@ -255,6 +255,10 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
     def runs(self) -> int:
         return self.q_ref.shape[0]
 
+    @property
+    def unbounded_counts(self) -> NDArray[np.int_]:
+        return np.asarray(self.n_unbounded, dtype=int)
+
     def centre(self) -> FloatArray:
         """``(q, w)`` of the box centre, ``(R, 7)``."""
         q = qmul(self.q_ref, qexp(self.e_c))

@@ -135,6 +135,10 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         ``n_unbounded``)."""
         return self.box.n_unbounded
 
+    @property
+    def unbounded_counts(self) -> NDArray[np.int_]:
+        return self.box.unbounded_counts
+
     def centre(self) -> FloatArray:
         """``(q, w)`` of the centre of the hull of ``S``, ``(R, 7)``."""
         hc, _ = self.hull()
