@@ -86,11 +86,15 @@ def job_path(out_dir: Path, job: Job) -> Path:
     return Path(out_dir) / f"{job.name}-{job.label}-s{job.seed}.parquet"
 
 
+def is_integer(value: Any) -> bool:
+    """Whether ``value`` is an integer: Python or numpy, not a bool, not a float (which
+    ``int()`` would truncate: seed 1.5 was run as seed 1)."""
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+
+
 def _whole(value: Any, flag: str, lo: int, hi: int) -> int:
-    """``value`` if it is an integer (Python or numpy; not a bool, not a float, which
-    ``int()`` would truncate: 1.5 was run as seed 1) in ``[lo, hi]``; else InputError."""
-    whole = isinstance(value, int | np.integer) and not isinstance(value, bool)
-    if not (whole and lo <= value <= hi):
+    """``value`` if it is an integer (:func:`is_integer`) in ``[lo, hi]``; else InputError."""
+    if not (is_integer(value) and lo <= value <= hi):
         raise InputError(f"{flag} {value!r}: must be an integer in [{lo}, {hi}]")
     return int(value)
 

@@ -132,8 +132,8 @@ def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
 
 
 def _index(value: Any, name: str, least: int) -> int:
-    """An integer argument (a Python or numpy integer, not a bool or a float) >= ``least``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+    """An integer argument (:func:`runner.is_integer`) >= ``least``."""
+    if not runner.is_integer(value):
         raise TypeError(f"{name} must be an integer, got {value!r}")
     if value < least:
         raise ValueError(f"{name} must be at least {least}, got {value}")
