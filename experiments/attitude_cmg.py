@@ -24,7 +24,7 @@ from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     lower_bound_energy_N2m2s,
     one_run,
 )
-from kalman_vs_infoset.experiments.stats import summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
 
 #: runs per task (each turn is its own loop)
 CHUNK = 1
@@ -72,10 +72,7 @@ def summarise(
         "max_torque_Nm": max(col("max_torque_Nm"), default=None),
         "failures": failures,
         "estimator": estimator,
-        "truth_outside": int(sum(col("truth_outside"))),
-        "empty_steps": int(sum(col("empty_steps"))),
-        "unbounded_steps": int(sum(col("unbounded_steps"))),
-        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
+        **estimator_counts(ok),
         "lower_bound_energy_N2m2s": lower_bound_energy_N2m2s(setup),
         "seed_energy_N2m2s": SEED_ENERGY_N2M2S[controller],
         "turn_time_s": setup.duration_s,

@@ -35,7 +35,7 @@ from kalman_vs_infoset.experiments.sim.gyrostat_config import (  # noqa: F401 - 
     GyrostatSetup,
     initial_quaternion,
 )
-from kalman_vs_infoset.experiments.stats import summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
 
 #: runs per task: the loop is vectorised over the runs of a chunk
 CHUNK = 8
@@ -110,10 +110,7 @@ def summarise(
         "max_torque_Nm": float(col("max_torque_Nm").max()) if len(ok) else float("nan"),
         "failures": failures,
         "estimator": estimator,
-        "truth_outside": int(col("truth_outside").sum()),
-        "empty_steps": int(col("empty_steps").sum()),
-        "unbounded_steps": int(col("unbounded_steps").sum()),
-        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
+        **estimator_counts(ok),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
         "unsettled_runs": int(np.sum(~np.isfinite(settle))),

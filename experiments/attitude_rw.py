@@ -22,7 +22,7 @@ from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
 from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
-from kalman_vs_infoset.experiments.stats import summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import regime_boundaries
 
@@ -96,10 +96,7 @@ def summarise(
         "max_torque_Nm": float(np.max(col("max_torque_Nm"))) if len(ok) else None,
         "failures": failures,
         "estimator": estimator,
-        "truth_outside": int(np.sum(col("truth_outside"))),
-        "empty_steps": int(np.sum(col("empty_steps"))),
-        "unbounded_steps": int(np.sum(col("unbounded_steps"))),
-        "mean_knowledge_bound_deg": summary_stats(col("mean_knowledge_bound_deg")),
+        **estimator_counts(ok),
         "not_settled": int(np.sum(~np.isfinite(settle))),
     }
     jd = config.body.inertia_kgm2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
@@ -40,3 +41,21 @@ def ok_mean(table, column: str) -> float | None:
     values = ok[column].astype(float)
     values = values[np.isfinite(values)]
     return float(values.mean()) if len(values) else None  # pandas' mean, as before
+
+
+def estimator_counts(ok) -> dict[str, Any]:
+    """What every attitude summary says of the estimator over the runs ``ok`` (a results
+    table): steps with the truth outside, updates the data contradicted, predictions
+    that were the whole space (each summed over the runs), and the statistics of the
+    runs' mean knowledge bound (deg). A column the table lacks counts as none."""
+
+    def total(key: str) -> int:
+        return int(np.sum(ok[key].to_numpy(dtype=float))) if key in ok else 0
+
+    bounds = ok["mean_knowledge_bound_deg"] if "mean_knowledge_bound_deg" in ok else []
+    return {
+        "truth_outside": total("truth_outside"),
+        "empty_steps": total("empty_steps"),
+        "unbounded_steps": total("unbounded_steps"),
+        "mean_knowledge_bound_deg": summary_stats(bounds),
+    }
