@@ -269,13 +269,13 @@ class NodeRefinement:
         node is kept in both halves: each half's slices there are exact). ``per`` (the
         per-piece summary) and the pending ``ops`` get a copy of the split piece's row
         and column."""
-        for p in range(len(per)):
-            if not np.isfinite(per[p, 4]):
-                continue
-            lo = max(float(per[p, 4]), self.model.eps_m * float(s.u_lo[p]))
-            hi = float(per[p, 5])
-            if not hi > self.split_ratio * lo:
-                continue
+        # the pieces wide enough to split, found in one vector operation (a piece's
+        # row of ``per`` does not change when others split); each is then checked in
+        # order, as the splits before it change the band's count of pieces
+        tau_lo = np.maximum(per[:, 4], self.model.eps_m * s.u_lo)
+        wide = np.isfinite(per[:, 4]) & (per[:, 5] > self.split_ratio * tau_lo)
+        for p in np.flatnonzero(wide).tolist():
+            lo, hi = float(tau_lo[p]), float(per[p, 5])
             if np.count_nonzero(s.u_lo == s.u_lo[p]) >= self.max_pieces:
                 continue  # this closing-speed band has its pieces
             idx = np.flatnonzero((s.piece == p) & s.live)
