@@ -16,6 +16,7 @@ FIG5 = "docs/results/fig5.json"
 CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
+BENCH_SLOW = "docs/results/bench_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
@@ -393,6 +394,19 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      ("help_cpu_s_max",)),
     (PERF, r"\| ([\d.]+) CPU-s compiling \(([\d.]+) CPU-s in all\)", BENCH,
      ("first_run_compile_s", "first_run_cpu_s")),
+    # docs/performance.md: the same kvi bench --json on a slower host
+    (PERF, r"`docs/results/bench_slow_host.json`, load average ([\d.]+);", BENCH_SLOW,
+     ("machine/load_average",)),
+    (PERF, r"a UKF step of (\d+) us and a set step of (\d+) us, and in UKF steps (\d+) / "
+     r"(\d+) for the two engagements, ([\d.]+) for the whole approach and a cost exponent "
+     r"of ([\d.]+):", BENCH_SLOW,
+     ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent")),
+    (PERF, r"`kvi intercept --help` cost ([\d.]+) CPU-s there", BENCH_SLOW,
+     ("help_cpu_s/intercept",)),
+    (PERF, r"compiled for ([\d.]+) CPU-s, and the Monte Carlo ran ([\d.]+) / ([\d.]+) runs "
+     r"per CPU-second", BENCH_SLOW,
+     ("first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
     # docs/performance.md, the node set's speed options: kvi compare kp_fig5 --estimators
     # infoset --noise random,game --runs 50 --workers 2 [--set KEY=VALUE] --json
     *[(PERF, rf"\| {re.escape(label)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \| ([\d.]+) \|",
