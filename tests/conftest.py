@@ -60,6 +60,16 @@ def _xdist_group(item) -> str | None:
     return "_".join(sorted(map(str, names))) or None
 
 
+#: modules holding the suite's longest tests (paper figures, the wheel, full engagements,
+#: corner schedules: 10-50 s each on a 2-core host), collected first: pytest-xdist hands
+#: the tests out in collection order, so a long test collected last kept one worker busy
+#: after the other had finished (order within a module, and module fixtures, unchanged)
+LONG_FIRST = (
+    "test_pictures.py", "test_wheel.py", "test_nodeset_invariants.py",
+    "test_soundness_physical.py", "test_intercept.py", "test_infoset.py",
+)  # fmt: skip
+
+
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(config, items):
     """``--dist loadgroup`` sends the tests of one ``xdist_group`` to one worker by the
@@ -67,7 +77,12 @@ def pytest_collection_modifyitems(config, items):
     pytest-xdist 3.8 writes it into ``item._nodeid``, which pytest 9 no longer reads
     (the id lives in ``item._id``): every group was silently split across the workers
     (two Dask clusters, the kp_fig5 corner schedule run twice). Where the suffix is
-    missing, it is added here; a pytest where neither works stops the session."""
+    missing, it is added here; a pytest where neither works stops the session.
+
+    First, the modules of ``LONG_FIRST`` move to the front (a stable sort: the same order
+    in every xdist worker, as pytest-xdist requires)."""
+    rank = {name: i for i, name in enumerate(LONG_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
     if not getattr(config.option, "loadgroup", False):  # set in an xdist worker
         return
     for item in items:
