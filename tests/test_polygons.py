@@ -144,6 +144,28 @@ def test_select_equals_the_polygons_picked_one_by_one(seed, runs, negative):
             np.testing.assert_array_equal(out.polygon(k), polys[i])
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=seeds, n_a=st.integers(0, 12), n_b=st.integers(0, 12))
+def test_take_polygons_gathers_from_two_batches_as_picked_one_by_one(seed, n_a, n_b):
+    """The node set's merge kernel (``take_polygons``): index ``i < n_a`` picks polygon
+    ``i`` of the first batch, ``i >= n_a`` polygon ``i - n_a`` of the second, in any
+    order and with repeats; compared with the polygons picked one by one."""
+    from kalman_vs_infoset.estim.common import _kernels as k
+
+    rng = np.random.default_rng(seed)
+    polys_a, polys_b = _random_convex(rng, n_a), _random_convex(rng, n_b)
+    if n_a:
+        polys_a[0] = np.zeros((0, 2))  # an empty polygon among them
+    a, b = ConvexPolygons.from_list(polys_a), ConvexPolygons.from_list(polys_b)
+    both = polys_a + polys_b
+    index = rng.integers(0, max(len(both), 1), size=rng.integers(0, 20)) if both else []
+    index = np.asarray(index, dtype=np.int64)
+    out = ConvexPolygons._make(*k.take_polygons(a.xy, a.offsets, b.xy, b.offsets, index))
+    assert out.n == len(index)
+    for j, i in enumerate(index):
+        np.testing.assert_array_equal(out.polygon(j), both[i])
+
+
 def test_all_sections_empty():
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     out = ConvexPolygons.from_list([square] * 4).clip_slab(0, 5.0, 6.0)

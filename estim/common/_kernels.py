@@ -364,6 +364,34 @@ def section_abs_max(xy, offsets):
     return ax, ay
 
 
+@njit(cache=True)
+def take_polygons(xy_a, off_a, xy_b, off_b, index):
+    """The polygons ``index`` of two batches in one: ``i < n_a`` is polygon ``i`` of
+    ``a``, ``i >= n_a`` polygon ``i - n_a`` of ``b`` (vertices copied, not computed)."""
+    n_a = off_a.shape[0] - 1
+    n = index.shape[0]
+    off = np.zeros(n + 1, dtype=np.int64)
+    for k in range(n):
+        i = index[k]
+        if i < n_a:
+            off[k + 1] = off[k] + off_a[i + 1] - off_a[i]
+        else:
+            off[k + 1] = off[k] + off_b[i - n_a + 1] - off_b[i - n_a]
+    xy = np.empty((off[n], 2))
+    for k in range(n):
+        i = index[k]
+        w = off[k]
+        if i < n_a:
+            for v in range(off_a[i], off_a[i + 1]):
+                xy[w, 0], xy[w, 1] = xy_a[v, 0], xy_a[v, 1]
+                w += 1
+        else:
+            for v in range(off_b[i - n_a], off_b[i - n_a + 1]):
+                xy[w, 0], xy[w, 1] = xy_b[v, 0], xy_b[v, 1]
+                w += 1
+    return xy, off
+
+
 def warm_up() -> None:
     """Load every kernel (from numba's on-disk cache, or compile) in this process.
 
@@ -390,3 +418,5 @@ def warm_up() -> None:
         polygon_contains(p, o, idx, 0.5, 0.5, 1e-9)
         section_abs_max(p, o)
         convex_hulls(p, o)
+        take_polygons(p, o, p, o, idx)
+        take_polygons(p, o, xy, off, idx)

@@ -18,6 +18,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.kinematic import STRIP_MARGIN
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
@@ -344,11 +345,16 @@ def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
 def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
     by piece, then label."""
-    kept = s.polygons if keep.all() else s.polygons.select(keep)
-    all_piece = np.concatenate([s.piece[keep], piece])
-    all_label = np.concatenate([s.label_s[keep], labels])
+    kept = np.flatnonzero(keep)
+    all_piece = np.concatenate([s.piece[kept], piece])
+    all_label = np.concatenate([s.label_s[kept], labels])
     order = np.lexsort((all_label, all_piece))
-    merged = _concat(kept, polys).select(order)
+    # the sorted nodes' polygons gathered from the set's and the new ones in one pass
+    # (index >= s.polygons.n: a new polygon)
+    source = np.concatenate([kept, s.polygons.n + np.arange(polys.n)])[order]
+    merged = ConvexPolygons._make(
+        *_k.take_polygons(s.polygons.xy, s.polygons.offsets, polys.xy, polys.offsets, source)
+    )
     return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
 
 
@@ -374,8 +380,3 @@ def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:
         hard_lo_s=np.append(s.hard_lo_s, cut), hard_hi_s=np.append(hard_hi, s.hard_hi_s[p]),
         log=s.log.with_copied_column(p),
     )  # fmt: skip
-
-
-def _concat(a: ConvexPolygons, b: ConvexPolygons) -> ConvexPolygons:
-    off = np.concatenate([a.offsets, a.offsets[-1] + b.offsets[1:]]).astype(np.int64)
-    return ConvexPolygons._make(np.vstack([a.xy, b.xy]), off)
