@@ -343,8 +343,8 @@ def _zs_extent(s: NodeSet, i: int) -> tuple[float, float]:
 
 
 def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
-    """``s`` with its nodes ``keep`` and the new nodes ``(piece, labels, polys)``, sorted
-    by piece, then label."""
+    """``s`` with its nodes ``keep`` (a boolean mask) and the new nodes ``(piece, labels,
+    polys)``, sorted by piece, then label."""
     kept = np.flatnonzero(keep)
     all_piece = np.concatenate([s.piece[kept], piece])
     all_label = np.concatenate([s.label_s[kept], labels])
