@@ -17,6 +17,7 @@ CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 BENCH_SLOW = "docs/results/bench_slow_host.json"
+VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
@@ -362,6 +363,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) and ([\d.]+), i\.e\. ([\d.]+) times the runs per CPU-second", VS,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "runs_per_cpu_s_ratio_mean")),
+    (PERF, r"`docs/results/vs_35e3739_slow_host.json`\): ([\d.]+) times the runs per "
+     r"CPU-second pooled, ([\d.]+) to ([\d.]+) pair by pair", VS_SLOW,
+     ("runs_per_cpu_s_ratio_pooled", "runs_per_cpu_s_ratio_min", "runs_per_cpu_s_ratio_max")),
     # docs/performance.md: ``kvi bench``
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
