@@ -24,9 +24,18 @@ from dataclasses import replace
 import numpy as np
 from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
 from kalman_vs_infoset.estim.intercept.nodeset.refine import _compact, _merge
+from numpy.typing import NDArray
 
 #: bands narrower than this (relative width in ``u``) are not split
 MIN_BAND_REL = 1e-6
+FloatArray = NDArray[np.float64]
+#: a band's trial split is kept when it narrows the band's extreme nodes by this
+#: times ``rtol`` of the set's width (:func:`_impulse_splits`)
+GAIN = 0.5
+#: seconds (of the set's time) between trial splits that did not pay
+RETRY_S = 5.0
+#: candidate bands tried at the nodes in one round
+TRIALS = 2
 
 
 def live_bands(s: NodeSet) -> list[tuple[float, float]]:
@@ -93,6 +102,139 @@ def split_live_bands(est, s: NodeSet, min_live: int, max_bands: int, rtol: float
         if out is None or out.is_empty:
             break
         s = out
+    return _impulse_splits(est, s, max_bands, rtol)
+
+
+def _band_extremes(s: NodeSet, bands: list[tuple[float, float]]) -> tuple[FloatArray, FloatArray]:
+    """Bounds of ``w`` over each band's cells (``inf, -inf`` for a band without one)."""
+    summ = s._summary
+    where = {b: i for i, b in enumerate(bands)}
+    lo, hi = s.u_lo.tolist(), s.u_hi.tolist()
+    cell_band = np.array([where.get((a, b), -1) for a, b in zip(lo, hi, strict=True)])[
+        summ["piece"]
+    ]
+    has = cell_band >= 0
+    w_lo, w_hi = np.full(len(bands), np.inf), np.full(len(bands), -np.inf)
+    np.fmin.at(w_lo, cell_band[has], summ["w"][has, 0])
+    np.fmax.at(w_hi, cell_band[has], summ["w"][has, 1])
+    return w_lo, w_hi
+
+
+def _w_at_nodes(polys, u_lo: FloatArray, u_hi: FloatArray, e_nom: float) -> FloatArray:
+    """Bounds (n, 2) of ``w = zs / (u e_nom)^2`` over each node's slice and ``u`` in
+    ``[u_lo, u_hi]`` (NaN for an empty slice)."""
+    off = polys.offsets
+    out = np.full((polys.n, 2), np.nan)
+    for i in range(polys.n):
+        if off[i + 1] > off[i]:
+            zs = polys.xy[off[i] : off[i + 1], 1]
+            f_near, f_far = (1.0 / (u_lo[i] * e_nom)) ** 2, (1.0 / (u_hi[i] * e_nom)) ** 2
+            lo, hi = zs.min(), zs.max()
+            out[i] = (lo * (f_near if lo < 0 else f_far), hi * (f_near if hi > 0 else f_far))
+    return out
+
+
+def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
+    """What splitting band ``[ua, ub]`` narrows its interval of ``w`` by, estimated at
+    the nodes of the cells that attain the band's extremes (their slices replayed
+    for both halves: a few nodes, not the band's whole grid)."""
+    summ = s._summary
+    cells = np.flatnonzero(((s.u_lo == ua) & (s.u_hi == ub))[summ["piece"]])
+    if len(cells) == 0:
+        return 0.0
+    w = summ["w"][cells]
+    # the end nodes of the cells that attain the band's extremes; of each pair, the
+    # node whose exact slice reaches further that way (one replayed node an end)
+    nodes = []
+    for c, col in ((cells[np.nanargmin(w[:, 0])], 0), (cells[np.nanargmax(w[:, 1])], 1)):
+        pair = summ["table"][c, 1:3]
+        pair = pair[pair >= 0]
+        pair = pair[s.live[pair]]
+        if len(pair):
+            at = _w_at_nodes(s.polygons.select(pair), s.u_lo[s.piece[pair]],
+                             s.u_hi[s.piece[pair]], s.e_nom)[:, col]  # fmt: skip
+            nodes.append(int(pair[np.argmin(at) if col == 0 else np.argmax(at)]))
+    if not nodes:
+        return 0.0
+    nodes = np.unique(nodes)
+    piece, labels = s.piece[nodes], s.label_s[nodes]
+    before = _w_at_nodes(s.polygons.select(nodes), s.u_lo[piece], s.u_hi[piece], s.e_nom)
+    um = 0.5 * (ua + ub)
+    # every involved piece's halves as pieces of their own: [ua, um] and [um, ub]
+    pcs = np.unique(piece)
+    n0 = len(s.u_lo)
+    log = s.log
+    for p in pcs:
+        log = log.with_copied_column(int(p))
+    for p in pcs:
+        log = log.with_copied_column(int(p))
+    halves = replace(
+        s, u_lo=np.r_[s.u_lo, np.full(len(pcs), ua), np.full(len(pcs), um)],
+        u_hi=np.r_[s.u_hi, np.full(len(pcs), um), np.full(len(pcs), ub)],
+        hard_lo_s=np.r_[s.hard_lo_s, s.hard_lo_s[pcs], s.hard_lo_s[pcs]],
+        hard_hi_s=np.r_[s.hard_hi_s, s.hard_hi_s[pcs], s.hard_hi_s[pcs]], log=log,
+    )  # fmt: skip
+    where = n0 + np.searchsorted(pcs, piece)
+    hp = np.r_[where, where + len(pcs)]
+    hl = np.r_[labels, labels]
+    polys = est._apply(halves, hp, hl, est._prior(halves, hp, hl), log, 0.0)[0]
+    after = _w_at_nodes(polys, halves.u_lo[hp], halves.u_hi[hp], s.e_nom)
+    k = len(nodes)
+    lo_after = np.fmin(after[:k, 0], after[k:, 0])
+    hi_after = np.fmax(after[:k, 1], after[k:, 1])
+    gain_lo = np.nanmin(lo_after) - np.nanmin(before[:, 0]) if np.isfinite(lo_after).any() else 0.0
+    gain_hi = np.nanmax(before[:, 1]) - np.nanmax(hi_after) if np.isfinite(hi_after).any() else 0.0
+    return float(max(gain_lo, 0.0) + max(gain_hi, 0.0))
+
+
+def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
+    """Split the bands whose spread of the impulses may widen ``w`` by more than
+    ``rtol`` of the set's width, where a trial shows that it does.
+
+    A band applies each impulse ``k`` for every ``u`` of the band, as if ``u`` could
+    change between impulses: that widens ``w`` by up to about ``|k| tau du / u`` an
+    impulse (:attr:`NodeSet.impulse_moment_m` times the band's relative width),
+    which :func:`_loosest_band`'s ``2 |w| du / u`` does not count. Later bearings cut
+    most of that spread again, so the bound overstates it late in the approach and
+    only selects candidates. The ``TRIALS`` candidates of the widest ``u`` intervals
+    (then of ``w``) are tried at the nodes of their extreme cells
+    (:func:`_node_gain`), and the best is split when
+    the halves narrow them by at least ``GAIN * rtol`` of the set's width (a split
+    takes about half the spread). A trial that does not pay waits ``RETRY_S``
+    seconds: a few cheap trials an engagement.
+    """
+    m = s.impulse_moment_m
+    if m == 0.0 or s.t_s < s.band_trial_after_s or s.is_empty:
+        return s
+    # no candidate when even the widest piece's spread is under rtol of the width (the
+    # per-piece summary: one vector test an update before any per-band work)
+    per = s._summary["per_piece"]
+    rel_max = float(np.max((s.u_hi - s.u_lo) / s.u_hi))
+    if not rel_max * m > rtol * (np.nanmax(per[:, 1]) - np.nanmin(per[:, 0])):
+        return s
+    while not s.is_empty:
+        bands = live_bands(s)
+        if len(bands) >= max_bands:
+            break
+        w_lo, w_hi = _band_extremes(s, bands)
+        width = float(w_hi.max() - w_lo.min())
+        ua, ub = np.array(bands).T
+        rel = (ub - ua) / ub
+        ok = (rel > MIN_BAND_REL) & (rel * m > rtol * width) & (w_hi >= w_lo)
+        if not ok.any():
+            break
+        # the widest bands in u first (the largest spread), the widest in w among them
+        order = np.lexsort((-(w_hi - w_lo), -rel))
+        tried = [int(i) for i in order if ok[i]][:TRIALS]
+        gains = [_node_gain(est, s, *bands[i]) for i in tried]
+        j = int(np.argmax(gains))
+        if gains[j] >= GAIN * rtol * width:
+            out = _split_band(est, s, *bands[tried[j]])
+            if out is not None and not out.is_empty:
+                s = out
+                continue
+        s = replace(s, band_trial_after_s=s.t_s + RETRY_S)
+        break
     return s
 
 

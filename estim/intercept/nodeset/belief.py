@@ -71,6 +71,13 @@ class NodeSet(Belief):
     n_simplified : int
         Number of node slices outer-simplified so far (a prediction left them with
         more than the estimator's ``max_vertices``, when it has one).
+    impulse_moment_m : float
+        A band of relative width ``rel`` applies each impulse for every ``u`` of the
+        band, which can widen ``w`` by about ``rel`` times this (m): each impulse
+        ``k`` adds ``|k| tau``, ``tau`` the set's largest time to go (:mod:`.bands`).
+    band_trial_after_s : float
+        No split of a band for the impulses' spread is tried before this time (s, as
+        ``t_s``): a trial that did not pay waits (:mod:`.bands`).
     """
 
     model: ChannelModel
@@ -88,6 +95,8 @@ class NodeSet(Belief):
     status: Status = Status.OK
     contradictions: int = 0
     n_simplified: int = 0
+    impulse_moment_m: float = 0.0
+    band_trial_after_s: float = -np.inf
 
     def __post_init__(self) -> None:
         for name in ("u_lo", "u_hi", "label_s", "hard_lo_s", "hard_hi_s"):

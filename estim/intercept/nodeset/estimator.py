@@ -292,6 +292,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         k, dk = impulse_parts(control) if control is not None else (0.0, 0.0)
         if control is not None and (k != 0.0 or dk != 0.0):  # (k, dk) = 0 without control
             ops = self._impulse(belief, control, per)
+        # each band applies the impulse for all its u: a spread of |k| du in V~, up to
+        # about |k| tau rel in w (the trial splits of bands.py weigh it)
+        tau = per[:, 5][np.isfinite(per[:, 5])]
+        moment = belief.impulse_moment_m + (abs(k) * float(tau.max()) if len(tau) else 0.0)
         s, per, ops = self._split(belief, per, ops)
         v_lo = np.full(len(s.u_lo), -self.model.nu_mps2)
         v_hi = -v_lo
@@ -307,19 +311,19 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         q_lo = np.minimum(v_lo * s.u_lo, v_lo * s.u_hi)
         q_hi = np.maximum(v_hi * s.u_lo, v_hi * s.u_hi)
         ops = ops + OpLog.one(_nk.PREDICT, len(q_lo), dt_s, q_lo=q_lo, q_hi=q_hi)
-        out = self.refine(self._record(s, ops), before=s)
+        out = self.refine(self._record(s, ops, impulse_moment_m=moment), before=s)
         if out.is_empty and out.status == Status.OK:
             return replace(out, status=Status.TERMINAL)
         return out
 
     # -- the operations (applied to the set, and replayed on new nodes) -----------------
-    def _record(self, s: NodeSet, op: OpLog) -> NodeSet:
+    def _record(self, s: NodeSet, op: OpLog, **fields) -> NodeSet:
         polys, t, hard_lo, hard_hi, n_simpl = self._apply(
             s, s.piece, s.label_s, s.polygons, op, s.t_s
         )
         return replace(
             s, polygons=polys, t_s=t, log=s.log + op, hard_lo_s=hard_lo, hard_hi_s=hard_hi,
-            status=Status.OK, n_simplified=s.n_simplified + n_simpl,
+            status=Status.OK, n_simplified=s.n_simplified + n_simpl, **fields,
         )  # fmt: skip
 
     def _apply(self, s: NodeSet, piece, label, polys: ConvexPolygons, ops: OpLog, t: float):
