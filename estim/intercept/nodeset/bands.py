@@ -145,7 +145,7 @@ def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
     w = summ["w"][cells]
     # the end nodes of the cells that attain the band's extremes; of each pair, the
     # node whose exact slice reaches further that way (one replayed node an end)
-    nodes = []
+    picked: list[int] = []
     for c, col in ((cells[np.nanargmin(w[:, 0])], 0), (cells[np.nanargmax(w[:, 1])], 1)):
         pair = summ["table"][c, 1:3]
         pair = pair[pair >= 0]
@@ -153,10 +153,10 @@ def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
         if len(pair):
             at = _w_at_nodes(s.polygons.select(pair), s.u_lo[s.piece[pair]],
                              s.u_hi[s.piece[pair]], s.e_nom)[:, col]  # fmt: skip
-            nodes.append(int(pair[np.argmin(at) if col == 0 else np.argmax(at)]))
-    if not nodes:
+            picked.append(int(pair[np.argmin(at) if col == 0 else np.argmax(at)]))
+    if not picked:
         return 0.0
-    nodes = np.unique(nodes)
+    nodes = np.unique(picked)
     piece, labels = s.piece[nodes], s.label_s[nodes]
     before = _w_at_nodes(s.polygons.select(nodes), s.u_lo[piece], s.u_hi[piece], s.e_nom)
     um = 0.5 * (ua + ub)
