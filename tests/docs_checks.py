@@ -435,8 +435,8 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",
        tuple(f"{f}variants/[variant={v},noise={n}]/cpu_s" for f in ("", f"{STUDY}w2.json::")))
       for v in ("bearing only", "bearing + range") for n in ("random", "game")],
-    (PERF, r"each worker peaked at (\d+) MB", STUDY + "w2.json",
-     ("variants/0/worker_peak_rss_mb",)),
+    (PERF, r"Each worker peaked at (\d+) to (\d+) MB", STUDY + "w2.json",
+     ("variants/0/worker_peak_rss_mb", "variants/2/worker_peak_rss_mb")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),

@@ -16,7 +16,7 @@ TEXT = " ".join((ROOT / "docs/performance.md").read_text(encoding="utf-8").split
 def test_ten_thousand_runs_per_variant_are_200_times_the_measured_50():
     """10 000 runs per variant = 200 x the 2-worker column's CPU time, in CPU-hours and
     in hours on the host's 2 cores."""
-    found = re.search(r"200 times the column: ([\d.]+) CPU-hours, ([\d.]+) hours on this "
+    found = re.search(r"200 times the 2-worker column: ([\d.]+) CPU-hours, ([\d.]+) hours on this "
                       r"host's (\d+) cores", TEXT)  # fmt: skip
     assert found, "the sentence was rewritten: re-point this test"
     cpu_h = 200 * sum(v["cpu_s"] for v in results(STUDY + "w2.json")["variants"]) / 3600
@@ -47,3 +47,64 @@ def test_the_speed_options_defaults_rows_are_the_published_runs():
     }
     for row in results("docs/results/speed/kp_fig5-default.json")["rows"]:
         assert {k: row[k] for k in keys} == published[row["noise"]], row["noise"]
+
+
+def _speed_cpu_s(name: str) -> dict[str, float]:
+    rows = results(f"docs/results/speed/kp_fig5-{name}.json")["rows"]
+    return {r["noise"]: r["cpu_s"] for r in rows}
+
+
+def _found(pattern: str) -> re.Match:
+    found = re.search(pattern, TEXT)
+    assert found, f"the sentence was rewritten: re-point this test ({pattern})"
+    return found
+
+
+def test_the_speed_options_ratios_are_the_measured_cpu_times():
+    """The speed options' savings and costs, in per cent and times, are the arithmetic of
+    the results files: each option's CPU time against the mean of the defaults' two
+    measurements (the first row and the repeat), random then game."""
+    first, repeat = _speed_cpu_s("default"), _speed_cpu_s("default-repeat")
+    base = {n: 0.5 * (first[n] + repeat[n]) for n in first}
+
+    def pct(name: str, noise: str) -> float:
+        return 100.0 * (_speed_cpu_s(name)[noise] / base[noise] - 1.0)
+
+    saved = _found(r"piece splits \(a ratio of 4 instead of 2\) saved (\d+) % and (\d+) %")
+    assert agrees(saved.group(1), -pct("node_split_ratio_4", "random"))
+    assert agrees(saved.group(2), -pct("node_split_ratio_4", "game"))
+    cap = _found(r"A vertex cap saves nothing \(\+(\d+) % and \+(\d+) % CPU time here\)")
+    assert agrees(cap.group(1), pct("max_vertices_64", "random"))
+    assert agrees(cap.group(2), pct("max_vertices_64", "game"))
+    one = _found(r"one band was ([\d.]+) times cheaper under the game, but only ([\d.]+) "
+                 r"times under random errors")  # fmt: skip
+    n1 = _speed_cpu_s("n_bands_1")
+    assert agrees(one.group(1), base["game"] / n1["game"])
+    assert agrees(one.group(2), base["random"] / n1["random"])
+    rep = _found(r"CPU-s for random / game, (\d+) % and (\d+) % below the first rows")
+    assert agrees(rep.group(1), 100.0 * (1.0 - repeat["random"] / first["random"]))
+    assert agrees(rep.group(2), 100.0 * (1.0 - repeat["game"] / first["game"]))
+
+
+def test_one_band_costs_little_under_random_errors_as_printed():
+    """'(-0.02 m, +0.3 m/s)': one band's mean miss and fuel minus the defaults' (random)."""
+    found = _found(r"it costs little under random errors \(([-+][\d.]+) m, ([-+][\d.]+) m/s\)")
+
+    def means(name: str) -> tuple[float, float]:
+        rows = results(f"docs/results/speed/kp_fig5-{name}.json")["rows"]
+        (r,) = [r for r in rows if r["noise"] == "random"]
+        return r["miss_m"]["mean"], r["fuel_mps"]["mean"]
+
+    (m1, f1), (m0, f0) = means("n_bands_1"), means("default")
+    assert agrees(found.group(1), m1 - m0)
+    assert agrees(found.group(2), f1 - f0)
+
+
+def test_two_workers_cost_what_the_study_table_says_more_than_one():
+    """'Two workers cost 13 % to 49 % more CPU per run than one': the extremes over the
+    four variants of the 2-worker column against the 1-worker one."""
+    found = _found(r"Two workers cost (\d+) % to (\d+) % more CPU per run than one")
+    w1, w2 = (results(f"{STUDY}{w}.json")["variants"] for w in ("w1", "w2"))
+    more = [100.0 * (b["cpu_s"] / a["cpu_s"] - 1.0) for a, b in zip(w1, w2, strict=True)]
+    assert agrees(found.group(1), min(more))
+    assert agrees(found.group(2), max(more))
