@@ -118,3 +118,41 @@ def test_intercept_page_family_widths_are_the_ranges_of_their_results_files():
         (e_lo, e_hi), (l_lo, l_hi) = _ratio_ranges(paths)
         for text, value in zip(printed, (e_lo, e_hi, l_lo, l_hi), strict=True):
             assert agrees(text, value), (name, text, value)
+
+
+def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
+    """The guided runs on seeds 401-430 (``kvi tightness kp_fig5_range --guided --noise
+    random|game --seed S --json``; kp_fig5 random and kp_fig3 game on 401-415): the exact
+    interval always inside, and the paragraph's largest ratios from the files."""
+    text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
+    folder = ROOT / "docs/results/tightness/seeds_401"
+    runs = [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))]
+    assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
+
+    def group(scenario, noise, seeds):
+        out = [r for r in runs if r["scenario"] == scenario and r["noise"] == noise]
+        assert sorted(r["seed"] for r in out) == list(seeds)
+        return sorted(out, key=lambda r: -r["max_ratio"])
+
+    def at(r):
+        i = r["ratio"].index(r["max_ratio"])
+        return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {r['times_s'][i]:.0f} s)"
+
+    game = group("kp_fig5_range", "game", range(401, 431))
+    assert f"Under game errors the set was at most {game[0]['max_ratio']:.3f} times" in text
+    rnd = group("kp_fig5_range", "random", range(401, 431))
+    third = rnd[2]["max_ratio"]
+    assert f"under random errors at most {at(rnd[0])} and {at(rnd[1])}, the other 28 seeds " \
+           f"at most {third:.3f}" in text  # fmt: skip
+    # "two of 48": these 30 seeds and the 18 of guided_range/ (301-318)
+    earlier = [
+        json.loads(p.read_text())
+        for p in (ROOT / "docs/results/tightness/guided_range").glob("*random*.json")
+    ]
+    past = [r for r in [*rnd, *earlier] if r["max_ratio"] > 1.03]
+    assert len(earlier) == 18 and len(past) == 2
+    assert "two of 48 random-error seeds pass the 1.03" in text
+    bo5 = group("kp_fig5", "random", range(401, 416))[0]["max_ratio"]
+    bo3 = group("kp_fig3", "game", range(401, 416))[0]["max_ratio"]
+    assert f"kp_fig5 under random errors at most {bo5:.3f}, kp_fig3 under game errors at " \
+           f"most {bo3:.3f}" in text  # fmt: skip
