@@ -17,6 +17,7 @@ CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 BENCH_SLOW = "docs/results/bench_slow_host.json"
+BENCH_NOW = "docs/results/bench_after_trial_splits.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
@@ -416,6 +417,16 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (PERF, r"compiled for ([\d.]+) CPU-s, and the Monte Carlo ran ([\d.]+) / ([\d.]+) runs "
      r"per CPU-second", BENCH_SLOW,
      ("first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
+    # docs/performance.md: kvi bench --json after the bands' trial splits (a third host)
+    (PERF, r"`docs/results/bench_after_trial_splits.json`, load average ([\d.]+)\)", BENCH_NOW,
+     ("machine/load_average",)),
+    (PERF, r"read a UKF step of (\d+) us and a set step of (\d+) us; in UKF steps (\d+) / "
+     r"(\d+) for the two engagements, ([\d.]+) for the whole approach and a cost exponent "
+     r"of ([\d.]+); the costliest `--help` took ([\d.]+) CPU-s; the first run compiled for "
+     r"([\d.]+) CPU-s; the Monte Carlo ran ([\d.]+) / ([\d.]+) runs per", BENCH_NOW,
+     ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent",
+      "help_cpu_s_max", "first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
     # docs/performance.md, the node set's speed options: kvi compare kp_fig5 --estimators
     # infoset --noise random,game --runs 50 --workers 2 [--set KEY=VALUE] --json
     *[(PERF, rf"\| {re.escape(label)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \| ([\d.]+) \|",
