@@ -436,7 +436,8 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
                           ("`estimator.infoset.node_split_ratio=4`", "node_split_ratio_4"),
                           ("`estimator.infoset.max_vertices=64`", "max_vertices_64"),
                           ("`estimator.infoset.n_bands=2`", "n_bands_2"),
-                          ("`estimator.infoset.n_bands=1`", "n_bands_1"))
+                          ("`estimator.infoset.n_bands=1`", "n_bands_1"),
+                          ("`estimator.infoset.impulse_per_piece=true`", "impulse_per_piece"))
       for noise in ("random", "game")],
     (PERF, r"A repeat of the defaults right after the last row read ([\d.]+) / ([\d.]+) "
      r"CPU-s for random / game",

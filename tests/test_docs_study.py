@@ -108,3 +108,16 @@ def test_two_workers_cost_what_the_study_table_says_more_than_one():
     more = [100.0 * (b["cpu_s"] / a["cpu_s"] - 1.0) for a, b in zip(w1, w2, strict=True)]
     assert agrees(found.group(1), min(more))
     assert agrees(found.group(2), max(more))
+
+
+def test_impulse_per_piece_costs_what_the_text_says():
+    """'cost 1.18 and 1.79 times the CPU time of the defaults here (random, game)': the
+    option's CPU time over the mean of the defaults' two measurements."""
+    found = _found(
+        r"\(`impulse_per_piece`, docs/infoset.md; measured an hour later, nothing else "
+        r"running\) cost ([\d.]+) and ([\d.]+) times the CPU time"
+    )
+    first, repeat = _speed_cpu_s("default"), _speed_cpu_s("default-repeat")
+    option = _speed_cpu_s("impulse_per_piece")
+    for noise, printed in zip(("random", "game"), found.groups(), strict=True):
+        assert agrees(printed, option[noise] / (0.5 * (first[noise] + repeat[noise])))

@@ -156,3 +156,32 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
     bo3 = group("kp_fig3", "game", range(401, 416))[0]["max_ratio"]
     assert f"kp_fig5 under random errors at most {bo5:.3f}, kp_fig3 under game errors at " \
            f"most {bo3:.3f}" in text  # fmt: skip
+
+
+def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
+    """The 48 random-error seeds with ``impulse_per_piece`` (``kvi tightness kp_fig5_range
+    --guided --noise random --seed S --set estimator.infoset.impulse_per_piece=true
+    --json``): the exact interval always inside, the largest ratio with its seed and
+    time, seeds 425 and 404, and the Fig. 5 game misses the paragraph quotes."""
+    text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
+    folder = ROOT / "docs/results/tightness/impulse_per_piece"
+    runs = {}
+    for p in folder.glob("*.json"):
+        r = json.loads(p.read_text())
+        assert "impulse_per_piece=true" in r["scenario"] and r["guided"]
+        assert r["noise"] == "random" and all(r["exact_inside"])
+        runs[r["seed"]] = r
+    assert sorted(runs) == [*range(301, 319), *range(401, 431)]
+    worst = max(runs.values(), key=lambda r: r["max_ratio"])
+    i = worst["ratio"].index(worst["max_ratio"])
+    assert (f"at most {worst['max_ratio']:.3f} times as wide as the exact one (seed "
+            f"{worst['seed']}, at {worst['times_s'][i]:.0f} s), seeds 425 and 404 at "
+            f"{runs[425]['max_ratio']:.3f} and {runs[404]['max_ratio']:.3f}") in text  # fmt: skip
+    speed = ROOT / "docs/results/speed"
+
+    def game_miss(name):
+        rows = json.loads((speed / f"{name}.json").read_text())["rows"]
+        return next(r["miss_m"]["mean"] for r in rows if r["noise"] == "game")
+
+    a, b = game_miss("kp_fig5-default"), game_miss("kp_fig5-impulse_per_piece")
+    assert f"their mean miss grows from {a:.2f} to {b:.2f} m" in text

@@ -116,7 +116,7 @@ def test_impulse_interval_holds_every_sampled_increment(k, dk, alpha, seed):
     u_lo, u_hi = np.array([1 / 58.1e3]), np.array([1 / 57.9e3])
     per = np.array([[-30.0, 40.0, -alpha, alpha, 20.0, 90.0]])
     moved = per.copy()
-    lo, hi = _nk.impulse_interval(moved, u_lo, u_hi, E, k, dk)
+    lo, hi, cos2 = _nk.impulse_interval(moved, u_lo, u_hi, E, k, dk)
     u = rng.uniform(u_lo[0], u_hi[0], 2000)
     a = rng.uniform(-alpha, alpha, 2000)
     d = rng.uniform(-dk, dk, 2000)

@@ -217,12 +217,16 @@ def _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps):
 def apply_ops(
     xy, off, label, piece, u_lo, u_hi, hard_lo, hard_hi, t,
     kinds, pa, pb, q_lo, q_hi,
-    scale, e_nom, eps, bb_end, bb_start, bb_ref, strip_margin, vcap,
+    scale, e_nom, eps, bb_end, bb_start, bb_ref, strip_margin, vcap, impulse_per_piece,
 ):  # fmt: skip
     """Apply the operations ``kinds[o]`` in order to the node polygons.
 
     Parameters (per operation ``o``): ``BEARING``: ``pa`` = measured bearing (rad);
-    ``IMPULSE``: ``q_lo, q_hi`` = the interval of the ``V~`` increment per piece;
+    ``IMPULSE``: ``q_lo, q_hi`` = the interval of the ``V~`` increment per piece, as
+    recorded; with ``impulse_per_piece``, ``pa, pb`` = the impulse ``k +- dk`` (m/s) and
+    ``q_lo`` = the least ``cos^2`` of the bearing per piece, the interval formed over
+    the node's own piece's ``u`` (:func:`impulse_interval`'s formula: a band split
+    after the impulse gives each half its own spread);
     ``RANGE``: ``pa, pb`` = the interval of ``x`` (m); ``PREDICT``: ``pa`` = step (s),
     ``q_lo, q_hi`` = the interval of ``v u`` per piece. Nodes have labels ``label`` (time to go
     at ``t = 0``) and pieces ``piece``; ``hard_lo, hard_hi`` (per piece, labels) are
@@ -284,13 +288,18 @@ def apply_ops(
                 a_buf = _room(a_buf, 0, 2 * m + 8)
                 m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
             elif kind == IMPULSE:
+                d_lo, d_hi = q_lo[o, b], q_hi[o, b]
+                if impulse_per_piece:
+                    e0, e1 = pa[o] * u_lo[b] * q_lo[o, b], pa[o] * u_hi[b]
+                    d_lo = min(e0, e1) - pb[o] * u_hi[b]
+                    d_hi = max(e0, e1) + pb[o] * u_hi[b]
                 zs = e_nom * tau
-                dy = 0.5 * (q_lo[o, b] + q_hi[o, b]) * zs
+                dy = 0.5 * (d_lo + d_hi) * zs
                 big = 0.0
                 for j in range(m):
                     a_buf[j, 1] += dy
                     big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
-                g = 0.5 * (q_hi[o, b] - q_lo[o, b]) * zs
+                g = 0.5 * (d_hi - d_lo) * zs
                 m, _ = _segment1(a_buf, m, 0.0, g, b_buf, big, False)
                 a_buf, b_buf = b_buf, a_buf
             elif kind == RANGE:
@@ -336,16 +345,18 @@ def apply_ops(
 
 @njit(cache=True)
 def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
-    """Interval of the ``V~`` increment of an impulse ``k +- dk`` per piece, and (in
-    place) the per-piece bounds of ``w`` in ``per`` moved by it (the formulas are
+    """Interval of the ``V~`` increment of an impulse ``k +- dk`` per piece, the least
+    ``cos^2`` of the bearing per piece, and (in place) the per-piece bounds of ``w`` in
+    ``per`` moved by it (the formulas are
     :meth:`.estimator.NodeSetEstimator._impulse`'s). A piece without cells
     (``inf`` bounds) gets ``nan`` bounds of ``w``: it is skipped downstream."""
     n = u_lo.shape[0]
-    lo, hi = np.empty(n), np.empty(n)
+    lo, hi, cos2 = np.empty(n), np.empty(n), np.empty(n)
     for b in range(n):
         a_abs = max(abs(per[b, 2]), abs(per[b, 3]))
         sin2 = np.sin(min(a_abs, 0.5 * np.pi)) ** 2
-        e0, e1 = k * u_lo[b] * (1.0 - sin2), k * u_hi[b]
+        cos2[b] = 1.0 - sin2
+        e0, e1 = k * u_lo[b] * cos2[b], k * u_hi[b]
         lo[b] = min(e0, e1) - dk * u_hi[b]
         hi[b] = max(e0, e1) + dk * u_hi[b]
         f0, f1 = (1.0 / (u_hi[b] * e_nom)) ** 2, (1.0 / (u_lo[b] * e_nom)) ** 2
@@ -361,7 +372,7 @@ def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
         else:
             per[b, 0] += min(p_min, 0.0)
             per[b, 1] += max(p_max, 0.0)
-    return lo, hi
+    return lo, hi, cos2
 
 
 @njit(cache=True)

@@ -137,6 +137,17 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         (:func:`~.bands.split_live_bands`): with a range
         finder the data pin the speed, and a band's width then dominates the
         interval of the miss.
+    max_bands : int
+        Most live closing-speed bands.
+    impulse_per_piece : bool
+        ``False`` (the default): the log keeps each impulse's interval of the ``V~``
+        increment per piece, so a band split later replays the impulses before it with
+        the parent band's spread of ``u``. ``True``: the log keeps ``k``, ``dk`` and
+        the least ``cos^2`` of the bearing, and a replay forms the interval over the
+        node's own piece: the halves of a split band lose the spread of the impulses
+        before the split too (sound: a half's ``u`` lies inside its parent's). Tighter
+        with the range finder and guidance, and costlier: more trial splits pay
+        (docs/infoset.md).
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -153,6 +164,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_vertices: int | None = DEFAULTS.max_vertices
     split_bands: bool = DEFAULTS.split_bands
     max_bands: int = DEFAULTS.max_bands
+    impulse_per_piece: bool = DEFAULTS.impulse_per_piece
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:
@@ -268,7 +280,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         # per piece (compiled: a handful of numbers, every step): with sin^2 of the
         # largest bearing, dV~ in [min, max](k u_lo (1 - sin^2), k u_hi) -+ dk u_hi;
         # zs moves by e_nom tau dV~ with tau in [tau_lo, tau_hi]; w = (e/e_nom)^2 zs
-        lo, hi = _nk.impulse_interval(per, s.u_lo, s.u_hi, s.e_nom, float(k), float(dk))
+        lo, hi, cos2 = _nk.impulse_interval(per, s.u_lo, s.u_hi, s.e_nom, float(k), float(dk))
+        if self.impulse_per_piece:  # k, dk and cos^2: replays form the interval per piece
+            return OpLog.one(_nk.IMPULSE, len(lo), pa=k, pb=dk, q_lo=cos2, q_hi=hi)
         return OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi)
 
     def predict(
@@ -336,7 +350,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             np.ascontiguousarray(piece, dtype=np.int64), s.u_lo, s.u_hi, s.hard_lo_s,
             s.hard_hi_s, float(t), *ops.parts(), self.alpha_scale_rad, s.e_nom,
             self.model.eps_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
-            NO_CAP if self.max_vertices is None else self.max_vertices,
+            NO_CAP if self.max_vertices is None else self.max_vertices, self.impulse_per_piece,
         )  # fmt: skip
         return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi, n_simpl
 

@@ -82,6 +82,15 @@ class InfosetOptions(SlabOptions):
     max_bands: Annotated[
         int, Field(ge=1, le=256, description="nodes: most live closing-speed bands")
     ] = 64
+    # off by default: tighter with the range finder and guidance (seeds 404, 425), but
+    # Fig. 5's bearings-only game runs cost about twice as much (docs/infoset.md)
+    impulse_per_piece: Annotated[
+        bool,
+        Field(
+            description="nodes: replay each impulse over the node's own closing-speed "
+            "band (a split band's halves lose the spread of earlier impulses too)"
+        ),
+    ] = False
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
@@ -118,6 +127,7 @@ class InfosetOptions(SlabOptions):
             max_vertices=self.max_vertices,
             split_bands=self.split_bands,
             max_bands=self.max_bands,
+            impulse_per_piece=self.impulse_per_piece,
         )
 
 
