@@ -185,3 +185,11 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
 
     a, b = game_miss("kp_fig5-default"), game_miss("kp_fig5-impulse_per_piece")
     assert f"their mean miss grows from {a:.2f} to {b:.2f} m" in text
+
+    def game_cpu_s(name):
+        rows = json.loads((speed / f"{name}.json").read_text())["rows"]
+        return next(r["cpu_s"] for r in rows if r["noise"] == "game")
+
+    base = 0.5 * (game_cpu_s("kp_fig5-default") + game_cpu_s("kp_fig5-default-repeat"))
+    ratio = game_cpu_s("kp_fig5-impulse_per_piece") / base
+    assert f"those of Fig. 5 cost {ratio:.2f} times the CPU time of the defaults" in text
