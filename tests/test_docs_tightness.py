@@ -165,13 +165,14 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
     time, seeds 425 and 404, and the Fig. 5 game misses the paragraph quotes."""
     text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
     folder = ROOT / "docs/results/tightness/impulse_per_piece"
-    runs = {}
+    runs, switch = {}, {}
     for p in folder.glob("*.json"):
         r = json.loads(p.read_text())
         assert "impulse_per_piece=true" in r["scenario"] and r["guided"]
-        assert r["noise"] == "random" and all(r["exact_inside"])
-        runs[r["seed"]] = r
-    assert sorted(runs) == [*range(301, 319), *range(401, 431)]
+        assert all(r["exact_inside"])
+        {"random": runs, "switch": switch}[r["noise"]][r["seed"]] = r
+    seeds = [*range(301, 319), *range(401, 431)]
+    assert sorted(runs) == sorted(switch) == seeds
     worst = max(runs.values(), key=lambda r: r["max_ratio"])
     i = worst["ratio"].index(worst["max_ratio"])
     assert (f"at most {worst['max_ratio']:.3f} times as wide as the exact one (seed "
@@ -185,6 +186,30 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
 
     a, b = game_miss("kp_fig5-default"), game_miss("kp_fig5-impulse_per_piece")
     assert f"their mean miss grows from {a:.2f} to {b:.2f} m" in text
+
+    # the switching errors (50 s), the default set on the same 48 seeds
+    default = [
+        json.loads(p.read_text())
+        for p in (ROOT / "docs/results/tightness/switch_range").glob("*.json")
+    ]
+    assert sorted(r["seed"] for r in default) == seeds
+    assert all(
+        r["noise"] == "switch" and r["guided"] and all(r["exact_inside"])
+        for r in [*default, *switch.values()]
+    )
+    top = sorted(default, key=lambda r: -r["max_ratio"])
+    i = top[0]["ratio"].index(top[0]["max_ratio"])
+    with_option = max(r["max_ratio"] for r in switch.values())
+    assert (
+        f"most {top[0]['max_ratio']:.3f} times as wide as the exact one (seed "
+        f"{top[0]['seed']}, at {top[0]['times_s'][i]:.0f} s; the next, "
+        f"{top[1]['max_ratio']:.3f}), with the option at most {with_option:.3f}"
+    ) in text
+    perf = " ".join((ROOT / "docs" / "performance.md").read_text(encoding="utf-8").split())
+    assert (
+        f"within {with_option:.3f} under errors that switch sign, where the default "
+        f"reaches {top[0]['max_ratio']:.3f}"
+    ) in perf
 
     def game_cpu_s(name):
         rows = json.loads((speed / f"{name}.json").read_text())["rows"]
