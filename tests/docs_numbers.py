@@ -31,6 +31,19 @@ def results(path: str) -> dict | list:
     return json.loads((ROOT / path).read_text(encoding="utf-8"))
 
 
+def speed_cpu_s(name: str) -> dict[str, float]:
+    """CPU-s per noise of ``docs/results/speed/kp_fig5-NAME.json`` (``kvi compare``)."""
+    rows = results(f"docs/results/speed/kp_fig5-{name}.json")["rows"]
+    return {r["noise"]: r["cpu_s"] for r in rows}
+
+
+def speed_base_cpu_s() -> dict[str, float]:
+    """The defaults' CPU-s per noise: the mean of the first row and the repeat, the
+    base the text's speed ratios are taken against."""
+    first, repeat = speed_cpu_s("default"), speed_cpu_s("default-repeat")
+    return {n: 0.5 * (first[n] + repeat[n]) for n in first}
+
+
 def _select(items: list, selector: str):
     """The one item of a list of records whose fields equal ``[field=value,...]``."""
     wanted = dict(pair.split("=", 1) for pair in selector[1:-1].split(","))

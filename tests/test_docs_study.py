@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import re
 
-from docs_numbers import ROOT, agrees, results
+from docs_numbers import ROOT, agrees, results, speed_base_cpu_s, speed_cpu_s
 
 STUDY = "docs/results/study/fig5-"
 TEXT = " ".join((ROOT / "docs/performance.md").read_text(encoding="utf-8").split())
@@ -49,11 +49,6 @@ def test_the_speed_options_defaults_rows_are_the_published_runs():
         assert {k: row[k] for k in keys} == published[row["noise"]], row["noise"]
 
 
-def _speed_cpu_s(name: str) -> dict[str, float]:
-    rows = results(f"docs/results/speed/kp_fig5-{name}.json")["rows"]
-    return {r["noise"]: r["cpu_s"] for r in rows}
-
-
 def _found(pattern: str) -> re.Match:
     found = re.search(pattern, TEXT)
     assert found, f"the sentence was rewritten: re-point this test ({pattern})"
@@ -64,11 +59,11 @@ def test_the_speed_options_ratios_are_the_measured_cpu_times():
     """The speed options' savings and costs, in per cent and times, are the arithmetic of
     the results files: each option's CPU time against the mean of the defaults' two
     measurements (the first row and the repeat), random then game."""
-    first, repeat = _speed_cpu_s("default"), _speed_cpu_s("default-repeat")
-    base = {n: 0.5 * (first[n] + repeat[n]) for n in first}
+    first, repeat = speed_cpu_s("default"), speed_cpu_s("default-repeat")
+    base = speed_base_cpu_s()
 
     def pct(name: str, noise: str) -> float:
-        return 100.0 * (_speed_cpu_s(name)[noise] / base[noise] - 1.0)
+        return 100.0 * (speed_cpu_s(name)[noise] / base[noise] - 1.0)
 
     saved = _found(r"piece splits \(a ratio of 4 instead of 2\) saved (\d+) % and (\d+) %")
     assert agrees(saved.group(1), -pct("node_split_ratio_4", "random"))
@@ -78,7 +73,7 @@ def test_the_speed_options_ratios_are_the_measured_cpu_times():
     assert agrees(cap.group(2), pct("max_vertices_64", "game"))
     one = _found(r"one band was ([\d.]+) times cheaper under the game, but only ([\d.]+) "
                  r"times under random errors")  # fmt: skip
-    n1 = _speed_cpu_s("n_bands_1")
+    n1 = speed_cpu_s("n_bands_1")
     assert agrees(one.group(1), base["game"] / n1["game"])
     assert agrees(one.group(2), base["random"] / n1["random"])
     rep = _found(r"CPU-s for random / game, (\d+) % and (\d+) % below the first rows")
@@ -117,7 +112,6 @@ def test_impulse_per_piece_costs_what_the_text_says():
         r"\(`impulse_per_piece`, docs/infoset.md; measured an hour later, nothing else "
         r"running\) cost ([\d.]+) and ([\d.]+) times the CPU time"
     )
-    first, repeat = _speed_cpu_s("default"), _speed_cpu_s("default-repeat")
-    option = _speed_cpu_s("impulse_per_piece")
+    base, option = speed_base_cpu_s(), speed_cpu_s("impulse_per_piece")
     for noise, printed in zip(("random", "game"), found.groups(), strict=True):
-        assert agrees(printed, option[noise] / (0.5 * (first[noise] + repeat[noise])))
+        assert agrees(printed, option[noise] / base[noise])

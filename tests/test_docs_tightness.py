@@ -6,7 +6,7 @@ import json
 import re
 from pathlib import Path
 
-from docs_numbers import agrees
+from docs_numbers import agrees, speed_base_cpu_s, speed_cpu_s
 
 ROOT = Path(__file__).resolve().parents[1]
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
@@ -211,10 +211,5 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
         f"reaches {top[0]['max_ratio']:.3f}"
     ) in perf
 
-    def game_cpu_s(name):
-        rows = json.loads((speed / f"{name}.json").read_text())["rows"]
-        return next(r["cpu_s"] for r in rows if r["noise"] == "game")
-
-    base = 0.5 * (game_cpu_s("kp_fig5-default") + game_cpu_s("kp_fig5-default-repeat"))
-    ratio = game_cpu_s("kp_fig5-impulse_per_piece") / base
+    ratio = speed_cpu_s("impulse_per_piece")["game"] / speed_base_cpu_s()["game"]
     assert f"those of Fig. 5 cost {ratio:.2f} times the CPU time of the defaults" in text

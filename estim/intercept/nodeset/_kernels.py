@@ -214,6 +214,14 @@ def _schedule(u_lo, u_hi, hard_lo, hard_hi, t, kinds, pa, pb, eps):
 
 
 @njit(cache=True)
+def _impulse_dv(k, dk, u_lo, u_hi, cos2):
+    """Interval of the ``V~`` increment ``(k +- dk) u cos^2(alpha)`` for ``u`` in
+    ``[u_lo, u_hi]`` and ``cos^2(alpha) >= cos2`` (one piece)."""
+    e0, e1 = k * u_lo * cos2, k * u_hi
+    return min(e0, e1) - dk * u_hi, max(e0, e1) + dk * u_hi
+
+
+@njit(cache=True)
 def apply_ops(
     xy, off, label, piece, u_lo, u_hi, hard_lo, hard_hi, t,
     kinds, pa, pb, q_lo, q_hi,
@@ -225,8 +233,8 @@ def apply_ops(
     ``IMPULSE``: ``q_lo, q_hi`` = the interval of the ``V~`` increment per piece, as
     recorded; with ``impulse_per_piece``, ``pa, pb`` = the impulse ``k +- dk`` (m/s) and
     ``q_lo`` = the least ``cos^2`` of the bearing per piece, the interval formed over
-    the node's own piece's ``u`` (:func:`impulse_interval`'s formula: a band split
-    after the impulse gives each half its own spread);
+    the node's own piece's ``u`` (:func:`_impulse_dv`, as :func:`impulse_interval`
+    records it: a band split after the impulse gives each half its own spread);
     ``RANGE``: ``pa, pb`` = the interval of ``x`` (m); ``PREDICT``: ``pa`` = step (s),
     ``q_lo, q_hi`` = the interval of ``v u`` per piece. Nodes have labels ``label`` (time to go
     at ``t = 0``) and pieces ``piece``; ``hard_lo, hard_hi`` (per piece, labels) are
@@ -290,9 +298,7 @@ def apply_ops(
             elif kind == IMPULSE:
                 d_lo, d_hi = q_lo[o, b], q_hi[o, b]
                 if impulse_per_piece:
-                    e0, e1 = pa[o] * u_lo[b] * q_lo[o, b], pa[o] * u_hi[b]
-                    d_lo = min(e0, e1) - pb[o] * u_hi[b]
-                    d_hi = max(e0, e1) + pb[o] * u_hi[b]
+                    d_lo, d_hi = _impulse_dv(pa[o], pb[o], u_lo[b], u_hi[b], q_lo[o, b])
                 zs = e_nom * tau
                 dy = 0.5 * (d_lo + d_hi) * zs
                 big = 0.0
@@ -356,9 +362,7 @@ def impulse_interval(per, u_lo, u_hi, e_nom, k, dk):
         a_abs = max(abs(per[b, 2]), abs(per[b, 3]))
         sin2 = np.sin(min(a_abs, 0.5 * np.pi)) ** 2
         cos2[b] = 1.0 - sin2
-        e0, e1 = k * u_lo[b] * cos2[b], k * u_hi[b]
-        lo[b] = min(e0, e1) - dk * u_hi[b]
-        hi[b] = max(e0, e1) + dk * u_hi[b]
+        lo[b], hi[b] = _impulse_dv(k, dk, u_lo[b], u_hi[b], cos2[b])
         f0, f1 = (1.0 / (u_hi[b] * e_nom)) ** 2, (1.0 / (u_lo[b] * e_nom)) ** 2
         p_min, p_max, nan = np.inf, -np.inf, False
         for t in (max(per[b, 4], 0.0), max(per[b, 5], 0.0)):
