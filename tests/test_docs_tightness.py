@@ -150,8 +150,8 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
         for p in (ROOT / "docs/results/tightness/guided_range").glob("*random*.json")
     ]
     past = [r for r in [*rnd, *earlier] if r["max_ratio"] > 1.03]
-    assert len(earlier) == 18 and len(past) == 2
-    assert "two of 48 random-error seeds pass the 1.03" in text
+    assert len(earlier) == 18 and past == []
+    assert "none of the 48 random-error seeds passes the 1.03" in text
     bo5 = group("kp_fig5", "random", range(401, 416))[0]["max_ratio"]
     bo3 = group("kp_fig3", "game", range(401, 416))[0]["max_ratio"]
     assert f"kp_fig5 under random errors at most {bo5:.3f}, kp_fig3 under game errors at " \
@@ -159,25 +159,61 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
 
 
 def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
-    """The 48 random-error seeds with ``impulse_per_piece`` (``kvi tightness kp_fig5_range
-    --guided --noise random --seed S --set estimator.infoset.impulse_per_piece=true
-    --json``): the exact interval always inside, the largest ratio with its seed and
-    time, seeds 425 and 404, and the Fig. 5 game misses the paragraph quotes."""
+    """The 48 guided range-finder seeds replayed per band, the previous default
+    (``kvi tightness kp_fig5_range --guided --noise random|game|switch --seed S --set
+    estimator.infoset.impulse_per_piece=false --json``, ``impulse_per_band/``) against the
+    defaults (``guided_range/``, ``seeds_401/``, ``switch_range/``): the exact interval
+    always inside, the seeds past 1.03 without the option and what they read with it,
+    the switching errors' extremes, and the Fig. 5 game misses the paragraph quotes."""
     text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
-    folder = ROOT / "docs/results/tightness/impulse_per_piece"
-    runs, switch = {}, {}
-    for p in folder.glob("*.json"):
-        r = json.loads(p.read_text())
-        assert "impulse_per_piece=true" in r["scenario"] and r["guided"]
-        assert all(r["exact_inside"])
-        {"random": runs, "switch": switch}[r["noise"]][r["seed"]] = r
+    tight = ROOT / "docs/results/tightness"
     seeds = [*range(301, 319), *range(401, 431)]
-    assert sorted(runs) == sorted(switch) == seeds
-    worst = max(runs.values(), key=lambda r: r["max_ratio"])
-    i = worst["ratio"].index(worst["max_ratio"])
-    assert (f"at most {worst['max_ratio']:.3f} times as wide as the exact one (seed "
-            f"{worst['seed']}, at {worst['times_s'][i]:.0f} s), seeds 425 and 404 at "
-            f"{runs[425]['max_ratio']:.3f} and {runs[404]['max_ratio']:.3f}") in text  # fmt: skip
+
+    def load(paths, noise):
+        out = {}
+        for p in paths:
+            r = json.loads(p.read_text())
+            if r["noise"] == noise:
+                assert r["guided"] and all(r["exact_inside"]), p.name
+                out[r["seed"]] = r
+        assert sorted(out) == seeds, noise
+        return out
+
+    band = {n: load((tight / "impulse_per_band").glob("*.json"), n)
+            for n in ("random", "game", "switch")}  # fmt: skip
+    assert all("impulse_per_piece=false" in r["scenario"] for r in band["random"].values())
+    default_paths = [*(tight / "guided_range").glob("*.json"),
+                     *(tight / "seeds_401").glob("kp_fig5_range-*.json")]  # fmt: skip
+    default = {n: load(default_paths, n) for n in ("random", "game")}
+    default["switch"] = load((tight / "switch_range").glob("*.json"), "switch")
+    assert all(r["scenario"] == "kp_fig5_range" for d in default.values() for r in d.values())
+
+    def at(r):
+        i = r["ratio"].index(r["max_ratio"])
+        return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {r['times_s'][i]:.0f} s)"
+
+    past = sorted((r for r in band["random"].values() if r["max_ratio"] > 1.03),
+                  key=lambda r: -r["max_ratio"])  # fmt: skip
+    assert [r["seed"] for r in past] == [425, 404]
+    assert f"two random-error seeds then passed 1.03: {at(past[0])} and {at(past[1])}" in text
+    now = default["random"]
+    assert f"the two seeds read {now[425]['max_ratio']:.3f} and {now[404]['max_ratio']:.3f}" in text
+    top = sorted(band["switch"].values(), key=lambda r: -r["max_ratio"])
+    with_option = max(r["max_ratio"] for r in default["switch"].values())
+    i = top[0]["ratio"].index(top[0]["max_ratio"])
+    assert (
+        f"without the option the set was at most {top[0]['max_ratio']:.3f} times as wide "
+        f"as the exact one (seed {top[0]['seed']}, at {top[0]['times_s'][i]:.0f} s; the "
+        f"next, {top[1]['max_ratio']:.3f}), with it at most {with_option:.3f}"
+    ) in text
+    game = [max(r["max_ratio"] for r in d["game"].values()) for d in (default, band)]
+    assert f"(at most {game[0]:.3f} against {game[1]:.3f} without)" in text
+    perf = " ".join((ROOT / "docs" / "performance.md").read_text(encoding="utf-8").split())
+    assert (
+        f"within {with_option:.3f} under errors that switch sign, where the previous "
+        f"default reaches {top[0]['max_ratio']:.3f}"
+    ) in perf
+
     speed = ROOT / "docs/results/speed"
 
     def game_miss(name):
@@ -186,30 +222,20 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
 
     a, b = game_miss("kp_fig5-default"), game_miss("kp_fig5-impulse_per_piece")
     assert f"their mean miss grows from {a:.2f} to {b:.2f} m" in text
-
-    # the switching errors (50 s), the default set on the same 48 seeds
-    default = [
-        json.loads(p.read_text())
-        for p in (ROOT / "docs/results/tightness/switch_range").glob("*.json")
-    ]
-    assert sorted(r["seed"] for r in default) == seeds
-    assert all(
-        r["noise"] == "switch" and r["guided"] and all(r["exact_inside"])
-        for r in [*default, *switch.values()]
-    )
-    top = sorted(default, key=lambda r: -r["max_ratio"])
-    i = top[0]["ratio"].index(top[0]["max_ratio"])
-    with_option = max(r["max_ratio"] for r in switch.values())
-    assert (
-        f"most {top[0]['max_ratio']:.3f} times as wide as the exact one (seed "
-        f"{top[0]['seed']}, at {top[0]['times_s'][i]:.0f} s; the next, "
-        f"{top[1]['max_ratio']:.3f}), with the option at most {with_option:.3f}"
-    ) in text
-    perf = " ".join((ROOT / "docs" / "performance.md").read_text(encoding="utf-8").split())
-    assert (
-        f"within {with_option:.3f} under errors that switch sign, where the default "
-        f"reaches {top[0]['max_ratio']:.3f}"
-    ) in perf
-
     ratio = speed_cpu_s("impulse_per_piece")["game"] / speed_base_cpu_s()["game"]
     assert f"those of Fig. 5 cost {ratio:.2f} times the CPU time of the defaults" in text
+
+    # with the range finder: two alternated pairs of 50-run measurements, and what moves
+    def cpu(name):
+        rows = json.loads((speed / f"kp_fig5_range-{name}.json").read_text())["rows"]
+        return {r["noise"]: r for r in rows}
+
+    pairs = [(cpu(f"default{t}"), cpu(f"impulse_per_band{t}")) for t in ("", "-repeat")]
+    ratios = [sum(a[n]["cpu_s"] for a, _ in pairs) / sum(b[n]["cpu_s"] for _, b in pairs)
+              for n in ("random", "game")]  # fmt: skip
+    assert f"it costs {ratios[0]:.2f} and {ratios[1]:.2f} times the CPU time of the per" in text
+    a, b = pairs[0]
+    dmiss = max(abs(a[n]["miss_m"]["mean"] - b[n]["miss_m"]["mean"]) for n in a)
+    dfuel = max(abs(a[n]["fuel_mps"]["mean"] - b[n]["fuel_mps"]["mean"]) for n in a)
+    assert dmiss <= 0.003 and dfuel <= 0.02
+    assert "mean miss by at most 0.003 m and the mean fuel by at most 0.02 m/s" in text

@@ -68,26 +68,45 @@ def _ratio_at_60_s(capsys, tmp_path, *extra) -> dict:
 
 def test_impulse_per_piece_narrows_seed_425_at_60_s_to_within_1_02(tmp_path, capsys):
     """Seed 425, random errors, the range finder and the law: at 60 s the set's interval
-    of the miss is 1.034 times the exact LP one (a band split after impulses replays
-    them with the parent band's spread of ``u``); replaying each impulse over the
-    node's own band (``impulse_per_piece``) brings it within 1.02, narrower than the
-    default, the exact interval inside both (exact_reference.ExactChannelSet)."""
+    of the miss is 1.034 times the exact LP one when a band split replays earlier
+    impulses with the parent band's spread of ``u`` (``impulse_per_piece=false``);
+    replaying each impulse over the node's own band, the default with a range finder,
+    brings it within 1.02 and narrower, the exact interval inside both
+    (exact_reference.ExactChannelSet)."""
+    per_band = _ratio_at_60_s(capsys, tmp_path / "per_band", "--set",
+                              "estimator.infoset.impulse_per_piece=false")  # fmt: skip
     default = _ratio_at_60_s(capsys, tmp_path / "default")
-    per_piece = _ratio_at_60_s(capsys, tmp_path / "per_piece", "--set",
-                               "estimator.infoset.impulse_per_piece=true")  # fmt: skip
-    assert default["exact_inside"] == per_piece["exact_inside"] == [True]
-    assert 1.0 <= per_piece["ratio"][0] <= 1.02
-    assert per_piece["ratio"][0] < default["ratio"][0]
+    assert default["exact_inside"] == per_band["exact_inside"] == [True]
+    assert 1.0 <= default["ratio"][0] <= 1.02
+    assert default["ratio"][0] < per_band["ratio"][0]
 
 
-@pytest.mark.parametrize("noise", ["random", "game"])
-def test_impulse_per_piece_keeps_the_truth_in_guided_range_finder_engagements(noise):
+@pytest.mark.parametrize(
+    ("scenario", "given", "expected"),
+    [("kp_fig5_range", None, True), ("kp_fig5", None, False),
+     ("kp_fig5_range", False, False), ("kp_fig5", True, True)],
+)  # fmt: skip
+def test_impulse_per_piece_defaults_on_exactly_when_a_range_finder_measures(
+    scenario, given, expected
+):
+    """``impulse_per_piece`` unset: on with the scenario's range finder, off with bearings
+    only; a value given in the scenario wins either way."""
+    table = {} if given is None else {"estimator": {"infoset": {"impulse_per_piece": given}}}
+    sc = api_load_scenario(scenario, **table)
+    est, _ = build_estimator("infoset", sc, sc.channel_model(), "lateral")
+    assert est.impulse_per_piece is expected
+    assert sc.setting().range_finder is sc.range_finder.enabled is (scenario == "kp_fig5_range")
+
+
+@pytest.mark.parametrize(("noise", "per_piece"), [("random", True), ("game", True),
+                                                  ("random", False), ("game", False)])  # fmt: skip
+def test_both_impulse_replays_keep_the_truth_in_guided_range_finder_engagements(noise, per_piece):
     """Full Fig. 5 engagements with the range finder and the law, each impulse replayed
-    over the node's own band: the physical truth inside the set at every checked step
-    (the halves' ``u`` lie inside their parent's, so their impulse intervals hold the
-    true increment)."""
-    sc = api_load_scenario("kp_fig5_range", estimator={"infoset": {"impulse_per_piece": True}})
-    for run_index in range(3):
+    over the node's own band (the default here) or over the band it was recorded in:
+    the physical truth inside the set at every checked step (a half's ``u`` lies inside
+    its parent's, so either impulse interval holds the true increment)."""
+    sc = api_load_scenario("kp_fig5_range", estimator={"infoset": {"impulse_per_piece": per_piece}})
+    for run_index in range(2 if per_piece else 1):
         r = run_engagement(sc, "infoset", noise, run=run_index)
         assert r.checked_steps > 0 and r.truth_outside == 0, (run_index, r.truth_outside)
         assert r.n_impulses > 0

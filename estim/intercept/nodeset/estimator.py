@@ -140,7 +140,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_bands : int
         Most live closing-speed bands.
     impulse_per_piece : bool
-        ``False`` (the default): the log keeps each impulse's interval of the ``V~``
+        ``False`` (the default here; the ``infoset`` options turn it on when a range
+        finder measures): the log keeps each impulse's interval of the ``V~``
         increment per piece, so a band split later replays the impulses before it with
         the parent band's spread of ``u``. ``True``: the log keeps ``k``, ``dk`` and
         the least ``cos^2`` of the bearing, and a replay forms the interval over the
@@ -164,7 +165,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_vertices: int | None = DEFAULTS.max_vertices
     split_bands: bool = DEFAULTS.split_bands
     max_bands: int = DEFAULTS.max_bands
-    impulse_per_piece: bool = DEFAULTS.impulse_per_piece
+    impulse_per_piece: bool = False
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:
