@@ -29,6 +29,7 @@ FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 VS = "docs/results/vs_35e3739.json"
+VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
 VS_BEFORE = "docs/results/vs_35e3739_before_trial_splits.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
@@ -365,6 +366,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) and ([\d.]+), i\.e\. ([\d.]+) times the runs per CPU-second", VS,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "runs_per_cpu_s_ratio_mean")),
+    (PERF, r"before that default, read ([\d.]+) \(`docs/results/vs_35e3739_at_8790e49.json`: "
+     r"([\d.]+) and ([\d.]+) CPU-s against ([\d.]+) and ([\d.]+)\)", VS_8790E49,
+     ("runs_per_cpu_s_ratio_mean", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0",
+      "cpu_s_35e3739/1")),
     (PERF, r"it read ([\d.]+) \(`docs/results/vs_35e3739_before_trial_splits.json`: ([\d.]+) "
      r"and ([\d.]+) CPU-s against ([\d.]+) and ([\d.]+)\)", VS_BEFORE,
      ("runs_per_cpu_s_ratio_mean", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0",
