@@ -337,7 +337,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
          ("random", "miss_m/mean", 8), ("random", "miss_m/mean", 12),
          ("random", "fuel_mps/mean", 6), ("random", "fuel_mps/mean", 12),
          ("game", "miss_m/mean", 8), ("game", "miss_m/mean", 6),
-         ("game", "fuel_mps/mean", 12), ("game", "fuel_mps/mean", 6)))),
+         ("game", "fuel_mps/mean", 12), ("game", "fuel_mps/mean", 8)))),
     # docs/intercept.md: the filters' noise inflated (kvi sweep kp_fig5_kalman_inflated)
     (INT, r"at `s = 30` the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m", INFL,
      ("rows/[value=30,estimator=ekf,noise=game]/miss_m/mean",
@@ -442,11 +442,14 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
                           ("`estimator.infoset.max_vertices=64`", "max_vertices_64"),
                           ("`estimator.infoset.n_bands=2`", "n_bands_2"),
                           ("`estimator.infoset.n_bands=1`", "n_bands_1"),
-                          ("`estimator.infoset.impulse_per_piece=true`", "impulse_per_piece"))
+                          ("`estimator.infoset.impulse_per_piece=false`", "impulse_per_band"))
       for noise in ("random", "game")],
-    (PERF, r"A repeat of the defaults right after the last row read ([\d.]+) / ([\d.]+) "
-     r"CPU-s for random / game",
+    (PERF, r"A repeat of the defaults right after the `n_bands=1` rows read ([\d.]+) / "
+     r"([\d.]+) CPU-s for random / game",
      f"{SPEED}default-repeat.json",
+     tuple(f"rows/[noise={n}]/cpu_s" for n in ("random", "game"))),
+    (PERF, r"and a second one after the next row ([\d.]+) / ([\d.]+) \(",
+     f"{SPEED}default-repeat2.json",
      tuple(f"rows/[noise={n}]/cpu_s" for n in ("random", "game"))),
     # docs/performance.md, the large study: kvi fig5 --runs 50 --workers 1|2 --json
     *[(PERF, rf"\| {re.escape(v)} \| {n} \| ([\d.]+) \| ([\d.]+) \|", STUDY + "w1.json",

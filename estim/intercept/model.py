@@ -295,12 +295,8 @@ class ChannelPrior:
 @dataclass(frozen=True)
 class ChannelSetting:
     """What an intercept estimator is built with besides its own options: the channel's
-    auxiliary model, the interval of the true closing speed its propagation may
-    assume (None: the nominal ``e`` exactly, the seed's model) and whether range
-    measurements come."""
+    auxiliary model and the interval of the true closing speed its propagation may
+    assume (None: the nominal ``e`` exactly, the seed's model)."""
 
     model: ChannelModel
     closing_speed_mps: tuple[float, float] | None = None
-    #: whether a range finder measures in this channel's runs: options that pay only
-    #: with range measurements may default on it (the node set's ``impulse_per_piece``)
-    range_finder: bool = False

@@ -405,7 +405,7 @@ class InterceptScenario(Table):
         """What an estimator of a channel is built with (:mod:`estim.registry`)."""
         lo, hi = self.closing_speed_kmps
         speed = (lo * 1e3, hi * 1e3)
-        return ChannelSetting(model or self.channel_model(), speed, self.range_finder.enabled)
+        return ChannelSetting(model or self.channel_model(), speed)
 
 
 def closing_interval_kmps(given: Any, model_kmps: Any) -> Any:

@@ -140,15 +140,13 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_bands : int
         Most live closing-speed bands.
     impulse_per_piece : bool
-        ``False`` (the default here; the ``infoset`` options turn it on when a range
-        finder measures): the log keeps each impulse's interval of the ``V~``
-        increment per piece, so a band split later replays the impulses before it with
-        the parent band's spread of ``u``. ``True``: the log keeps ``k``, ``dk`` and
-        the least ``cos^2`` of the bearing, and a replay forms the interval over the
-        node's own piece: the halves of a split band lose the spread of the impulses
-        before the split too (sound: a half's ``u`` lies inside its parent's). Tighter
-        with the range finder and guidance, and costlier: more trial splits pay
-        (docs/infoset.md).
+        ``True`` (the default): the log keeps each impulse's ``k``, ``dk`` and the least
+        ``cos^2`` of the bearing, and a replay forms the interval of the ``V~``
+        increment over the node's own piece, so the halves of a band split after an
+        impulse lose its spread of ``u`` too (sound: a half's ``u`` lies inside its
+        parent's). ``False``: the log keeps the interval per piece as recorded, and a
+        band split replays the impulses before it with the parent band's spread of
+        ``u``: cheaper where trial splits would pay, looser (docs/infoset.md).
     """
 
     model: ChannelModel = field(default_factory=ChannelModel)
@@ -165,7 +163,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     max_vertices: int | None = DEFAULTS.max_vertices
     split_bands: bool = DEFAULTS.split_bands
     max_bands: int = DEFAULTS.max_bands
-    impulse_per_piece: bool = False
+    impulse_per_piece: bool = DEFAULTS.impulse_per_piece
 
     def __post_init__(self) -> None:
         if self.closing_speed_mps is not None:

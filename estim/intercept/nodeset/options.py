@@ -82,18 +82,17 @@ class InfosetOptions(SlabOptions):
     max_bands: Annotated[
         int, Field(ge=1, le=256, description="nodes: most live closing-speed bands")
     ] = 64
-    # None: on with a range finder, where it keeps guided sets within 1.03 of the exact
-    # width (seeds 404, 425: 1.03-1.05 without); off for bearings only, where the
-    # default is as tight and Fig. 5's game runs would cost about twice as much
-    # (docs/infoset.md)
+    # on by default: with it, guided sets stay within 1.03 of the exact width where the
+    # per-band replay reached 1.03-1.05 (seeds 404, 425; docs/infoset.md); off is a speed
+    # option (Fig. 5's bearings-only game runs about 1.7 times cheaper)
     impulse_per_piece: Annotated[
-        bool | None,
+        bool,
         Field(
             description="nodes: replay each impulse over the node's own closing-speed "
-            "band (a split band's halves lose the spread of earlier impulses too; "
-            "None: on when a range finder measures)"
+            "band (a split band's halves lose the spread of earlier impulses too; false: "
+            "over the band it was recorded in, cheaper and looser)"
         ),
-    ] = None
+    ] = True
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
@@ -110,10 +109,6 @@ class InfosetOptions(SlabOptions):
         # spacing; slabs and nodes contain it down to eps
         spacing_m = (x_km[1] - x_km[0]) * 1e3 / max(self.n_sections - 1, 1)
         return e_mps * dt_s + spacing_m
-
-    def per_piece(self, range_finder: bool) -> bool:
-        """``impulse_per_piece`` resolved: as given, else on with a range finder."""
-        return range_finder if self.impulse_per_piece is None else self.impulse_per_piece
 
     def build(self, setting):
         if self.sections != "nodes":
@@ -134,7 +129,7 @@ class InfosetOptions(SlabOptions):
             max_vertices=self.max_vertices,
             split_bands=self.split_bands,
             max_bands=self.max_bands,
-            impulse_per_piece=self.per_piece(setting.range_finder),
+            impulse_per_piece=self.impulse_per_piece,
         )
 
 
