@@ -18,6 +18,7 @@ F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 BENCH_SLOW = "docs/results/bench_slow_host.json"
 BENCH_NOW = "docs/results/bench_after_trial_splits.json"
+BENCH_PP = "docs/results/bench_per_piece.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
@@ -30,6 +31,7 @@ WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 VS = "docs/results/vs_35e3739.json"
 VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
+VS_6CA6544 = "docs/results/vs_35e3739_at_6ca6544.json"
 VS_BEFORE = "docs/results/vs_35e3739_before_trial_splits.json"
 N = "numbers/"
 SIGNS = N + "resurs_inertia_signs/"
@@ -366,7 +368,12 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) and ([\d.]+), i\.e\. ([\d.]+) times the runs per CPU-second", VS,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "runs_per_cpu_s_ratio_mean")),
-    (PERF, r"before that default, read ([\d.]+) \(`docs/results/vs_35e3739_at_8790e49.json`: "
+    (PERF, r"range finder measured \(`docs/results/vs_35e3739_at_6ca6544.json`: ([\d.]+) and "
+     r"([\d.]+) CPU-s against ([\d.]+) and ([\d.]+)\)", VS_6CA6544,
+     ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1")),
+    (PERF, r"read ([\d.]+) with the per-piece replay only", VS_6CA6544,
+     ("runs_per_cpu_s_ratio_mean",)),
+    (PERF, r"and ([\d.]+) before it \(`docs/results/vs_35e3739_at_8790e49.json`: "
      r"([\d.]+) and ([\d.]+) CPU-s against ([\d.]+) and ([\d.]+)\)", VS_8790E49,
      ("runs_per_cpu_s_ratio_mean", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0",
       "cpu_s_35e3739/1")),
@@ -432,6 +439,22 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
       "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent",
       "help_cpu_s_max", "first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
+    # docs/performance.md: kvi bench --json with the per-piece impulse replay
+    (PERF, r"`docs/results/bench_per_piece.json`, load average ([\d.]+), nothing else",
+     BENCH_PP, ("machine/load_average",)),
+    (PERF, r"read a UKF step of (\d+) us and a set step of (\d+) us; in UKF steps (\d+) / "
+     r"(\d+) for the two engagements, ([\d.]+) for the whole approach and a cost exponent "
+     r"of ([\d.]+); the costliest `--help` took ([\d.]+) CPU-s \(over", BENCH_PP,
+     ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent",
+      "help_cpu_s_max")),
+    (PERF, r"the first run compiled for ([\d.]+) CPU-s; the Monte Carlo ran ([\d.]+) / "
+     r"([\d.]+) runs per CPU-second with 1 / 2 workers\. A first run", BENCH_PP,
+     ("first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
+    (PERF, r"`docs/results/bench_per_piece_first.json`\), read (\d+) / (\d+), ([\d.]+) and "
+     r"([\d.]+):", "docs/results/bench_per_piece_first.json",
+     ("engagement_in_ukf_steps", "engagement_random_in_ukf_steps", "whole_approach_ratio",
+      "cost_exponent")),
     # docs/performance.md, the node set's speed options: kvi compare kp_fig5 --estimators
     # infoset --noise random,game --runs 50 --workers 2 [--set KEY=VALUE] --json
     *[(PERF, rf"\| {re.escape(label)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \| ([\d.]+) \|",
