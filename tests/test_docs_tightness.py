@@ -13,6 +13,16 @@ ROOT = Path(__file__).resolve().parents[1]
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
 
 
+def _worst_time_s(r: dict) -> float:
+    """The time (s) of a tightness run's largest ratio."""
+    return r["times_s"][r["ratio"].index(r["max_ratio"])]
+
+
+def _worst(r: dict) -> str:
+    """A run's largest ratio as the pages print it: '1.034 (seed 425, at 60 s)'."""
+    return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {_worst_time_s(r):.0f} s)"
+
+
 def test_infoset_page_range_finder_tightness_rows_match_their_results_files():
     rows = ROW.findall((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8"))
     assert len(rows) == 5
@@ -38,18 +48,14 @@ def test_infoset_page_guided_range_finder_paragraph_matches_its_results_files():
     game = max(r["max_ratio"] for r in runs if r["noise"] == "game")
     random = max((r for r in runs if r["noise"] == "random"), key=lambda r: r["max_ratio"])
 
-    def worst(r):
-        i = r["ratio"].index(r["max_ratio"])
-        return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {r['times_s'][i]:.0f} s)"
-
     assert f"under game errors the set was at most {game:.3f} times as wide" in text
-    assert f"under random errors at most {worst(random)}" in text
+    assert f"under random errors at most {_worst(random)}" in text
     before = sorted(
         (json.loads(p.read_text()) for p in (folder / "before_trial_splits").glob("*.json")),
         key=lambda r: -r["max_ratio"],
     )
     assert len(before) == 2 and all(r["max_ratio"] > 1.04 for r in before)
-    assert f"errors: {worst(before[0])} and {worst(before[1])}" in text
+    assert f"errors: {_worst(before[0])} and {_worst(before[1])}" in text
     now318 = next(r for r in runs if r["seed"] == 318 and r["noise"] == "random")
     assert f"seed 318 now reads {now318['max_ratio']:.3f} at worst" in text
     (wide,) = (folder / "n_bands_16").glob("*seed318*.json")
@@ -135,16 +141,12 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
         assert sorted(r["seed"] for r in out) == list(seeds)
         return sorted(out, key=lambda r: -r["max_ratio"])
 
-    def at(r):
-        i = r["ratio"].index(r["max_ratio"])
-        return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {r['times_s'][i]:.0f} s)"
-
     game = group("kp_fig5_range", "game", range(401, 431))
     assert f"Under game errors the set was at most {game[0]['max_ratio']:.3f} times" in text
     rnd = group("kp_fig5_range", "random", range(401, 431))
     third = rnd[2]["max_ratio"]
-    assert f"under random errors at most {at(rnd[0])} and {at(rnd[1])}, the other 28 seeds " \
-           f"at most {third:.3f}" in text  # fmt: skip
+    assert (f"under random errors at most {_worst(rnd[0])} and {_worst(rnd[1])}, the other "
+            f"28 seeds at most {third:.3f}") in text  # fmt: skip
     # "two of 48": these 30 seeds and the 18 of guided_range/ (301-318)
     earlier = [
         json.loads(p.read_text())
@@ -165,7 +167,7 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
         return f"{top[sc, n][0]['max_ratio']:.3f}"
 
     assert (f"kp_fig5 under random errors at most {most('kp_fig5', 'random')}, under "
-            f"switching errors at most {at(top['kp_fig5', 'switch'][0])}, under game errors "
+            f"switching errors at most {_worst(top['kp_fig5', 'switch'][0])}, under game errors "
             f"at most {most('kp_fig5', 'game')}; kp_fig3 under game errors at most "
             f"{most('kp_fig3', 'game')}, under random and switching errors at most "
             f"{most('kp_fig3', 'random')} and {most('kp_fig3', 'switch')}") in text  # fmt: skip
@@ -178,9 +180,8 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
     switch = sorted((r for r in band if r["scenario"] == "kp_fig5" and r["noise"] == "switch"),
                     key=lambda r: -r["max_ratio"])  # fmt: skip
     r = switch[0]
-    i = r["ratio"].index(r["max_ratio"])
     assert (f"reached {r['max_ratio']:.3f} under switching errors on kp_fig5 (seed {r['seed']}, "
-            f"at {r['times_s'][i]:.0f} s; the next, {switch[1]['max_ratio']:.3f}), and read "
+            f"at {_worst_time_s(r):.0f} s; the next, {switch[1]['max_ratio']:.3f}), and read "
             "about the same elsewhere") in text  # fmt: skip
     others = [r for r in band if r not in switch[:1]]
     assert max(r["max_ratio"] for r in others) <= 1.03
@@ -216,22 +217,18 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
     default["switch"] = load((tight / "switch_range").glob("*.json"), "switch")
     assert all(r["scenario"] == "kp_fig5_range" for d in default.values() for r in d.values())
 
-    def at(r):
-        i = r["ratio"].index(r["max_ratio"])
-        return f"{r['max_ratio']:.3f} (seed {r['seed']}, at {r['times_s'][i]:.0f} s)"
-
     past = sorted((r for r in band["random"].values() if r["max_ratio"] > 1.03),
                   key=lambda r: -r["max_ratio"])  # fmt: skip
     assert [r["seed"] for r in past] == [425, 404]
-    assert f"two random-error seeds then passed 1.03: {at(past[0])} and {at(past[1])}" in text
+    two = f"{_worst(past[0])} and {_worst(past[1])}"
+    assert f"two random-error seeds then passed 1.03: {two}" in text
     now = default["random"]
     assert f"the two seeds read {now[425]['max_ratio']:.3f} and {now[404]['max_ratio']:.3f}" in text
     top = sorted(band["switch"].values(), key=lambda r: -r["max_ratio"])
     with_option = max(r["max_ratio"] for r in default["switch"].values())
-    i = top[0]["ratio"].index(top[0]["max_ratio"])
     assert (
         f"with the per-band replay the set was at most {top[0]['max_ratio']:.3f} times as "
-        f"wide as the exact one (seed {top[0]['seed']}, at {top[0]['times_s'][i]:.0f} s; the "
+        f"wide as the exact one (seed {top[0]['seed']}, at {_worst_time_s(top[0]):.0f} s; the "
         f"next, {top[1]['max_ratio']:.3f}), with the default at most {with_option:.3f}"
     ) in text
     game = [max(r["max_ratio"] for r in d["game"].values()) for d in (default, band)]

@@ -18,15 +18,20 @@ from kalman_vs_infoset.api import load_scenario as api_load_scenario
 from kalman_vs_infoset.api import run_engagement
 
 
+def _tightness_at(capsys, out, scenario, noise, seed, time_s, *extra) -> dict:
+    """``kvi tightness SCENARIO --guided`` at one time, its JSON summary."""
+    r = run(capsys, "tightness", scenario, "--guided", "--noise", noise, "--seed", str(seed),
+            "--times", str(time_s), "--out", out, "--json", *extra)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
 def test_guided_range_finder_seed_318_at_30_s_within_1_03_of_the_exact_lp_set(tmp_path, capsys):
     """Seed 318, random errors, the law's impulses, the range finder: the set's interval
     of the miss was 1.053 times the exact LP one at 30 s (bands that spread ~107 m/s of
     impulses over their ``u``); the trial splits bring it to at most 1.03, the exact
     interval inside (exact_reference.ExactChannelSet, an independent LP)."""
-    r = run(capsys, "tightness", "kp_fig5_range", "--guided", "--noise", "random",
-            "--seed", "318", "--times", "30", "--out", tmp_path, "--json")  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    res = json.loads(r.stdout.strip().splitlines()[-1])
+    res = _tightness_at(capsys, tmp_path, "kp_fig5_range", "random", 318, 30)
     assert res["exact_inside"] == [True]
     assert 1.0 <= res["ratio"][0] <= 1.03
 
@@ -59,23 +64,16 @@ def test_no_trial_split_when_the_impulses_spread_is_under_rtol(monkeypatch):
     assert calls == [] and b.impulse_moment_m == 0.0
 
 
-def _ratio_at_60_s(capsys, tmp_path, *extra) -> dict:
-    r = run(capsys, "tightness", "kp_fig5_range", "--guided", "--noise", "random",
-            "--seed", "425", "--times", "60", "--out", tmp_path, "--json", *extra)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    return json.loads(r.stdout.strip().splitlines()[-1])
-
-
 def test_impulse_per_piece_narrows_seed_425_at_60_s_to_within_1_02(tmp_path, capsys):
     """Seed 425, random errors, the range finder and the law: at 60 s the set's interval
     of the miss is 1.034 times the exact LP one when a band split replays earlier
     impulses with the parent band's spread of ``u`` (``impulse_per_piece=false``);
-    replaying each impulse over the node's own band, the default with a range finder,
-    brings it within 1.02 and narrower, the exact interval inside both
-    (exact_reference.ExactChannelSet)."""
-    per_band = _ratio_at_60_s(capsys, tmp_path / "per_band", "--set",
-                              "estimator.infoset.impulse_per_piece=false")  # fmt: skip
-    default = _ratio_at_60_s(capsys, tmp_path / "default")
+    replaying each impulse over the node's own band (the default) brings it within 1.02
+    and narrower, the exact interval inside both (exact_reference.ExactChannelSet)."""
+    case = ("kp_fig5_range", "random", 425, 60)
+    per_band = _tightness_at(capsys, tmp_path / "per_band", *case, "--set",
+                             "estimator.infoset.impulse_per_piece=false")  # fmt: skip
+    default = _tightness_at(capsys, tmp_path / "default", *case)
     assert default["exact_inside"] == per_band["exact_inside"] == [True]
     assert 1.0 <= default["ratio"][0] <= 1.02
     assert default["ratio"][0] < per_band["ratio"][0]
@@ -87,15 +85,10 @@ def test_bearings_only_switching_errors_seed_425_at_95_s_within_1_03(tmp_path, c
     interval of the miss 1.052 times the exact LP one; the default per-piece replay
     keeps it within 1.03 and narrower, the exact interval inside both
     (exact_reference.ExactChannelSet)."""
-
-    def ratio(out, *extra):
-        r = run(capsys, "tightness", "kp_fig5", "--guided", "--noise", "switch", "--seed",
-                "425", "--times", "95", "--out", tmp_path / out, "--json", *extra)  # fmt: skip
-        assert r.returncode == 0, r.stderr
-        return json.loads(r.stdout.strip().splitlines()[-1])
-
-    per_band = ratio("per_band", "--set", "estimator.infoset.impulse_per_piece=false")
-    default = ratio("default")
+    case = ("kp_fig5", "switch", 425, 95)
+    per_band = _tightness_at(capsys, tmp_path / "per_band", *case, "--set",
+                             "estimator.infoset.impulse_per_piece=false")  # fmt: skip
+    default = _tightness_at(capsys, tmp_path / "default", *case)
     assert default["exact_inside"] == per_band["exact_inside"] == [True]
     assert 1.0 <= default["ratio"][0] <= 1.03
     assert default["ratio"][0] < per_band["ratio"][0]
