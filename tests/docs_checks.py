@@ -204,7 +204,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"within ([\d.]+) s \|", FIGS, (N + "gyrostat/settle_s/box/game", N + "gyrostat/tau_s")),
     (README, r"within 0\.2 deg only from ([\d]+) s", FIGS, (N + "resurs/within_tolerance_from_s",)),
     (README, r"Fig\. 5 \(four variants x (\d+) runs\)", FIG5, ("runs",)),
-    # the largest ratio of the 264 guided runs on unseen seeds (its file: the worst run,
+    # the largest ratio of the 444 guided runs on unseen seeds (its file: the worst run,
     # test_docs_tightness checks that it is the largest)
     (README, r"at most ([\d.]+) times its width in the guided runs on unseen seeds",
      "docs/results/tightness/guided_range/kp_fig5_range-tightness-infoset-random-seed306-guided.json",

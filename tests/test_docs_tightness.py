@@ -187,6 +187,28 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
     assert max(r["max_ratio"] for r in others) <= 1.03
 
 
+def test_infoset_page_seeds_501_paragraph_matches_its_results_files():
+    """Seeds 501-520, guided, every bundled intercept scenario under random, switching and
+    game errors (``kvi tightness SCENARIO --guided --noise N --seed S``, ``seeds_501/``):
+    180 runs with the defaults, the exact interval always inside, none past 1.03, and
+    each scenario's largest ratio (seed, time, errors) as the paragraph prints it."""
+    text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
+    folder = ROOT / "docs/results/tightness/seeds_501"
+    runs = [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))]
+    scenarios, noises = ("kp_fig5", "kp_fig3", "kp_fig5_range"), ("random", "switch", "game")
+    grid = {(sc, n, s) for sc in scenarios for n in noises for s in range(501, 521)}
+    assert sorted((r["scenario"], r["noise"], r["seed"]) for r in runs) == sorted(grid)
+    assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
+    assert all(r["max_ratio"] <= 1.03 for r in runs)
+    assert "180 runs, in `seeds_501/`), the exact interval was inside at every time" in text
+    for sc, label in (("kp_fig5_range", "with the range finder"), ("kp_fig5", "on kp_fig5"),
+                      ("kp_fig3", "on kp_fig3")):  # fmt: skip
+        r = max((r for r in runs if r["scenario"] == sc), key=lambda r: r["max_ratio"])
+        printed = (f"{label} at most {r['max_ratio']:.3f} (seed {r['seed']}, at "
+                   f"{_worst_time_s(r):.0f} s, {r['noise']} errors)")  # fmt: skip
+        assert printed in text, printed
+
+
 def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
     """The 48 guided range-finder seeds replayed per band, the previous default
     (``kvi tightness kp_fig5_range --guided --noise random|game|switch --seed S --set
@@ -285,19 +307,19 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
 
 def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_runs():
     """README: 'at most 1.029 times its width in the guided runs on unseen seeds': every
-    guided run on seeds 301-318 and 401-430 with the defaults (``guided_range/``,
-    ``switch_range/``, ``seeds_401/``), the exact interval inside in all."""
+    guided run on seeds 301-318, 401-430 and 501-520 with the defaults (``guided_range/``,
+    ``switch_range/``, ``seeds_401/``, ``seeds_501/``), the exact interval inside in all."""
     text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     tight = ROOT / "docs/results/tightness"
     runs = [
         json.loads(p.read_text())
-        for folder in ("guided_range", "switch_range", "seeds_401")
+        for folder in ("guided_range", "switch_range", "seeds_401", "seeds_501")
         for p in (tight / folder).glob("*.json")
     ]
     assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
     assert all("+" not in r["scenario"] for r in runs)  # the defaults, no --set
     worst = max(runs, key=lambda r: r["max_ratio"])
-    assert len(runs) == 264
+    assert len(runs) == 444
     assert f"at most {worst['max_ratio']:.3f} times its width in the guided runs on unseen" in text
     # the row of docs_checks.CHECKS that reads this number points at the worst run's file
     row = next(c for c in CHECKS if c[0] == "README.md" and "unseen seeds" in c[1])
