@@ -108,3 +108,66 @@ def test_a_changed_number_in_a_copy_of_the_docs_fails():
     added = readme.replace("## Install", "The set wins 97 % of runs.\n\n## Install")
     found = unchecked_numbers(added, patterns)
     assert len(found) == 1 and "The set wins 97 % of runs." in found[0]
+
+
+def test_intercept_page_adversary_comparisons_hold_in_the_files():
+    """docs/intercept.md's comparisons of the three adversaries against the information
+    set, which the number checks above read through one fixed row each: over the Fig. 5
+    runs the seed's rule drew the largest fuel of any rule, on Fig. 3 it is the costliest
+    of the three, the white-box rules raise the miss but not the mean fuel, and no rule put
+    the truth outside the set (``kvi adversaries kp_fig5|kp_fig3``)."""
+    import json
+
+    text = " ".join((ROOT / "docs" / "intercept.md").read_text(encoding="utf-8").split())
+    folder = ROOT / "docs" / "results" / "adversaries"
+    rows = {
+        sc: {r["rule"]: r for r in json.loads((folder / f"{sc}-adversaries.json").read_text())[
+            "rows"] if r["estimator"] == "infoset"}
+        for sc in ("kp_fig5", "kp_fig3")
+    }  # fmt: skip
+    assert all(set(r) == {"game", "targeted", "lookahead"} for r in rows.values())
+    fig5, fig3 = rows["kp_fig5"], rows["kp_fig3"]
+    assert "the largest fuel any rule drew from the pursuer was" in text
+    assert max(fig5, key=lambda k: fig5[k]["fuel_mps"]["max"]) == "game"
+    assert "on Fig. 3 the seed's rule (our reading) is the costliest of the three" in text
+    assert max(fig3, key=lambda k: fig3[k]["fuel_mps"]["mean"]) == "game"
+    assert "push the set's miss up" in text and "but not its fuel" in text
+    for white_box in ("targeted", "lookahead"):
+        assert fig5[white_box]["miss_m"]["mean"] > fig5["game"]["miss_m"]["mean"]
+        assert fig5[white_box]["fuel_mps"]["mean"] < fig5["game"]["fuel_mps"]["mean"]
+    assert all(r["truth_outside"] == 0 for sc in rows.values() for r in sc.values())
+
+
+def test_intercept_page_family_comparisons_hold_in_the_files():
+    """docs/intercept.md's reading of the eight-estimator table (``kvi compare kp_fig5
+    --estimators infoset,ellipsoid,zonotope,box,ekf,ukf,hinf,pf``), whose numbers the
+    checks above read through fixed rows: every set row has 0 steps outside and every
+    filter row some, the quoted range of the filters' counts is their least and largest,
+    exactly three rows beat the set in both miss and fuel under the same errors (those the
+    page names), and the particle filter is the filters' closest to the set under random
+    errors."""
+    import json
+
+    text = " ".join((ROOT / "docs" / "intercept.md").read_text(encoding="utf-8").split())
+    path = ROOT / "docs" / "results" / "families" / "compare_kp_fig5_families.json"
+    rows = {(r["estimator"], r["noise"]): r for r in json.loads(path.read_text())["rows"]}
+    sets, filters = ("infoset", "ellipsoid", "zonotope", "box"), ("ekf", "ukf", "hinf", "pf")
+    assert {e for e, _ in rows} == {*sets, *filters}
+    assert all(r["truth_outside"] == 0 for (e, _), r in rows.items() if e in sets)
+    outside = [r["truth_outside"] for (e, _), r in rows.items() if e in filters]
+    assert min(outside) > 0
+    assert f"under any kind (from {min(outside)} to {max(outside)} steps outside a row)" in text
+
+    def mean(row, key):
+        return row[key]["mean"]
+
+    better = sorted(
+        key for key, r in rows.items() if key[0] != "infoset"
+        and mean(r, "miss_m") < mean(rows["infoset", key[1]], "miss_m")
+        and mean(r, "fuel_mps") < mean(rows["infoset", key[1]], "fuel_mps")
+    )  # fmt: skip
+    assert better == [("ellipsoid", "bias"), ("ellipsoid", "game"), ("hinf", "bias")]
+    assert "Three rows look better than the set" in text
+    closest = min(filters, key=lambda e: mean(rows[e, "random"], "miss_m"))
+    assert closest == min(filters, key=lambda e: mean(rows[e, "random"], "fuel_mps")) == "pf"
+    assert "The particle filter is the closest of the filters to the set" in text
