@@ -232,7 +232,10 @@ def render(result: dict[str, Any]) -> str:
 
 
 def _save(fig: Any, out: Path, stem: str) -> list[str]:
+    from kalman_vs_infoset.experiments import figstyle
+
     paths = []
+    figstyle.plain_log_labels(fig)
     for ext in ("png", "svg"):
         path = out / f"{stem}.{ext}"
         fig.savefig(path, dpi=130)

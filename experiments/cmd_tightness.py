@@ -246,6 +246,7 @@ def run(args) -> dict[str, Any]:
 
 
 def _write(result: dict[str, Any], stem: Path) -> list[Path]:
+    from kalman_vs_infoset.experiments import figstyle
     from kalman_vs_infoset.experiments.plots import plt  # Agg backend
 
     fig, (ax, ax_r) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
@@ -274,6 +275,7 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
         fontsize=10,
     )
     paths = [stem.parent / f"{stem.name}.{ext}" for ext in ("png", "svg", "json")]
+    figstyle.plain_log_labels(fig)
     for p, ext in zip(paths[:2], ("png", "svg"), strict=True):
         atomic_write(p, partial(fig.savefig, format=ext, dpi=130))
     plt.close(fig)

@@ -225,6 +225,45 @@ def test_style_is_colour_blind_safe_and_consistent():
     assert matplotlib.get_backend().lower() == "agg"
 
 
+def _read_plain_label(text: str) -> float:
+    """The number of a plain log label: "0", "10⁴", "−10⁻³", "2×10⁻³"."""
+    sign = -1.0 if text.startswith("−") else 1.0
+    text = text.removeprefix("−")
+    if text == "0":
+        return 0.0
+    coeff, _, power = text.rpartition("10")
+    exponent = int(power.translate(str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")))
+    return sign * float(coeff.removesuffix("×") or 1.0) * 10.0**exponent
+
+
+def test_log_axes_are_labelled_in_plain_text_at_their_ticks(tmp_path):
+    """Log and symlog tick labels are written without mathtext ("10⁻³", "−10⁴",
+    "2×10⁻³"): every label, read back as a number, is the value of its tick."""
+    import matplotlib.pyplot as plt
+
+    fig, (ax_log, ax_sym, ax_minor) = plt.subplots(1, 3)
+    ax_log.plot([1e-3, 1e4], [1, 2], label="a")
+    ax_log.set(xscale="log", xlabel="x, m", ylabel="y, -")
+    ax_sym.plot([0, 1], [-1e4, 1e4], label="b")
+    ax_sym.set(yscale="symlog", xlabel="x, m", ylabel="y, m")
+    ax_minor.plot([1, 2], [2e-3, 9e-3], label="c")  # within a decade: minor ticks labelled
+    ax_minor.set(yscale="log", xlabel="x, m", ylabel="y, m")
+    figstyle.save(fig, tmp_path / "logs")
+    axes = [(ax_log.xaxis, False), (ax_sym.yaxis, False), (ax_minor.yaxis, True)]
+    labelled = {}
+    for axis, minor in axes:
+        ticks = axis.get_minor_ticks() if minor else axis.get_major_ticks()
+        for tick in ticks:
+            text = tick.label1.get_text()
+            assert "$" not in text
+            if text:
+                labelled[text] = tick.get_loc()
+    assert {"10⁻³", "10⁰", "10⁴", "−10⁴", "0"} <= set(labelled)
+    assert any("×10⁻³" in text for text in labelled)
+    for text, loc in labelled.items():
+        assert _read_plain_label(text) == pytest.approx(loc, rel=1e-12), text
+
+
 def test_crowded_cdf_puts_one_legend_below_the_panels():
     """Eight estimators x four noises: the legend leaves the axes (it hid the curves)."""
     from kalman_vs_infoset.experiments import plots
