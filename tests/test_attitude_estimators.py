@@ -31,7 +31,7 @@ from kalman_vs_infoset.estim.attitude.ukf.estimator import (
 from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.spatial.transform import Rotation
 
-from kalman_vs_infoset.numerics.rotations import qexp, qlog, qmatrix, qmul
+from kalman_vs_infoset.numerics.rotations import cross, qexp, qlog, qmatrix, qmul
 
 
 def test_quaternion_maps_equal_scipy():
@@ -48,6 +48,25 @@ def test_quaternion_maps_equal_scipy():
     np.testing.assert_allclose(
         np.abs(np.sum(qmul(p.as_quat(), q.as_quat()) * (p * q).as_quat(), axis=1)), 1.0, atol=1e-12
     )
+
+
+@pytest.mark.parametrize(
+    ("shape_a", "shape_b"),
+    [((3,), (3,)), ((1, 3), (1, 3)), ((3,), (1, 3)), ((1, 1, 3), (3,)), ((4, 3), (3,)),
+     ((3,), (2, 5, 3))],
+)  # fmt: skip
+def test_cross_equals_numpy_for_one_vector_and_for_batches(shape_a, shape_b):
+    """``cross`` (a Python-float path for one vector each, arrays for batches) gives
+    ``np.cross``'s shape and, where numpy's products are the same, its values."""
+    rng = np.random.default_rng(3)
+    for scale in (1e-9, 1.0, 1e7):
+        a, b = rng.normal(size=shape_a) * scale, rng.normal(size=shape_b)
+        got = cross(a, b)
+        assert got.shape == np.cross(a, b).shape and got.dtype == np.float64
+        np.testing.assert_allclose(got, np.cross(a, b), rtol=1e-12, atol=1e-300)
+        a2, b2 = np.broadcast_arrays(a, b)  # the batch path on the same numbers: identical
+        batch = cross(np.stack([a2, a2]), np.stack([b2, b2]))
+        assert np.array_equal(got, batch[0])
 
 
 def _measure_at(x: np.ndarray, model: AttitudeModel, signs: np.ndarray) -> AttitudeMeasurement:
