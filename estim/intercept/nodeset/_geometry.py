@@ -87,28 +87,28 @@ def _node_lines(xy, off, tau, scale, e_nom):
 
 
 @njit(cache=True)
-def _lines(lines, off, j, sign, a_out, b_out):
-    """Node ``j``'s lines (:func:`_node_lines`) times ``sign`` into ``a_out, b_out``;
-    returns their number (0 for an empty or missing node)."""
-    if j < 0:
-        return 0
-    a_line, b_line = lines[0], lines[1]
-    m = off[j + 1] - off[j]
-    for v in range(m):
-        a_out[v] = sign * a_line[off[j] + v]
-        b_out[v] = sign * b_line[off[j] + v]
-    return m
+def _envelopes_at(a_line, b_line, start, stop, t):
+    """Indices of the largest and of the smallest of the lines ``a + b t`` of
+    vertices ``start .. stop - 1`` at ``t`` (the first on ties; -1 if none compares):
+    the upper envelope of the lines and the upper envelope of their negations, whose
+    values are exactly the negated values, in one pass."""
+    best_hi, arg_hi = -np.inf, -1
+    best_lo, arg_lo = np.inf, -1
+    for v in range(start, stop):
+        val = a_line[v] + b_line[v] * t
+        if val > best_hi:
+            best_hi, arg_hi = val, v
+        if val < best_lo:
+            best_lo, arg_lo = val, v
+    return arg_hi, arg_lo
 
 
 @njit(cache=True)
-def _envelope_at(a, b, m, t):
-    """Index of the line of ``a + b t`` that is largest at ``t`` (upper envelope)."""
-    best, arg = -np.inf, -1
-    for v in range(m):
-        val = a[v] + b[v] * t
-        if val > best:
-            best, arg = val, v
-    return arg
+def _line(a_line, b_line, v):
+    """Line ``v``'s ``(a, b)``; ``nan`` for none (-1: no line compared)."""
+    if v < 0:
+        return np.nan, np.nan
+    return a_line[v], b_line[v]
 
 
 @njit(cache=True)
@@ -134,31 +134,88 @@ def _quad(l0, l1, d0, d1, s0, s1):
 
 
 @njit(cache=True)
-def _zem_bound_cell(
-    lines, off, nodes, t4, lo_s, hi_s, sign, buf_a, buf_b, rtol, pts, counts, cand, coef
-):
-    """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``sign zs`` (see
-    :func:`zem_bounds`); returns the bound and the ``tau`` where it is attained.
-    ``pts``, ``counts``, ``cand`` (8) and ``coef`` (2, 3) are scratch."""
+def _side_coefs(a_line, b_line, v_in, v_out, s0, s1, sign):
+    """The quadratic of one side's secant bound (:func:`_quad`) from the lines ``v_in``
+    and ``v_out``, times ``sign``: for the lower bound (``-1``) the coefficients the
+    negated lines give, which are exactly the negated ones (negation is exact)."""
+    l0, l1 = _line(a_line, b_line, v_in)
+    o0, o1 = _line(a_line, b_line, v_out)
+    c0, c1, c2 = _quad(l0, l1, l0 - o0, l1 - o1, s0, s1)
+    return sign * c0, sign * c1, sign * c2
+
+
+@njit(cache=True)
+def _max_on_segment(coef, p, q, best, arg, cand):
+    """Raise ``(best, arg)`` to the maximum over ``[p, q]`` of the minimum of the two
+    sides' quadratics ``coef`` (2, 3) (a side with an infinite constant term is
+    absent): at the ends, each quadratic's vertex and where the two cross."""
+    nc = 0
+    cand[nc] = p
+    cand[nc + 1] = q
+    nc += 2
+    for side in range(2):
+        if np.isfinite(coef[side, 0]) and coef[side, 2] != 0.0:
+            tv = -coef[side, 1] / (2.0 * coef[side, 2])
+            if p < tv < q:
+                cand[nc] = tv
+                nc += 1
+    if np.isfinite(coef[0, 0]) and np.isfinite(coef[1, 0]):
+        ea = coef[0, 2] - coef[1, 2]
+        eb = coef[0, 1] - coef[1, 1]
+        ec = coef[0, 0] - coef[1, 0]
+        if ea != 0.0:
+            disc = eb * eb - 4.0 * ea * ec
+            if disc >= 0.0:
+                r = np.sqrt(disc)
+                for root in ((-eb + r) / (2.0 * ea), (-eb - r) / (2.0 * ea)):
+                    if p < root < q:
+                        cand[nc] = root
+                        nc += 1
+        elif eb != 0.0:
+            root = -ec / eb
+            if p < root < q:
+                cand[nc] = root
+                nc += 1
+    for c in range(nc):
+        t = cand[c]
+        val = np.inf
+        for side in range(2):
+            if np.isfinite(coef[side, 0]):
+                val = min(val, coef[side, 0] + coef[side, 1] * t + coef[side, 2] * t * t)
+        if val > best:
+            best, arg = val, t
+    return best, arg
+
+
+@njit(cache=True)
+def _zem_bound_cell(lines, off, nodes, t4, lo_s, hi_s, rtol, pts, cand, coef, span):
+    """Max over ``tau`` in ``[lo_s, hi_s]`` of the bound of ``zs`` and of ``-zs`` (see
+    :func:`zem_bounds`): ``(up, arg_up, dn, arg_dn)``, the bound of ``-zs`` as the
+    same computation on the negated lines gives it (both in one pass over the lines).
+    ``pts``, ``cand`` (8), ``coef`` (2, 2, 3) and ``span`` (4, 2) are scratch."""
+    a_line, b_line, cross = lines[0], lines[1], lines[2]
     for k in range(4):
-        counts[k] = _lines(lines, off, nodes[k], sign, buf_a[k], buf_b[k])
-    if counts[1] == 0 and counts[2] == 0:
-        return -np.inf, lo_s
-    has_l = counts[0] > 0 and counts[1] > 0 and t4[1] > t4[0]
-    has_r = counts[2] > 0 and counts[3] > 0 and t4[3] > t4[2]
+        j = nodes[k]
+        span[k, 0] = off[j] if j >= 0 else 0
+        span[k, 1] = off[j + 1] if j >= 0 else 0
+    n1, n2 = span[1, 1] - span[1, 0], span[2, 1] - span[2, 0]
+    if n1 == 0 and n2 == 0:
+        return -np.inf, lo_s, -np.inf, lo_s
+    has_l = span[0, 1] > span[0, 0] and n1 > 0 and t4[1] > t4[0]
+    has_r = n2 > 0 and span[3, 1] > span[3, 0] and t4[3] > t4[2]
     if not has_l and not has_r:
-        if counts[1] > 0 and lo_s == hi_s == t4[1]:  # a lone node: its own slice
-            v = _envelope_at(buf_a[1], buf_b[1], counts[1], t4[1])
-            return buf_a[1, v] + buf_b[1, v] * t4[1], lo_s
-        return np.inf, lo_s
-    # breakpoints: where the largest line of a node changes (consecutive vertices tie)
+        if n1 > 0 and lo_s == hi_s == t4[1]:  # a lone node: its own slice
+            vh, vl = _envelopes_at(a_line, b_line, span[1, 0], span[1, 1], t4[1])
+            ah, bh = _line(a_line, b_line, vh)
+            al, bl = _line(a_line, b_line, vl)
+            return ah + bh * t4[1], lo_s, -(al + bl * t4[1]), lo_s
+        return np.inf, lo_s, np.inf, lo_s
+    # breakpoints: where the largest (or smallest) line of a node changes (consecutive
+    # vertices tie; negating the lines leaves them where they are)
     pts[0], pts[1] = lo_s, hi_s
     npts = 2
-    cross = lines[2]
     for k in range(4):
-        if counts[k] == 0:
-            continue
-        for i in range(off[nodes[k]], off[nodes[k] + 1]):
+        for i in range(span[k, 0], span[k, 1]):
             tx = cross[i]
             if lo_s < tx < hi_s:
                 pts[npts] = tx
@@ -166,7 +223,8 @@ def _zem_bound_cell(
     _sort_head(pts, npts)
     h_l = t4[1] - t4[0]
     h_r = t4[3] - t4[2]
-    best, arg = -np.inf, lo_s
+    best_up, arg_up = -np.inf, lo_s
+    best_dn, arg_dn = -np.inf, lo_s
     for s in range(npts - 1):
         p, q = pts[s], pts[s + 1]
         if q < p:
@@ -176,63 +234,36 @@ def _zem_bound_cell(
         for side in range(2):
             k_in, k_out = (1, 0) if side == 0 else (2, 3)
             if (side == 0 and not has_l) or (side == 1 and not has_r):
-                coef[side, 0] = np.inf
+                coef[0, side, 0] = coef[1, side, 0] = np.inf
                 continue
-            vi = _envelope_at(buf_a[k_in], buf_b[k_in], counts[k_in], mid)
-            vo = _envelope_at(buf_a[k_out], buf_b[k_out], counts[k_out], mid)
-            l0, l1 = buf_a[k_in, vi], buf_b[k_in, vi]
-            d0, d1 = l0 - buf_a[k_out, vo], l1 - buf_b[k_out, vo]
+            ih, il = _envelopes_at(a_line, b_line, span[k_in, 0], span[k_in, 1], mid)
+            oh, ol = _envelopes_at(a_line, b_line, span[k_out, 0], span[k_out, 1], mid)
             if side == 0:  # secant through nodes i-1, i, extended to the right
                 s0, s1 = -t4[1] / h_l, 1.0 / h_l
             else:  # secant through nodes i+2, i+1, extended to the left
                 s0, s1 = t4[2] / h_r, -1.0 / h_r
-            c0, c1, c2 = _quad(l0, l1, d0, d1, s0, s1)
-            coef[side, 0], coef[side, 1], coef[side, 2] = c0, c1, c2
-        nc = 0
-        cand[nc] = p
-        cand[nc + 1] = q
-        nc += 2
-        for side in range(2):
-            if np.isfinite(coef[side, 0]) and coef[side, 2] != 0.0:
-                tv = -coef[side, 1] / (2.0 * coef[side, 2])
-                if p < tv < q:
-                    cand[nc] = tv
-                    nc += 1
-        if np.isfinite(coef[0, 0]) and np.isfinite(coef[1, 0]):
-            ea = coef[0, 2] - coef[1, 2]
-            eb = coef[0, 1] - coef[1, 1]
-            ec = coef[0, 0] - coef[1, 0]
-            if ea != 0.0:
-                disc = eb * eb - 4.0 * ea * ec
-                if disc >= 0.0:
-                    r = np.sqrt(disc)
-                    for root in ((-eb + r) / (2.0 * ea), (-eb - r) / (2.0 * ea)):
-                        if p < root < q:
-                            cand[nc] = root
-                            nc += 1
-            elif eb != 0.0:
-                root = -ec / eb
-                if p < root < q:
-                    cand[nc] = root
-                    nc += 1
-        for c in range(nc):
-            t = cand[c]
-            val = np.inf
-            for side in range(2):
-                if np.isfinite(coef[side, 0]):
-                    val = min(val, coef[side, 0] + coef[side, 1] * t + coef[side, 2] * t * t)
-            if val > best:
-                best, arg = val, t
+            c0, c1, c2 = _side_coefs(a_line, b_line, ih, oh, s0, s1, 1.0)
+            coef[0, side, 0], coef[0, side, 1], coef[0, side, 2] = c0, c1, c2
+            c0, c1, c2 = _side_coefs(a_line, b_line, il, ol, s0, s1, -1.0)
+            coef[1, side, 0], coef[1, side, 1], coef[1, side, 2] = c0, c1, c2
+        best_up, arg_up = _max_on_segment(coef[0], p, q, best_up, arg_up, cand)
+        best_dn, arg_dn = _max_on_segment(coef[1], p, q, best_dn, arg_dn, cand)
     # the node values bound their own slice exactly
     for k in (1, 2):
-        if counts[k] > 0 and lo_s <= t4[k] <= hi_s:
-            v = _envelope_at(buf_a[k], buf_b[k], counts[k], t4[k])
-            f = buf_a[k, v] + buf_b[k, v] * t4[k]
-            if not best >= f:
-                best, arg = f, t4[k]
-    if np.isfinite(best):
-        best += rtol * (abs(best) + 1e-300)
-    return best, arg
+        if span[k, 1] > span[k, 0] and lo_s <= t4[k] <= hi_s:
+            vh, vl = _envelopes_at(a_line, b_line, span[k, 0], span[k, 1], t4[k])
+            ah, bh = _line(a_line, b_line, vh)
+            al, bl = _line(a_line, b_line, vl)
+            f_up, f_dn = ah + bh * t4[k], -(al + bl * t4[k])
+            if not best_up >= f_up:
+                best_up, arg_up = f_up, t4[k]
+            if not best_dn >= f_dn:
+                best_dn, arg_dn = f_dn, t4[k]
+    if np.isfinite(best_up):
+        best_up += rtol * (abs(best_up) + 1e-300)
+    if np.isfinite(best_dn):
+        best_dn += rtol * (abs(best_dn) + 1e-300)
+    return best_up, arg_up, best_dn, arg_dn
 
 
 @njit(cache=True)
@@ -249,26 +280,15 @@ def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
     (ends, vertices, crossings). Returns ``(m, 4)``: ``zs_hi, arg_hi, zs_lo, arg_lo``.
     """
     m = table.shape[0]
-    vmax = 1
-    for j in range(off.shape[0] - 1):
-        vmax = max(vmax, off[j + 1] - off[j])
-    buf_a = np.empty((4, vmax))
-    buf_b = np.empty((4, vmax))
     pts = np.empty(xy.shape[0] + 2)
-    counts = np.zeros(4, dtype=np.int64)
-    cand, coef = np.empty(8), np.zeros((2, 3))
+    cand, coef, span = np.empty(8), np.zeros((2, 2, 3)), np.empty((4, 2), dtype=np.int64)
     out = np.empty((m, 4))
     # a node's lines serve the (up to) four cells around it
     lines = _node_lines(xy, off, tau, scale, e_nom)
     for c in range(m):
-        up, a_up = _zem_bound_cell(
-            lines, off, table[c], tau4[c], lo_s[c], hi_s[c], 1.0, buf_a, buf_b, rtol, pts,
-            counts, cand, coef,
-        )  # fmt: skip
-        dn, a_dn = _zem_bound_cell(
-            lines, off, table[c], tau4[c], lo_s[c], hi_s[c], -1.0, buf_a, buf_b, rtol, pts,
-            counts, cand, coef,
-        )  # fmt: skip
+        up, a_up, dn, a_dn = _zem_bound_cell(
+            lines, off, table[c], tau4[c], lo_s[c], hi_s[c], rtol, pts, cand, coef, span
+        )
         out[c, 0], out[c, 1], out[c, 2], out[c, 3] = up, a_up, -dn, a_dn
     return out
 
@@ -346,6 +366,10 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
             per_piece[p, 2 * k + 1] = -np.inf
     f_hi = np.empty(4)
     f_lo = np.empty(4)
+    # each node's extent in Y~ serves the (up to) four cells around it: once per node
+    y_hi, y_lo = np.empty(n), np.empty(n)
+    for j in range(n):
+        y_hi[j], y_lo[j] = _support(xy, off, j, tau[j], 1.0, 0.0, scale, e_nom)
     for c in range(m):
         p = cpiece[c]
         big = (1.0 / (u_lo[p] * e_nom)) ** 2
@@ -353,10 +377,9 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
         w[c, 1] = zs[c, 0] * (big if zs[c, 0] > 0 else small)
         w[c, 0] = zs[c, 2] * (big if zs[c, 2] < 0 else small)
         for k in range(4):
-            j = table[c, k]
-            h, lo_v = _support(xy, off, j, tau4[c, k], 1.0, 0.0, scale, e_nom)
-            f_hi[k] = h
-            f_lo[k] = -lo_v
+            j = table[c, k]  # tau4[c, k] is tau[j] for a node, and a missing one has none
+            f_hi[k] = y_hi[j] if j >= 0 else -np.inf
+            f_lo[k] = -y_lo[j] if j >= 0 else -np.inf
         y_up = _secant(tau4[c], f_hi, span[c, 0], span[c, 1], rtol)[0]
         y_dn = -_secant(tau4[c], f_lo, span[c, 0], span[c, 1], rtol)[0]
         # Y~ / tau is monotone in tau on each secant: both ends of the part suffice
