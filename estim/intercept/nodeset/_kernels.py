@@ -85,6 +85,17 @@ def _clip1(src, m, nx, ny, bound, dst):
 
 
 @njit(cache=True)
+def _inside(src, m, nx, ny, bound):
+    """Whether :func:`_clip1` of ``src[:m]`` against ``nx x + ny y <= bound`` keeps
+    every vertex (the same test, vertex by vertex): then it only copies them and drops
+    duplicates."""
+    for j in range(m):
+        if not src[j, 0] * nx + src[j, 1] * ny - bound <= 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _segment1(src, m, g0, g1, dst, scale, want_scale):
     """One convex polygon plus the segment ``[-g, g]``: at most ``m + 2`` vertices,
     convex and winding once (``scale`` is the largest coordinate of ``src`` in
@@ -292,9 +303,21 @@ def apply_ops(
                         m = _dedupe_tail(a_buf, 0, m, tol_hi)
                         m = _dedupe_tail(a_buf, 0, m, tol_lo)
                     continue
+                # a side the polygon lies within is a clip that only copies and drops
+                # duplicates: that, in place (the same vertices, half the passes)
+                if x_hi <= c + h:
+                    if close:
+                        m = _dedupe_tail(a_buf, 0, m, tol_hi)
+                    m = _clip1(a_buf, m, -1.0, 0.0, -(c - h), b_buf)
+                    a_buf, b_buf = b_buf, a_buf
+                    continue
                 m = _clip1(a_buf, m, 1.0, 0.0, c + h, b_buf)
                 a_buf = _room(a_buf, 0, 2 * m + 8)
-                m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
+                if m > 0 and x_lo >= c - h and _inside(b_buf, m, -1.0, 0.0, -(c - h)):
+                    m = _dedupe_tail(b_buf, 0, m, tol_lo)
+                    a_buf, b_buf = b_buf, a_buf
+                else:
+                    m = _clip1(b_buf, m, -1.0, 0.0, -(c - h), a_buf) if m > 0 else 0
             elif kind == IMPULSE:
                 d_lo, d_hi = q_lo[o, b], q_hi[o, b]
                 if impulse_per_piece:
