@@ -17,6 +17,8 @@ CMP = "docs/results/compare_kp_fig5.json"
 F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 BENCH_SLOW = "docs/results/bench_slow_host.json"
+BENCH_PREV = "docs/results/bench_at_1f4367d.json"
+VS_1F4 = "docs/results/vs_1f4367d.json"
 BENCH_NOW = "docs/results/bench_after_trial_splits.json"
 BENCH_PP = "docs/results/bench_per_piece.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
@@ -485,6 +487,17 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       for v in ("bearing only", "bearing + range") for n in ("random", "game")],
     (PERF, r"Each worker peaked at (\d+) to (\d+) MB", STUDY + "w2.json",
      ("variants/0/worker_peak_rss_mb", "variants/2/worker_peak_rss_mb")),
+    # docs/performance.md: the previous reading of the bench table, and side by side
+    (PERF, r"read a UKF step of (\d+) us where this one reads (\d+) us, and a set step of "
+     r"(\d+) us where this one reads (\d+) us; its Monte Carlo ran ([\d.]+) runs per "
+     r"CPU-second where this one runs ([\d.]+)\.", BENCH_PREV,
+     ("step_us/ukf", f"{BENCH}::step_us/ukf", "step_us/infoset", f"{BENCH}::step_us/infoset",
+      "runs_per_cpu_s/1", f"{BENCH}::runs_per_cpu_s/1")),
+    (PERF, r"`kvi fig5 --runs (\d+)` \(three pairs, `docs/results/vs_1f4367d.json`\) cost "
+     r"([\d.]+), ([\d.]+) and ([\d.]+) CPU-s with this code against ([\d.]+), ([\d.]+) and "
+     r"([\d.]+) with the previous one: ([\d.]+) times the runs per CPU-second", VS_1F4,
+     ("runs_per_variant", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_1f4367d/0",
+      "cpu_s_1f4367d/1", "cpu_s_1f4367d/2", "runs_per_cpu_s_ratio_mean")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),
