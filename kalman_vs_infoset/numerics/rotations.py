@@ -20,9 +20,9 @@ def cross(a: FloatArray, b: FloatArray) -> FloatArray:
     if a.size == 3 and b.size == 3:
         # one vector each (the closed loops' usual case): the same products in Python
         # floats, a tenth of the cost of slicing and stacking arrays of three
-        a0, a1, a2 = a.ravel().tolist()
-        b0, b1, b2 = b.ravel().tolist()
-        out = np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+        x0, x1, x2 = a.ravel().tolist()
+        y0, y1, y2 = b.ravel().tolist()
+        out = np.array([x1 * y2 - x2 * y1, x2 * y0 - x0 * y2, x0 * y1 - x1 * y0])
         return out.reshape(a.shape if a.ndim >= b.ndim else b.shape)
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
