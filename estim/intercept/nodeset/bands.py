@@ -282,13 +282,19 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
     s = _compact(est._refine_pieces(s))
     # each half's feasible labels are narrower than its parent's: a fresh grid of
     # n_nodes over its bracket (its live labels kept, so none is lost) keeps the
-    # cells between its nodes as short as the parent's were
+    # cells between its nodes as short as the parent's were. The live nodes keep their
+    # slices: they were replayed above with this log and this band, and the hard limits
+    # raised since then only empty nodes that are not live (so a replay again would
+    # give the same polygons); only the grid's other labels are replayed.
     for half in np.unique(s.piece[s.live & (s.u_lo >= ua)[s.piece] & (s.u_hi <= ub)[s.piece]]):
         lo, hi = est._bracket(s, int(half))
         lo, hi = max(lo, float(s.hard_lo_s[half])), min(hi, float(s.hard_hi_s[half]))
         mine = s.live & (s.piece == half)
-        labels = np.unique(np.r_[np.linspace(lo, hi, est.n_nodes), s.label_s[mine]])
-        s = est._regrid(s, int(half), labels)
+        grid = np.linspace(lo, hi, est.n_nodes)
+        labels = np.unique(grid[~np.isin(grid, s.label_s[mine])])
+        piece = np.full(len(labels), half)
+        polys = est._exact_slices(s, piece, labels)
+        s = _merge(s, (s.piece != half) | mine, piece, labels, polys)
     return _compact(s)
 
 
