@@ -18,6 +18,7 @@ F3 = "docs/results/fig3/kp_fig3-infoset-"
 BENCH = "docs/results/bench.json"
 BENCH_SLOW = "docs/results/bench_slow_host.json"
 BENCH_PREV = "docs/results/bench_at_1f4367d.json"
+BENCH_39E = "docs/results/bench_at_39ec9cf.json"
 VS_1F4 = "docs/results/vs_1f4367d.json"
 BENCH_NOW = "docs/results/bench_after_trial_splits.json"
 BENCH_PP = "docs/results/bench_per_piece.json"
@@ -487,15 +488,20 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       for v in ("bearing only", "bearing + range") for n in ("random", "game")],
     (PERF, r"Each worker peaked at (\d+) to (\d+) MB", STUDY + "w2.json",
      ("variants/0/worker_peak_rss_mb", "variants/2/worker_peak_rss_mb")),
-    # docs/performance.md: the previous reading of the bench table, and side by side
-    (PERF, r"read a UKF step of (\d+) us where this one reads (\d+) us, and a set step of "
-     r"(\d+) us where this one reads (\d+) us; its Monte Carlo ran ([\d.]+) runs per "
-     r"CPU-second where this one runs ([\d.]+)\.", BENCH_PREV,
-     ("step_us/ukf", f"{BENCH}::step_us/ukf", "step_us/infoset", f"{BENCH}::step_us/infoset",
-      "runs_per_cpu_s/1", f"{BENCH}::runs_per_cpu_s/1")),
+    # docs/performance.md: the earlier readings of the bench table, and side by side
+    (PERF, r"read a UKF step of (\d+) us and a set step of (\d+) us, where this one reads "
+     r"(\d+) us and (\d+) us, so the engagements read (\d+) / (\d+) UKF steps there and "
+     r"(\d+) / (\d+) here", BENCH_39E,
+     ("step_us/ukf", "step_us/infoset", f"{BENCH}::step_us/ukf", f"{BENCH}::step_us/infoset",
+      "engagement_in_ukf_steps", "engagement_random_in_ukf_steps",
+      f"{BENCH}::engagement_in_ukf_steps", f"{BENCH}::engagement_random_in_ukf_steps")),
+    (PERF, r"`docs/results/bench_at_1f4367d.json`\) read (\d+) us and (\d+) us", BENCH_PREV,
+     ("step_us/ukf", "step_us/infoset")),
+    (PERF, r"at earlier releases' measurements, ([\d.]+) in the reading half an hour before "
+     r"this one, and ([\d.]+) here", BENCH_39E, ("cost_exponent", f"{BENCH}::cost_exponent")),
     (PERF, r"`kvi fig5 --runs (\d+)` \(three pairs, `docs/results/vs_1f4367d.json`\) cost "
      r"([\d.]+), ([\d.]+) and ([\d.]+) CPU-s with this code against ([\d.]+), ([\d.]+) and "
-     r"([\d.]+) with the previous one: ([\d.]+) times the runs per CPU-second", VS_1F4,
+     r"([\d.]+) with the previous release's: ([\d.]+) times the runs per CPU-second", VS_1F4,
      ("runs_per_variant", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_1f4367d/0",
       "cpu_s_1f4367d/1", "cpu_s_1f4367d/2", "runs_per_cpu_s_ratio_mean")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
