@@ -113,3 +113,30 @@ def test_kvi_version_names_the_installed_package(capsys):
         main(["--version"])
     assert exc.value.code == 0
     assert capsys.readouterr().out.strip() == f"kvi {kalman_vs_infoset.__version__}"
+
+
+def _modules_a_run_imports(name: str, noise: str) -> list[str]:
+    """In a pool worker: the modules that one engagement imports (none are expected:
+    the pool's parent loaded them, :func:`executors.warm_kernels`)."""
+    from kalman_vs_infoset.experiments.intercept_runs import timed_engagement
+    from kalman_vs_infoset.experiments.runner import run_seed
+    from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
+
+    sc = load_scenario(scenario_folder(None) / f"{name}.toml")
+    before = set(sys.modules)
+    row = timed_engagement(sc, "infoset", noise, run_seed(1, 0))
+    assert row["status"] == "ok", row
+    return sorted(set(sys.modules) - before)
+
+
+@pytest.mark.parametrize("name, noise", [("kp_fig5_range", "random"), ("kp_fig5", "game")])
+def test_a_forked_worker_imports_nothing_on_its_first_run(name, noise):
+    """Each worker of a pool inherits the libraries a run needs: importing them on its
+    first run cost every worker of every pool 0.3 CPU-s (scipy.optimize), about 4 % of
+    ``kvi fig5``. Runs in a forked worker, as the runner's are."""
+    import multiprocessing
+
+    if multiprocessing.get_start_method() != "fork":
+        pytest.skip("the workers inherit the parent's modules only when forked")
+    with executors.make_executor(1) as pool:
+        assert pool.submit(_modules_a_run_imports, name, noise).result() == []
