@@ -33,6 +33,7 @@ FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 VS = "docs/results/vs_35e3739.json"
+VS_E8E = "docs/results/vs_35e3739_at_e8e92a3.json"
 VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
 VS_6CA6544 = "docs/results/vs_35e3739_at_6ca6544.json"
 VS_BEFORE = "docs/results/vs_35e3739_before_trial_splits.json"
@@ -370,10 +371,18 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
        ("miss_m/mean", "fuel_mps/mean", "truth_outside"))
       for dt, noise in (("0.1", "game"), ("0.075", "game"), ("0.05", "game"), ("0.05", "random"))],
     # docs/performance.md, side by side with 35e3739: /usr/bin/time of kvi fig5 --runs 20
-    # and, on that commit, python -m experiments fig5 --runs 20, alternately, twice
+    # and, on that commit, python -m experiments fig5 --runs 20, alternately (pairs)
     (PERF, r"today's `kvi fig5 --runs (\d+)`", VS, ("runs_per_variant",)),
-    (PERF, r"`docs/results/vs_35e3739.json`\): ([\d.]+) and ([\d.]+) CPU-s today against "
-     r"([\d.]+) and ([\d.]+), i\.e\. ([\d.]+) times the runs per CPU-second", VS,
+    (PERF, r"`docs/results/vs_35e3739.json`, measured with this release's code\): ([\d.]+), "
+     r"([\d.]+) and ([\d.]+) CPU-s today against ([\d.]+), ([\d.]+) and ([\d.]+), i\.e\. "
+     r"([\d.]+) times the runs per CPU-second", VS,
+     ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
+      "cpu_s_35e3739/2", "runs_per_cpu_s_ratio_mean")),
+    (PERF, r"first command there cost ([\d.]+) CPU-s and its next two ([\d.]+) and (\d+\.\d+)",
+     VS, ("first_set/cpu_s_35e3739/0", "first_set/cpu_s_35e3739/1",
+          "first_set/cpu_s_35e3739/2")),
+    (PERF, r"`docs/results/vs_35e3739_at_e8e92a3.json`\), read ([\d.]+) and ([\d.]+) CPU-s "
+     r"against ([\d.]+) and ([\d.]+), ([\d.]+) times", VS_E8E,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "runs_per_cpu_s_ratio_mean")),
     (PERF, r"range finder measured \(`docs/results/vs_35e3739_at_6ca6544.json`: ([\d.]+) and "
