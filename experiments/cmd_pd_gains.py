@@ -234,13 +234,7 @@ def render(result: dict[str, Any]) -> str:
 def _save(fig: Any, out: Path, stem: str) -> list[str]:
     from kalman_vs_infoset.experiments import figstyle
 
-    paths = []
-    figstyle.plain_log_labels(fig)
-    for ext in ("png", "svg"):
-        path = out / f"{stem}.{ext}"
-        fig.savefig(path, dpi=130)
-        paths.append(str(path))
-    return paths
+    return [str(p) for p in figstyle.save(fig, out / stem, dpi=130)]
 
 
 def write_figures(

@@ -23,7 +23,6 @@ import argparse
 import json
 import math
 import time
-from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -274,11 +273,8 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
         f"noise, seed {result['seed']}" + (", guided" if result["guided"] else ""),
         fontsize=10,
     )
-    paths = [stem.parent / f"{stem.name}.{ext}" for ext in ("png", "svg", "json")]
-    figstyle.plain_log_labels(fig)
-    for p, ext in zip(paths[:2], ("png", "svg"), strict=True):
-        atomic_write(p, partial(fig.savefig, format=ext, dpi=130))
-    plt.close(fig)
+    paths = figstyle.save(fig, stem, dpi=130)
+    paths.append(stem.parent / f"{stem.name}.json")
     body = json.dumps({k: v for k, v in result.items() if k != "files"}, default=float)
     atomic_write(paths[2], lambda tmp: Path(tmp).write_text(body + "\n"))
     return paths

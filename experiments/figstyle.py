@@ -209,15 +209,23 @@ def plain_log_labels(fig) -> None:
                     fmt.__class__ = _PlainLogFormatter  # same state, plain __call__
 
 
-def save(fig, stem: Path, formats: tuple[str, ...] = ("png", "svg")) -> list[Path]:
-    """Write ``<stem>.png`` and ``<stem>.svg`` (names may hold dots); close the figure."""
+def save(
+    fig, stem: Path, formats: tuple[str, ...] = ("png", "svg"), dpi: float = DPI
+) -> list[Path]:
+    """Write ``<stem>.png`` and ``<stem>.svg`` (names may hold dots), each atomically (a
+    figure stopped mid-write leaves the one before it, never half a file); close the
+    figure."""
+    from kalman_vs_infoset.experiments.files import atomic_write
+
     plain_log_labels(fig)
     stem = Path(stem)
-    stem.parent.mkdir(parents=True, exist_ok=True)
     out = [stem.parent / f"{stem.name}.{ext}" for ext in formats]
-    for i, p in enumerate(out):
-        fig.savefig(p, dpi=DPI)
-        if i == 0:  # laid out once: the other formats keep the positions (half the cost)
-            fig.set_layout_engine("none")
-    plt.close(fig)
+    try:
+        for i, (p, ext) in enumerate(zip(out, formats, strict=True)):
+            # the temporary file's name ends in .tmp: the format is given, not guessed
+            atomic_write(p, lambda tmp, ext=ext: fig.savefig(tmp, format=ext, dpi=dpi))
+            if i == 0:  # laid out once: the other formats keep the positions (half the cost)
+                fig.set_layout_engine("none")
+    finally:
+        plt.close(fig)
     return out

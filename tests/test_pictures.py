@@ -264,6 +264,41 @@ def test_log_axes_are_labelled_in_plain_text_at_their_ticks(tmp_path):
         assert _read_plain_label(text) == pytest.approx(loc, rel=1e-12), text
 
 
+def test_a_figure_stopped_mid_write_leaves_the_one_before_it(tmp_path):
+    """Figures are written atomically: a write that fails half-way (here the SVG, after
+    some bytes) leaves the previous SVG as it was and no temporary file, and the figure
+    is closed; the PNG written before it is the new one, whole."""
+    import matplotlib.pyplot as plt
+
+    def figure(y: float):
+        fig, ax = plt.subplots()
+        ax.plot([0.0, 1.0], [0.0, y], label="line")
+        ax.set(xlabel="x, m", ylabel="y, m")
+        ax.legend()
+        return fig
+
+    stem = tmp_path / "fig"
+    figstyle.save(figure(1.0), stem)
+    old_png, old_svg = (stem.with_suffix(e).read_bytes() for e in (".png", ".svg"))
+    fig = figure(2.0)
+    draw = fig.savefig
+
+    def half_then_fail(path, *args, **kwargs):
+        if kwargs.get("format") == "svg":
+            Path(path).write_bytes(b"<svg")  # part of a file, then the write stops
+            raise OSError("disk full")
+        return draw(path, *args, **kwargs)
+
+    fig.savefig = half_then_fail
+    with pytest.raises(OSError, match="disk full"):
+        figstyle.save(fig, stem)
+    assert stem.with_suffix(".svg").read_bytes() == old_svg
+    new_png = stem.with_suffix(".png").read_bytes()
+    assert new_png != old_png and new_png.startswith(b"\x89PNG")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.png", "fig.svg"]
+    assert not plt.fignum_exists(fig.number)
+
+
 def test_crowded_cdf_puts_one_legend_below_the_panels():
     """Eight estimators x four noises: the legend leaves the axes (it hid the curves)."""
     from kalman_vs_infoset.experiments import plots
