@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import re
 from collections.abc import Iterable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -223,7 +224,7 @@ def save(
     try:
         for i, (p, ext) in enumerate(zip(out, formats, strict=True)):
             # the temporary file's name ends in .tmp: the format is given, not guessed
-            atomic_write(p, lambda tmp, ext=ext: fig.savefig(tmp, format=ext, dpi=dpi))
+            atomic_write(p, partial(fig.savefig, format=ext, dpi=dpi))
             if i == 0:  # laid out once: the other formats keep the positions (half the cost)
                 fig.set_layout_engine("none")
     finally:
