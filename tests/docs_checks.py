@@ -484,6 +484,18 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
                           ("`estimator.infoset.n_bands=1`", "n_bands_1"),
                           ("`estimator.infoset.impulse_per_piece=false`", "impulse_per_band"))
       for noise in ("random", "game")],
+    # the later day's two options, beside the defaults run before and after them
+    (PERF, r"the defaults read ([\d.]+) and ([\d.]+) CPU-s random, ([\d.]+) and ([\d.]+) game",
+     f"{SPEED}later-default.json",
+     ("rows/[noise=random]/cpu_s", f"{SPEED}later-default-repeat.json::rows/[noise=random]/cpu_s",
+      "rows/[noise=game]/cpu_s", f"{SPEED}later-default-repeat.json::rows/[noise=game]/cpu_s")),
+    *[(PERF, rf"{re.escape(opt)}\) saved \d+ % and \d+ %[^;]*?, for (?:a mean miss of )?"
+       rf"([\d.]+) / ([\d.]+) m and (?:fuel of )?([\d.]+) / ([\d.]+) m/s",
+       f"{SPEED}later-{name}.json",
+       ("rows/[noise=random]/miss_m/mean", "rows/[noise=game]/miss_m/mean",
+        "rows/[noise=random]/fuel_mps/mean", "rows/[noise=game]/fuel_mps/mean"))
+      for opt, name in (("`estimator.infoset.n_nodes=8`", "n_nodes_8"),
+                        ("`estimator.infoset.min_live_nodes=4`", "min_live_nodes_4"))],
     (PERF, r"A repeat of the defaults right after the `n_bands=1` rows read ([\d.]+) / "
      r"([\d.]+) CPU-s for random / game",
      f"{SPEED}default-repeat.json",

@@ -128,3 +128,31 @@ def test_impulse_per_band_costs_what_the_text_says():
     runs = [speed_cpu_s(n) for n in ("impulse_per_band", "impulse_per_band-repeat")]
     for noise, printed in zip(("random", "game"), found.groups(), strict=True):
         assert agrees(printed, base[noise] / (0.5 * (runs[0][noise] + runs[1][noise])))
+
+
+def test_fewer_nodes_save_what_the_text_says():
+    """'(`estimator.infoset.n_nodes=8`) saved 11 % and 11 % of the CPU time (random, game)':
+    each option's CPU time against the mean of the defaults run before and after it on
+    the same day, and the defaults drew the published runs."""
+    later = "docs/results/speed/kp_fig5-later-"
+
+    def cpu(name: str) -> dict[str, float]:
+        return {r["noise"]: r["cpu_s"] for r in results(f"{later}{name}.json")["rows"]}
+
+    first, repeat = cpu("default"), cpu("default-repeat")
+    base = {n: 0.5 * (first[n] + repeat[n]) for n in ("random", "game")}
+    for opt, name in (("n_nodes=8", "n_nodes_8"), ("min_live_nodes=4", "min_live_nodes_4")):
+        found = _found(rf"`estimator\.infoset\.{re.escape(opt)}`\) saved (\d+) % and (\d+) %")
+        got = cpu(name)
+        assert all(r["truth_outside"] == 0 for r in results(f"{later}{name}.json")["rows"])
+        for noise, printed in zip(("random", "game"), found.groups(), strict=True):
+            assert agrees(printed, 100.0 * (1.0 - got[noise] / base[noise])), (opt, noise)
+    keys = ("runs", "seed", "miss_m", "fuel_mps", "truth_outside", "empty_set", "failures")
+    published = {
+        r["noise"]: {k: r[k] for k in keys}
+        for r in results("docs/results/compare_kp_fig5.json")["rows"]
+        if r["estimator"] == "infoset"
+    }
+    for name in ("default", "default-repeat"):
+        for row in results(f"{later}{name}.json")["rows"]:
+            assert {k: row[k] for k in keys} == published[row["noise"]], (name, row["noise"])
