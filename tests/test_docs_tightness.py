@@ -6,6 +6,7 @@ import json
 import re
 from pathlib import Path
 
+import pytest
 from docs_checks import CHECKS
 from docs_numbers import agrees, speed_base_cpu_s, speed_cpu_s
 
@@ -187,20 +188,24 @@ def test_infoset_page_seeds_401_paragraph_matches_its_results_files():
     assert max(r["max_ratio"] for r in others) <= 1.03
 
 
-def test_infoset_page_seeds_501_paragraph_matches_its_results_files():
-    """Seeds 501-520, guided, every bundled intercept scenario under random, switching and
-    game errors (``kvi tightness SCENARIO --guided --noise N --seed S``, ``seeds_501/``):
-    180 runs with the defaults, the exact interval always inside, none past 1.03, and
-    each scenario's largest ratio (seed, time, errors) as the paragraph prints it."""
-    text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
-    folder = ROOT / "docs/results/tightness/seeds_501"
+@pytest.mark.parametrize(("first", "n_seeds"), [(501, 20), (601, 10)])
+def test_infoset_page_unseen_seeds_paragraph_matches_its_results_files(first, n_seeds):
+    """Seeds 501-520 and 601-610, guided, every bundled intercept scenario under random,
+    switching and game errors (``kvi tightness SCENARIO --guided --noise N --seed S``,
+    ``seeds_501/``, ``seeds_601/``): 9 runs a seed with the defaults, the exact interval
+    always inside, none past 1.03, and each scenario's largest ratio (seed, time,
+    errors) as the paragraph prints it."""
+    page = (ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split("\n\n")
+    (text,) = [" ".join(p.split()) for p in page if f"`seeds_{first}/`" in p]  # its paragraph
+    folder = ROOT / f"docs/results/tightness/seeds_{first}"
     runs = [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))]
     scenarios, noises = ("kp_fig5", "kp_fig3", "kp_fig5_range"), ("random", "switch", "game")
-    grid = {(sc, n, s) for sc in scenarios for n in noises for s in range(501, 521)}
+    seeds = range(first, first + n_seeds)
+    grid = {(sc, n, s) for sc in scenarios for n in noises for s in seeds}
     assert sorted((r["scenario"], r["noise"], r["seed"]) for r in runs) == sorted(grid)
     assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
     assert all(r["max_ratio"] <= 1.03 for r in runs)
-    assert "180 runs, in `seeds_501/`), the exact interval was inside at every time" in text
+    assert f"{len(grid)} runs, in `seeds_{first}/`), the exact interval was inside at every" in text
     for sc, label in (("kp_fig5_range", "with the range finder"), ("kp_fig5", "on kp_fig5"),
                       ("kp_fig3", "on kp_fig3")):  # fmt: skip
         r = max((r for r in runs if r["scenario"] == sc), key=lambda r: r["max_ratio"])
@@ -307,19 +312,20 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
 
 def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_runs():
     """README: 'at most 1.029 times its width in the guided runs on unseen seeds': every
-    guided run on seeds 301-318, 401-430 and 501-520 with the defaults (``guided_range/``,
-    ``switch_range/``, ``seeds_401/``, ``seeds_501/``), the exact interval inside in all."""
+    guided run on seeds 301-318, 401-430, 501-520 and 601-610 with the defaults
+    (``guided_range/``, ``switch_range/``, ``seeds_401/``, ``seeds_501/``, ``seeds_601/``),
+    the exact interval inside in all."""
     text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     tight = ROOT / "docs/results/tightness"
     runs = [
         json.loads(p.read_text())
-        for folder in ("guided_range", "switch_range", "seeds_401", "seeds_501")
+        for folder in ("guided_range", "switch_range", "seeds_401", "seeds_501", "seeds_601")
         for p in (tight / folder).glob("*.json")
     ]
     assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
     assert all("+" not in r["scenario"] for r in runs)  # the defaults, no --set
     worst = max(runs, key=lambda r: r["max_ratio"])
-    assert len(runs) == 444
+    assert len(runs) == 534
     assert f"at most {worst['max_ratio']:.3f} times its width in the guided runs on unseen" in text
     # the row of docs_checks.CHECKS that reads this number points at the worst run's file
     row = next(c for c in CHECKS if c[0] == "README.md" and "unseen seeds" in c[1])
