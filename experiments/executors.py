@@ -73,8 +73,8 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
     n = workers or os.cpu_count() or 1
     warm_kernels()  # forked workers inherit the loaded kernels
     # The parent's objects go to the collector's permanent generation before the fork:
-    # a worker's first collection would otherwise write to every one of them and copy
-    # the parent's heap page by page (measured: 0.2-0.4 CPU-s on each worker's first run).
+    # a worker's collections would otherwise write to every one of them and copy the
+    # parent's heap page by page (a few per cent of `kvi fig5`'s CPU time, measured).
     gc.collect()
     gc.freeze()
     pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))
