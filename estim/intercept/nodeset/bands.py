@@ -291,10 +291,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
         lo, hi = max(lo, float(s.hard_lo_s[half])), min(hi, float(s.hard_hi_s[half]))
         mine = s.live & (s.piece == half)
         grid = np.linspace(lo, hi, est.n_nodes)
-        labels = np.unique(grid[~np.isin(grid, s.label_s[mine])])
-        piece = np.full(len(labels), half)
-        polys = est._exact_slices(s, piece, labels)
-        s = _merge(s, (s.piece != half) | mine, piece, labels, polys)
+        s = est._regrid(s, int(half), np.unique(grid[~np.isin(grid, s.label_s[mine])]), keep=mine)
     return _compact(s)
 
 

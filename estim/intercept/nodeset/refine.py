@@ -194,9 +194,12 @@ class NodeRefinement:
         hi = s.label_s[last + 1] if last + 1 <= idx[-1] else s.hard_hi_s[b]
         return float(lo), float(hi)
 
-    def _regrid(self, s: NodeSet, b: int, labels: FloatArray, polys_before_last=None) -> NodeSet:
+    def _regrid(
+        self, s: NodeSet, b: int, labels: FloatArray, polys_before_last=None, keep=None
+    ) -> NodeSet:
         """Piece ``b`` with new nodes at ``labels``: the prior, then the whole log (or
-        only its last operation on ``polys_before_last = (polygons, t)``)."""
+        only its last operation on ``polys_before_last = (polygons, t)``). Its old nodes
+        go, but those in ``keep`` (a boolean mask over the nodes, default none)."""
         piece = np.full(len(labels), b)
         if polys_before_last is None:
             polys = self._exact_slices(s, piece, labels)
@@ -204,7 +207,8 @@ class NodeRefinement:
             last = OpLog(*(a[-1:] for a in s.log.parts()))
             polys, _, _, _, _ = self._apply(s, piece, labels, polys_before_last[0], last,
                                          polys_before_last[1])  # fmt: skip
-        return _merge(s, s.piece != b, piece, labels, polys)
+        others = s.piece != b
+        return _merge(s, others if keep is None else others | keep, piece, labels, polys)
 
     def _exact_slices(self, s: NodeSet, piece: NDArray[np.int64], labels: FloatArray):
         """The slices at new nodes: the prior, then every recorded operation."""
