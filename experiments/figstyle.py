@@ -34,6 +34,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
 import matplotlib.pyplot as plt  # noqa: E402
+from kalman_vs_infoset.experiments.files import atomic_write  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 #: Okabe & Ito (2008), "Color Universal Design"
@@ -216,8 +217,6 @@ def save(
     """Write ``<stem>.png`` and ``<stem>.svg`` (names may hold dots), each atomically (a
     figure stopped mid-write leaves the one before it, never half a file); close the
     figure."""
-    from kalman_vs_infoset.experiments.files import atomic_write
-
     plain_log_labels(fig)
     stem = Path(stem)
     out = [stem.parent / f"{stem.name}.{ext}" for ext in formats]
