@@ -156,3 +156,114 @@ def test_fewer_nodes_save_what_the_text_says():
     for name in ("default", "default-repeat"):
         for row in results(f"{later}{name}.json")["rows"]:
             assert {k: row[k] for k in keys} == published[row["noise"]], (name, row["noise"])
+
+
+def test_the_piece_split_floor_saves_what_the_text_says():
+    """docs/performance.md's paragraph on ``min_split_tau_s``: every CPU time, per cent,
+    miss and fuel it prints is the results files' (``kvi compare ... --set
+    estimator.infoset.min_split_tau_s=1|0.5``, the defaults run before and after), and
+    what it calls unchanged is: the same summaries."""
+    speed = "docs/results/speed/"
+
+    def rows(name: str) -> dict[str, dict]:
+        return {r["noise"]: r for r in results(f"{speed}{name}.json")["rows"]}
+
+    first, repeat = rows("kp_fig5-floor-default"), rows("kp_fig5-floor-default-repeat")
+    one, half = rows("kp_fig5-min_split_tau_1"), rows("kp_fig5-min_split_tau_0.5")
+    base = {n: 0.5 * (first[n]["cpu_s"] + repeat[n]["cpu_s"]) for n in ("random", "game")}
+    found = _found(
+        r"the defaults cost ([\d.]+) and ([\d.]+) CPU-s random, ([\d.]+) and ([\d.]+) game; a "
+        r"floor of one second \(two decision steps\) read ([\d.]+) and ([\d.]+), (\d+) % and "
+        r"(\d+) % below the defaults' means, and half a second ([\d.]+) and ([\d.]+) \((\d+) % "
+        r"and (\d+) %\)"
+    )
+    saved = {k: {n: 100.0 * (1.0 - r[n]["cpu_s"] / base[n]) for n in base}
+             for k, r in (("one", one), ("half", half))}  # fmt: skip
+    values = [first["random"]["cpu_s"], repeat["random"]["cpu_s"], first["game"]["cpu_s"],
+              repeat["game"]["cpu_s"], one["random"]["cpu_s"], one["game"]["cpu_s"],
+              saved["one"]["random"], saved["one"]["game"], half["random"]["cpu_s"],
+              half["game"]["cpu_s"], saved["half"]["random"], saved["half"]["game"]]  # fmt: skip
+    for printed, value in zip(found.groups(), values, strict=True):
+        assert agrees(printed, value), (printed, value)
+    # random errors: the same means; the game: the means printed
+    found = _found(r"Under random errors the means are unchanged \(([\d.]+) m and ([\d.]+) m/s\)")
+    for r in (first, repeat, one, half):
+        assert agrees(found.group(1), r["random"]["miss_m"]["mean"])
+        assert agrees(found.group(2), r["random"]["fuel_mps"]["mean"])
+    found = _found(
+        r"The game's mean miss read ([\d.]+) m with the floor of one second and ([\d.]+) m "
+        r"with half a second, against the defaults' ([\d.]+) m \(fuel ([\d.]+) and ([\d.]+) "
+        r"against ([\d.]+) m/s\)"
+    )
+    values = [one["game"]["miss_m"]["mean"], half["game"]["miss_m"]["mean"],
+              first["game"]["miss_m"]["mean"], one["game"]["fuel_mps"]["mean"],
+              half["game"]["fuel_mps"]["mean"], first["game"]["fuel_mps"]["mean"]]  # fmt: skip
+    for printed, value in zip(found.groups(), values, strict=True):
+        assert agrees(printed, value), (printed, value)
+    # with the range finder and on Fig. 3: what the text calls the same is the same
+    keys = ("miss_m", "fuel_mps", "truth_outside", "empty_set", "diverged", "failures")
+    same = lambda a, b: all(a[n][k] == b[n][k] for n in ("random", "game") for k in keys)  # noqa: E731
+    r0, r1 = rows("kp_fig5_range-floor-default"), rows("kp_fig5_range-min_split_tau_1")
+    assert same(r0, r1)
+    found = _found(
+        r"\(kp_fig5_range: the same results, ([\d.]+) and ([\d.]+) CPU-s \(random, game\) with "
+        r"the defaults, ([\d.]+) and ([\d.]+) with the floor"
+    )
+    values = [r[n]["cpu_s"] for r in (r0, r1) for n in ("random", "game")]
+    for printed, value in zip(found.groups(), values, strict=True):
+        assert agrees(printed, value), (printed, value)
+    c0, c1 = rows("kp_fig3-floor-default"), rows("kp_fig3-min_split_tau_1")
+    found = _found(
+        r"on Fig\. 3 the means read the same ([\d.]+) m and ([\d.]+) m/s \(random\) and ([\d.]+) m "
+        r"and ([\d.]+) m/s \(game\) both ways, and the floor saved (\d+) % and (\d+) %"
+    )
+    for r in (c0, c1):
+        values = [r["random"]["miss_m"]["mean"], r["random"]["fuel_mps"]["mean"],
+                  r["game"]["miss_m"]["mean"], r["game"]["fuel_mps"]["mean"]]  # fmt: skip
+        for printed, value in zip(found.groups()[:4], values, strict=True):
+            assert agrees(printed, value), (printed, value)
+    for printed, n in zip(found.groups()[4:], ("random", "game"), strict=True):
+        assert agrees(printed, 100.0 * (1.0 - c1[n]["cpu_s"] / c0[n]["cpu_s"])), n
+    # every run of every file: the truth inside, nothing emptied, diverged or failed
+    for name in ("kp_fig5-min_split_tau_1", "kp_fig5-min_split_tau_0.5",
+                 "kp_fig5_range-min_split_tau_1", "kp_fig3-min_split_tau_1"):  # fmt: skip
+        for r in rows(name).values():
+            assert (r["truth_outside"], r["empty_set"], r["diverged"], r["failures"]) == (0,) * 4
+    # the defaults drew the published runs
+    published = {r["noise"]: r for r in results("docs/results/compare_kp_fig5.json")["rows"]
+                 if r["estimator"] == "infoset"}  # fmt: skip
+    for r in (first, repeat):
+        assert all(r[n][k] == published[n][k] for n in ("random", "game") for k in keys)
+
+
+def test_the_piece_split_floor_tightness_sentence_matches_its_files():
+    """'the exact interval is inside the set in all 90 with the floor, 88 read the same
+    widths as with the defaults, and the widest is 1.016 ... (the defaults: 1.016) and
+    1.022 over all three (the same)': counted over the two folders of guided runs."""
+    found = _found(
+        r"the exact interval is inside the set in all (\d+) with the floor, (\d+) read the "
+        r"same widths as with the defaults \(`seeds_601/`\), and the widest is ([\d.]+) times "
+        r"the exact width with bearings only \(the defaults: ([\d.]+)\) and ([\d.]+) over all "
+        r"three \(the same\)"
+    )
+
+    def runs(folder: str) -> dict[tuple, dict]:
+        out = {}
+        for path in sorted((ROOT / "docs/results/tightness" / folder).glob("*.json")):
+            d = results(str(path.relative_to(ROOT)))
+            out[(d["scenario"].split("+")[0], d["noise"], d["seed"])] = d
+        return out
+
+    floor, default = runs("split_floor"), runs("seeds_601")
+    assert set(floor) == set(default) and int(found.group(1)) == len(floor)
+    assert all(all(d["exact_inside"]) for d in floor.values())
+    assert all(d["guided"] and not d["kinematic_margin"] for d in floor.values())
+    same = sum(floor[k]["ratio"] == default[k]["ratio"] for k in floor)
+    assert int(found.group(2)) == same
+    widest = lambda rs, scs: max(d["max_ratio"] for k, d in rs.items() if k[0] in scs)  # noqa: E731
+    bearings = ("kp_fig5", "kp_fig3")
+    assert agrees(found.group(3), widest(floor, bearings))
+    assert agrees(found.group(4), widest(default, bearings))
+    everything = ("kp_fig5", "kp_fig3", "kp_fig5_range")
+    assert agrees(found.group(5), widest(floor, everything))
+    assert agrees(found.group(5), widest(default, everything))

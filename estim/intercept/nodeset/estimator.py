@@ -103,6 +103,14 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         while its closing-speed band has fewer than ``max_pieces`` pieces: each piece
         sizes its own kinematic margin (large only near the target) and impulse
         widening.
+    min_split_tau_s : float
+        The ratio of a piece's times to go is counted from at least this (s) and from
+        the time to go at eps: pieces whose states all arrive within about twice this
+        are not split. ``0`` (the default): from eps only. Near the target the
+        pieces' ratios grow every step, so they split, die and split again; a floor
+        of one or two decision steps saves that work, and sizes the kinematic
+        margin of the last steps' states over their whole piece (sound, looser
+        there; docs/performance.md).
     tighten_rtol, max_inserts : float, int
         After each update, nodes are added (up to ``max_inserts`` rounds, times the
         live closing-speed bands over the initial ones) in the cells where the bounds
@@ -155,6 +163,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     n_nodes: int = DEFAULTS.n_nodes
     min_live_nodes: int = DEFAULTS.min_live_nodes
     split_ratio: float = DEFAULTS.node_split_ratio
+    min_split_tau_s: float = DEFAULTS.min_split_tau_s
     max_pieces: int = DEFAULTS.max_pieces
     tighten_rtol: float = DEFAULTS.tighten_rtol
     max_inserts: int = DEFAULTS.max_inserts
@@ -178,6 +187,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             raise ValueError("alpha_scale_rad must be positive")
         if not self.split_ratio > 1.0:
             raise ValueError("split_ratio must be > 1 (inf: no splitting)")
+        if not self.min_split_tau_s >= 0.0:
+            raise ValueError("min_split_tau_s must be >= 0")
         if self.max_pieces < 1:
             raise ValueError("max_pieces must be >= 1")
         if not (self.tighten_rtol > 0 and self.max_inserts >= 0):

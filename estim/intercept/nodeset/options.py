@@ -49,6 +49,16 @@ class InfosetOptions(SlabOptions):
     node_split_ratio: Annotated[
         float, Field(gt=1.0, le=1e6, description="nodes: split a piece whose ranges span more")
     ] = 2.0
+    min_split_tau_s: Annotated[
+        float,
+        Field(
+            ge=0.0,
+            le=1e4,
+            description="nodes: count a piece's ratio of times to go from at least this, "
+            "s (0: from the time to go at eps; a step or two saves the splits near "
+            "the target, docs/performance.md)",
+        ),
+    ] = 0.0
     tighten_rtol: Annotated[
         float,
         Field(gt=0.0, le=1.0, description="nodes: refine where a bound exceeds the nodes by more"),
@@ -123,6 +133,7 @@ class InfosetOptions(SlabOptions):
             min_live_nodes=self.min_live_nodes,
             kinematic_margin=self.kinematic_margin,
             split_ratio=self.node_split_ratio,
+            min_split_tau_s=self.min_split_tau_s,
             max_pieces=self.max_pieces,
             tighten_rtol=self.tighten_rtol,
             max_inserts=self.max_inserts,

@@ -43,6 +43,7 @@ class NodeRefinement:
     n_nodes: int
     min_live_nodes: int
     split_ratio: float
+    min_split_tau_s: float
     max_pieces: int
     tighten_rtol: float
     max_inserts: int
@@ -277,7 +278,9 @@ class NodeRefinement:
         # the pieces wide enough to split, found in one vector operation (a piece's
         # row of ``per`` does not change when others split); each is then checked in
         # order, as the splits before it change the band's count of pieces
-        tau_lo = np.maximum(per[:, 4], self.model.eps_m * s.u_lo)
+        # counted from eps at least (and from min_split_tau_s: states that arrive
+        # within a step or two need no margin of their own)
+        tau_lo = np.maximum(np.maximum(per[:, 4], self.model.eps_m * s.u_lo), self.min_split_tau_s)
         wide = np.isfinite(per[:, 4]) & (per[:, 5] > self.split_ratio * tau_lo)
         for p in np.flatnonzero(wide).tolist():
             lo, hi = float(tau_lo[p]), float(per[p, 5])
