@@ -36,13 +36,19 @@ def add_arguments(p) -> None:
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--out", default="results/fig5", help="output directory")
     options.add_runner(p)
+    # both variants take them (e.g. a node-set option); the files' stem names them
+    options.add_overrides(p, "estimator.infoset.min_split_tau_s=1")
 
 
 def _stem(args) -> str:
-    """The files' stem: ``fig5``, with the estimators and seed when not the seed's, so
-    another choice never replaces the seed's figure."""
+    """The files' stem: ``fig5``, with the estimators and seed when not the seed's and
+    the ``--set`` overrides (as a scenario's name takes them), so another choice never
+    replaces the seed's figure."""
+    from kalman_vs_infoset.experiments.scenario import override_suffix
+
     ests = "" if args.estimators == seed_estimators() else "-" + "+".join(args.estimators)
-    return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}")
+    overrides = override_suffix(getattr(args, "overrides", []))
+    return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}") + overrides
 
 
 def run(args) -> dict[str, Any]:
@@ -59,7 +65,7 @@ def run(args) -> dict[str, Any]:
     frames, rows = [], []
     sc = None
     for fname, variant in VARIANTS:
-        sc = load_scenario(scenario_folder(args.scenarios) / fname)
+        sc = load_scenario(scenario_folder(args.scenarios) / fname, args.overrides)
         seed = sc.experiment.seed if args.seed is None else args.seed
         summaries, dfs = run_grid(
             sc, args, args.runs, seed, out / "runs", args.estimators, ("random", "game")

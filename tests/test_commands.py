@@ -170,6 +170,32 @@ def test_fig5_names_its_files_by_the_estimators_and_seed_when_not_the_seeds():
     assert _stem(Namespace(estimators=["infoset"], seed=None)) == "fig5"
     assert _stem(Namespace(estimators=["ekf", "ukf"], seed=None)) == "fig5-ekf+ukf"
     assert _stem(Namespace(estimators=["infoset"], seed=4)) == "fig5-s4"
+    floor = ["estimator.infoset.min_split_tau_s=1"]
+    assert _stem(Namespace(estimators=["infoset"], seed=None, overrides=floor)) == (
+        "fig5+estimator.infoset.min_split_tau_s=1"
+    )
+
+
+def test_fig5_takes_overrides_for_both_variants_in_files_of_their_own(tmp_path, capsys):
+    """``kvi fig5 --set KEY=VALUE``: both variants run with it, their run tables and the
+    figure's files carry it in their names (the seed's files are not replaced), and a
+    key or value the scenario refuses is one line and exit status 2, before any run."""
+    out = tmp_path / "out"
+    r = run(capsys, "fig5", "--runs", 1, "--workers", 1, "--no-progress", "--out", out,
+            "--set", "estimator.infoset.min_split_tau_s=1", "--json")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    stem = "fig5+estimator.infoset.min_split_tau_s=1"
+    assert (out / f"{stem}_runs.csv").is_file() and not (out / "fig5_runs.csv").exists()
+    table = pd.read_csv(out / f"{stem}_runs.csv")
+    assert sorted(set(table["scenario"])) == [
+        "kp_fig5+estimator.infoset.min_split_tau_s=1",
+        "kp_fig5_range+estimator.infoset.min_split_tau_s=1",
+    ]
+    bad = tmp_path / "bad"
+    r = run(capsys, "fig5", "--runs", 1, "--out", bad, "--set",
+            "estimator.infoset.min_split_tau_s=-1")  # fmt: skip
+    assert r.returncode == 2 and one_line_error(r), r.stderr
+    assert "min_split_tau_s" in r.stderr and not bad.exists()
 
 
 # -- thin commands --------------------------------------------------------------------
