@@ -47,7 +47,7 @@ def _stem(args) -> str:
     from kalman_vs_infoset.experiments.scenario import override_suffix
 
     ests = "" if args.estimators == seed_estimators() else "-" + "+".join(args.estimators)
-    overrides = override_suffix(getattr(args, "overrides", []))
+    overrides = override_suffix(args.overrides)
     return "fig5" + ests + ("" if args.seed is None else f"-s{args.seed}") + overrides
 
 

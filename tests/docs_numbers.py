@@ -31,10 +31,14 @@ def results(path: str) -> dict | list:
     return json.loads((ROOT / path).read_text(encoding="utf-8"))
 
 
+def speed_rows(stem: str) -> dict[str, dict]:
+    """The rows of ``docs/results/speed/STEM.json`` (``kvi compare``), by noise."""
+    return {r["noise"]: r for r in results(f"docs/results/speed/{stem}.json")["rows"]}
+
+
 def speed_cpu_s(name: str) -> dict[str, float]:
     """CPU-s per noise of ``docs/results/speed/kp_fig5-NAME.json`` (``kvi compare``)."""
-    rows = results(f"docs/results/speed/kp_fig5-{name}.json")["rows"]
-    return {r["noise"]: r["cpu_s"] for r in rows}
+    return {noise: r["cpu_s"] for noise, r in speed_rows(f"kp_fig5-{name}").items()}
 
 
 def speed_base_cpu_s() -> dict[str, float]:

@@ -167,9 +167,9 @@ def test_fig5_names_its_files_by_the_estimators_and_seed_when_not_the_seeds():
 
     from kalman_vs_infoset.experiments.cmd_fig5 import _stem
 
-    assert _stem(Namespace(estimators=["infoset"], seed=None)) == "fig5"
-    assert _stem(Namespace(estimators=["ekf", "ukf"], seed=None)) == "fig5-ekf+ukf"
-    assert _stem(Namespace(estimators=["infoset"], seed=4)) == "fig5-s4"
+    assert _stem(Namespace(estimators=["infoset"], seed=None, overrides=[])) == "fig5"
+    assert _stem(Namespace(estimators=["ekf", "ukf"], seed=None, overrides=[])) == "fig5-ekf+ukf"
+    assert _stem(Namespace(estimators=["infoset"], seed=4, overrides=[])) == "fig5-s4"
     floor = ["estimator.infoset.min_split_tau_s=1"]
     assert _stem(Namespace(estimators=["infoset"], seed=None, overrides=floor)) == (
         "fig5+estimator.infoset.min_split_tau_s=1"

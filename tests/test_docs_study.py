@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import re
 
-from docs_numbers import ROOT, agrees, results, speed_base_cpu_s, speed_cpu_s
+from docs_numbers import ROOT, agrees, results, speed_base_cpu_s, speed_cpu_s, speed_rows
 
 STUDY = "docs/results/study/fig5-"
 TEXT = " ".join((ROOT / "docs/performance.md").read_text(encoding="utf-8").split())
@@ -134,17 +134,12 @@ def test_fewer_nodes_save_what_the_text_says():
     """'(`estimator.infoset.n_nodes=8`) saved 11 % and 11 % of the CPU time (random, game)':
     each option's CPU time against the mean of the defaults run before and after it on
     the same day, and the defaults drew the published runs."""
-    later = "docs/results/speed/kp_fig5-later-"
-
-    def cpu(name: str) -> dict[str, float]:
-        return {r["noise"]: r["cpu_s"] for r in results(f"{later}{name}.json")["rows"]}
-
-    first, repeat = cpu("default"), cpu("default-repeat")
+    first, repeat = speed_cpu_s("later-default"), speed_cpu_s("later-default-repeat")
     base = {n: 0.5 * (first[n] + repeat[n]) for n in ("random", "game")}
     for opt, name in (("n_nodes=8", "n_nodes_8"), ("min_live_nodes=4", "min_live_nodes_4")):
         found = _found(rf"`estimator\.infoset\.{re.escape(opt)}`\) saved (\d+) % and (\d+) %")
-        got = cpu(name)
-        assert all(r["truth_outside"] == 0 for r in results(f"{later}{name}.json")["rows"])
+        got = speed_cpu_s(f"later-{name}")
+        assert all(r["truth_outside"] == 0 for r in speed_rows(f"kp_fig5-later-{name}").values())
         for noise, printed in zip(("random", "game"), found.groups(), strict=True):
             assert agrees(printed, 100.0 * (1.0 - got[noise] / base[noise])), (opt, noise)
     keys = ("runs", "seed", "miss_m", "fuel_mps", "truth_outside", "empty_set", "failures")
@@ -154,7 +149,7 @@ def test_fewer_nodes_save_what_the_text_says():
         if r["estimator"] == "infoset"
     }
     for name in ("default", "default-repeat"):
-        for row in results(f"{later}{name}.json")["rows"]:
+        for row in speed_rows(f"kp_fig5-later-{name}").values():
             assert {k: row[k] for k in keys} == published[row["noise"]], (name, row["noise"])
 
 
@@ -163,13 +158,8 @@ def test_the_piece_split_floor_saves_what_the_text_says():
     miss and fuel it prints is the results files' (``kvi compare ... --set
     estimator.infoset.min_split_tau_s=1|0.5``, the defaults run before and after), and
     what it calls unchanged is: the same summaries."""
-    speed = "docs/results/speed/"
-
-    def rows(name: str) -> dict[str, dict]:
-        return {r["noise"]: r for r in results(f"{speed}{name}.json")["rows"]}
-
-    first, repeat = rows("kp_fig5-floor-default"), rows("kp_fig5-floor-default-repeat")
-    one, half = rows("kp_fig5-min_split_tau_1"), rows("kp_fig5-min_split_tau_0.5")
+    first, repeat = speed_rows("kp_fig5-floor-default"), speed_rows("kp_fig5-floor-default-repeat")
+    one, half = speed_rows("kp_fig5-min_split_tau_1"), speed_rows("kp_fig5-min_split_tau_0.5")
     base = {n: 0.5 * (first[n]["cpu_s"] + repeat[n]["cpu_s"]) for n in ("random", "game")}
     found = _found(
         r"the defaults cost ([\d.]+) and ([\d.]+) CPU-s random, ([\d.]+) and ([\d.]+) game; a "
@@ -203,7 +193,7 @@ def test_the_piece_split_floor_saves_what_the_text_says():
     # with the range finder and on Fig. 3: what the text calls the same is the same
     keys = ("miss_m", "fuel_mps", "truth_outside", "empty_set", "diverged", "failures")
     same = lambda a, b: all(a[n][k] == b[n][k] for n in ("random", "game") for k in keys)  # noqa: E731
-    r0, r1 = rows("kp_fig5_range-floor-default"), rows("kp_fig5_range-min_split_tau_1")
+    r0, r1 = speed_rows("kp_fig5_range-floor-default"), speed_rows("kp_fig5_range-min_split_tau_1")
     assert same(r0, r1)
     found = _found(
         r"\(kp_fig5_range: the same results, ([\d.]+) and ([\d.]+) CPU-s \(random, game\) with "
@@ -212,7 +202,7 @@ def test_the_piece_split_floor_saves_what_the_text_says():
     values = [r[n]["cpu_s"] for r in (r0, r1) for n in ("random", "game")]
     for printed, value in zip(found.groups(), values, strict=True):
         assert agrees(printed, value), (printed, value)
-    c0, c1 = rows("kp_fig3-floor-default"), rows("kp_fig3-min_split_tau_1")
+    c0, c1 = speed_rows("kp_fig3-floor-default"), speed_rows("kp_fig3-min_split_tau_1")
     found = _found(
         r"on Fig\. 3 the means read the same ([\d.]+) m and ([\d.]+) m/s \(random\) and ([\d.]+) m "
         r"and ([\d.]+) m/s \(game\) both ways, and the floor saved (\d+) % and (\d+) %"
@@ -227,7 +217,7 @@ def test_the_piece_split_floor_saves_what_the_text_says():
     # every run of every file: the truth inside, nothing emptied, diverged or failed
     for name in ("kp_fig5-min_split_tau_1", "kp_fig5-min_split_tau_0.5",
                  "kp_fig5_range-min_split_tau_1", "kp_fig3-min_split_tau_1"):  # fmt: skip
-        for r in rows(name).values():
+        for r in speed_rows(name).values():
             assert (r["truth_outside"], r["empty_set"], r["diverged"], r["failures"]) == (0,) * 4
     # the defaults drew the published runs
     published = {r["noise"]: r for r in results("docs/results/compare_kp_fig5.json")["rows"]

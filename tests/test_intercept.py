@@ -313,6 +313,7 @@ def test_a_piece_split_floor_keeps_the_two_body_truth_inside(tmp_path_factory, s
         text = text.replace("y_km = [-1.0, 1.0]", "y_km = [-9.5, 9.5]")
         text = text.replace("[estimator]\n", "[estimator]\ny_km = [-10.0, 10.0]\n")
     text = text.replace("[estimator.infoset]\nn_sections = 9\n", SPLIT_FLOOR)
+    assert SPLIT_FLOOR in text and ("y_km = [-9.5, 9.5]" in text) == beyond  # all applied
     _assert_set_keeps_the_truth(tmp_path_factory, text, noise, seed)
 
 
