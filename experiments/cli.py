@@ -34,6 +34,7 @@ from kalman_vs_infoset.experiments.errors import (
     InputError,
     Terminated,
     clear_stop,
+    raises_now,
     request_stop,
 )
 
@@ -164,13 +165,15 @@ def _on_sigterm(signum, frame) -> None:
     """SIGTERM, taken like Ctrl-C: what finished is saved and the command says so."""
     signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the save
     request_stop()  # checked between runs, should the exception below be swallowed
-    raise Terminated
+    if raises_now():
+        raise Terminated
 
 
 def _on_sigint(signum, frame) -> None:
     """Ctrl-C: ``KeyboardInterrupt``, also checked between runs."""
     request_stop(KeyboardInterrupt)
-    raise KeyboardInterrupt
+    if raises_now():
+        raise KeyboardInterrupt
 
 
 def _compile_notice(prog: str, module: Any) -> CompileNotice | None:

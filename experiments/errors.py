@@ -4,11 +4,18 @@
 Ctrl-C (finished runs saved, exit status 143). The signal handler raises it where the
 signal lands; as library code may swallow an exception raised there, the request is
 also kept (:func:`request_stop`) and checked between runs (:func:`check_stop`).
+
+Where this process waits on worker processes it holds the futures' locks, which an
+exception raised by a signal handler would leave held (the pool's manager thread then
+blocks on them and the interpreter cannot exit). There the handlers only record the
+stop (:func:`stops_deferred`), and the waiting loop raises it within its poll period.
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 
 class InputError(Exception):
@@ -24,6 +31,23 @@ class Terminated(KeyboardInterrupt):
 
 _LOCK = threading.Lock()
 _STOP: list[type[KeyboardInterrupt]] = []
+_DEFERRED = [0]  # depth of nested stops_deferred() blocks
+
+
+@contextmanager
+def stops_deferred() -> Iterator[None]:
+    """Within the block the signal handlers record a stop without raising it (see
+    :func:`raises_now`); the caller checks :func:`check_stop` after the block."""
+    _DEFERRED[0] += 1
+    try:
+        yield
+    finally:
+        _DEFERRED[0] -= 1
+
+
+def raises_now() -> bool:
+    """Whether a signal handler may raise its exception where the signal lands."""
+    return _DEFERRED[0] == 0
 
 
 def request_stop(kind: type[KeyboardInterrupt] = Terminated) -> None:

@@ -31,7 +31,12 @@ from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept import kinematic
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
-from kalman_vs_infoset.experiments.errors import InputError, check_stop, stop_requested
+from kalman_vs_infoset.experiments.errors import (
+    InputError,
+    check_stop,
+    stop_requested,
+    stops_deferred,
+)
 from kalman_vs_infoset.experiments.limits import RunLimits, limited
 from kalman_vs_infoset.experiments.provenance import code_identity
 from kalman_vs_infoset.guidance.intercept._kepler import warm_up as kepler_warm_up
@@ -78,18 +83,23 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
     gc.collect()
     gc.freeze()
     pool = ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(os.getpid(),))
+    # The pool's shutdown takes its locks and the futures': a second Ctrl-C must not
+    # raise there (see errors.stops_deferred), so these steps defer the signals.
     try:
         yield pool
     except BaseException:  # Ctrl-C, SIGTERM, an error: the running chunks are not waited for
-        _stop_workers(pool)
+        with stops_deferred():
+            _stop_workers(pool)
         raise
     else:
         if not stop_requested():
             # every chunk is done: the workers exit at once, and waiting for them counts
             # their CPU time in this process's usage (experiments.usage: a variant's cpu_s)
-            pool.shutdown(wait=True)
+            with stops_deferred():
+                pool.shutdown(wait=True)
     finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+        with stops_deferred():
+            pool.shutdown(wait=False, cancel_futures=True)
         gc.unfreeze()  # this process collects its objects again
 
 
@@ -250,9 +260,14 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
                 lost["dead"] += len(chunk) + sum(map(len, queue))
                 return
 
-    refill()
+    # The waits, submissions and results hold the futures' and the pool's locks: a
+    # signal only records the stop there, raised by check_stop within a second.
+    with stops_deferred():
+        refill()
+    check_stop()
     while pending:
-        done, _ = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+        with stops_deferred():
+            done, _ = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
         check_stop()
         if not done:
             if _live_workers(ex) == 0:
@@ -269,7 +284,8 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
         for fut in done:
             chunk = pending.pop(fut)
             try:
-                pairs = fut.result()
+                with stops_deferred():
+                    pairs = fut.result()
             except InputError:
                 raise
             except (BrokenExecutor, CancelledError):
@@ -282,7 +298,8 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
                 row = {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
                 pairs = [(j, dict(row)) for j in chunk]
             yield pairs
-        refill()
+        with stops_deferred():
+            refill()
 
 
 def _live_workers(ex: Executor) -> int | None:
