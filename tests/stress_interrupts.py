@@ -1,6 +1,7 @@
 """Stop a pooled command at random moments, many times: each must exit promptly.
 
-Not collected by pytest (a race shows in a few runs out of hundreds; the suite's test
+Not collected by pytest (the race it looks for was seen once in CI and never in 40
+stops on the development host; the suite's test
 ``test_a_signal_landing_inside_a_wait_on_workers_leaves_no_lock_held`` places the
 signal deterministically instead). Run it by hand after touching the runner, the
 executors or the signal handlers::
