@@ -24,19 +24,12 @@ import argparse
 import importlib
 import json
 import math
-import signal
 import sys
-import threading
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-from kalman_vs_infoset.experiments.errors import (
-    InputError,
-    Terminated,
-    clear_stop,
-    raises_now,
-    request_stop,
-)
+from kalman_vs_infoset.experiments import signals
+from kalman_vs_infoset.experiments.errors import InputError, Terminated, clear_stop, reraise_stop
 
 from kalman_vs_infoset._numba_cache import CompileNotice
 
@@ -161,21 +154,6 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def _on_sigterm(signum, frame) -> None:
-    """SIGTERM, taken like Ctrl-C: what finished is saved and the command says so."""
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second one must not cut the save
-    request_stop()  # checked between runs, should the exception below be swallowed
-    if raises_now():
-        raise Terminated
-
-
-def _on_sigint(signum, frame) -> None:
-    """Ctrl-C: ``KeyboardInterrupt``, also checked between runs."""
-    request_stop(KeyboardInterrupt)
-    if raises_now():
-        raise KeyboardInterrupt
-
-
 def _compile_notice(prog: str, module: Any) -> CompileNotice | None:
     """A notice of numba compilations during the command, for the commands that use the
     compiled kernels (``COMPILED_KERNELS = True`` in the module: it imports them in
@@ -193,47 +171,60 @@ def _compile_notice(prog: str, module: Any) -> CompileNotice | None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; the exit status: 0, 1 when runs failed or were lost (the last
     line on stderr says how many), 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM."""
-    argv = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(_command_named(argv))
-    args = parser.parse_args(argv)
-    if getattr(args, "_missing", False):
-        print(f"{parser.prog}: error: command '{args.command}' is not available", file=sys.stderr)
-        return 2
-    out = getattr(args, "out", None)
-    if out is not None and not str(out).strip():  # Path("") is the current folder
-        print(f"{parser.prog} {args.command}: error: --out '': expected a folder name",
-              file=sys.stderr)  # fmt: skip
-        return 2
-    module = importlib.import_module(args._module)
-    clear_stop()
-    main_thread = threading.current_thread() is threading.main_thread()
-    before = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
-    interactive = main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    if interactive:  # not where Ctrl-C is ignored (a background job)
-        signal.signal(signal.SIGINT, _on_sigint)
-    runner = sys.modules.get(_RUNNER)  # not imported: no run was made, none failed
-    if runner is not None:
-        runner.forget_failures()
-    from kalman_vs_infoset.experiments import progress
-
-    progress.configure_logging()
-    notice = _compile_notice(parser.prog, module)
+    # a stop outside the command's run (which reports its own): while the command's
+    # module loads, before the handlers are in place, or while they are put back
     try:
-        return _run(parser, module, args)
-    finally:
-        if notice is not None:
-            notice.report()
-            notice.uninstall()
-        if main_thread:
-            signal.signal(signal.SIGTERM, before)
-        if interactive:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
+        return _main(argv)
+    except Terminated:
+        print("kvi: terminated (SIGTERM)", file=sys.stderr)
+        return 143
+    except KeyboardInterrupt:
+        print("kvi: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    clear_stop()
+    # the handlers first: the command's module, imported to parse its arguments, loads
+    # numpy, pandas and the kernels (up to a second, where Ctrl-C printed a traceback)
+    with signals.handled():
+        parser = build_parser(_command_named(argv))
+        args = parser.parse_args(argv)
+        if getattr(args, "_missing", False):
+            print(f"{parser.prog}: error: command '{args.command}' is not available",
+                  file=sys.stderr)  # fmt: skip
+            return 2
+        out = getattr(args, "out", None)
+        if out is not None and not str(out).strip():  # Path("") is the current folder
+            print(f"{parser.prog} {args.command}: error: --out '': expected a folder name",
+                  file=sys.stderr)  # fmt: skip
+            return 2
+        module = importlib.import_module(args._module)
+        runner = sys.modules.get(_RUNNER)  # not imported: no run was made, none failed
+        if runner is not None:
+            runner.forget_failures()
+        from kalman_vs_infoset.experiments import progress
+
+        progress.configure_logging()
+        notice = _compile_notice(parser.prog, module)
+        try:
+            return _run(parser, module, args)
+        finally:
+            if notice is not None:
+                notice.report()
+                notice.uninstall()
 
 
 def _run(parser, module, args) -> int:
     where = f"{parser.prog} {args.command}"
     try:
-        result = module.run(args)
+        try:
+            result = module.run(args)
+        except Exception as exc:
+            # a stop that C code (numba's dispatcher) returned as another error
+            reraise_stop(exc)
+            raise
     except InputError as exc:
         print(f"{where}: error: {exc}", file=sys.stderr)
         return 2

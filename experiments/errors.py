@@ -70,3 +70,23 @@ def check_stop() -> None:
     """Raise the requested stop (:class:`Terminated`, ``KeyboardInterrupt``), if any."""
     if _STOP:
         raise _STOP[0]
+
+
+def causes(exc: BaseException) -> Iterator[BaseException]:
+    """``exc`` and the exceptions behind it (``__cause__``, else ``__context__``)."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        yield cur
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+
+
+def reraise_stop(exc: BaseException) -> None:
+    """Raise the stop (``KeyboardInterrupt``, :class:`Terminated`) behind ``exc``, if
+    there is one: C code that a signal interrupts (numba's dispatcher, an extension's
+    import) returns it as another error, caused by it (``SystemError: ... returned a
+    result with an exception set``, ``ImportError: initialization failed``)."""
+    for cur in causes(exc):
+        if isinstance(cur, KeyboardInterrupt):
+            raise cur

@@ -31,6 +31,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+from kalman_vs_infoset.experiments.errors import causes
+
 try:
     import resource
 except ImportError:  # not on Windows: the memory limit is refused there
@@ -65,17 +67,14 @@ def _expired(signum, frame) -> None:
 
 
 def reraise_timeout(exc: BaseException) -> None:
-    """Raise the :class:`RunTimeout` behind ``exc``, if there is one. A timeout that
-    fires while a compiled (numba) kernel returns comes back as a ``SystemError``
-    ("returned a result with an exception set") caused by it; a run's own ``except
-    Exception`` must not record that as the run's error."""
-    seen: set[int] = set()
-    cur: BaseException | None = exc
-    while cur is not None and id(cur) not in seen:
-        if isinstance(cur, RunTimeout):
+    """Raise the :class:`RunTimeout`, or the command's stop (Ctrl-C, SIGTERM: a
+    ``KeyboardInterrupt``), behind ``exc``, if there is one. A signal that lands while
+    a compiled (numba) kernel returns comes back as a ``SystemError`` ("returned a
+    result with an exception set") caused by it; a run's own ``except Exception``
+    must not record that as the run's error."""
+    for cur in causes(exc):
+        if isinstance(cur, RunTimeout | KeyboardInterrupt):
             raise cur
-        seen.add(id(cur))
-        cur = cur.__cause__ or cur.__context__
 
 
 @contextmanager

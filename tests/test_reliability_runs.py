@@ -11,7 +11,6 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -183,58 +182,6 @@ def test_ctrl_c_of_attitude_saves_finished_chunks_and_returns_promptly(tmp_path,
     r = run(capsys, *args[:-1], ref, "--runs", runs, "--json")
     assert r.returncode == 0, r.stderr
     _same_runs(_table(out), _table(ref))
-
-
-@pytest.mark.parametrize("handler", ["_on_sigint", "_on_sigterm"])
-def test_a_signal_landing_inside_a_wait_on_workers_leaves_no_lock_held(handler, monkeypatch):
-    """The regression behind a Ctrl-C that hung at exit: the handler raised while the
-    command held the futures' locks in ``concurrent.futures.wait``, and the pool's
-    manager thread blocked on them for good. The wait below takes every future's lock,
-    as ``wait`` does, and the signal lands there; the stop must come after the wait
-    with every lock free."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from kalman_vs_infoset.experiments import cli, errors
-
-    real_wait = executors.wait
-    seen: list = []
-
-    def wait_hit_by_a_signal(fs, **kw):
-        real_wait(fs)  # all done first: no worker thread needs the locks below
-        seen.extend(fs)
-        locks = [f._condition for f in fs]
-        for lock in locks:  # as wait's _AcquireFutures: no finally releases them
-            lock.acquire()
-        getattr(cli, handler)(signal.SIGINT, None)
-        for lock in locks:
-            lock.release()
-        return real_wait(fs, **kw)
-
-    monkeypatch.setattr(executors, "wait", wait_hit_by_a_signal)
-    before = signal.getsignal(signal.SIGTERM)
-    errors.clear_stop()
-    try:
-        with ThreadPoolExecutor(1) as ex, pytest.raises(KeyboardInterrupt) as stop:
-            list(executors._pooled(ex, lambda c: [(j, {}) for j in c], [[0], [1]], 2, {}))
-    finally:
-        errors.clear_stop()
-        signal.signal(signal.SIGTERM, before)  # the SIGTERM handler ignores a second one
-    expected = errors.Terminated if handler == "_on_sigterm" else KeyboardInterrupt
-    assert seen and stop.type is expected
-    # every lock free for another thread (they are re-entrant for this one), as the
-    # pool's manager thread needs them to set the results
-    free: list[bool] = []
-
-    def try_locks() -> None:
-        for fut in seen:
-            free.append(fut._condition.acquire(blocking=False))
-            if free[-1]:
-                fut._condition.release()
-
-    checker = threading.Thread(target=try_locks)
-    checker.start()
-    checker.join()
-    assert free and all(free), free
 
 
 def test_dask_with_no_live_worker_fails_in_one_line(short, tmp_path, capsys, monkeypatch):
