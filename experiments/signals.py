@@ -59,13 +59,23 @@ def _held_back(frame) -> bool:
     return False
 
 
+def _later() -> None:
+    """Raise the stop again in :data:`REDELIVER_S` (where there is no such timer, as on
+    Windows, it comes at the next check between runs)."""
+    if _TIMER:
+        signal.setitimer(signal.ITIMER_REAL, REDELIVER_S)
+
+
+_TIMER = hasattr(signal, "setitimer") and hasattr(signal, "SIGALRM")
+
+
 def _raise_here(frame) -> bool:
     """Whether the stop may be raised where the signal landed; otherwise it is raised
     again :data:`REDELIVER_S` later (or by the waiting loop that defers it)."""
     if not raises_now():
         return False
     if _held_back(frame):
-        signal.setitimer(signal.ITIMER_REAL, REDELIVER_S)
+        _later()
         return False
     return True
 
@@ -96,7 +106,7 @@ def _on_unraisable(unraisable) -> None:
     printed, and raised again a moment later, outside it. Anything else goes to the
     hook that was there."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt) and stop_requested():
-        signal.setitimer(signal.ITIMER_REAL, REDELIVER_S)
+        _later()
         return
     _UNRAISABLE[0](unraisable)
 
@@ -116,13 +126,14 @@ def handled() -> Iterator[None]:
     interactive = signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if interactive:
         signal.signal(signal.SIGINT, _on_sigint)
-    alarm = signal.signal(signal.SIGALRM, _on_sigalrm)
+    alarm = signal.signal(signal.SIGALRM, _on_sigalrm) if _TIMER else None
     _UNRAISABLE[0], sys.unraisablehook = sys.unraisablehook, _on_unraisable
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, alarm)
+        if _TIMER:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, alarm)
         sys.unraisablehook = _UNRAISABLE[0]
         signal.signal(signal.SIGTERM, term)
         if interactive:
