@@ -37,8 +37,9 @@ def handlers_kept():
 def test_a_stop_while_the_command_loads_is_one_line_and_its_status(
     stop, status, line, monkeypatch, capsys
 ):
-    """Before the command's handlers are in place (its module imports numpy, pandas,
-    the kernels: up to a second), Ctrl-C used to print Python's traceback."""
+    """A stop that escapes while the command's module loads (its imports: numpy,
+    pandas, the kernels, up to a second) used to print Python's traceback: one line
+    and the stop's status instead."""
     real = cli.importlib.import_module
 
     def import_module(name, *args):
