@@ -7,6 +7,7 @@ fast. Test modules add the sections they need (``SHORT + RANGE_FINDER``).
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import traceback
 from dataclasses import dataclass
@@ -74,6 +75,17 @@ control_period_s = 0.05
 k_q = 1.375
 k_w = 2.625
 """
+
+# the same turn over 20 s (400 control steps): a command still running when it is
+# stopped (the signal tests)
+SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 20.0")
+
+
+def as_from_a_terminal() -> None:
+    """In the child before it runs: Ctrl-C at its default, as a shell in a terminal
+    starts a command (a disposition of SIG_IGN is inherited, and the command rightly
+    leaves an ignored Ctrl-C ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def experiment(runs: int, seed: int = 11) -> str:

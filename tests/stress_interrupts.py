@@ -30,15 +30,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness_texts import TINY_RW
+from harness_texts import SLOW_RW, as_from_a_terminal
 
 ROOT = Path(__file__).resolve().parents[1]
-SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 20.0")
 EXPECTED = {"INT": 130, "TERM": 143}
-
-
-def _as_from_a_terminal() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)  # a background job would ignore Ctrl-C
 
 
 def one_try(
@@ -54,7 +49,7 @@ def one_try(
                 "--runs", "800"]  # fmt: skip
         env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
         proc = subprocess.Popen(args, cwd=ROOT, stderr=subprocess.PIPE, text=True, env=env,
-                                preexec_fn=_as_from_a_terminal)  # fmt: skip
+                                preexec_fn=as_from_a_terminal)  # fmt: skip
         deadline = time.monotonic() + 120.0
         while not from_start and not any(out.glob("*.parquet")) and proc.poll() is None:
             if time.monotonic() > deadline:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from harness_texts import SHORT, TINY_RW, one_line_error
+from harness_texts import SHORT, SLOW_RW, TINY_RW, as_from_a_terminal, one_line_error
 from harness_texts import run_cli as run
 from kalman_vs_infoset.experiments import executors, intercept_runs
 from kalman_vs_infoset.experiments.files import exclusive
@@ -27,7 +27,6 @@ KVI = [sys.executable, "-m", "kalman_vs_infoset"]
 linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals, flock")
 
 # a turn of 400 control steps: a chunk of 8 runs takes about a second
-SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 20.0")
 
 
 def _table(out: Path) -> pd.DataFrame:
@@ -53,18 +52,11 @@ def _intercept(scenario, out, runs, *extra):
             "--out", out, *extra]  # fmt: skip
 
 
-def _as_from_a_terminal() -> None:
-    """In the child before it runs: Ctrl-C at its default, as a shell in a terminal
-    starts a command (a disposition of SIG_IGN is inherited, and the command rightly
-    leaves an ignored Ctrl-C ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def _popen(args) -> subprocess.Popen:
     # faulthandler: a command that hangs is made to print every thread's stack
     env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
     return subprocess.Popen([str(a) for a in args], cwd=ROOT, stderr=subprocess.PIPE, text=True,
-                            env=env, preexec_fn=_as_from_a_terminal)  # fmt: skip
+                            env=env, preexec_fn=as_from_a_terminal)  # fmt: skip
 
 
 def _stopped(proc: subprocess.Popen, sig: int, timeout_s: float = 60.0) -> tuple[str, float]:

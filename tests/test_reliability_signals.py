@@ -30,6 +30,15 @@ def handlers_kept():
     signal.signal(signal.SIGTERM, before)
 
 
+def _command_fake(monkeypatch, run) -> None:
+    """``kvi fake``: a command module whose ``run`` is ``run``."""
+    fake = types.ModuleType("fake_command")
+    fake.add_arguments = lambda parser: None
+    fake.run = run
+    monkeypatch.setitem(sys.modules, "fake_command", fake)
+    monkeypatch.setitem(cli.COMMANDS, "fake", ("fake_command", "a test's command"))
+
+
 @pytest.mark.parametrize(("stop", "status", "line"), [
     (KeyboardInterrupt, 130, "kvi: interrupted"),
     (errors.Terminated, 143, "kvi: terminated (SIGTERM)"),
@@ -78,11 +87,7 @@ def test_a_stop_landing_in_a_finalizer_is_not_printed_and_still_stops_the_comman
             sum(range(1000))
         return {"finished": True}
 
-    fake = types.ModuleType("fake_command")
-    fake.add_arguments = lambda parser: None
-    fake.run = run
-    monkeypatch.setitem(sys.modules, "fake_command", fake)
-    monkeypatch.setitem(cli.COMMANDS, "fake", ("fake_command", "a test's command"))
+    _command_fake(monkeypatch, run)
     t0 = time.monotonic()
     status = cli.main(["fake"])
     took_s = time.monotonic() - t0
@@ -155,11 +160,7 @@ def test_a_stop_returned_as_another_error_is_the_stop(monkeypatch, capsys, handl
         except KeyboardInterrupt as exc:
             raise SystemError("returned a result with an exception set") from exc
 
-    fake = types.ModuleType("fake_command")
-    fake.add_arguments = lambda parser: None
-    fake.run = run
-    monkeypatch.setitem(sys.modules, "fake_command", fake)
-    monkeypatch.setitem(cli.COMMANDS, "fake", ("fake_command", "a test's command"))
+    _command_fake(monkeypatch, run)
     assert cli.main(["fake"]) == 130
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [
