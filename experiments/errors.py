@@ -1,9 +1,10 @@
 """The exceptions the command line turns into an exit status with one line.
 
 :class:`InputError`: bad input, exit status 2. :class:`Terminated`: SIGTERM, taken like
-Ctrl-C (finished runs saved, exit status 143). The signal handler raises it where the
-signal lands; as library code may swallow an exception raised there, the request is
-also kept (:func:`request_stop`) and checked between runs (:func:`check_stop`).
+Ctrl-C (finished runs saved, exit status 143). The signal handlers
+(:mod:`.signals`) raise it where the signal lands; as library code may swallow an
+exception raised there, the request is also kept (:func:`request_stop`) and checked
+between runs (:func:`check_stop`).
 
 Where this process waits on worker processes it holds the futures' locks, which an
 exception raised by a signal handler would leave held (the pool's manager thread then
