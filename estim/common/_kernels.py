@@ -11,8 +11,8 @@ once compiled.) Correctness is tested against shapely.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from kalman_vs_infoset._jit import njit
 from kalman_vs_infoset.numerics.arrays import readonly
 
 

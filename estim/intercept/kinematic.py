@@ -11,9 +11,9 @@ below are the set estimators' shared numerics.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from kalman_vs_infoset._jit import njit
 from kalman_vs_infoset.numerics.arrays import readonly
 
 FloatArray = NDArray[np.float64]

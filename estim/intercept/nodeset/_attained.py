@@ -11,7 +11,8 @@ kept vertices), so both give the same extremes to the last bit (a test compares 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from kalman_vs_infoset._jit import njit
 
 
 @njit(cache=True)

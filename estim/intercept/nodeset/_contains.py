@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 from kalman_vs_infoset.estim.intercept.nodeset._geometry import _support
-from numba import njit
+
+from kalman_vs_infoset._jit import njit
 
 
 @njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy

@@ -10,7 +10,8 @@ bearing, the range, per-piece extents); the containment test is in :mod:`._conta
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from kalman_vs_infoset._jit import njit
 
 
 @njit(cache=True)

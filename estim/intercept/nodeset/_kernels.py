@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 from kalman_vs_infoset.estim.common._kernels import _dedupe_tail, simplify_polygon
-from numba import njit
+
+from kalman_vs_infoset._jit import njit
 
 #: operation codes of the log
 BEARING, IMPULSE, RANGE, PREDICT = 0, 1, 2, 3
