@@ -139,7 +139,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     sub.required = True
     for name, (module_name, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
-        p.set_defaults(_module=module_name)
+        p.set_defaults(_module=module_name, _parser=p)
         if name != command:
             continue
         try:
@@ -190,7 +190,9 @@ def _main(argv: Sequence[str] | None) -> int:
     # numpy, pandas and the kernels (up to a second, where Ctrl-C printed a traceback)
     with signals.handled():
         parser = build_parser(_command_named(argv))
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # said by the command's parser: "kvi COMMAND: error: ..."
+            args._parser.error(f"unrecognized arguments: {' '.join(extra)}")
         if getattr(args, "_missing", False):
             print(f"{parser.prog}: error: command '{args.command}' is not available",
                   file=sys.stderr)  # fmt: skip

@@ -115,6 +115,15 @@ def test_bad_command_line_exits_2_with_one_line(capsys, args):
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
 
 
+@pytest.mark.parametrize("command", ["tightness", "intercept", "bench"])
+def test_an_unknown_option_is_named_with_its_command(capsys, command):
+    """argparse said ``kvi: error: unrecognized arguments`` without the command."""
+    scenario = [] if command == "bench" else [str(FIG3)]
+    r = cli_inproc(capsys, command, *scenario, "--seedz", "1-0")
+    assert r.returncode == 2
+    assert r.stderr.strip() == f"kvi {command}: error: unrecognized arguments: --seedz 1-0"
+
+
 def _table(df):
     cols = ["run", "miss_m", "fuel_mps", "truth_outside", "x0_km", "y0_km", "vy0_kmps"]
     return df[cols].sort_values("run").reset_index(drop=True)
