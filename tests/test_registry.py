@@ -129,6 +129,13 @@ def _intercept_contract(est: Estimator) -> None:
         assert isinstance(b.contradictions, int)
     np.testing.assert_array_equal(b0.centre(), centre)  # beliefs are values
     assert np.isfinite(b3.extremes(fc).max_value)
+    # a step back in time, a NaN step or a non-finite impulse is refused in one clear
+    # error (a NaN step left the node set's belief NaN with status ok)
+    for dt_s, control in ((-0.5, None), (np.nan, None), (0.5, np.nan), (0.5, -np.inf)):
+        with pytest.raises(ValueError, match="dt_s must be|impulse must be"):
+            est.predict(b1, dt_s, control)
+    with pytest.raises(ValueError, match="impulse must be"):
+        Impulse(np.nan, 0.1)
     # predicting past the blind range ends the belief, reported by its status (a set
     # without measurements may say it diverged on the way)
     b = b3
@@ -151,6 +158,15 @@ def _attitude_contract(est: Estimator) -> None:
     centre = b0.centre().copy()
     ctrl = AttitudeControl.held(np.full((2, 3), 1e-3), np.zeros((2, 3)), 0.05)
     b1 = est.update(est.predict(b0, 0.05, ctrl), draw_measurement(x, ATT_MODEL, rng))
+    # a step that is not a finite positive time, a NaN torque or a zero quaternion is
+    # refused in one clear error (a NaN torque gave NaN beliefs with status ok)
+    for dt_s in (-0.05, 0.0, np.nan, np.inf):
+        with pytest.raises(ValueError, match="dt_s must be"):
+            est.predict(b0, dt_s, ctrl)
+    with pytest.raises(ValueError, match="torque_Nm must be finite"):
+        AttitudeControl.held(np.full((2, 3), np.nan), np.zeros((2, 3)), 0.05)
+    with pytest.raises(ValueError, match="quat must be"):
+        AttitudeMeasurement(np.zeros((2, 4)), np.zeros((2, 3)))
     assert isinstance(b1, type(b0)) and isinstance(b1.status, Status)
     assert b1.empty_counts.shape == (2,) and b1.attitude_bound_rad().shape == (2,)
     assert np.all(np.isfinite(b1.attitude_bound_rad()))

@@ -19,8 +19,15 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
 )
+from kalman_vs_infoset.estim.attitude.model import check_step as check_step_attitude
 from kalman_vs_infoset.estim.base import Belief, Estimator, Extremes, Status
-from kalman_vs_infoset.estim.intercept.model import ChannelModel, ChannelPrior, Range, impulse_parts
+from kalman_vs_infoset.estim.intercept.model import (
+    ChannelModel,
+    ChannelPrior,
+    Range,
+    check_step,
+    impulse_parts,
+)
 from pydantic import BaseModel, ConfigDict, Field
 
 from kalman_vs_infoset.numerics.rotations import qinv, qlog, qmul
@@ -86,6 +93,7 @@ class ToyEstimator(Estimator[ToyBelief, ChannelPrior]):
         return self._box(pts)
 
     def predict(self, belief: ToyBelief, dt_s: float, control: Any = None) -> ToyBelief:
+        check_step(dt_s)  # the contract: a bad step is refused, not propagated
         if belief.is_empty:
             return belief
         pts = belief.corners()
@@ -166,6 +174,7 @@ class ToyAttitudeEstimator(Estimator[ToyAttitudeBelief, AttitudePrior]):
         return self._of(prior.measurement)
 
     def predict(self, belief, dt_s, control=None):
+        check_step_attitude(dt_s)
         return belief
 
     def update(self, belief, measurement):

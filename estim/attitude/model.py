@@ -121,6 +121,8 @@ class AttitudeControl:
     def __post_init__(self) -> None:
         for name in ("torque_Nm", "h_lo_Nms", "h_hi_Nms"):
             arr = np.array(np.atleast_2d(getattr(self, name)), dtype=float)
+            if not np.isfinite(arr).all():  # a NaN torque gave a NaN belief with status ok
+                raise ValueError(f"{name} must be finite")
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         if np.any(self.h_lo_Nms > self.h_hi_Nms):
@@ -149,8 +151,13 @@ class AttitudeMeasurement:
 
     def __post_init__(self) -> None:
         q = np.array(np.atleast_2d(self.quat), dtype=float)
-        q /= np.linalg.norm(q, axis=-1, keepdims=True)
+        norm = np.linalg.norm(q, axis=-1, keepdims=True)
+        if not (np.isfinite(q).all() and np.all(norm > 0.0)):
+            raise ValueError("quat must be finite and non-zero")
+        q /= norm
         w = np.array(np.atleast_2d(self.rate_radps), dtype=float)
+        if not np.isfinite(w).all():
+            raise ValueError("rate_radps must be finite")
         for arr in (q, w):
             arr.setflags(write=False)
         object.__setattr__(self, "quat", q)
@@ -212,6 +219,12 @@ class NeverEmptyBelief(AttitudeBelief):
     @property
     def empty_counts(self) -> NDArray[np.int_]:
         return np.zeros(self.runs, dtype=int)
+
+
+def check_step(dt_s: float) -> None:
+    """A prediction's step: a finite number of seconds > 0."""
+    if not (np.isfinite(dt_s) and dt_s > 0):
+        raise ValueError(f"dt_s must be a finite number > 0, got {dt_s}")
 
 
 def draw_measurement(

@@ -30,6 +30,7 @@ Miss forecast for free motion (seed 003 section 5)::
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -138,15 +139,30 @@ class Impulse:
     uncertainty_mps: float = 0.0
 
     def __post_init__(self) -> None:
-        if not self.uncertainty_mps >= 0:
-            raise ValueError("uncertainty_mps must be non-negative")
+        if not math.isfinite(self.k_mps):
+            raise ValueError(f"an impulse must be finite, got k_mps={self.k_mps}")
+        if not (math.isfinite(self.uncertainty_mps) and self.uncertainty_mps >= 0):
+            raise ValueError(
+                f"uncertainty_mps must be finite and non-negative, got {self.uncertainty_mps}"
+            )
 
 
 def impulse_parts(control: float | Impulse) -> tuple[float, float]:
-    """``(k, uncertainty)`` of a control given as a number or an :class:`Impulse`."""
+    """``(k, uncertainty)`` of a control given as a number or an :class:`Impulse`
+    (ValueError for a number that is not finite)."""
     if isinstance(control, Impulse):
         return float(control.k_mps), float(control.uncertainty_mps)
-    return float(control), 0.0
+    k = float(control)
+    if not math.isfinite(k):
+        raise ValueError(f"an impulse must be finite, got {k}")
+    return k, 0.0
+
+
+def check_step(dt_s: float) -> None:
+    """A prediction's step: finite and not negative (the model moves forward in time;
+    a NaN step left some estimators' beliefs NaN with status ``ok``)."""
+    if not (math.isfinite(dt_s) and dt_s >= 0.0):
+        raise ValueError(f"dt_s must be a finite number >= 0, got {dt_s}")
 
 
 @dataclass(frozen=True)

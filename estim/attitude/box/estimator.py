@@ -65,6 +65,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    check_step,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -352,8 +353,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
         (:class:`AttitudeControl`; None: no torque, no momentum); a step too long for the
         a-priori enclosure is halved (the inputs hold over the whole step, so each half is
         enclosed as well)."""
-        if not dt_s > 0:
-            raise ValueError("dt_s must be positive")
+        check_step(dt_s)
         if control is None:
             control = AttitudeControl.zero(belief.runs)
         elif not isinstance(control, AttitudeControl):

@@ -17,6 +17,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
     NeverEmptyBelief,
+    check_step,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -87,6 +88,7 @@ class PerfectAttitudeEstimator(Estimator[AttitudePointBelief, AttitudePrior]):
     def predict(
         self, belief: AttitudePointBelief, dt_s: float, control: Any = None
     ) -> AttitudePointBelief:
+        check_step(dt_s)
         return belief
 
     def update(self, belief: AttitudePointBelief, measurement: Any) -> AttitudePointBelief:

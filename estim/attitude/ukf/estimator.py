@@ -53,6 +53,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
     NeverEmptyBelief,
+    check_step,
     rk4_attitude,
 )
 from kalman_vs_infoset.estim.attitude.ukf.options import DEFAULTS
@@ -274,8 +275,7 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     ) -> UkfAttitudeBelief:
         """Sigma points through the model under the known inputs ``control`` held over
         the step (None: no torque, no momentum)."""
-        if not dt_s > 0:
-            raise ValueError("dt_s must be positive")
+        check_step(dt_s)
         ctrl = self._control(belief, control)
         sig = self._sigma_points(belief.mean, belief.cov)
         q1, w1 = self._propagate(belief, sig, dt_s, ctrl)

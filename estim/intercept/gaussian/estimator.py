@@ -110,6 +110,7 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelPrior,
     Impulse,
     Range,
+    check_step,
     impulse_parts,
 )
 from numpy.typing import NDArray
@@ -278,6 +279,7 @@ class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior
     ) -> GaussianBelief:
         """The impulse ``control`` at the step's start (:meth:`_impulse`), the threshold
         (:meth:`threshold`), then the propagation over ``dt_s`` (exact map, ``Q``)."""
+        check_step(dt_s)
         self._check(belief)
         if control is not None:
             belief = self._impulse(belief, control)

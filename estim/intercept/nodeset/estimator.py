@@ -64,6 +64,7 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelPrior,
     Impulse,
     Range,
+    check_step,
     impulse_parts,
 )
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
@@ -308,6 +309,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         a step computes the bounds between nodes once; impulse and prediction are
         one compiled call.
         """
+        check_step(dt_s)
         if belief.is_empty:
             return belief
         # bounds of w, alpha and tau per piece

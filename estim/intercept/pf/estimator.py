@@ -69,6 +69,7 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelPrior,
     Impulse,
     Range,
+    check_step,
     impulse_parts,
 )
 from kalman_vs_infoset.estim.intercept.pf.belief import E, ParticleBelief, V, X, Y
@@ -160,6 +161,7 @@ class ParticleChannelEstimator(Estimator[ParticleBelief, ChannelPrior]):
         self, belief: ParticleBelief, dt_s: float, control: float | Impulse | None = None
     ) -> ParticleBelief:
         """Resampling (with roughening), the threshold, the impulse, then the exact step."""
+        check_step(dt_s)
         if belief.is_empty:
             return belief
         rng = self.rng(belief)

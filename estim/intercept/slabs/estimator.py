@@ -103,6 +103,7 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelPrior,
     Impulse,
     Range,
+    check_step,
     impulse_parts,
 )
 from kalman_vs_infoset.estim.intercept.slabs.belief import InformationSet
@@ -333,6 +334,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         """Apply the impulse ``control`` (at the step's start; :meth:`_impulse`), then move
         every section over ``dt_s``: exact shear at the interval's middle, a segment for
         the rest of the interval, the disturbance box; threshold at eps."""
+        check_step(dt_s)
         if control is not None:
             belief = self._impulse(belief, control)
         if belief.is_empty:
