@@ -49,7 +49,9 @@ def _dedupe_tail(out, start, k, tol):
 def clip_halfplanes(xy, offsets, nx, ny, bound):
     """Sutherland-Hodgman of polygon i against ``nx[i] x + ny[i] y <= bound[i]``."""
     n = offsets.shape[0] - 1
-    out = np.empty((xy.shape[0] + n + 1, 2))
+    # each edge writes at most two vertices: a convex polygon gets m + 1 at most, but
+    # signs that alternate (vertices on the line within rounding, or NaN) get more
+    out = np.empty((2 * xy.shape[0] + 1, 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
     tol = 1e-15 * _scale(xy)
     k = 0
@@ -191,7 +193,9 @@ def convex_hulls(xy, offsets):
                 h -= 1
             hull[h] = a
             h += 1
-        h = max(h - 1, 1)  # the last point repeats the first
+        # the last point repeats the first; at most m (a NaN coordinate makes every
+        # orientation test fail and both chains keep every point: 2 m - 2 of them)
+        h = min(max(h - 1, 1), m)
         for a in range(h):
             out[k, 0] = pts[hull[a], 0]
             out[k, 1] = pts[hull[a], 1]

@@ -264,8 +264,8 @@ class ChannelModel:
 
 def _interval(value: Iterable[float], name: str) -> tuple[float, float]:
     lo, hi = (float(v) for v in value)
-    if not lo <= hi:
-        raise ValueError(f"{name} must be an interval [lo, hi] with lo <= hi")
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+        raise ValueError(f"{name} must be a finite interval [lo, hi] with lo <= hi")
     return lo, hi
 
 
