@@ -280,3 +280,19 @@ def _run_cli(main, args):
         code = main(args)
     assert code in (0, None)
     return json.loads(buf.getvalue().strip().splitlines()[-1])
+
+
+def test_ukf_runs_the_gyrostat_turn_with_error_free_measurements(tmp_path):
+    """Noise "none" gives the gyrostat loop's estimators measurement bounds of 1e-12:
+    ``R ~ 1e-24`` left the updated covariance indefinite to rounding and every run
+    failed (``LinAlgError: Matrix is not positive definite``); the filter floors its
+    bounds at ``MEAS_FLOOR`` (1e-8), so the turn runs and settles."""
+    from kalman_vs_infoset.experiments.cli import main
+
+    args = ["attitude", "gyrostat_game", "--noise", "none", "--runs", "1",
+            "--estimators", "ukf", "--set", "manoeuvre.initial_angle_deg=5",
+            "--set", "simulation.control_period_s=0.2",
+            "--workers", "1", "--no-progress", "--out", str(tmp_path), "--json"]  # fmt: skip
+    res = _run_cli(main, args)
+    assert res["failures"] == 0 and res["estimator"] == "ukf"
+    assert np.isfinite(res["settle_time_s"]["mean"])

@@ -24,7 +24,8 @@ variance ``D^2/3`` (a uniform in ``[-D, D]``) held over the step, ``G diag(D^2/3
 G^T``, ``G = (dt^2/2 J_b^-1; dt J_b^-1)``, a small floor, and a random walk of ``d``
 (variance ``D^2/3`` per ``tau_d = 60 s``).
 Update: ``z = (log(q_ref^-1 q_m), w_m)``, ``h(x) = x``, ``R = diag(b_a^2/3, b_w^2/3)``
-(the variance of a uniform error within the bounds). After each step the mean
+(the variance of a uniform error within the bounds, each bound at least
+``MEAS_FLOOR``). After each step the mean
 attitude error is folded into the reference (``q_ref <- q_ref exp(a)``, ``a <- 0``);
 the covariance is kept (its transport by the small reset rotation is neglected, as
 in the usual multiplicative EKF/UKF).
@@ -67,6 +68,9 @@ from kalman_vs_infoset.numerics.rotations import qexp, qinv, qlog, qmul
 FloatArray = NDArray[np.float64]
 DIM = 9  # (a, w, d): attitude error, rate, disturbance torque
 DIM_Z = 6
+#: least measurement error bound the filter assumes (rad for the angle, rad/s for the
+#: rate): far under any sensor's, far over rounding of the covariance (~1e-16 relative)
+MEAS_FLOOR = 1e-8
 TAU_D_S = 60.0
 
 
@@ -191,9 +195,12 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
         if self.substeps < 1:
             raise ValueError("substeps must be >= 1")
         object.__setattr__(self, "points", MerweScaledSigmaPoints(DIM, 1.0, 2.0, 0.0))
-        var = np.concatenate([self.model.meas_angle_bound_rad, self.model.meas_rate_bound_radps])
-        # measurement noise R (6 x 6)
-        object.__setattr__(self, "r_cov", readonly(np.diag(var**2 / 3.0)))
+        bound = np.concatenate([self.model.meas_angle_bound_rad, self.model.meas_rate_bound_radps])
+        # measurement noise R (6 x 6), its bounds floored: error-free measurements (the
+        # loops' noise "none" passes bounds of 1e-12) made R ~ 1e-24 and the updated
+        # covariance lost definiteness to rounding (LinAlgError in the next Cholesky)
+        bound = np.maximum(bound, MEAS_FLOOR)
+        object.__setattr__(self, "r_cov", readonly(np.diag(bound**2 / 3.0)))
 
     @property
     def gate(self) -> float:
