@@ -11,9 +11,10 @@ with numba's stamp of the file *and* a digest of every kernel source of the pack
 (each ``.py`` file under the roots that has ``@njit``): an edit of any kernel recompiles
 every kernel once. Functions elsewhere (a user's own numba code) keep numba's locators.
 
-The locator list is numba's class attribute ``_locator_classes`` (not public API, the
-same from numba 0.59 to 0.68); :func:`install` returns False where it is missing, and a
-test fails then.
+The locator list is the class attribute ``_locator_classes`` of the cache that ``njit``
+uses (``numba.core.caching.CompileResultCacheImpl``; not public API): :func:`install`
+returns False where it is missing, and the tests (an edit of a called kernel must
+recompile its caller) fail then.
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ def install(roots: tuple[Path, ...] | None = None) -> bool:
     False when this numba has no such list."""
     from numba.core import caching
 
-    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    impl = getattr(caching, "CompileResultCacheImpl", None)
     classes = getattr(impl, "_locator_classes", None)
     if impl is None or not isinstance(classes, list):
         return False

@@ -159,4 +159,4 @@ def test_the_package_kernels_are_stamped_with_every_kernel_source():
         assert "from numba import njit" not in text, path
         assert "from kalman_vs_infoset._jit import njit" in text, path
     assert _jit.install()
-    assert caching.CacheImpl._locator_classes[0].kvi_roots == _jit._roots()
+    assert caching.CompileResultCacheImpl._locator_classes[0].kvi_roots == _jit._roots()
