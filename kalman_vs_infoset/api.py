@@ -241,6 +241,7 @@ def run_experiment(
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
     runs = sc.experiment.runs if runs is None else _index(runs, "runs", 1)
+    workers = None if workers is None else _index(workers, "workers", 1)  # 0 meant all CPUs
     seed = sc.experiment.seed if seed is None else seed
     if out is not None:
         return intercept_runs.run_experiment(

@@ -123,3 +123,9 @@ def test_bad_input_through_the_api_is_one_clear_error():
         api.load_results("/nonexistent/folder")
     with pytest.raises(ValueError):
         api.run_engagement("kp_fig3", run=-1)
+    # workers=0 ran on every CPU (0 read as "unset"); the command line refuses it
+    for workers in (0, -2):
+        with pytest.raises(ValueError, match="workers must be at least 1"):
+            api.run_experiment("kp_fig3", "ekf", "random", runs=1, workers=workers)
+    with pytest.raises(TypeError, match="workers must be an integer"):
+        api.run_experiment("kp_fig3", "ekf", "random", runs=1, workers=1.5)
