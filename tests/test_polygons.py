@@ -200,3 +200,20 @@ def test_convex_hulls_kernel_equals_shapely_convex_hull(seed, n, scale, collinea
         cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
         # convex: no reflex vertex left (beyond the rounding of nearly collinear input)
         assert np.all(cross > -1e-12 * np.abs(xy).max() ** 2)
+
+
+def test_a_nan_bound_or_segment_is_refused_not_an_empty_set():
+    """A NaN bound compared every vertex as outside and emptied the polygons silently;
+    an infinite bound stays a bound (no limit on that side)."""
+    sq = ConvexPolygons.from_list([[[0, 0], [1, 0], [1, 1], [0, 1]]])
+    for call in (
+        lambda: sq.clip_slab(0, [np.nan], [1.0]),
+        lambda: sq.clip_slab(1, [0.0], [np.nan]),
+        lambda: sq.clip_halfplanes([1.0, 0.0], [np.nan]),
+        lambda: sq.clip_halfplanes([np.nan, 0.0], [0.5]),
+        lambda: sq.minkowski_segment([np.nan, 0.0]),
+        lambda: sq.minkowski_segment([np.inf, 0.0]),
+    ):
+        with pytest.raises(ValueError, match="NaN|finite"):
+            call()
+    assert sq.clip_slab(0, [-np.inf], [np.inf]).counts.tolist() == [4]

@@ -37,6 +37,14 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+def _no_nan(name: str, values: FloatArray) -> FloatArray:
+    """``values`` (a bound or a segment; infinities are bounds too), refused if NaN: a
+    NaN bound emptied every polygon silently (each vertex compared as outside)."""
+    if np.isnan(values).any():
+        raise ValueError(f"{name} must not be NaN")
+    return values
+
+
 def _offsets(counts: IntArray) -> IntArray:
     out = np.zeros(len(counts) + 1, dtype=np.int64)
     np.cumsum(counts, out=out[1:])
@@ -254,8 +262,8 @@ class ConvexPolygons:
         """
         if len(self.xy) == 0:
             return self
-        normal = np.broadcast_to(np.asarray(normal, dtype=float), (self.n, 2))
-        bound = np.broadcast_to(np.asarray(bound, dtype=float), (self.n,))
+        normal = _no_nan("normal", np.broadcast_to(np.asarray(normal, dtype=float), (self.n, 2)))
+        bound = _no_nan("bound", np.broadcast_to(np.asarray(bound, dtype=float), (self.n,)))
         xy, off = _k.clip_halfplanes(
             self.xy, self.offsets, np.ascontiguousarray(normal[:, 0]),
             np.ascontiguousarray(normal[:, 1]), np.ascontiguousarray(bound),
@@ -268,6 +276,7 @@ class ConvexPolygons:
             return self
         lo = np.ascontiguousarray(np.broadcast_to(np.asarray(lo, dtype=float), (self.n,)))
         hi = np.ascontiguousarray(np.broadcast_to(np.asarray(hi, dtype=float), (self.n,)))
+        _no_nan("lo", lo), _no_nan("hi", hi)
         return ConvexPolygons._make(*_k.clip_slab(self.xy, self.offsets, axis, lo, hi))
 
     def shift_band(self, dy: FloatArray, half_y: FloatArray) -> ConvexPolygons:
@@ -311,6 +320,8 @@ class ConvexPolygons:
         if len(self.xy) == 0:
             return self
         g = np.broadcast_to(np.asarray(half, dtype=float), (self.n, 2))
+        if not np.isfinite(g).all():
+            raise ValueError("half must be finite")
         xy, off = _k.minkowski_segment(
             self.xy, self.offsets, np.ascontiguousarray(g[:, 0]), np.ascontiguousarray(g[:, 1])
         )
