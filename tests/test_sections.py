@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import sets_sampling as S
 import shapely
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
@@ -19,6 +19,7 @@ from kalman_vs_infoset.estim.intercept.sections.ellipsoid import (
     EllipsoidSections,
     covered,
     fogel_huang_volume,
+    growth,
     segment_sum,
 )
 from kalman_vs_infoset.estim.intercept.sections.zonotope import (
@@ -246,7 +247,8 @@ def test_ellipsoid_strip_is_estim_sets_intersect_strip_fogel_huang1982(criterion
     for j in range(N):
         want = b.ellipsoid(j).intersect_strip([1.0, 0.0], *r[j], criterion)
         np.testing.assert_allclose(got.centre[j], want.centre, rtol=1e-9, atol=1e-12)
-        held = covered(b.shape[j : j + 1], want.shape[None])[0]  # its rounding covered
+        p_in, p_out = b.shape[j : j + 1], want.shape[None]
+        held = covered(p_in, p_out, growth(p_in, p_out))[0]  # its rounding covered
         np.testing.assert_allclose(got.shape[j], held, rtol=1e-8, atol=1e-9)
 
 
@@ -258,6 +260,10 @@ def test_ellipsoid_strip_is_estim_sets_intersect_strip_fogel_huang1982(criterion
     width=st.floats(1e-3, 0.5),
     criterion=st.sampled_from(["volume", "trace"]),
 )
+# the trace weight's delta (2074 here) multiplied the update's rounding past the cover
+# (make fuzz, seed 777000124): a corner of the intersection 4e-9 of q outside
+@example(log_ratio=-13.0, angle=0.0, where=0.006556880634842276,
+         width=0.006556880634842276, criterion="trace")  # fmt: skip
 def test_a_thin_section_cut_by_a_strip_holds_the_exact_intersection(
     log_ratio, angle, where, width, criterion
 ):
