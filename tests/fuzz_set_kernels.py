@@ -29,17 +29,10 @@ import numpy as np
 def _case(rng: np.random.Generator, name: str) -> str:
     """One random sequence; the final status of the belief."""
     from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.estim.intercept import model as im
     from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
-    from kalman_vs_infoset.estim.intercept.model import (
-        Bearing,
-        ChannelModel,
-        ChannelPrior,
-        ChannelSetting,
-        Impulse,
-        Range,
-    )
 
-    model = ChannelModel()
+    model = im.ChannelModel()
     y, v = 10 ** rng.uniform(-3, 6), 10 ** rng.uniform(-4, 3)
     x0 = 10 ** rng.uniform(5, 6.9)
     speed = None
@@ -47,15 +40,15 @@ def _case(rng: np.random.Generator, name: str) -> str:
         e = 58e3 * rng.uniform(0.5, 1.5)
         speed = (e, e * (1 + 10 ** rng.uniform(-6, -0.5)))
     y_hi = y * rng.uniform(-1, 1) if rng.random() < 0.3 else y
-    prior = ChannelPrior((-y, y_hi), (-v, v), (x0, x0 * (1 + rng.uniform(0, 0.5))), speed)
-    est = registry.get("intercept", name).build(None, ChannelSetting(model, speed))
+    prior = im.ChannelPrior((-y, y_hi), (-v, v), (x0, x0 * (1 + rng.uniform(0, 0.5))), speed)
+    est = registry.get("intercept", name).build(None, im.ChannelSetting(model, speed))
     b = est.initial(prior)
     for _ in range(int(rng.integers(5, 400))):
         if rng.random() < 0.6:
-            b = est.update(b, Bearing(float(rng.normal() * 10 ** rng.uniform(-9, -3.5))))
+            b = est.update(b, im.Bearing(float(rng.normal() * 10 ** rng.uniform(-9, -3.5))))
         elif rng.random() < 0.4:
             off = float(rng.uniform(0, 0.01))
-            b = est.update(b, Range(float(x0 * rng.uniform(0.0, 1.5)), off_axis_rad=off))
+            b = est.update(b, im.Range(float(x0 * rng.uniform(0.0, 1.5)), off_axis_rad=off))
         if b.is_empty:
             break
         if rng.random() < 0.5:
@@ -70,7 +63,7 @@ def _case(rng: np.random.Generator, name: str) -> str:
         u = None
         if rng.random() < 0.5:
             k = float(rng.normal() * 10 ** rng.uniform(-2, 2))
-            u = Impulse(k, float(10 ** rng.uniform(-4, 1))) if rng.random() < 0.5 else k
+            u = im.Impulse(k, float(10 ** rng.uniform(-4, 1))) if rng.random() < 0.5 else k
         b = est.predict(b, float(dt), u)
         if b.is_empty:
             break
