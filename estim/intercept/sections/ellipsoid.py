@@ -111,11 +111,15 @@ def _trace(p: FloatArray) -> FloatArray:
     return p[:, 0, 0] + p[:, 1, 1]
 
 
+def _det(p: FloatArray) -> FloatArray:
+    return p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
+
+
 def _eigenvalues(p: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Largest and smallest eigenvalue of each symmetric 2 x 2 in ``p`` (closed form; the
     smallest carries an error of ~1e-16 of the largest and may come out negative)."""
     tr = _trace(p)
-    det = p[:, 0, 0] * p[:, 1, 1] - p[:, 0, 1] * p[:, 1, 0]
+    det = _det(p)
     disc = np.sqrt(np.clip(0.25 * tr * tr - det, 0.0, None))
     return 0.5 * tr + disc, 0.5 * tr - disc
 
@@ -200,8 +204,7 @@ def growth(p_in: FloatArray, p_out: FloatArray) -> FloatArray:
     1 where ``P_in`` is flat): the factor ``delta`` of a strip update, which multiplies
     the rounding of ``P - k P a a^T P`` (it cancels along ``a`` down to ``r^2 / den`` of
     ``P``). An estimate is enough: it only scales the rounding cover."""
-    det_in = p_in[:, 0, 0] * p_in[:, 1, 1] - p_in[:, 0, 1] * p_in[:, 1, 0]
-    det_out = p_out[:, 0, 0] * p_out[:, 1, 1] - p_out[:, 0, 1] * p_out[:, 1, 0]
+    det_in, det_out = _det(p_in), _det(p_out)
     # det(P_out - lam P_in) = det_in lam^2 - b lam + det_out, b = tr(adj(P_in) P_out)
     b = (p_in[:, 1, 1] * p_out[:, 0, 0] + p_in[:, 0, 0] * p_out[:, 1, 1]
          - p_in[:, 0, 1] * p_out[:, 1, 0] - p_in[:, 1, 0] * p_out[:, 0, 1])  # fmt: skip
