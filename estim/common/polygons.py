@@ -274,9 +274,9 @@ class ConvexPolygons:
         """Intersect polygon ``i`` with ``lo[i] <= p[axis] <= hi[i]``."""
         if len(self.xy) == 0:
             return self
-        lo = np.ascontiguousarray(np.broadcast_to(np.asarray(lo, dtype=float), (self.n,)))
-        hi = np.ascontiguousarray(np.broadcast_to(np.asarray(hi, dtype=float), (self.n,)))
-        _no_nan("lo", lo), _no_nan("hi", hi)
+        lo = _no_nan("lo", np.broadcast_to(np.asarray(lo, dtype=float), (self.n,)))
+        hi = _no_nan("hi", np.broadcast_to(np.asarray(hi, dtype=float), (self.n,)))
+        lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
         return ConvexPolygons._make(*_k.clip_slab(self.xy, self.offsets, axis, lo, hi))
 
     def shift_band(self, dy: FloatArray, half_y: FloatArray) -> ConvexPolygons:
