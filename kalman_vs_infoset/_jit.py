@@ -57,9 +57,10 @@ def sources_digest(roots: tuple[Path, ...] | None = None) -> str:
     roots = _roots() if roots is None else roots
     h = hashlib.sha256()
     for root in roots:
-        for path in kernel_files((root,)):
-            h.update(path.relative_to(root).as_posix().encode() + b"\0")
-            h.update(path.read_bytes() + b"\0")
+        for path in sorted(root.rglob("*.py")):
+            data = path.read_bytes()  # read once: marked and hashed
+            if MARK in data:
+                h.update(path.relative_to(root).as_posix().encode() + b"\0" + data + b"\0")
     return h.hexdigest()
 
 
