@@ -26,8 +26,6 @@ ROOT = Path(__file__).resolve().parents[1]
 KVI = [sys.executable, "-m", "kalman_vs_infoset"]
 linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="POSIX signals, flock")
 
-# a turn of 400 control steps: a chunk of 8 runs takes about a second
-
 
 def _table(out: Path) -> pd.DataFrame:
     (pq,) = Path(out).rglob("*.parquet")
