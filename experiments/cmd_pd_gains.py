@@ -42,18 +42,54 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--initial-turn", default=d.initial_turn, help="full_angle (default) | eq11"
     )
-    parser.add_argument("--angle-tol-deg", type=float, default=d.angle_tol_deg)
-    parser.add_argument("--rate-tol-degps", type=float, default=d.rate_tol_degps)
-    parser.add_argument("--grid-step", type=float, default=d.grid_step)
-    parser.add_argument("--control-period-s", type=float, default=d.control_period_s)
-    parser.add_argument("--horizon-s", type=float, default=d.horizon_s)
+    # the settle criterion and the simulation (gain_study.StudySettings declares them)
+    parser.add_argument(
+        "--angle-tol-deg",
+        type=float,
+        default=d.angle_tol_deg,
+        help="settled when |angle| stays under this, deg (default %(default)g)",
+    )
+    parser.add_argument(
+        "--rate-tol-degps",
+        type=float,
+        default=d.rate_tol_degps,
+        help="... and |rate| under this, deg/s (default %(default)g)",
+    )
+    parser.add_argument(
+        "--grid-step",
+        type=float,
+        default=d.grid_step,
+        help=f"step of the k_q and k_w grids from {d.grid_lo:g} to "
+        f"{d.grid_hi:g} (default %(default)g)",
+    )
+    parser.add_argument(
+        "--control-period-s",
+        type=float,
+        default=d.control_period_s,
+        help="sample period of the control (zero-order hold), s (default %(default)g)",
+    )
+    parser.add_argument(
+        "--horizon-s",
+        type=float,
+        default=d.horizon_s,
+        help=f"simulated time of a turn, s; a case not settled "
+        f"{d.hold_s:g} s before its end counts as never (default %(default)g)",
+    )
     parser.add_argument(
         "--fit-loss", default=d.fit_loss, help="soft_l1 (default) | cauchy | linear"
     )
     parser.add_argument(
-        "--map-angle-deg", type=float, default=150.0, help="turn of the Fig. 10 map"
+        "--map-angle-deg",
+        type=float,
+        default=150.0,
+        help="turn of the Fig. 10 map, deg (default %(default)g)",
     )
-    parser.add_argument("--fig15-kw", type=float, default=1.0, help="k_w of the Fig. 15 comparison")
+    parser.add_argument(
+        "--fig15-kw",
+        type=float,
+        default=1.0,
+        help="k_w of the Fig. 15 comparison (default %(default)g)",
+    )
 
 
 def _angles(text: str | None, table: dict[float, float]) -> list[tuple[str, float]]:

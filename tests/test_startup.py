@@ -67,8 +67,12 @@ def test_every_command_still_declares_its_arguments(capsys):
     for name in cli.COMMANDS:
         parser = cli.build_parser(name)
         sub = next(a for a in parser._actions if a.dest == "command")
-        options = {s for a in sub.choices[name]._actions for s in a.option_strings}
+        actions = sub.choices[name]._actions
+        options = {s for a in actions for s in a.option_strings}
         assert "--json" in options, name
+        # every option says what it is (five of pd-gains' said nothing in --help)
+        silent = [a.option_strings[0] for a in actions if a.option_strings and not a.help]
+        assert not silent, f"kvi {name}: options without help: {silent}"
     # a command that needs options to parse still reports their absence in one line
     try:
         code = cli.main(["sweep", "x.toml"])
