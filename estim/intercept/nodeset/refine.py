@@ -75,7 +75,9 @@ class NodeRefinement:
         dead node above. New nodes (exact slices: the prior, then every recorded
         operation) bisect the longest cells of the bracket -- the end cells, where
         the feasible interval ends, among them -- until the piece has ``min_live_nodes``
-        plus two; a piece down to one live node is re-gridded with ``n_nodes``. A piece
+        plus two; a piece down to one live node is re-gridded with ``n_nodes`` (the live
+        node kept when none of the new ones holds a state: its states may be a sliver
+        between them, and an empty piece is dropped). A piece
         emptied by a bearing is searched (:meth:`_search`) in the bracket it had
         ``before``; one emptied by a range interval or the threshold is re-gridded where
         that bracket meets the new hard limits (the feasible interval, if any is left,
@@ -115,7 +117,17 @@ class NodeRefinement:
                 if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
                     break
                 if n_live == 1:
-                    s = self._regrid(s, p, np.linspace(lo, hi, self.n_nodes))
+                    grid = np.linspace(lo, hi, self.n_nodes)
+                    out = self._regrid(s, p, grid)
+                    if not (out.live & (out.piece == p)).any():
+                        # the states lie between the new nodes (a sliver around the
+                        # live node, narrower than the grid's spacing): dropping the
+                        # live node would drop them, so it stays, and the next round
+                        # re-grids the narrower bracket its new dead neighbours leave
+                        mine = s.live & (s.piece == p)
+                        grid = grid[~np.isin(grid, s.label_s[mine])]
+                        out = self._regrid(s, p, grid, keep=mine)
+                    s = out
                     continue
                 mine = (s.piece == p) & (s.label_s >= lo) & (s.label_s <= hi)
                 knots = np.unique(np.r_[lo, s.label_s[mine], hi])
