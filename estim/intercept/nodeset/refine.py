@@ -101,7 +101,8 @@ class NodeRefinement:
                     lo, hi = self._bracket(before, p)
                     if int(s.log.kinds[-1]) == _nk.BEARING:
                         if not self._strip_misses(before, p, float(s.log.pa[-1])):
-                            s = self._search(s, p, lo, hi)
+                            held = before.label_s[before.live & (before.piece == p)]
+                            s = self._search(s, p, lo, hi, held)
                         break
                     # a range interval or the threshold cut every node off: what is
                     # left lies where the feasible interval (inside the old bracket)
@@ -146,24 +147,29 @@ class NodeRefinement:
         shrink = max((self.n_nodes - 1) / 2.0, 1.5)
         return 4 + int(np.ceil(np.log(1.0 / MIN_SPACING_REL) / np.log(shrink)))
 
-    def _search(self, s: NodeSet, p: int, lo: float, hi: float) -> NodeSet:
+    def _search(self, s: NodeSet, p: int, lo: float, hi: float, held: FloatArray) -> NodeSet:
         """Find the states of piece ``p`` that the last bearing left between its nodes.
 
-        Before the last bearing the piece had states in ``[lo, hi]``. How far a slice
-        misses the bearing's strip (in ``Y~``: ``min Y~ - (alpha_m + a) tau`` or
-        ``(alpha_m - a) tau - max Y~``) is convex in ``tau`` (the body is convex and
-        ``a(x) x`` concave), so if no node of a fine grid meets the strip, any states
-        left lie next to the node that misses it least: the search narrows to that
-        node's neighbours, down to a spacing of ``MIN_SPACING_REL``. The piece is
-        empty when nothing is found.
+        Before the last bearing the piece had states in ``[lo, hi]``, at the labels
+        ``held`` among others. How far a slice misses the bearing's strip (in ``Y~``:
+        ``min Y~ - (alpha_m + a) tau`` or ``(alpha_m - a) tau - max Y~``) is convex in
+        ``tau`` (the body is convex and ``a(x) x`` concave), so if no node of a fine
+        grid meets the strip, any states left lie next to the node that misses it
+        least: the search narrows to that node's neighbours, down to a spacing of
+        ``MIN_SPACING_REL``. The piece is empty when nothing is found. A grid none of
+        whose nodes held states before the bearing (a sliver between its nodes) says
+        nothing: it is searched again with the labels known to hold some added.
         """
         head = OpLog(*(a[:-1] for a in s.log.parts()))
         alpha_m = float(s.log.pa[-1])
-        piece = np.full(self.n_nodes, p)
+        retry = False
         for _ in range(12):  # each level narrows the bracket ~(n_nodes - 1) / 2 times
             labels = np.linspace(lo, hi, self.n_nodes)
+            if retry:
+                labels = np.unique(np.r_[labels, held[(held > lo) & (held < hi)]])
             if not hi - lo > MIN_SPACING_REL * max(abs(hi), 1.0) * self.n_nodes:
                 break
+            piece = np.full(len(labels), p)
             polys, t, _, _, _ = self._apply(
                 s, piece, labels, self._prior(s, piece, labels), head, 0.0
             )
@@ -178,8 +184,13 @@ class NodeRefinement:
             miss = np.where(np.isnan(miss), np.inf, miss * tau)
             k = int(np.argmin(miss))
             if not np.isfinite(miss[k]):
-                break
-            lo, hi = labels[max(k - 1, 0)], labels[min(k + 1, self.n_nodes - 1)]
+                if retry or not ((held > lo) & (held < hi)).any():
+                    break
+                retry = True  # this level again, with the labels that held states
+                continue
+            retry = False
+            held = labels[k : k + 1]  # it held states before the bearing
+            lo, hi = labels[max(k - 1, 0)], labels[min(k + 1, len(labels) - 1)]
         return s
 
     def _strip_misses(self, before: NodeSet, p: int, alpha_m: float) -> bool:
