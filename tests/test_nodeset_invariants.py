@@ -103,6 +103,11 @@ def test_corner_schedule_runs_to_the_threshold_convex_and_with_the_truth(scenari
 # nodes were all empty; the piece was dropped with the truth in it
 @example(corner=(True, True, True, True), error_switch_s=[16.0], disturbance_switch_s=[],
          signs=(1.0, 1.0), scenario="kp_fig5")  # fmt: skip
+# a search of a brute force over such schedules: a band split left two live nodes of
+# one piece 4e-15 s apart, and the secant through them cut the truth out of the end
+# cell beside them (5 steps outside)
+@example(corner=(False, False, True, True), error_switch_s=[4.96, 6.569, 9.191],
+         disturbance_switch_s=[9.642], signs=(-1.0, 1.0), scenario="kp_fig5")  # fmt: skip
 def test_slices_stay_convex_and_wind_once_after_every_operation(
     corner, error_switch_s, disturbance_switch_s, signs, scenario
 ):

@@ -16,6 +16,7 @@ import pytest
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
+from kalman_vs_infoset.estim.intercept.nodeset.refine import _merge
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
@@ -70,3 +71,23 @@ def test_a_search_grid_that_misses_the_states_is_searched_again(last_step):
     found = est._search(s, p, float(grid[0]), float(grid[-1]), held)
     assert (found.live & (found.piece == p)).any()
     assert found.contains(truth)
+
+
+def test_a_node_within_rounding_of_a_live_node_is_not_added(last_step):
+    """Two live nodes of a piece a few ulps apart are one slice up to rounding; a secant
+    through them extrapolates rounding (a band split once left such a pair, and the
+    truth left the end cell beside it). A new node that close is not added; one a
+    little farther is, and one without states is."""
+    _, s, _, _, _ = last_step
+    i = int(np.flatnonzero(s.live)[0])
+    one = s.polygons.select(np.array([i]))
+    keep = np.ones(s.polygons.n, dtype=bool)
+    p, lab = s.piece[i : i + 1], s.label_s[i]
+    twin = _merge(s, keep, p, np.array([lab + 4 * np.spacing(lab)]), one)
+    assert twin.polygons.n == s.polygons.n
+    apart = _merge(s, keep, p, np.array([lab * (1 + 1e-11)]), one)
+    assert apart.polygons.n == s.polygons.n + 1
+    empty = s.polygons.select(np.flatnonzero(~s.live)[:1])
+    assert _merge(s, keep, p, np.array([lab + 4 * np.spacing(lab)]), empty).polygons.n == (
+        s.polygons.n + 1
+    )
