@@ -43,38 +43,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--initial-turn", default=d.initial_turn, help="full_angle (default) | eq11"
     )
     # the settle criterion and the simulation (gain_study.StudySettings declares them)
-    parser.add_argument(
-        "--angle-tol-deg",
-        type=float,
-        default=d.angle_tol_deg,
-        help="settled when |angle| stays under this, deg (default %(default)g)",
-    )
-    parser.add_argument(
-        "--rate-tol-degps",
-        type=float,
-        default=d.rate_tol_degps,
-        help="... and |rate| under this, deg/s (default %(default)g)",
-    )
-    parser.add_argument(
-        "--grid-step",
-        type=float,
-        default=d.grid_step,
-        help=f"step of the k_q and k_w grids from {d.grid_lo:g} to "
-        f"{d.grid_hi:g} (default %(default)g)",
-    )
-    parser.add_argument(
-        "--control-period-s",
-        type=float,
-        default=d.control_period_s,
-        help="sample period of the control (zero-order hold), s (default %(default)g)",
-    )
-    parser.add_argument(
-        "--horizon-s",
-        type=float,
-        default=d.horizon_s,
-        help=f"simulated time of a turn, s; a case not settled "
-        f"{d.hold_s:g} s before its end counts as never (default %(default)g)",
-    )
+    settle = (
+        ("--angle-tol-deg", d.angle_tol_deg, "settled when |angle| stays under this, deg"),
+        ("--rate-tol-degps", d.rate_tol_degps, "... and |rate| under this, deg/s"),
+        ("--grid-step", d.grid_step, f"step of the gain grids, {d.grid_lo:g} to {d.grid_hi:g}"),
+        ("--control-period-s", d.control_period_s, "control sample period (zero-order hold), s"),
+        ("--horizon-s", d.horizon_s, f"simulated time of a turn, s; a case not settled "
+         f"{d.hold_s:g} s before its end counts as never"),
+    )  # fmt: skip
+    for flag, default, text in settle:
+        parser.add_argument(flag, type=float, default=default, help=f"{text} (default %(default)g)")
     parser.add_argument(
         "--fit-loss", default=d.fit_loss, help="soft_l1 (default) | cauchy | linear"
     )
