@@ -289,9 +289,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
     for half in np.unique(s.piece[s.live & (s.u_lo >= ua)[s.piece] & (s.u_hi <= ub)[s.piece]]):
         lo, hi = est._bracket(s, int(half))
         lo, hi = max(lo, float(s.hard_lo_s[half])), min(hi, float(s.hard_hi_s[half]))
-        mine = s.live & (s.piece == half)
-        grid = np.linspace(lo, hi, est.n_nodes)
-        s = est._regrid(s, int(half), np.unique(grid[~np.isin(grid, s.label_s[mine])]), keep=mine)
+        s = est._regrid_keeping_live(s, int(half), np.linspace(lo, hi, est.n_nodes))
     return _compact(s)
 
 

@@ -129,9 +129,7 @@ class NodeRefinement:
                         # live node, narrower than the grid's spacing): dropping the
                         # live node would drop them, so it stays, and the next round
                         # re-grids the narrower bracket its new dead neighbours leave
-                        mine = s.live & (s.piece == p)
-                        grid = grid[~np.isin(grid, s.label_s[mine])]
-                        out = self._regrid(s, p, grid, keep=mine)
+                        out = self._regrid_keeping_live(s, p, grid)
                     s = out
                     continue
                 mine = (s.piece == p) & (s.label_s >= lo) & (s.label_s <= hi)
@@ -237,6 +235,12 @@ class NodeRefinement:
                                          polys_before_last[1])  # fmt: skip
         others = s.piece != b
         return _merge(s, others if keep is None else others | keep, piece, labels, polys)
+
+    def _regrid_keeping_live(self, s: NodeSet, b: int, grid: FloatArray) -> NodeSet:
+        """Piece ``b`` re-gridded at ``grid`` (sorted), its live nodes kept with their
+        slices (a grid label equal to one of theirs is not replayed again)."""
+        mine = s.live & (s.piece == b)
+        return self._regrid(s, b, np.unique(grid[~np.isin(grid, s.label_s[mine])]), keep=mine)
 
     def _exact_slices(self, s: NodeSet, piece: NDArray[np.int64], labels: FloatArray):
         """The slices at new nodes: the prior, then every recorded operation."""
@@ -386,8 +390,8 @@ def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     # the sorted nodes' polygons gathered from the set's and the new ones in one pass
     # (index >= s.polygons.n: a new polygon)
     source = np.concatenate([kept, s.polygons.n + np.arange(polys.n)])[order]
-    counts = np.concatenate([s.polygons.counts, polys.counts])[source]
-    twin = _twins(all_piece[order], all_label[order], source >= s.polygons.n, counts > 0)
+    counts = np.concatenate([s.polygons.counts, polys.counts])
+    twin = _twins(all_piece[order], all_label[order], source, s.polygons.n, counts)
     if twin.any():
         order, source = order[~twin], source[~twin]
     merged = ConvexPolygons._make(
@@ -396,18 +400,22 @@ def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
 
 
-def _twins(piece, label, new, held) -> NDArray[np.bool_]:
+def _twins(piece, label, source, n_old: int, counts) -> NDArray[np.bool_]:
     """Which of the sorted nodes ``(piece, label)`` to drop: of two neighbours of one
-    piece within ``DUPLICATE_REL`` of each other that both hold states (``held``), the
-    new one (``new``; the second if both are). Their slices are one slice up to
-    rounding, and a secant through them carries only the rounding: two live nodes
-    4e-15 s apart let the truth out of the end cell beside them, extrapolated over
-    4e-5 s. (A node without states has no value to extrapolate from: it stays.)"""
+    piece within ``DUPLICATE_REL`` of each other that both hold states, the new one
+    (``source >= n_old``; the second if both are; ``counts[source]``: vertices). Their
+    slices are one slice up to rounding, and a secant through them carries only the
+    rounding: two live nodes 4e-15 s apart let the truth out of the end cell beside
+    them, extrapolated over 4e-5 s. (A node without states has no value to extrapolate
+    from: it stays.)"""
+    drop = np.zeros(len(label), dtype=bool)
     near = (piece[1:] == piece[:-1]) & (
         np.abs(np.diff(label)) <= DUPLICATE_REL * np.maximum(np.abs(label[1:]), 1.0)
     )
+    if not near.any():  # every merge asks; a pair is rare
+        return drop
+    new, held = source >= n_old, counts[source] > 0
     near &= held[1:] & held[:-1] & (new[1:] | new[:-1])
-    drop = np.zeros(len(label), dtype=bool)
     for i in np.flatnonzero(near).tolist():
         if not drop[i]:  # (a chain of twins keeps every other one at least)
             drop[i + 1 if new[i + 1] else i] = True
