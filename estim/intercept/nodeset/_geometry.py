@@ -294,6 +294,29 @@ def zem_bounds(xy, off, tau, table, tau4, lo_s, hi_s, scale, e_nom, rtol):
     return out
 
 
+#: a secant's outer node is at least this fraction of the distance it is extrapolated
+#: over from the near node: its slope divides the rounding of the two nodes' slices by
+#: their spacing, and 1e-5 keeps a few ulps of rounding under ``BOUND_RTOL`` (a pair a
+#: rounding error apart once cut the truth out of the long cell beside it). Concavity
+#: allows any node beyond the near one; in the runs checked the nearest always
+#: qualified (docs/infoset.md).
+MAX_SECANT_REACH = 1.0e5
+
+
+@njit(cache=True)
+def _outer_node(label, piece, near, step, reach):
+    """The node beyond node ``near`` (``step = -1``: before it, ``+1``: after it) of its
+    piece nearest to it whose spacing from it is at least ``reach / MAX_SECANT_REACH``,
+    ``reach`` the distance its secant is extrapolated over; -1 if none."""
+    n = label.shape[0]
+    j = near + step
+    while 0 <= j < n and piece[j] == piece[near]:
+        if abs(label[near] - label[j]) * MAX_SECANT_REACH >= reach:
+            return j
+        j += step
+    return -1
+
+
 @njit(cache=True)
 def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_nom, rtol):
     """Everything the node set is asked, in one pass over its cells.
@@ -329,16 +352,13 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
             continue
         table[m, 1], table[m, 2] = i, i + 1
         tau4[m, 1], tau4[m, 2] = label[i] - t, label[i + 1] - t
-        if i >= 1 and piece[i - 1] == p:
-            table[m, 0] = i - 1
-            tau4[m, 0] = label[i - 1] - t
-        else:
-            tau4[m, 0] = tau4[m, 1] - 1.0
-        if i + 2 < n and piece[i + 2] == p:
-            table[m, 3] = i + 2
-            tau4[m, 3] = label[i + 2] - t
-        else:
-            tau4[m, 3] = tau4[m, 2] + 1.0
+        # the secants' outer nodes: the nearest ones far enough from the cell's ends
+        j = _outer_node(label, piece, i, -1, hi - (label[i] - t))
+        table[m, 0] = j
+        tau4[m, 0] = label[j] - t if j >= 0 else tau4[m, 1] - 1.0
+        j = _outer_node(label, piece, i + 1, 1, (label[i + 1] - t) - lo)
+        table[m, 3] = j
+        tau4[m, 3] = label[j] - t if j >= 0 else tau4[m, 2] + 1.0
         span[m, 0], span[m, 1] = lo, hi
         cpiece[m] = p
         m += 1

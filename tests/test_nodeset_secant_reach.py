@@ -1,0 +1,135 @@
+"""Bounds between nodes next to a pair of nodes much closer than the cell they bound.
+
+The secant through nodes ``i-1, i`` bounds the cell ``[tau_i, tau_i+1]`` (docs/infoset.md,
+the bounds between nodes: the support of a convex body's slices is concave along it).
+Its slope is a difference quotient, so rounding of the two nodes' slices (a few ulps: two
+replays of the log never round alike) is divided by their spacing and multiplied by the
+cell's length. A pair 1e-12 apart beside a cell 1e12 times longer turns 4 ulps into a
+bound 1e-3 too low: states of the body fall outside it. Concavity allows any earlier
+node in place of ``i-1``; the bounds take the nearest one far enough for the rounding to
+stay under ``BOUND_RTOL`` (``_geometry.MAX_SECANT_REACH``).
+
+The body here is a prism (the same slice at every ``tau``), so its support is constant
+along it and every secant of exact values bounds it exactly: the limiting case of
+concavity, where a rounded secant cuts it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from kalman_vs_infoset.estim.common import _kernels as _k
+from kalman_vs_infoset.estim.intercept.nodeset import _contains
+from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
+from kalman_vs_infoset.estim.intercept.nodeset.bounds import BOUND_RTOL
+
+SCALE = 1e-4  # alpha_scale_rad
+E_NOM = 58e3  # m/s
+Y_MAX, V_MAX = 0.05, 1e-4  # the prism: |Y~| <= Y_MAX, |V~| <= V_MAX at every tau
+HARD_HI = 250.0  # the body ends here (s); the last node, past it, is empty
+ULP = 2.0**-52
+
+
+def _slice(tau: float) -> np.ndarray:
+    """The prism's slice at ``tau`` in the node set's ``(a, zs)``: ``a = Y~ / (scale
+    tau)``, ``zs = e_nom (Y~ + V~ tau)`` (bounds.py)."""
+    yv = np.array([[-Y_MAX, -V_MAX], [Y_MAX, -V_MAX], [Y_MAX, V_MAX], [-Y_MAX, V_MAX]])
+    return np.c_[yv[:, 0] / (SCALE * tau), E_NOM * (yv[:, 0] + yv[:, 1] * tau)]
+
+
+def _nodes(labels, shrink):
+    """Node polygons at ``labels`` (the last one empty); node ``k`` shrunk by
+    ``shrink[k]`` ulps towards the origin, as rounding could leave it."""
+    pts = [_slice(t) * (1.0 - s * ULP) for t, s in zip(labels[:-1], shrink, strict=True)]
+    xy = np.concatenate(pts)
+    off = np.r_[0, np.cumsum([len(p) for p in pts]), sum(len(p) for p in pts)]
+    return _k.convex_hulls(xy, off.astype(np.int64))
+
+
+def _summary(labels, shrink):
+    xy, off = _nodes(labels, shrink)
+    n = len(labels)
+    u = np.array([1.0 / E_NOM])
+    out = _ng.summarise(
+        xy, off, np.asarray(labels, float), np.zeros(n, np.int64), 0.0, u, u,
+        np.array([50.0]), np.array([HARD_HI]), SCALE, E_NOM, BOUND_RTOL,
+    )  # fmt: skip
+    return xy, off, out
+
+
+def _admits(labels, shrink, tau: float, y: float) -> bool:
+    """Whether the summary of the nodes admits ``Y~ = y, V~ = 0`` at ``tau``."""
+    xy, off, (table, tau4, span, cpiece, *_rest) = _summary(labels, shrink)
+    x = tau * E_NOM  # tau = x u
+    alpha = y / tau
+    omega = alpha / tau  # V~ = omega tau - alpha = 0
+    u = np.array([1.0 / E_NOM])
+    live = np.diff(off) > 0
+    tau_n = np.asarray(labels, float)
+    return bool(
+        _contains.contains_state(
+            xy,
+            off,
+            tau_n,
+            live,
+            cpiece,
+            span,
+            table,
+            tau4,
+            u,
+            u,
+            alpha,
+            omega,
+            x,
+            1e-9,
+            SCALE,
+            E_NOM,
+        )  # fmt: skip
+    )
+
+
+#: a pair of live nodes 1e-12 apart (relative) at 100 s, one node at 90 s before them,
+#: the empty node past the body's end
+LABELS = [90.0, 100.0, 100.0 * (1 + 1e-12), 300.0]
+
+
+@pytest.mark.parametrize("shrink", [(0, 0, 4), (0, 4, 0), (3, 0, 5)])
+def test_a_rounded_close_pair_keeps_the_far_end_of_the_cell_beside_it(shrink):
+    """bounds.py (secants of a concave support): a state of the prism near the far end
+    of the cell beside the close pair stays inside, whichever node the rounding
+    shrank."""
+    inside = Y_MAX * (1 - 1e-8)
+    assert _admits(LABELS, shrink, 240.0, inside)
+    assert _admits(LABELS, shrink, 240.0, -inside)
+
+
+@pytest.mark.parametrize("shrink", [(0, 0, 4), (0, 4, 0)])
+def test_a_rounded_close_pair_bounds_the_zero_effort_miss_of_the_cell_beside_it(shrink):
+    """The bound of ``zs`` over the cell ``[tau_2, 250 s]`` is at least the prism's
+    exact largest ``zs`` there, ``e_nom (Y_MAX + V_MAX 250)`` (at the cell's far end), and
+    still finite and tight (within 1e-6): the secant uses the node at 90 s."""
+    _, _, (table, _, span, _, zs, *_rest) = _summary(LABELS, shrink)
+    c = int(np.flatnonzero(table[:, 1] == 2)[0])
+    assert span[c, 1] == HARD_HI
+    exact = E_NOM * (Y_MAX + V_MAX * HARD_HI)
+    assert zs[c, 0] >= exact
+    assert zs[c, 0] <= exact * (1 + 1e-6)
+    assert -zs[c, 2] >= exact  # the lower bound, by symmetry
+    assert table[c, 0] == 0  # the secant from the far node, not the near one
+
+
+def test_nodes_spaced_like_the_cell_use_their_nearest_neighbour():
+    """Away from close pairs the bounds use the nearest node, as before: a node within
+    ``MAX_SECANT_REACH`` times the cell's length of it."""
+    labels = [90.0, 100.0, 110.0, 300.0]
+    _, _, (table, *_rest) = _summary(labels, (0, 0, 0))
+    c = int(np.flatnonzero(table[:, 1] == 2)[0])
+    assert table[c, 0] == 1
+    assert _ng.MAX_SECANT_REACH * 10.0 > 140.0
+
+
+def test_without_a_farther_node_the_cell_is_bounded_from_the_other_side_only():
+    """A close pair with no node before it gives no left secant: the cell beside it has
+    no bound from that side (sound), and the state stays inside."""
+    labels = [100.0, 100.0 * (1 + 1e-12), 300.0]
+    assert _admits(labels, (0, 4), 240.0, Y_MAX * (1 - 1e-8))
