@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept.nodeset import _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
@@ -133,3 +135,69 @@ def test_without_a_farther_node_the_cell_is_bounded_from_the_other_side_only():
     no bound from that side (sound), and the state stays inside."""
     labels = [100.0, 100.0 * (1 + 1e-12), 300.0]
     assert _admits(labels, (0, 4), 240.0, Y_MAX * (1 - 1e-8))
+
+
+def _body_slice(pts: np.ndarray, tau: float) -> np.ndarray:
+    """The slice at ``tau`` of the convex hull of ``pts`` (rows ``Y~, V~, tau``): the
+    hull of the points where the segments between them cross ``tau`` (every point of
+    the slice is a convex combination of two hull points on either side of it)."""
+    out = [p[:2] for p in pts if p[2] == tau]
+    for i in range(len(pts)):
+        for j in range(len(pts)):
+            a, b = pts[i], pts[j]
+            if a[2] < tau < b[2]:
+                s = (tau - a[2]) / (b[2] - a[2])
+                out.append(a[:2] + s * (b[:2] - a[:2]))
+    return np.array(out).reshape(-1, 2)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n_pts=st.integers(4, 9),
+    n_nodes=st.integers(3, 9),
+    near_rel=st.sampled_from([0.0, 1e-12, 1e-11, 1e-9, 1e-6]),
+    ulps=st.integers(0, 8),
+)
+def test_bounds_between_rounded_nodes_hold_every_state_of_a_random_convex_body(
+    seed, n_pts, n_nodes, near_rel, ulps
+):
+    """bounds.py, against the body itself: the convex hull of random points in ``(Y~,
+    V~, tau)`` (the scales of seed 003's Fig. 5: ``|Y~| <= 0.05``, ``|V~| <= 1e-4``,
+    ``tau`` in 80-120 s), its exact slices at random nodes (one of them doubled at
+    ``near_rel`` of its label), each moved by up to ``ulps`` ulps as rounding could.
+    Every sampled state of the body is admitted by the containment test, and its
+    ``zs`` lies within the bounds of its cell."""
+    rng = np.random.default_rng(seed)
+    pts = np.c_[rng.uniform(-0.05, 0.05, n_pts), rng.uniform(-1e-4, 1e-4, n_pts),
+                rng.uniform(80.0, 120.0, n_pts)]  # fmt: skip
+    t_lo, t_hi = pts[:, 2].min(), pts[:, 2].max()
+    labels = np.sort(np.r_[rng.uniform(t_lo, t_hi, n_nodes), t_lo - 5.0, t_hi + 5.0])
+    if near_rel:
+        k = int(rng.integers(1, len(labels) - 1))
+        labels = np.sort(np.r_[labels, labels[k] * (1.0 + near_rel)])
+    polys = []
+    for t in labels:
+        yv = _body_slice(pts, t)
+        ps = np.c_[yv[:, 0] / (SCALE * t), E_NOM * (yv[:, 0] + yv[:, 1] * t)]
+        polys.append(ps * (1.0 + rng.integers(-ulps, ulps + 1) * ULP))
+    off = np.r_[0, np.cumsum([len(p) for p in polys])].astype(np.int64)
+    xy, off = _k.convex_hulls(np.concatenate(polys).reshape(-1, 2), off)
+    u = np.array([1.0 / E_NOM])
+    n = len(labels)
+    table, tau4, span, cpiece, zs, *_rest = _ng.summarise(
+        xy, off, labels, np.zeros(n, np.int64), 0.0, u, u, np.array([0.0]),
+        np.array([1e3]), SCALE, E_NOM, BOUND_RTOL,
+    )  # fmt: skip
+    live = np.diff(off) > 0
+    w = rng.dirichlet(np.ones(n_pts), 200)
+    for y, v, tau in w @ pts:
+        alpha = y / tau
+        omega = (v + alpha) / tau  # V~ = omega tau - alpha
+        assert _contains.contains_state(
+            xy, off, labels, live, cpiece, span, table, tau4, u, u, alpha, omega,
+            tau * E_NOM, 1e-9, SCALE, E_NOM,
+        ), (y, v, tau)  # fmt: skip
+        c = np.flatnonzero((span[:, 0] <= tau) & (tau <= span[:, 1]))
+        z = E_NOM * (y + v * tau)
+        assert len(c) and np.any((zs[c, 2] <= z) & (z <= zs[c, 0])), (tau, z)
