@@ -324,7 +324,8 @@ def summarise(xy, off, label, piece, t, u_lo, u_hi, hard_lo, hard_hi, scale, e_n
     A cell is a pair of consecutive nodes of one piece with at least one live end,
     its part of ``tau`` clipped to the piece's hard limits. Returns
 
-    * ``table`` (m, 4): nodes ``i-1, i, i+1, i+2`` around each cell (-1: none);
+    * ``table`` (m, 4): nodes ``i-1, i, i+1, i+2`` around each cell (-1: none), the
+      outer two farther out where the nearest is too close (:func:`_outer_node`);
     * ``tau4`` (m, 4): their times to go (dummies for missing neighbours);
     * ``span`` (m, 2): the cell's part of ``tau``; ``cpiece`` (m,): its piece;
     * ``zs`` (m, 4): bounds of ``zs`` with their taus (:func:`zem_bounds`);

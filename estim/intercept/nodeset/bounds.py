@@ -13,8 +13,11 @@ interval, so on the cell ``[tau_i, tau_i+1]``::
     f(tau) <= L_left(tau)   = f_i   + (f_i   - f_i-1) (tau - tau_i)   / (tau_i   - tau_i-1)
     f(tau) <= L_right(tau)  = f_i+1 + (f_i+1 - f_i+2) (tau_i+1 - tau) / (tau_i+2 - tau_i+1)
 
-whenever the nodes named are not empty. The bound is exact at the nodes and tight
-wherever ``f`` is nearly linear between them; it needs three live nodes in a row,
+whenever the nodes named are not empty; any node beyond ``i`` may stand for ``i-1``
+(and beyond ``i+1`` for ``i+2``), and the bounds take one at least 1e-5 of the
+extension's reach away (``_geometry.MAX_SECANT_REACH``: a slope through two nodes
+closer than that carries their rounding, amplified). The bound is exact at the nodes
+and tight wherever ``f`` is nearly linear between them; it needs three live nodes in a row,
 which the estimator keeps by refining the nodes. A cell with both ends empty holds
 nothing (the live nodes lie elsewhere and the feasible ``tau`` form an interval).
 
