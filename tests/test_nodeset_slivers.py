@@ -20,7 +20,7 @@ from kalman_vs_infoset.estim.intercept.nodeset.refine import _merge
 from kalman_vs_infoset.experiments.scenario import load_scenario
 from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
-from nodeset_schedules import ROOT
+from nodeset_schedules import ROOT, run_schedule
 
 SHORT_APPROACH = ["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]", "model.dt_s=1.0"]
 
@@ -91,3 +91,37 @@ def test_a_node_within_rounding_of_a_live_node_is_not_added(last_step):
     assert _merge(s, keep, p, np.array([lab + 4 * np.spacing(lab)]), empty).polygons.n == (
         s.polygons.n + 1
     )
+
+
+def test_the_strip_proof_never_skips_a_search_that_finds_states(monkeypatch):
+    """A piece whose nodes a bearing all emptied is searched for states between them,
+    unless the bounds between nodes prove that the strip misses it at every time to go
+    (``_strip_misses``). Forced to search every time, over corner schedules of a short
+    approach (every corner of the box, errors at the bounds flipping late): every
+    search the proof would have skipped finds nothing, and searches that find states
+    occur (the proof is not vacuous, nor is the check)."""
+    from kalman_vs_infoset.estim.intercept.nodeset import refine
+
+    pairs: list[tuple[bool, bool]] = []
+    verdict: list[bool] = []
+    strip, search = refine.NodeRefinement._strip_misses, refine.NodeRefinement._search
+
+    def forced(self, before, p, alpha_m):
+        verdict.append(strip(self, before, p, alpha_m))
+        return False
+
+    def searched(self, s, p, lo, hi, held):
+        out = search(self, s, p, lo, hi, held)
+        if verdict:  # (a search from the top, not one of its own levels)
+            found = out is not s and bool((out.live & (out.piece == p)).any())
+            pairs.append((verdict.pop(), found))
+        return out
+
+    monkeypatch.setattr(refine.NodeRefinement, "_strip_misses", forced)
+    monkeypatch.setattr(refine.NodeRefinement, "_search", searched)
+    for y, v in ((10e3, 100.0), (-10e3, 100.0), (10e3, -100.0)):
+        for x, e in ((951.3e3, 58.1e3), (801.3e3, 57.9e3)):
+            run_schedule("kp_fig5", (y, v, x, e), [16.0], [], 1.0, -1.0, overrides=SHORT_APPROACH)
+    assert not any(skip and found for skip, found in pairs)
+    assert sum(skip for skip, _ in pairs) >= 10
+    assert sum(found for _, found in pairs) >= 10

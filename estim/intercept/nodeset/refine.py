@@ -202,14 +202,19 @@ class NodeRefinement:
         bound at the cell's smallest range). Then the piece is empty, and the
         search's replays (:meth:`_search`, which would find nothing) are skipped."""
         sm = before._summary
-        cells = sm["piece"] == p
-        if not cells.any():
+        cells = np.flatnonzero(sm["piece"] == p)
+        if not len(cells):
             return False
         tau_lo = np.maximum(sm["span"][cells, 0], 0.0)
         half = self.model.bearing_bound(tau_lo / before.u_hi[p]) * (1.0 + STRIP_MARGIN)
         half = half + STRIP_MARGIN * self.alpha_scale_rad
         a = sm["alpha"][cells]
-        return bool(np.all((a[:, 0] > alpha_m + half) | (a[:, 1] < alpha_m - half)))
+        missed = (a[:, 0] > alpha_m + half) | (a[:, 1] < alpha_m - half)
+        if missed.all():
+            return True
+        # the cells left, time to go by time to go (most searches found nothing there)
+        rest = cells[~missed]
+        return bool(_strip_misses_along(before, rest, alpha_m, half[~missed]).all())
 
     @staticmethod
     def _bracket(s: NodeSet, b: int) -> tuple[float, float]:
@@ -326,6 +331,47 @@ class NodeRefinement:
             per = np.vstack([per, per[p]])
             ops = ops.with_copied_column(p)
         return s, per, ops
+
+
+def _strip_misses_along(before: NodeSet, cells, alpha_m: float, half) -> NDArray[np.bool_]:
+    """Whether the bearing strip ``|Y~ / tau - alpha_m| <= half`` misses each of the
+    ``cells`` of ``before``'s summary at every ``tau`` of the cell: the cell's ``Y~``
+    lies between the secants of its nodes' extents in ``Y~`` (the bounds between
+    nodes, each valid over the whole cell), so a state at ``tau`` in the strip needs
+    ``min(up lines)(tau) >= (alpha_m - half) tau`` and ``max(down lines)(tau) <=
+    (alpha_m + half) tau``: each the set where lines are non-negative, an interval.
+    The cell is missed when the two leave no ``tau`` of it. (The cell's bounds of the
+    bearing, which :meth:`NodeRefinement._strip_misses` tries first, take ``Y~``'s
+    bound over the whole cell at either end.) A cell bounded from neither side is not
+    missed; each line gets a margin of 1e-8 of the values it spans (rounding)."""
+    sm = before._summary
+    table, tau4, span = sm["table"][cells], sm["tau4"][cells], sm["span"][cells]
+    ext = before.polygons.bounds()[:, [0, 2]] * before.alpha_scale_rad  # a_min, a_max
+    # (a node's extent in Y~ = a tau alpha_scale; live nodes have tau > 0)
+    y = np.where(((table >= 0) & (tau4 > 0))[..., None], ext[table] * tau4[..., None], np.nan)
+    lo, hi = span[:, 0].copy(), span[:, 1].copy()
+    bounded = np.zeros(len(cells), dtype=bool)
+    for near, far in ((1, 0), (2, 3)):  # the secant through nodes i-1, i; i+2, i+1
+        dt = tau4[:, near] - tau4[:, far]
+        ok = np.isfinite(y[:, near, 0]) & np.isfinite(y[:, far, 0]) & (dt != 0.0)
+        dt = np.where(ok, dt, 1.0)
+        reach = np.maximum(np.abs(span[:, 1] - tau4[:, near]), np.abs(span[:, 0] - tau4[:, near]))
+        for k, side in ((1, 1.0), (0, -1.0)):  # Y~ up to the max line, down to the min
+            f_near, f_far = y[:, near, k], y[:, far, k]
+            slope = (f_near - f_far) / dt
+            c0 = f_near - slope * tau4[:, near]
+            margin = 1e-8 * (np.abs(f_near) + np.abs(f_far) + np.abs(slope) * reach)
+            # side * (line(tau) - strip edge(tau)) + margin >= 0, as c + g tau >= 0
+            edge = alpha_m - side * half
+            c = side * c0 + margin
+            g = side * (slope - edge)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                root = -c / g
+            lo = np.where(ok & (g > 0), np.maximum(lo, root), lo)
+            hi = np.where(ok & (g < 0), np.minimum(hi, root), hi)
+            hi = np.where(ok & (g == 0) & (c < 0), -np.inf, hi)
+        bounded |= ok
+    return bounded & ~(lo <= hi)
 
 
 def _bisect_longest(knots: FloatArray, k: int) -> FloatArray:
