@@ -33,6 +33,7 @@ FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 VS = "docs/results/vs_35e3739.json"
+VS_5F9 = "docs/results/vs_35e3739_at_5f9e157.json"
 VS_E8E = "docs/results/vs_35e3739_at_e8e92a3.json"
 VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
 VS_6CA6544 = "docs/results/vs_35e3739_at_6ca6544.json"
@@ -378,8 +379,12 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) times the runs per CPU-second", VS,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "cpu_s_35e3739/2", "runs_per_cpu_s_ratio_mean")),
+    (PERF, r"`docs/results/vs_35e3739_at_5f9e157.json`\),\s+read ([\d.]+), ([\d.]+) and "
+     r"([\d.]+) CPU-s against ([\d.]+), ([\d.]+) and ([\d.]+), ([\d.]+) times", VS_5F9,
+     ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
+      "cpu_s_35e3739/2", "runs_per_cpu_s_ratio_mean")),
     (PERF, r"first command there cost ([\d.]+) CPU-s and its next two ([\d.]+) and (\d+\.\d+)",
-     VS, ("first_set/cpu_s_35e3739/0", "first_set/cpu_s_35e3739/1",
+     VS_5F9, ("first_set/cpu_s_35e3739/0", "first_set/cpu_s_35e3739/1",
           "first_set/cpu_s_35e3739/2")),
     (PERF, r"`docs/results/vs_35e3739_at_e8e92a3.json`\), read ([\d.]+) and ([\d.]+) CPU-s "
      r"against ([\d.]+) and ([\d.]+), ([\d.]+) times", VS_E8E,
