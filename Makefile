@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 # The main experiment: the paper's Fig. 5 (four variants, 50 runs each), CDF plots and table.
 run: $(STAMP)
-	$(BIN)/kvi fig5 --out results/fig5
+	$(BIN)/kvi fig5 --out results/fig5 --rerun-other-code
 
 # two pytest-xdist workers (the Dask tests share one worker and its cluster: loadgroup)
 # (the numba kernels compile into their cache while mypy runs: about 30 CPU-s on a

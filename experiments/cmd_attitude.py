@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             )
             df = run_job(
                 job, req.runs, req.out, args.workers, args.scheduler, not args.no_progress,
-                limits=options.run_limits(args),
+                limits=options.run_limits(args), rerun_other_code=args.rerun_other_code,
             )  # fmt: skip
             ok = df[df["status"] == "ok"] if len(df) else df
             failures = int((df["status"] != "ok").sum()) if len(df) else 0

@@ -100,11 +100,14 @@ def run_experiment(
     executor: Executor | None = None,
     limits: RunLimits | None = None,
     chunk: int = 1,
+    rerun_other_code: bool = False,
 ) -> pd.DataFrame:
     """Run (or complete) an intercept experiment and return its per-run table
-    (``chunk``: runs a task, :func:`intercept_job`; the table does not depend on it)."""
+    (``chunk``: runs a task, :func:`intercept_job`; the table does not depend on it;
+    ``rerun_other_code``: :func:`experiments.runner.run_job`)."""
     job = intercept_job(sc, estimator, noise, check_seed(seed), chunk)
-    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limits)
+    return run_job(job, runs, out_dir, workers, scheduler, progress, executor, limits,
+                   rerun_other_code)  # fmt: skip
 
 
 def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, wall_s) -> dict:
@@ -146,6 +149,7 @@ def run_grid(
             df = run_experiment(
                 sc, est, noise, runs, seed, out, args.workers, args.scheduler,
                 not args.no_progress, limits=run_limits(args),
+                rerun_other_code=args.rerun_other_code,
             )  # fmt: skip
             row = summarise(df, sc, est, noise, seed, time.perf_counter() - t1)
             # a remote cluster's workers are not this process's children: not counted

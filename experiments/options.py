@@ -244,11 +244,19 @@ def run_limits(args: argparse.Namespace):
 
 
 def add_runner(p: argparse.ArgumentParser) -> None:
-    """Where the runs go: ``--workers``, ``--scheduler``, ``--no-progress`` and the limit."""
+    """Where the runs go: ``--workers``, ``--scheduler``, ``--no-progress``, the limit and
+    ``--rerun-other-code``."""
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     add_limit(p)
+    p.add_argument(
+        "--rerun-other-code",
+        action="store_true",
+        help="run again the runs of a results table in --out that other code wrote (an "
+        "earlier version of the package), replacing it; default: refuse such a table "
+        "(finished runs of this code are always resumed)",
+    )
 
 
 def add_overrides(p: argparse.ArgumentParser, example: str) -> None:

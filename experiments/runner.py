@@ -183,13 +183,16 @@ def run_job(
     progress: bool = True,
     executor: Executor | None = None,
     limits: RunLimits | None = None,
+    rerun_other_code: bool = False,
 ) -> pd.DataFrame:
     """Run (or complete) runs ``0..runs-1`` of ``job``; return their rows, by run.
 
     Finished runs are kept on disk whatever ``runs`` is (a smaller ``runs`` only
-    reports fewer); failed runs are run again; a file of another scenario or other
-    sources is refused (one line). Complete results are only read (a read-only folder
-    can be summarised again); otherwise the table is written by one command at a time
+    reports fewer); failed runs are run again; a file of another scenario is refused
+    (one line), and so is one of other sources unless ``rerun_other_code`` (its runs
+    are then run again and the file replaced: it is deleted before the first run).
+    Complete results are only read (a read-only folder can be summarised again);
+    otherwise the table is written by one command at a time
     (:func:`experiments.files.exclusive`). ``limits`` are a run's CPU-time and memory
     limits (:mod:`experiments.limits`).
     """
@@ -198,8 +201,7 @@ def run_job(
     path = job_path(out_dir, job)
     meta = {**job.meta, "code": code_identity()}
     meta_path = sidecar_path(path)
-    if path.exists():
-        _check_resumable(path, existing_sidecar(path), meta)
+    if path.exists() and not _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
             return _reported(job, path, table, runs)
@@ -214,8 +216,14 @@ def run_job(
         with exclusive(path, job.desc):
             table = {}
             if path.exists():  # read again: another command may have written it meanwhile
-                _check_resumable(path, existing_sidecar(path), meta)
-                table = _read_table(path)
+                if _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
+                    # gone before the new description is written: an interruption
+                    # cannot leave the old runs under this code's name
+                    path.unlink()
+                    print(f"{job.desc}: {path.name} was written by other code: its runs "
+                          "are run again", file=sys.stderr)  # fmt: skip
+                else:
+                    table = _read_table(path)
             if not meta_path.exists() or _read_json(meta_path) != meta:
                 wrote_meta = not meta_path.exists()
                 text = json.dumps(meta, indent=2)
@@ -296,9 +304,12 @@ def _read_json(path: Path) -> Any:
         return None
 
 
-def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
+def _check_resumable(
+    path: Path, meta_path: Path, meta: dict[str, Any], rerun_other_code: bool = False
+) -> bool:
     """Refuse (one line) to add runs to results of another scenario or other code. The
-    resolved scenarios are compared, not the paths that named them."""
+    resolved scenarios are compared, not the paths that named them. Returns whether
+    the file is of other code and ``rerun_other_code`` lets its runs be run again."""
     fix = "use another --out or delete the file"
     try:
         old = json.loads(meta_path.read_text())
@@ -316,12 +327,16 @@ def _check_resumable(path: Path, meta_path: Path, meta: dict[str, Any]) -> None:
             f"{path}: results of a different scenario ({key}: {a!r} in the file, {b!r} now); {fix}"
         )
     before = (old.get("code") or {}).get("sources_sha256")
-    if before != meta["code"]["sources_sha256"]:
-        was = f"sources {before[:12]}" if before else "code that recorded no identity"
-        raise InputError(
-            f"{path}: results written by other code ({was}, now "
-            f"{meta['code']['sources_sha256'][:12]}); {fix}"
-        )
+    if before == meta["code"]["sources_sha256"]:
+        return False
+    if rerun_other_code:
+        return True
+    was = f"sources {before[:12]}" if before else "code that recorded no identity"
+    raise InputError(
+        f"{path}: results written by other code ({was}, now "
+        f"{meta['code']['sources_sha256'][:12]}); {fix}, or run them again with "
+        "--rerun-other-code"
+    )
 
 
 def _first_difference(a: Any, b: Any, key: str = "") -> tuple[str, Any, Any]:

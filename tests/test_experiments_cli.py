@@ -373,6 +373,42 @@ def test_resume_refuses_results_of_another_scenario_or_other_code(short, tmp_pat
     assert sorted(done["run"]) == [0, 1, 2, 3]
 
 
+def test_rerun_other_code_replaces_only_the_runs_of_other_code(short, tmp_path, capsys):
+    """``--rerun-other-code`` (what ``make run`` passes, so that it works after an
+    update): a table another version of the code wrote is run again and replaced,
+    with the rows a fresh run gives and this code's identity beside it; the refusal
+    without the flag names it; a table of another scenario is still refused; and the
+    runs of this code are resumed, not run again."""
+    from kalman_vs_infoset.experiments.provenance import code_identity
+
+    sc = load_scenario(short)
+    out = tmp_path / "out"
+    args = ("intercept", short, "--runs", "2", "--out", out, "--no-progress")
+    assert cli_inproc(capsys, *args).returncode == 0
+    path = intercept_runs.results_path(out, sc, "infoset", "random", 11)
+    meta_path = out / "_meta" / f"{path.stem}.json"
+    meta = json.loads(meta_path.read_text())
+    fresh = _table(pd.read_parquet(path))
+    stale = pd.read_parquet(path)
+    stale["miss_m"] = -1.0  # what the other code "measured"
+    stale.to_parquet(path)
+    meta_path.write_text(json.dumps({**meta, "code": {**meta["code"], "sources_sha256": "0" * 64}}))
+    r = cli_inproc(capsys, *args)
+    assert r.returncode == 2 and "--rerun-other-code" in r.stderr
+    r = cli_inproc(capsys, *args, "--rerun-other-code")
+    assert r.returncode == 0, r.stderr
+    assert "written by other code: its runs are run again" in r.stderr
+    pd.testing.assert_frame_equal(_table(pd.read_parquet(path)), fresh)
+    assert json.loads(meta_path.read_text())["code"] == json.loads(json.dumps(code_identity()))
+    stored = path.read_bytes()  # this code's runs: resumed (nothing run, nothing written)
+    r = cli_inproc(capsys, *args, "--rerun-other-code")
+    assert r.returncode == 0 and "run again" not in r.stderr and path.read_bytes() == stored
+    other = {**meta, "scenario": {**meta["scenario"], "name": "other"}}
+    meta_path.write_text(json.dumps(other))
+    r = cli_inproc(capsys, *args, "--rerun-other-code")
+    assert r.returncode == 2 and "different scenario" in r.stderr and path.read_bytes() == stored
+
+
 def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tmp_path, capsys):
     """``--set range_finder.enabled=false`` resolves to the same scenario as the file
     with that line edited (the name aside, which gets a ``+key=value`` suffix), gives
