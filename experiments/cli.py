@@ -24,6 +24,7 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
@@ -170,7 +171,8 @@ def _compile_notice(prog: str, module: Any) -> CompileNotice | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; the exit status: 0, 1 when runs failed or were lost (the last
-    line on stderr says how many), 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM."""
+    line on stderr says how many), 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM, 141
+    when the reader of its output went away (``kvi scenarios | head -3``)."""
     # a stop outside the command's run (which reports its own): while the command's
     # module loads, before the handlers are in place, or while they are put back
     try:
@@ -181,6 +183,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("kvi: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader has what it wanted: stop quietly, as shell tools do (128 + SIGPIPE);
+        # stdout goes to /dev/null so that the interpreter's last flush does not fail too
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
 
 
 def _main(argv: Sequence[str] | None) -> int:

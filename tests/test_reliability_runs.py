@@ -366,3 +366,14 @@ def test_a_file_system_without_locks_is_written_unlocked(tmp_path, capsys, monke
         table.write_text("x")
     assert "cannot lock files" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.parquet"]
+
+
+def test_a_reader_that_goes_away_stops_the_command_quietly():
+    """``kvi scenarios | head -1``: the reader closes the pipe before the command writes;
+    the command stops without a traceback, with the shell's status for SIGPIPE."""
+    proc = subprocess.Popen([*KVI, "scenarios"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # before the interpreter has started: every write finds it closed
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141, err
+    assert err == ""
