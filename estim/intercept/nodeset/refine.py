@@ -199,8 +199,10 @@ class NodeRefinement:
         """Whether the bearing strip at ``alpha_m`` misses every cell of piece ``p`` of
         the set ``before`` it: each cell's bounds of the bearing (sound, from the
         bounds between nodes) lie outside the strip at its widest over the cell (the
-        bound at the cell's smallest range). Then the piece is empty, and the
-        search's replays (:meth:`_search`, which would find nothing) are skipped."""
+        bound at the cell's smallest range), or, for the cells where they do not, the
+        strip misses the cell at each of its times to go (:func:`_strip_misses_along`).
+        Then the piece is empty, and the search's replays (:meth:`_search`, which
+        would find nothing) are skipped."""
         sm = before._summary
         cells = np.flatnonzero(sm["piece"] == p)
         if not len(cells):
