@@ -32,48 +32,43 @@ HARD_HI = 250.0  # the body ends here (s); the last node, past it, is empty
 ULP = 2.0**-52
 
 
-def _slice(tau: float) -> np.ndarray:
-    """The prism's slice at ``tau`` in the node set's ``(a, zs)``: ``a = Y~ / (scale
+def _to_node(yv: np.ndarray, tau: float) -> np.ndarray:
+    """Rows ``(Y~, V~)`` at ``tau`` in the node set's ``(a, zs)``: ``a = Y~ / (scale
     tau)``, ``zs = e_nom (Y~ + V~ tau)`` (bounds.py)."""
-    yv = np.array([[-Y_MAX, -V_MAX], [Y_MAX, -V_MAX], [Y_MAX, V_MAX], [-Y_MAX, V_MAX]])
     return np.c_[yv[:, 0] / (SCALE * tau), E_NOM * (yv[:, 0] + yv[:, 1] * tau)]
 
 
-def _nodes(labels, shrink):
-    """Node polygons at ``labels`` (the last one empty); node ``k`` shrunk by
-    ``shrink[k]`` ulps towards the origin, as rounding could leave it."""
-    pts = [_slice(t) * (1.0 - s * ULP) for t, s in zip(labels[:-1], shrink, strict=True)]
-    xy = np.concatenate(pts)
-    off = np.r_[0, np.cumsum([len(p) for p in pts]), sum(len(p) for p in pts)]
-    return _k.convex_hulls(xy, off.astype(np.int64))
+def _slice(tau: float) -> np.ndarray:
+    """The prism's slice at ``tau`` in ``(a, zs)``."""
+    yv = np.array([[-Y_MAX, -V_MAX], [Y_MAX, -V_MAX], [Y_MAX, V_MAX], [-Y_MAX, V_MAX]])
+    return _to_node(yv, tau)
 
 
-def _summary(labels, shrink):
-    xy, off = _nodes(labels, shrink)
-    n = len(labels)
+def _summarised(polys, labels, hard_lo: float, hard_hi: float):
+    """The hulls of node polygons ``polys`` (an empty one: no states) at ``labels``,
+    one piece at ``e_nom``, and their summary (``_geometry.summarise``)."""
+    off = np.r_[0, np.cumsum([len(p) for p in polys])].astype(np.int64)
+    xy, off = _k.convex_hulls(np.concatenate(polys).reshape(-1, 2), off)
     u = np.array([1.0 / E_NOM])
     out = _ng.summarise(
-        xy, off, np.asarray(labels, float), np.zeros(n, np.int64), 0.0, u, u,
-        np.array([50.0]), np.array([HARD_HI]), SCALE, E_NOM, BOUND_RTOL,
+        xy, off, np.asarray(labels, float), np.zeros(len(labels), np.int64), 0.0, u, u,
+        np.array([hard_lo]), np.array([hard_hi]), SCALE, E_NOM, BOUND_RTOL,
     )  # fmt: skip
     return xy, off, out
 
 
-def _admits(labels, shrink, tau: float, y: float) -> bool:
-    """Whether the summary of the nodes admits ``Y~ = y, V~ = 0`` at ``tau``."""
-    xy, off, (table, tau4, span, cpiece, *_rest) = _summary(labels, shrink)
-    x = tau * E_NOM  # tau = x u
+def _admits_state(xy, off, labels, summary, y: float, v: float, tau: float) -> bool:
+    """Whether the summary admits the state ``Y~ = y, V~ = v`` at ``tau``."""
+    table, tau4, span, cpiece = summary[:4]
     alpha = y / tau
-    omega = alpha / tau  # V~ = omega tau - alpha = 0
+    omega = (v + alpha) / tau  # V~ = omega tau - alpha
     u = np.array([1.0 / E_NOM])
-    live = np.diff(off) > 0
-    tau_n = np.asarray(labels, float)
     return bool(
         _contains.contains_state(
             xy,
             off,
-            tau_n,
-            live,
+            np.asarray(labels, float),
+            np.diff(off) > 0,
             cpiece,
             span,
             table,
@@ -82,12 +77,25 @@ def _admits(labels, shrink, tau: float, y: float) -> bool:
             u,
             alpha,
             omega,
-            x,
+            tau * E_NOM,
             1e-9,
             SCALE,
             E_NOM,
         )  # fmt: skip
     )
+
+
+def _summary(labels, shrink):
+    """The prism's slices at ``labels`` (the last node empty), node ``k`` shrunk by
+    ``shrink[k]`` ulps towards the origin, as rounding could leave it; summarised."""
+    polys = [_slice(t) * (1.0 - s * ULP) for t, s in zip(labels[:-1], shrink, strict=True)]
+    return _summarised([*polys, np.empty((0, 2))], labels, 50.0, HARD_HI)
+
+
+def _admits(labels, shrink, tau: float, y: float) -> bool:
+    """Whether the summary of the nodes admits ``Y~ = y, V~ = 0`` at ``tau``."""
+    xy, off, summary = _summary(labels, shrink)
+    return _admits_state(xy, off, labels, summary, y, 0.0, tau)
 
 
 #: a pair of live nodes 1e-12 apart (relative) at 100 s, one node at 90 s before them,
@@ -176,28 +184,15 @@ def test_bounds_between_rounded_nodes_hold_every_state_of_a_random_convex_body(
     if near_rel:
         k = int(rng.integers(1, len(labels) - 1))
         labels = np.sort(np.r_[labels, labels[k] * (1.0 + near_rel)])
-    polys = []
-    for t in labels:
-        yv = _body_slice(pts, t)
-        ps = np.c_[yv[:, 0] / (SCALE * t), E_NOM * (yv[:, 0] + yv[:, 1] * t)]
-        polys.append(ps * (1.0 + rng.integers(-ulps, ulps + 1) * ULP))
-    off = np.r_[0, np.cumsum([len(p) for p in polys])].astype(np.int64)
-    xy, off = _k.convex_hulls(np.concatenate(polys).reshape(-1, 2), off)
-    u = np.array([1.0 / E_NOM])
-    n = len(labels)
-    table, tau4, span, cpiece, zs, *_rest = _ng.summarise(
-        xy, off, labels, np.zeros(n, np.int64), 0.0, u, u, np.array([0.0]),
-        np.array([1e3]), SCALE, E_NOM, BOUND_RTOL,
-    )  # fmt: skip
-    live = np.diff(off) > 0
+    polys = [
+        _to_node(_body_slice(pts, t), t) * (1.0 + rng.integers(-ulps, ulps + 1) * ULP)
+        for t in labels
+    ]
+    xy, off, summary = _summarised(polys, labels, 0.0, 1e3)
+    span, zs = summary[2], summary[4]
     w = rng.dirichlet(np.ones(n_pts), 200)
     for y, v, tau in w @ pts:
-        alpha = y / tau
-        omega = (v + alpha) / tau  # V~ = omega tau - alpha
-        assert _contains.contains_state(
-            xy, off, labels, live, cpiece, span, table, tau4, u, u, alpha, omega,
-            tau * E_NOM, 1e-9, SCALE, E_NOM,
-        ), (y, v, tau)  # fmt: skip
+        assert _admits_state(xy, off, labels, summary, y, v, tau), (y, v, tau)
         c = np.flatnonzero((span[:, 0] <= tau) & (tau <= span[:, 1]))
         z = E_NOM * (y + v * tau)
         assert len(c) and np.any((zs[c, 2] <= z) & (z <= zs[c, 0])), (tau, z)
