@@ -19,10 +19,8 @@ told from an empty one, and then the band is not split (sound either way).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
-from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet, evolve
 from kalman_vs_infoset.estim.intercept.nodeset.refine import _compact, _merge
 from numpy.typing import NDArray
 
@@ -168,7 +166,7 @@ def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
         log = log.with_copied_column(int(p))
     for p in pcs:
         log = log.with_copied_column(int(p))
-    halves = replace(
+    halves = evolve(
         s, u_lo=np.r_[s.u_lo, np.full(len(pcs), ua), np.full(len(pcs), um)],
         u_hi=np.r_[s.u_hi, np.full(len(pcs), um), np.full(len(pcs), ub)],
         hard_lo_s=np.r_[s.hard_lo_s, s.hard_lo_s[pcs], s.hard_lo_s[pcs]],
@@ -233,7 +231,7 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
             if out is not None and not out.is_empty:
                 s = out
                 continue
-        s = replace(s, band_trial_after_s=s.t_s + RETRY_S)
+        s = evolve(s, band_trial_after_s=s.t_s + RETRY_S)
         break
     return s
 
@@ -253,7 +251,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
         hard_lo = np.r_[s.hard_lo_s, max(s.hard_lo_s[p], xa * um)]
         hard_hi = np.r_[s.hard_hi_s, s.hard_hi_s[p]]
         hard_hi[p] = min(hard_hi[p], xb * um)
-        two = replace(
+        two = evolve(
             s, u_lo=np.r_[s.u_lo, um], u_hi=np.r_[np.where(np.arange(q) == p, um, s.u_hi), ub],
             hard_lo_s=hard_lo, hard_hi_s=hard_hi, log=s.log.with_copied_column(int(p)),
         )  # fmt: skip
@@ -262,7 +260,7 @@ def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:
         polys, _, h_lo, h_hi, _ = est._apply(
             two, piece, both, est._prior(two, piece, both), two.log, 0.0
         )
-        two = replace(two, hard_lo_s=np.maximum(two.hard_lo_s, h_lo),
+        two = evolve(two, hard_lo_s=np.maximum(two.hard_lo_s, h_lo),
                       hard_hi_s=np.minimum(two.hard_hi_s, h_hi))  # fmt: skip
         counts = polys.counts
         # the parent's feasible labels: between its dead end nodes, or out to its

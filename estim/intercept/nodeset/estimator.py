@@ -45,7 +45,7 @@ node has passed under eps the set is empty with status ``"terminal"``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -69,7 +69,7 @@ from kalman_vs_infoset.estim.intercept.model import (
 )
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
 from kalman_vs_infoset.estim.intercept.nodeset.bands import split_live_bands
-from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet, evolve
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
 from kalman_vs_infoset.estim.intercept.nodeset.options import DEFAULTS
 from kalman_vs_infoset.estim.intercept.nodeset.refine import NodeRefinement
@@ -240,7 +240,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             hard_hi, 0.0, OpLog.empty(len(u_lo)), boxes, self.alpha_scale_rad,
         )  # fmt: skip
         label = np.concatenate(labels)
-        return replace(base, piece=piece, label_s=label, polygons=self._prior(base, piece, label))
+        return evolve(base, piece=piece, label_s=label, polygons=self._prior(base, piece, label))
 
     def _prior(self, s: NodeSet, piece: NDArray[np.int64], label: FloatArray) -> ConvexPolygons:
         """The prior slices at ``label`` (see :meth:`initial`)."""
@@ -276,7 +276,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         if not out.is_empty:
             out = self.tighten(out)
         if out.is_empty:
-            return replace(
+            return evolve(
                 belief, status=Status.CONTRADICTION, contradictions=belief.contradictions + 1
             )
         return out
@@ -332,14 +332,14 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             w_abs = np.maximum(np.abs(per[:, 0]), np.abs(per[:, 1]))
             if not np.all((w_abs <= DIVERGED_W_PER_X * x_max) | ~np.isfinite(per[:, 4])):
                 empty = s.polygons.clip_slab(0, np.full(s.polygons.n, np.inf), 0.0)
-                return replace(s, polygons=empty, status=Status.DIVERGED)
+                return evolve(s, polygons=empty, status=Status.DIVERGED)
         # v u for u in [u_lo, u_hi]
         q_lo = np.minimum(v_lo * s.u_lo, v_lo * s.u_hi)
         q_hi = np.maximum(v_hi * s.u_lo, v_hi * s.u_hi)
         ops = ops + OpLog.one(_nk.PREDICT, len(q_lo), dt_s, q_lo=q_lo, q_hi=q_hi)
         out = self.refine(self._record(s, ops, impulse_moment_m=moment), before=s)
         if out.is_empty and out.status == Status.OK:
-            return replace(out, status=Status.TERMINAL)
+            return evolve(out, status=Status.TERMINAL)
         return out
 
     # -- the operations (applied to the set, and replayed on new nodes) -----------------
@@ -347,7 +347,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         polys, t, hard_lo, hard_hi, n_simpl = self._apply(
             s, s.piece, s.label_s, s.polygons, op, s.t_s
         )
-        return replace(
+        return evolve(
             s, polygons=polys, t_s=t, log=s.log + op, hard_lo_s=hard_lo, hard_hi_s=hard_hi,
             status=Status.OK, n_simplified=s.n_simplified + n_simpl, **fields,
         )  # fmt: skip

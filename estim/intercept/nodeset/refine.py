@@ -14,7 +14,6 @@ New nodes get exact slices by replaying the recorded operations on the prior
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -24,7 +23,7 @@ from kalman_vs_infoset.estim.intercept.kinematic import STRIP_MARGIN
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
-from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet
+from kalman_vs_infoset.estim.intercept.nodeset.belief import NodeSet, evolve
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import OpLog
 from numpy.typing import NDArray
 
@@ -400,7 +399,7 @@ def _compact(s: NodeSet) -> NodeSet:
     near[1:] |= live[:-1] & same  # the dead node just above a live one
     near[:-1] |= live[1:] & same  # and just below
     if not near.all():
-        s = replace(
+        s = evolve(
             s, piece=s.piece[near], label_s=s.label_s[near], polygons=s.polygons.select(near)
         )
     return _drop_empty_pieces(s)
@@ -415,7 +414,7 @@ def _drop_empty_pieces(s: NodeSet) -> NodeSet:
         return s
     new_index = np.cumsum(used) - 1
     log = s.log
-    return replace(
+    return evolve(
         s, piece=new_index[s.piece], u_lo=s.u_lo[used], u_hi=s.u_hi[used],
         hard_lo_s=s.hard_lo_s[used], hard_hi_s=s.hard_hi_s[used],
         log=OpLog(log.kinds, log.pa, log.pb, np.ascontiguousarray(log.q_lo[:, used]),
@@ -445,7 +444,7 @@ def _merge(s: NodeSet, keep, piece, labels, polys: ConvexPolygons) -> NodeSet:
     merged = ConvexPolygons._make(
         *_k.take_polygons(s.polygons.xy, s.polygons.offsets, polys.xy, polys.offsets, source)
     )
-    return replace(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
+    return evolve(s, piece=all_piece[order], label_s=all_label[order], polygons=merged)
 
 
 def _twins(piece, label, source, n_old: int, counts) -> NDArray[np.bool_]:
@@ -486,7 +485,7 @@ def _split_at(s: NodeSet, p: int, j: int) -> NodeSet:
     piece = np.concatenate([s.piece[:c], s.piece[b:], np.full(n_new, new, dtype=np.int64)])
     hard_hi = s.hard_hi_s.copy()
     hard_hi[p] = cut
-    return replace(
+    return evolve(
         s, piece=piece, label_s=s.label_s[order], polygons=s.polygons.select(order),
         u_lo=np.append(s.u_lo, s.u_lo[p]), u_hi=np.append(s.u_hi, s.u_hi[p]),
         hard_lo_s=np.append(s.hard_lo_s, cut), hard_hi_s=np.append(hard_hi, s.hard_hi_s[p]),
