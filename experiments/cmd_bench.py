@@ -17,6 +17,10 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
 * ``whole_approach_step_us`` (and ``whole_approach_steps``, ``whole_approach_ratio``
   = information set / UKF): the same step for the information set and the UKF, mean
   over the whole approach to the blind range whatever ``--steps`` is;
+  ``whole_approach_tail_share``: the share of that pass's CPU time spent in its last
+  tenth of steps (``whole_approach_tail_steps`` of them; a cost that does not depend
+  on where the approach is reads 0.1), ``whole_approach_head_step_us`` the mean step
+  before them and ``whole_approach_head_ratio`` its ratio (information set / UKF);
 * ``engagement_ms``: one full Fig. 3 engagement, both channels, game noise
   (``engagement_random_ms``: random noise); ``engagement_in_ukf_steps`` and
   ``engagement_random_in_ukf_steps``: the same divided by ``ukf_step_us`` (the
@@ -99,6 +103,8 @@ BENCH_IMPULSE_MPS = 0.5
 
 #: more steps than any approach has (the bearings stop at the blind range)
 _ALL_STEPS = 100_000
+#: the last tenth of an approach's steps: its share of the CPU time is reported
+TAIL_FRACTION = 0.1
 #: time steps (s) of the approaches of the cost exponent: about 100, 200 and 400 steps
 #: from 5801.3 km to the blind range (``--quick``: about 25, 50 and 100)
 COST_DT_S = (1.0, 0.5, 0.25)
@@ -145,23 +151,54 @@ def _bearings(model, steps: int, dt: float, rng) -> list[float]:
     return out
 
 
-def _approach_cpu_s(name: str, sc, steps: int, dt: float) -> tuple[float, int]:
-    """CPU time (s) of one pass of ``name`` over the approach, and the steps done."""
+def _approach_step_cpu_s(name: str, sc, steps: int, dt: float) -> tuple[np.ndarray, float]:
+    """CPU time (s) of each step of one pass of ``name`` over the approach, and of the
+    update that emptied its belief (0 when none did: the approach ran to its end)."""
     from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 
     model = sc.channel_model()
     est, b = build_estimator(name, sc, model, "lateral")
     alphas = _bearings(model, steps, dt, np.random.default_rng(7))
-    done = 0
-    t0 = time.thread_time()
+    times = []
     for a in alphas:
+        t0 = time.thread_time()
         b = est.update(b, Bearing(a))
         if b.is_empty:
-            break
+            return np.array(times), time.thread_time() - t0
         b.extremes(MissForecast(model))
         b = est.predict(b, dt, BENCH_IMPULSE_MPS)  # the impulse acts at the step's start
-        done += 1
-    return time.thread_time() - t0, done
+        times.append(time.thread_time() - t0)
+    return np.array(times), 0.0
+
+
+def _approach_cpu_s(name: str, sc, steps: int, dt: float) -> tuple[float, int]:
+    """CPU time (s) of one pass of ``name`` over the approach, and the steps done."""
+    times, rest = _approach_step_cpu_s(name, sc, steps, dt)
+    return float(times.sum()) + rest, len(times)
+
+
+def whole_approach(name: str, sc, dt: float, repeat: int) -> dict[str, float]:
+    """One step of ``name`` over the whole approach (to the blind range), median of
+    ``repeat`` passes: ``step_us`` (mean over its ``steps``), ``tail_share`` (the share
+    of the pass's CPU time spent in its last ``TAIL_FRACTION`` of steps, ``tail_steps``
+    of them) and ``head_step_us`` (the mean step before them). A cost that grows late
+    in the approach shows as a tail share well above ``TAIL_FRACTION``."""
+    passes = []
+    for _ in range(repeat):
+        times, rest = _approach_step_cpu_s(name, sc, _ALL_STEPS, dt)
+        n = len(times)
+        k = min(max(1, round(TAIL_FRACTION * n)), n - 1) if n > 1 else 0
+        total = float(times.sum()) + rest
+        passes.append(
+            {
+                "step_us": total / max(n, 1) * 1e6,
+                "tail_share": float(times[n - k :].sum()) / total if k and total > 0 else 0.0,
+                "head_step_us": float(times[: n - k].mean()) * 1e6 if n else 0.0,
+                "steps": n,
+                "tail_steps": k,
+            }
+        )
+    return {key: float(np.median([p[key] for p in passes])) for key in passes[0]}
 
 
 def step_cost_us(name: str, sc, steps: int, repeat: int) -> tuple[float, int]:
@@ -327,13 +364,17 @@ def run(args) -> dict[str, Any]:
     result[f"engagement_in_{unit}_steps"] = result["engagement_ms"] / unit_ms
     result[f"engagement_random_in_{unit}_steps"] = result["engagement_random_ms"] / unit_ms
     result[f"{ref}_to_{unit}_ratio"] = steps[ref] / steps[unit]
-    if quick:  # the whole approach at a coarse step: a few dozen steps
-        whole = {n: _whole(n, fig3, COST_DT_S_QUICK[-1]) for n in (ref, unit)}
-    else:
-        whole = {n: step_cost_us(n, fig3, _ALL_STEPS, repeat) for n in (ref, unit)}
-    result["whole_approach_step_us"] = {n: us for n, (us, _) in whole.items()}
-    result["whole_approach_steps"] = {n: k for n, (_, k) in whole.items()}
-    result["whole_approach_ratio"] = whole[ref][0] / whole[unit][0]
+    # the whole approach (at a coarse step with --quick: a few dozen steps)
+    dt_whole = COST_DT_S_QUICK[-1] if quick else fig3.model.dt_s
+    whole = {n: whole_approach(n, fig3, dt_whole, 1 if quick else repeat) for n in (ref, unit)}
+    result["whole_approach_step_us"] = {n: w["step_us"] for n, w in whole.items()}
+    result["whole_approach_steps"] = {n: int(w["steps"]) for n, w in whole.items()}
+    result["whole_approach_ratio"] = whole[ref]["step_us"] / whole[unit]["step_us"]
+    # where in the approach the cost lies: its last tenth of steps, and the rest
+    result["whole_approach_tail_share"] = {n: w["tail_share"] for n, w in whole.items()}
+    result["whole_approach_tail_steps"] = {n: int(w["tail_steps"]) for n, w in whole.items()}
+    result["whole_approach_head_step_us"] = {n: w["head_step_us"] for n, w in whole.items()}
+    result["whole_approach_head_ratio"] = whole[ref]["head_step_us"] / whole[unit]["head_step_us"]
     result.update(cost_exponent(fig3, COST_DT_S_QUICK if quick else COST_DT_S))
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
     # interleaved and best-of-repeat: the machine's speed drifts (shared host)
@@ -377,9 +418,19 @@ def run(args) -> dict[str, Any]:
     return result
 
 
-def _whole(name: str, sc, dt: float) -> tuple[float, int]:
-    cpu_s, done = _approach_cpu_s(name, sc, _ALL_STEPS, dt)
-    return cpu_s / max(done, 1) * 1e6, done
+def _tail_lines(result: dict[str, Any]) -> list[str]:
+    """Where in the whole approach the cost lies (absent: files of older releases)."""
+    if "whole_approach_tail_share" not in result:
+        return []
+    share, k = result["whole_approach_tail_share"], result["whole_approach_tail_steps"]
+    head = result["whole_approach_head_step_us"]
+    return [
+        "  its last steps' share of the CPU time: "
+        + ", ".join(f"{n} {share[n]:.0%} in the last {k[n]}" for n in share)
+        + "; the steps before them: "
+        + ", ".join(f"{n} {us:.1f} us" for n, us in head.items())
+        + f" (ratio {result['whole_approach_head_ratio']:.2f})"
+    ]
 
 
 def render(result: dict[str, Any]) -> str:
@@ -412,6 +463,7 @@ def render(result: dict[str, Any]) -> str:
                 for n, us in result["whole_approach_step_us"].items()
             )
             + f" (ratio {result['whole_approach_ratio']:.2f})",
+            *_tail_lines(result),
             f"full Fig. 3 engagement, both channels: game {result['engagement_ms']:.0f} ms "
             f"({result[f'engagement_in_{unit}_steps']:.0f} {in_steps}), random "
             f"{result['engagement_random_ms']:.0f} ms "

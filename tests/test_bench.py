@@ -42,6 +42,16 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert set(whole) == {"infoset", "ukf"} and all(whole[n] > 0 for n in whole)
     assert n_steps["infoset"] == n_steps["ukf"] > 5
     assert out["whole_approach_ratio"] == whole["infoset"] / whole["ukf"]
+    # its last tenth of steps and the steps before them (--quick: one pass, so the mean
+    # over all steps is the two parts' weighted mean)
+    share, tail = out["whole_approach_tail_share"], out["whole_approach_tail_steps"]
+    head = out["whole_approach_head_step_us"]
+    for n in ("infoset", "ukf"):
+        assert tail[n] == round(0.1 * n_steps[n]) and 0.0 < share[n] < 1.0
+        assert head[n] * (n_steps[n] - tail[n]) == pytest.approx(
+            (1.0 - share[n]) * whole[n] * n_steps[n]
+        )
+    assert out["whole_approach_head_ratio"] == head["infoset"] / head["ukf"]
     assert out["engagement_in_ukf_steps"] == pytest.approx(
         out["engagement_ms"] * 1e3 / out["ukf_step_us"]
     )
