@@ -22,6 +22,7 @@ BENCH_39E = "docs/results/bench_at_39ec9cf.json"
 VS_1F4 = "docs/results/vs_1f4367d.json"
 BENCH_NOW = "docs/results/bench_after_trial_splits.json"
 BENCH_PP = "docs/results/bench_per_piece.json"
+BENCH_TAIL = "docs/results/bench_tail.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
@@ -407,6 +408,15 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"CPU-second pooled, ([\d.]+) to ([\d.]+) pair by pair", VS_SLOW,
      ("runs_per_cpu_s_ratio_pooled", "runs_per_cpu_s_ratio_min", "runs_per_cpu_s_ratio_max")),
     # docs/performance.md: ``kvi bench``
+    (PERF, r"whole approach's (\d+) steps the last (\d+) took\s+([\d.]+) of the set's CPU time "
+     r"and ([\d.]+) of the UKF's; before them a set step cost (\d+) us\s+against the UKF's "
+     r"(\d+) us \(ratio ([\d.]+)\), where over all \d+ it cost (\d+) against (\d+) us\s+"
+     r"\(([\d.]+)\)", BENCH_TAIL,
+     ("whole_approach_steps/infoset", "whole_approach_tail_steps/infoset",
+      "whole_approach_tail_share/infoset", "whole_approach_tail_share/ukf",
+      "whole_approach_head_step_us/infoset", "whole_approach_head_step_us/ukf",
+      "whole_approach_head_ratio", "whole_approach_step_us/infoset",
+      "whole_approach_step_us/ukf", "whole_approach_ratio")),
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
     (PERF, r"\| `ellipsoid` / `zonotope` / `box` step \(29 slabs\) \| (\d+) / "
