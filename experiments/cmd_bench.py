@@ -159,7 +159,7 @@ def _approach_step_cpu_s(name: str, sc, steps: int, dt: float) -> tuple[np.ndarr
     model = sc.channel_model()
     est, b = build_estimator(name, sc, model, "lateral")
     alphas = _bearings(model, steps, dt, np.random.default_rng(7))
-    times = []
+    times: list[float] = []
     for a in alphas:
         t0 = time.thread_time()
         b = est.update(b, Bearing(a))
