@@ -25,6 +25,8 @@ from kalman_vs_infoset.estim.intercept.nodeset import _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset.bounds import BOUND_RTOL
 
+from kalman_vs_infoset.numerics.arrays import readonly
+
 SCALE = 1e-4  # alpha_scale_rad
 E_NOM = 58e3  # m/s
 Y_MAX, V_MAX = 0.05, 1e-4  # the prism: |Y~| <= Y_MAX, |V~| <= V_MAX at every tau
@@ -49,10 +51,11 @@ def _summarised(polys, labels, hard_lo: float, hard_hi: float):
     one piece at ``e_nom``, and their summary (``_geometry.summarise``)."""
     off = np.r_[0, np.cumsum([len(p) for p in polys])].astype(np.int64)
     xy, off = _k.convex_hulls(np.concatenate(polys).reshape(-1, 2), off)
-    u = np.array([1.0 / E_NOM])
+    # read-only, as a node set holds them: the kernels' compiled (and cached) versions
+    xy, off, u = readonly(xy), readonly(off, np.int64), readonly([1.0 / E_NOM])
     out = _ng.summarise(
-        xy, off, np.asarray(labels, float), np.zeros(len(labels), np.int64), 0.0, u, u,
-        np.array([hard_lo]), np.array([hard_hi]), SCALE, E_NOM, BOUND_RTOL,
+        xy, off, readonly(labels), readonly(np.zeros(len(labels)), np.int64), 0.0, u, u,
+        readonly([hard_lo]), readonly([hard_hi]), SCALE, E_NOM, BOUND_RTOL,
     )  # fmt: skip
     return xy, off, out
 
@@ -62,7 +65,7 @@ def _admits_state(xy, off, labels, summary, y: float, v: float, tau: float) -> b
     table, tau4, span, cpiece = summary[:4]
     alpha = y / tau
     omega = (v + alpha) / tau  # V~ = omega tau - alpha
-    u = np.array([1.0 / E_NOM])
+    u = readonly([1.0 / E_NOM])
     return bool(
         _contains.contains_state(
             xy,
