@@ -407,6 +407,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (PERF, r"`docs/results/vs_35e3739_slow_host.json`\): ([\d.]+) times the runs per "
      r"CPU-second pooled, ([\d.]+) to ([\d.]+) pair by pair", VS_SLOW,
      ("runs_per_cpu_s_ratio_pooled", "runs_per_cpu_s_ratio_min", "runs_per_cpu_s_ratio_max")),
+    (README, r"approach a set step costs ([\d.]+) of a UKF step, and the last tenth takes "
+     r"([\d.]+) of the set's\s+CPU time", BENCH_TAIL,
+     ("whole_approach_head_ratio", "whole_approach_tail_share/infoset")),
     # docs/performance.md: ``kvi bench``
     (PERF, r"whole approach's (\d+) steps the last (\d+) took\s+([\d.]+) of the set's CPU time "
      r"and ([\d.]+) of the UKF's; before them a set step cost (\d+) us\s+against the UKF's "
