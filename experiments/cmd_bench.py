@@ -21,6 +21,9 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   tenth of steps (``whole_approach_tail_steps`` of them; a cost that does not depend
   on where the approach is reads 0.1), ``whole_approach_head_step_us`` the mean step
   before them and ``whole_approach_head_ratio`` its ratio (information set / UKF);
+  ``whole_approach_nodes_made``: the live nodes the set makes a step over the same
+  approach (untimed), before the last tenth and in it, and the share of the last
+  tenth's that are gone one step later (:func:`approach_nodes`);
 * ``engagement_ms``: one full Fig. 3 engagement, both channels, game noise
   (``engagement_random_ms``: random noise); ``engagement_in_ukf_steps`` and
   ``engagement_random_in_ukf_steps``: the same divided by ``ukf_step_us`` (the
@@ -201,6 +204,55 @@ def whole_approach(name: str, sc, dt: float, repeat: int) -> dict[str, float]:
     return {key: float(np.median([p[key] for p in passes])) for key in passes[0]}
 
 
+def approach_nodes(name: str, sc, dt: float) -> dict[str, float] | None:
+    """The live nodes ``name``'s belief makes over :func:`whole_approach`'s pass
+    (untimed; ``None`` for a belief without nodes): ``head`` and ``tail``, the mean
+    made a step before the last ``TAIL_FRACTION`` of steps and in it, and
+    ``tail_gone_in_a_step``, the share of the tail's that are gone one step later. A
+    node is a closing-speed band and a label, seen after each update and prediction;
+    each one made is a replay of the whole operation log."""
+    from kalman_vs_infoset.experiments.sim.intercept import build_estimator
+
+    model = sc.channel_model()
+    est, b = build_estimator(name, sc, model, "lateral")
+    if not all(hasattr(b, a) for a in ("label_s", "piece", "u_lo", "live")):
+        return None
+
+    def nodes(b) -> set[tuple[float, float]]:
+        keys = zip(b.u_lo[b.piece].tolist(), b.label_s.tolist(), strict=True)
+        return {k for k, ok in zip(keys, b.live.tolist(), strict=True) if ok}
+
+    born: dict[tuple[float, float], int] = {}
+    lives: list[tuple[int, int]] = []  # (step made, step gone) of the nodes made
+    seen = nodes(b)
+    step = 0
+    for a in _bearings(model, _ALL_STEPS, dt, np.random.default_rng(7)):
+        for op in ("update", "predict"):
+            b = (
+                est.update(b, Bearing(a))
+                if op == "update"
+                else est.predict(b, dt, BENCH_IMPULSE_MPS)
+            )
+            now = nodes(b)
+            born.update({k: step for k in now - seen})
+            lives += [(born.pop(k), step) for k in seen - now if k in born]
+            seen = now
+            if b.is_empty:
+                break
+        if b.is_empty:
+            break
+        step += 1
+    lives += [(s, step + 1) for s in born.values()]  # alive at the end
+    n = max(step, 1)
+    k = min(max(1, round(TAIL_FRACTION * n)), n - 1) if n > 1 else 0
+    tail = [(s, g) for s, g in lives if s >= n - k]
+    return {
+        "head": sum(s < n - k for s, _ in lives) / max(n - k, 1),
+        "tail": len(tail) / max(k, 1),
+        "tail_gone_in_a_step": sum(g - s <= 1 for s, g in tail) / len(tail) if tail else 0.0,
+    }
+
+
 def step_cost_us(name: str, sc, steps: int, repeat: int) -> tuple[float, int]:
     """Median CPU cost (us) of update + predict (with an impulse) + extremes for one
     channel, and the number of steps timed: at most ``steps``, fewer when the approach
@@ -375,6 +427,8 @@ def run(args) -> dict[str, Any]:
     result["whole_approach_tail_steps"] = {n: int(w["tail_steps"]) for n, w in whole.items()}
     result["whole_approach_head_step_us"] = {n: w["head_step_us"] for n, w in whole.items()}
     result["whole_approach_head_ratio"] = whole[ref]["head_step_us"] / whole[unit]["head_step_us"]
+    # the set's nodes made a step there (each a replay of the whole log), untimed
+    result["whole_approach_nodes_made"] = approach_nodes(ref, fig3, dt_whole)
     result.update(cost_exponent(fig3, COST_DT_S_QUICK if quick else COST_DT_S))
     throughput(fig5, 2, 2)  # start-up of the worker pool is not what we measure
     # interleaved and best-of-repeat: the machine's speed drifts (shared host)
@@ -430,6 +484,15 @@ def _tail_lines(result: dict[str, Any]) -> list[str]:
         + "; the steps before them: "
         + ", ".join(f"{n} {us:.1f} us" for n, us in head.items())
         + f" (ratio {result['whole_approach_head_ratio']:.2f})"
+    ] + _nodes_line(result.get("whole_approach_nodes_made"))
+
+
+def _nodes_line(made: dict[str, float] | None) -> list[str]:
+    if not made:
+        return []
+    return [
+        f"  nodes the set makes a step: {made['head']:.2f} before the last steps, "
+        f"{made['tail']:.1f} in them ({made['tail_gone_in_a_step']:.0%} gone a step later)"
     ]
 
 

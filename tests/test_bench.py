@@ -52,6 +52,10 @@ def test_bench_reports_every_field_side_by_side(capsys):
             (1.0 - share[n]) * whole[n] * n_steps[n]
         )
     assert out["whole_approach_head_ratio"] == head["infoset"] / head["ukf"]
+    # the set's nodes made a step over that approach (the UKF has none)
+    made = out["whole_approach_nodes_made"]
+    assert made["head"] >= 0.0 and made["tail"] >= 0.0
+    assert 0.0 <= made["tail_gone_in_a_step"] <= 1.0
     assert out["engagement_in_ukf_steps"] == pytest.approx(
         out["engagement_ms"] * 1e3 / out["ukf_step_us"]
     )
@@ -76,6 +80,17 @@ def test_bench_reports_every_field_side_by_side(capsys):
     assert set(out["help_cpu_s"]) == {"(none)", "intercept"}
     assert all(v > 0 for v in out["help_cpu_s"].values())
     assert out["help_cpu_s_max"] == max(out["help_cpu_s"].values())
+
+
+def test_bench_counts_nodes_only_of_a_belief_with_nodes():
+    """``whole_approach_nodes_made`` is the node set's: a filter's belief has none."""
+    from kalman_vs_infoset.experiments.cmd_bench import approach_nodes
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    fig3 = load_scenario("data/scenarios/kp_fig3.toml")
+    assert approach_nodes("ukf", fig3, 4.0) is None
+    made = approach_nodes("infoset", fig3, 4.0)
+    assert made is not None and made["head"] + made["tail"] > 0.0
 
 
 def test_bench_first_run_compiles_on_an_empty_cache(tmp_path):
