@@ -420,6 +420,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       "whole_approach_head_step_us/infoset", "whole_approach_head_step_us/ukf",
       "whole_approach_head_ratio", "whole_approach_step_us/infoset",
       "whole_approach_step_us/ukf", "whole_approach_ratio")),
+    (PERF, r"the set makes ([\d.]+) live nodes a step\s+before the last tenth of the approach "
+     r"and ([\d.]+) a step in it, and ([\d.]+) of the latter are\s+gone one step later",
+     BENCH_TAIL, ("whole_approach_nodes_made/head", "whole_approach_nodes_made/tail",
+                  "whole_approach_nodes_made/tail_gone_in_a_step")),
     (PERF, r"\| `infoset` step \(node set\), first (\d+) steps \| (\d+) us", BENCH,
      ("steps_timed/infoset", "step_us/infoset")),
     (PERF, r"\| `ellipsoid` / `zonotope` / `box` step \(29 slabs\) \| (\d+) / "
@@ -433,6 +437,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (PERF, r"whole approach \((\d+) steps\) \| (\d+) / (\d+) us: ([\d.]+) \|",
      BENCH, ("whole_approach_steps/infoset", "whole_approach_step_us/infoset",
              "whole_approach_step_us/ukf", "whole_approach_ratio")),
+    (PERF, r"the set makes ([\d.]+) live nodes a step\s+before the last tenth of the approach "
+     r"and ([\d.]+) a step in it, and ([\d.]+) of the latter are\s+gone one step later",
+     BENCH_TAIL, ("whole_approach_nodes_made/head", "whole_approach_nodes_made/tail",
+                  "whole_approach_nodes_made/tail_gone_in_a_step")),
     (PERF, r"game / random \| (\d+) / (\d+) ms: (\d+) / (\d+) UKF steps", BENCH,
      ("engagement_ms", "engagement_random_ms", "engagement_in_ukf_steps",
       "engagement_random_in_ukf_steps")),
