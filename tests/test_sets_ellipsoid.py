@@ -26,6 +26,10 @@ def _size(criterion: str, q: np.ndarray) -> np.ndarray:
 
 @FEW
 @given(SEEDS, DIMS)
+# (make fuzz, seed 1204202602) an ill-conditioned A (condition 1.3e4): the computed
+# image's thin eigenvalue (3e-10 of the largest) was rounded inwards, and mapped
+# points lay 7e-7 outside it in q, until affine covered its rounding
+@example(seed=4450, n=4)
 def test_affine_contains_mapped_points(seed, n):
     rng = np.random.default_rng(seed)
     e = S.random_ellipsoid(rng, n)

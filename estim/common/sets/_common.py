@@ -73,11 +73,15 @@ def clip_slab(
     :class:`EmptyIntersectionError` when the ranges are disjoint by more than rounding:
     :data:`TOUCH_RTOL` of their scale, plus ``rounding``, the absolute rounding of the
     set's range as its family computes it (a strip through a point of a set flat along
-    ``a`` may miss its computed range by that much).
+    ``a`` may miss its computed range by that much). The scale is the set's range and
+    the slab's finite ends: the slab's ends are rounded to their own magnitude (a strip
+    of radius 1e-3 whose edge touches a point at 1e-8 missed it by 1e-19, which the
+    set's scale alone took for a miss).
     """
     new_lo, new_hi = max(lo, set_lo), min(hi, set_hi)
     if new_lo > new_hi:
-        scale = max(abs(set_lo), abs(set_hi), set_hi - set_lo, 1e-300)
+        ends = [abs(v) for v in (lo, hi) if np.isfinite(v)]
+        scale = max(abs(set_lo), abs(set_hi), set_hi - set_lo, *ends, 1e-300)
         if new_lo - new_hi > TOUCH_RTOL * scale + rounding:
             raise EmptyIntersectionError(
                 f"slab [{lo:.6g}, {hi:.6g}] misses the set's range [{set_lo:.6g}, {set_hi:.6g}]"
