@@ -4,7 +4,7 @@ and worked examples (the parallel-cut ellipsoid of Todd 1982, exact 1-D interval
 import numpy as np
 import pytest
 import sets_sampling as S
-from hypothesis import example, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common.sets import Ellipsoid, EmptyIntersectionError
 
@@ -75,7 +75,8 @@ def test_strip_contains_points_of_the_intersection(seed, n, criterion, deficit):
     a, b, r = S.cutting_strip(pts, rng)
     out = e.intersect_strip(a, b, r, criterion)
     inside = S.points_in_slab(pts, a, b - r, b + r)
-    assert len(inside) > 0
+    # a strip in a gap between the samples tests nothing (make fuzz, seed 1204202627)
+    assume(len(inside) > 0)
     assert np.all(out.contains(inside, tol=1e-7))
     if criterion == "volume" and e.rank == n:
         assert _logvol(out) <= _logvol(e) + 1e-12

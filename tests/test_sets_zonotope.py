@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sets_sampling as S
 import shapely
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common.sets import EmptyIntersectionError, Zonotope
 
@@ -54,7 +54,8 @@ def test_strip_contains_points_of_the_intersection(seed, n, m):
     a, b, r = S.cutting_strip(pts, rng)
     out = z.intersect_strip(a, b, r)
     inside = S.points_in_slab(pts, a, b - r, b + r)
-    assert len(inside) > 0
+    # a strip in a gap between the samples tests nothing (make fuzz, seed 1204202627)
+    assume(len(inside) > 0)
     # the support function is exact, so every direction of a few checks the hull cheaply
     d = rng.normal(size=(40, n))
     assert np.all(inside @ d.T <= out.support(d) + 1e-9)
