@@ -190,7 +190,7 @@ def whole_approach(name: str, sc, dt: float, repeat: int) -> dict[str, float]:
     for _ in range(repeat):
         times, rest = _approach_step_cpu_s(name, sc, _ALL_STEPS, dt)
         n = len(times)
-        k = min(max(1, round(TAIL_FRACTION * n)), n - 1) if n > 1 else 0
+        k = _tail_steps(n)
         total = float(times.sum()) + rest
         passes.append(
             {
@@ -204,6 +204,26 @@ def whole_approach(name: str, sc, dt: float, repeat: int) -> dict[str, float]:
     return {key: float(np.median([p[key] for p in passes])) for key in passes[0]}
 
 
+def _tail_steps(n: int) -> int:
+    """How many of ``n`` steps are the approach's last ``TAIL_FRACTION`` (at least one,
+    and not all of them)."""
+    return min(max(1, round(TAIL_FRACTION * n)), n - 1) if n > 1 else 0
+
+
+def _approach_beliefs(est, b, model, dt: float):
+    """``(step, "update" | "predict", belief)`` after each operation over the approach
+    of :func:`_approach_cpu_s` (untimed), until the belief becomes empty."""
+    for step, a in enumerate(_bearings(model, _ALL_STEPS, dt, np.random.default_rng(7))):
+        b = est.update(b, Bearing(a))
+        yield step, "update", b
+        if b.is_empty:
+            return
+        b = est.predict(b, dt, BENCH_IMPULSE_MPS)
+        yield step, "predict", b
+        if b.is_empty:
+            return
+
+
 def approach_nodes(name: str, sc, dt: float) -> dict[str, float] | None:
     """The live nodes ``name``'s belief makes over :func:`whole_approach`'s pass
     (untimed; ``None`` for a belief without nodes): ``head`` and ``tail``, the mean
@@ -214,8 +234,8 @@ def approach_nodes(name: str, sc, dt: float) -> dict[str, float] | None:
     from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 
     model = sc.channel_model()
-    est, b = build_estimator(name, sc, model, "lateral")
-    if not all(hasattr(b, a) for a in ("label_s", "piece", "u_lo", "live")):
+    est, prior = build_estimator(name, sc, model, "lateral")
+    if not all(hasattr(prior, a) for a in ("label_s", "piece", "u_lo", "live")):
         return None
 
     def nodes(b) -> set[tuple[float, float]]:
@@ -224,27 +244,17 @@ def approach_nodes(name: str, sc, dt: float) -> dict[str, float] | None:
 
     born: dict[tuple[float, float], int] = {}
     lives: list[tuple[int, int]] = []  # (step made, step gone) of the nodes made
-    seen = nodes(b)
-    step = 0
-    for a in _bearings(model, _ALL_STEPS, dt, np.random.default_rng(7)):
-        for op in ("update", "predict"):
-            b = (
-                est.update(b, Bearing(a))
-                if op == "update"
-                else est.predict(b, dt, BENCH_IMPULSE_MPS)
-            )
-            now = nodes(b)
-            born.update({k: step for k in now - seen})
-            lives += [(born.pop(k), step) for k in seen - now if k in born]
-            seen = now
-            if b.is_empty:
-                break
-        if b.is_empty:
-            break
-        step += 1
-    lives += [(s, step + 1) for s in born.values()]  # alive at the end
-    n = max(step, 1)
-    k = min(max(1, round(TAIL_FRACTION * n)), n - 1) if n > 1 else 0
+    seen, n = nodes(prior), 0
+    for step, _, b in _approach_beliefs(est, prior, model, dt):
+        now = nodes(b)
+        born.update({k: step for k in now - seen})
+        lives += [(born.pop(k), step) for k in seen - now if k in born]
+        seen = now
+        # steps done: the last one counts only if its prediction kept the belief
+        n = step + 1 if not b.is_empty else step
+    lives += [(s, n + 1) for s in born.values()]  # alive at the end
+    n = max(n, 1)
+    k = _tail_steps(n)
     tail = [(s, g) for s, g in lives if s >= n - k]
     return {
         "head": sum(s < n - k for s, _ in lives) / max(n - k, 1),
@@ -295,15 +305,13 @@ def _approach_vertices(name: str, sc, dt: float) -> tuple[float | None, int | No
     from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 
     model = sc.channel_model()
-    est, b = build_estimator(name, sc, model, "lateral")
-    if not hasattr(b, "polygons"):
+    est, prior = build_estimator(name, sc, model, "lateral")
+    if not hasattr(prior, "polygons"):
         return None, None
     per_slice, largest = [], 0
-    for a in _bearings(model, _ALL_STEPS, dt, np.random.default_rng(7)):
-        b = est.update(b, Bearing(a))
-        if b.is_empty:
-            break
-        b = est.predict(b, dt, BENCH_IMPULSE_MPS)
+    for _, op, b in _approach_beliefs(est, prior, model, dt):
+        if op == "update":
+            continue  # counted after each prediction
         counts = b.polygons.counts
         live = counts[counts > 0]
         if len(live):

@@ -36,6 +36,17 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+#: the node set's array fields and their types (read-only; :func:`evolve` checks only
+#: the changed ones)
+_ARRAY_FIELDS = {"u_lo": float, "u_hi": float, "label_s": float, "hard_lo_s": float,
+                 "hard_hi_s": float, "piece": np.int64}  # fmt: skip
+
+
+def _check_nodes(piece, label_s, polygons: ConvexPolygons) -> None:
+    if len(piece) != polygons.n or len(label_s) != polygons.n:
+        raise ValueError("one piece index and one label per node polygon")
+
+
 @dataclass(frozen=True, eq=False)
 class NodeSet(Belief):
     """An immutable node set (see the module docstring).
@@ -99,11 +110,9 @@ class NodeSet(Belief):
     band_trial_after_s: float = -np.inf
 
     def __post_init__(self) -> None:
-        for name in ("u_lo", "u_hi", "label_s", "hard_lo_s", "hard_hi_s"):
-            object.__setattr__(self, name, readonly(getattr(self, name), copy=None))
-        object.__setattr__(self, "piece", readonly(self.piece, np.int64, copy=None))
-        if len(self.piece) != self.polygons.n or len(self.label_s) != self.polygons.n:
-            raise ValueError("one piece index and one label per node polygon")
+        for name, kind in _ARRAY_FIELDS.items():
+            object.__setattr__(self, name, readonly(getattr(self, name), kind, copy=None))
+        _check_nodes(self.piece, self.label_s, self.polygons)
 
     # -- basic views -----------------------------------------------------------------
     @property
@@ -339,10 +348,8 @@ class NodeSet(Belief):
         )
 
 
-#: the node set's array fields and their types (:func:`evolve` checks the changed ones)
-_ARRAY_FIELDS = {"u_lo": float, "u_hi": float, "label_s": float, "hard_lo_s": float,
-                 "hard_hi_s": float, "piece": np.int64}  # fmt: skip
 _FIELDS = tuple(f.name for f in fields(NodeSet))
+_FIELD_NAMES = frozenset(_FIELDS)
 
 
 def evolve(s: NodeSet, **changes: Any) -> NodeSet:
@@ -354,7 +361,7 @@ def evolve(s: NodeSet, **changes: Any) -> NodeSet:
     quiet step's Python time). The cached views (``live``, the summary) are not
     carried over: they belong to ``s``.
     """
-    unknown = set(changes) - set(_FIELDS)
+    unknown = changes.keys() - _FIELD_NAMES
     if unknown:
         raise TypeError(f"NodeSet has no field(s) {sorted(unknown)}")
     new = object.__new__(NodeSet)
@@ -366,7 +373,5 @@ def evolve(s: NodeSet, **changes: Any) -> NodeSet:
         kind = _ARRAY_FIELDS.get(name)
         values[name] = value if kind is None else readonly(value, kind, copy=None)
     if {"piece", "label_s", "polygons"} & changes.keys():
-        n = values["polygons"].n
-        if len(values["piece"]) != n or len(values["label_s"]) != n:
-            raise ValueError("one piece index and one label per node polygon")
+        _check_nodes(values["piece"], values["label_s"], values["polygons"])
     return new
