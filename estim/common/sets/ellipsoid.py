@@ -34,7 +34,10 @@ Operations
   is among ``rho = 0`` and the positive roots of a cubic, written out in
   :func:`_trace_rho`. Before the update the strip is clipped to the range of ``a.x`` over
   the ellipsoid, which leaves the intersection unchanged and tightens the bound. A
-  vanishing strip (a hyperplane) and a segment (rank-1 ``P``) are cut exactly.
+  vanishing strip (a hyperplane) and a segment (rank-1 ``P``) are cut exactly. Each
+  result covers its own rounding (the shape by ``+ delta I``, the centre by a ball, a
+  segment's part lengthened): a thin cap or a segment almost normal to ``a`` otherwise
+  left points of the exact intersection outside.
 * :meth:`Ellipsoid.intersect_halfspace` -- ``a.x <= b`` as the slab between the
   ellipsoid's own minimum of ``a.x`` and ``b``, then the same update.
 * :meth:`Ellipsoid.support` -- ``h(d) = c.d + sqrt(d^T P d)``;
@@ -254,6 +257,41 @@ class Ellipsoid:
             vector(a, self.dim, "a"), -np.inf, halfspace_bound(b), criterion
         )
 
+    def _cut_segment(self, a: FloatArray, lo: float, hi: float) -> Ellipsoid:
+        """The part of the segment ``{c + t v : |t| <= 1}`` (rank-1 ``P = v v^T``) with
+        ``lo <= a.x <= hi`` (the slab already clipped to it and not holding all of it).
+
+        Along the segment ``a.x = m + t s`` with ``s = a.v``, so the part is
+        ``t in [(lo - m) / s, (hi - m) / s]``. ``s`` is computed from ``v``, not as
+        ``sqrt(a.P a)``, whose cancellation squares the conditioning (a segment almost
+        normal to ``a`` lost 1e-5 of its length), and the part is lengthened by the
+        rounding of ``m``, ``s``, the slab's ends and the new centre (in ``t``)."""
+        lam, vec = self._eig
+        v = np.sqrt(lam[-1]) * vec[:, -1]
+        s = float(a @ v)
+        if s == 0.0:  # normal to a to rounding: the slab touches all of it
+            return self
+        m = float(a @ self.centre)
+        abs_a = np.abs(a)
+        err_s = _ROUND * float(abs_a @ np.abs(v))
+        err_m = _ROUND * float(abs_a @ np.abs(self.centre))
+        t_lo, t_hi = sorted(((lo - m) / s, (hi - m) / s))
+        # within [-1, 1]; a slab that touches an end to rounding leaves that end
+        t_lo, t_hi = min(max(t_lo, -1.0), 1.0), max(min(t_hi, 1.0), -1.0)
+        if t_lo > t_hi:
+            t_lo = t_hi = 0.5 * (t_lo + t_hi)
+        t_c, t_r = 0.5 * (t_lo + t_hi), 0.5 * (t_hi - t_lo)
+        centre = self.centre + t_c * v
+        t_err = (
+            (max(abs(t_lo), abs(t_hi)) * err_s + err_m + _ROUND * (abs(lo) + abs(hi) + abs(m)))
+            / abs(s)
+            + _ROUND * (abs(t_c) + t_r)
+            + _ROUND
+            * float(np.linalg.norm(np.abs(self.centre) + np.abs(t_c * v)))
+            / float(np.linalg.norm(v))
+        )
+        return Ellipsoid._make(centre, (t_r + t_err) ** 2 * np.outer(v, v))
+
     def _intersect_slab(self, a: FloatArray, lo: float, hi: float, criterion: str) -> Ellipsoid:
         if criterion not in ("volume", "trace"):
             raise ValueError(f"unknown criterion {criterion!r}")
@@ -272,9 +310,12 @@ class Ellipsoid:
         y, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
         e = y - m
         if self.rank == 1:  # a segment: its part in the slab is a sub-segment (exact)
-            return Ellipsoid._make(c + (e / g) * pa, (r * r / g) * p)
+            return self._cut_segment(a, lo, hi)
         if r <= 1e-12 * half:  # a hyperplane: the section is an ellipsoid (exact)
-            return Ellipsoid._make(c + (e / g) * pa, (1.0 - e * e / g) * (p - np.outer(pa, pa) / g))
+            return _section(c, p, pa, g, e, r, _ROUND * (abs(y) + abs(m)))
+        # the slab's middle and the set's a.x are rounded to their magnitudes: a slab so
+        # much wider holds every point the exact one does
+        r += _ROUND * (abs(y) + abs(m) + abs(e))
         gn, eps = g / r**2, e**2 / r**2
         if criterion == "volume":
             rho = _volume_rho(self.rank, gn, eps)
@@ -284,8 +325,62 @@ class Ellipsoid:
             return self
         den = r * r + rho * g
         delta = 1.0 + rho - rho * e * e / den
-        shape = delta * (p - (rho / den) * np.outer(pa, pa))
-        return Ellipsoid._make(c + (rho * e / den) * pa, shape)
+        k = rho / den
+        shape = delta * (p - k * np.outer(pa, pa))
+        shift = (rho * e / den) * pa
+        return _covered(
+            c + shift,
+            shape,
+            # P - k P a a^T P cancels along a down to r^2 / den of P: its rounding is of
+            # P's scale, which delta multiplies (a thin cap cut from a round ellipsoid
+            # left boundary points 1e-8 outside in q without it)
+            delta * (float(np.linalg.norm(p)) + k * float(pa @ pa)),
+            np.abs(c) + np.abs(shift),
+        )
+
+
+#: a bound on the relative rounding of the few operations behind one computed number
+_ROUND = 8 * np.finfo(float).eps
+
+
+def _covered(c: FloatArray, p: FloatArray, p_scale: float, c_scale: FloatArray) -> Ellipsoid:
+    """``E(c, p)`` grown to hold the exact result whose computed shape ``p`` is rounded
+    by at most :data:`_ROUND` ``p_scale`` per entry (``+ delta I``, Weyl, as
+    :meth:`Ellipsoid.affine`) and whose computed centre ``c`` by :data:`_ROUND`
+    ``c_scale`` per coordinate (the Minkowski sum with a ball of that radius, the
+    minimum-trace member of Schweppe's family)."""
+    n = c.size
+    p = p + (n * _ROUND * p_scale) * np.eye(n)
+    rad2 = float(np.sum((_ROUND * c_scale) ** 2))
+    tr = float(np.trace(p))
+    if rad2 > 0.0 and tr > 0.0:
+        q = np.sqrt(tr / (n * rad2))
+        p = (1.0 + 1.0 / q) * p + ((1.0 + q) * rad2) * np.eye(n)
+    return Ellipsoid._make(c, p)
+
+
+def _section(
+    c: FloatArray, p: FloatArray, pa: FloatArray, g: float, e: float, r: float, err_e: float
+) -> Ellipsoid:
+    """The section of ``E(c, p)`` by the slab ``a.x in y +- r`` (``r`` under 1e-12 of the
+    ellipsoid's half-width along ``a``; ``e = y - a.c`` to within ``err_e``), taken as
+    the hyperplane section at ``y``: ``E(c + e/g P a, (1 - e^2/g) (P - P a a^T P / g))``,
+    ``g = a.P a``. The factor is widened by its rounding and by its change over the
+    slab (near a touch it cancels to a rounding difference), and the result covers the
+    rounding of the matrix, which cancels along ``a``, and of the centre."""
+    shift = (e / g) * pa
+    ratio = e * e / g
+    f = max(1.0 - ratio, 0.0)
+    # rounding of 1 - e^2/g (g itself to about 1e-15 here), then the slab's width
+    df = _ROUND * (1.0 + 4.0 * ratio) + 2.0 * abs(e) * err_e / g + (2.0 * abs(e) * r + r * r) / g
+    scale = f + df
+    flat = p - np.outer(pa, pa) / g
+    return _covered(
+        c + shift,
+        scale * flat,
+        scale * (float(np.linalg.norm(p)) + float(pa @ pa) / g),
+        np.abs(c) + np.abs(shift),
+    )
 
 
 def _volume_rho(n: int, gn: float, eps: float) -> float:
