@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sets_sampling as S
 import shapely
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common.sets import EmptyIntersectionError, Zonotope
 
@@ -171,6 +171,30 @@ def test_contains_by_facets_agrees_with_the_lp(n):
     assert flat.contains(flat.generators.sum(axis=1)) and not flat.contains([0.0, 0.0, 1.0])
     with pytest.raises(ValueError):
         flat.contains(np.zeros(3), method="facets")
+
+
+def _flat_zonotope_and_points(seed: int, n: int, m: int):
+    """A zonotope flat in space (``m < n`` generators, any scale and position) and points
+    ``c + G xi`` of it, half of them with every ``|xi_j| = 1`` (its vertices)."""
+    rng = np.random.default_rng(seed)
+    c = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3)
+    z = Zonotope(c, rng.normal(size=(n, m)) * 10.0 ** rng.uniform(-3, 2))
+    xi = rng.uniform(-1.0, 1.0, size=(20, m))
+    xi[10:] = np.sign(xi[10:])
+    return z, c + xi @ z.generators.T
+
+
+@FEW
+@given(SEEDS, st.integers(2, 4), st.integers(1, 3))
+# with the LP solver's default tolerances (1e-7) these vertices read 1e-8 outside
+@example(seed=9, n=4, m=2)
+def test_contains_lp_holds_the_vertices_of_a_flat_zonotope(seed, n, m):
+    """The LP containment is exact to ``tol`` (1e-9 by default), not to the solver's
+    default feasibility tolerance: a flat zonotope holds every ``c + G xi``, ``|xi| <=
+    1``, its vertices included (independent certificate: ``xi`` itself)."""
+    assume(m < n)
+    z, pts = _flat_zonotope_and_points(seed, n, m)
+    assert np.all(z.contains(pts, method="lp"))
 
 
 def test_vertices_2d_match_the_convex_hull_of_all_sign_vertices():

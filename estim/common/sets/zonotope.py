@@ -161,8 +161,9 @@ class Zonotope:
         normals ``d`` of all ``(n-1)``-subsets of generators (vectorised over points;
         used by ``"auto"`` when there are at most 4096 subsets). ``"lp"``: the linear
         programme ``min t`` s.t. ``|G xi - (x - c)| <= tol s``, ``|xi_j| <= t``, inside
-        iff ``t <= 1 + tol`` (``s`` the largest row sum of ``|G|``); points outside the
-        interval hull are rejected without it.
+        iff ``t <= 1 + tol`` (``s`` the largest row sum of ``|G|``), solved by HiGHS to
+        feasibility tolerances of 1e-10 (its default 1e-7 read vertices of flat zonotopes
+        1e-8 outside); points outside the interval hull are rejected without it.
         """
         x = np.asarray(x, dtype=float)
         pts = np.atleast_2d(x)
@@ -207,7 +208,13 @@ class Zonotope:
         b_ub = np.concatenate([np.zeros(2 * m), d + slack, slack - d])
         cost = np.zeros(m + 1)
         cost[-1] = 1.0
-        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * m + [(0, None)])
+        res = linprog(
+            cost,
+            A_ub=a_ub,
+            b_ub=b_ub,
+            bounds=[(None, None)] * m + [(0, None)],
+            options={"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10},
+        )
         return float(res.fun) if res.status == 0 else np.inf
 
     def vertices_2d(self) -> FloatArray:
