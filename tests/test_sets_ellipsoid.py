@@ -51,6 +51,39 @@ def test_minkowski_sum_contains_sums(seed, n, criterion):
     assert np.all(out.contains(p1 + p2[::-1], tol=1e-7))
 
 
+def _any_ellipsoid(rng: np.random.Generator, n: int) -> Ellipsoid:
+    """An ellipsoid of any rank, position and scale, thin (one axis 1e-8 to 1e-3 of the
+    others) half of the time."""
+    rank = int(rng.integers(1, n + 1))
+    f = np.zeros((n, n))
+    f[:, :rank] = rng.normal(size=(n, rank)) * 10.0 ** rng.uniform(-3, 2)
+    if rng.random() < 0.5:
+        u, sv, vt = np.linalg.svd(f)
+        sv[-1] *= 10.0 ** rng.uniform(-8, -3)
+        f = u @ np.diag(sv) @ vt
+    return Ellipsoid(rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3), f @ f.T)
+
+
+@FEW
+@given(SEEDS, DIMS, st.sampled_from(["trace", "volume"]))
+# each failed before (found by a search over seeds): the volume parameter's bracket
+# raised (brentq found no sign change), two intervals 2e-5 wide at 1e3 left the sum of
+# their ends 5e-9 outside in q, and a sum thinner than the rank threshold was read as
+# flat by contains, which rejected its own extreme point
+@example(seed=103, n=2, criterion="volume")
+@example(seed=65, n=1, criterion="trace")
+@example(seed=680, n=2, criterion="volume")
+def test_minkowski_sum_holds_the_sum_of_support_points(seed, n, criterion):
+    """For any direction ``d`` the sum of the two support points is the support point of
+    ``E1 + E2``: on the boundary of the exact sum, so in every outer bound of it."""
+    rng = np.random.default_rng(seed)
+    e1, e2 = _any_ellipsoid(rng, n), _any_ellipsoid(rng, n)
+    d = rng.normal(size=n)
+    x1, x2 = e1.support_point(d), e2.support_point(d)
+    assume(e1.contains(x1, tol=1e-12) and e2.contains(x2, tol=1e-12))
+    assert e1.minkowski_sum(e2, criterion).contains(x1 + x2)
+
+
 @pytest.mark.parametrize("criterion", ["trace", "volume"])
 def test_minkowski_parameter_is_optimal_over_the_family(criterion):
     rng = np.random.default_rng(3)

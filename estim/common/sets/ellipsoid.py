@@ -205,16 +205,23 @@ class Ellipsoid:
         """Whether ``x`` (shape (n,) or (k, n)) lies in ``E``, up to a relative ``tol``.
 
         In the eigenbasis of ``P``, ``sum z_i^2 / l_i <= (1 + tol)^2`` over the nonzero
-        ``l_i`` and ``|z_i| <= tol sqrt(l_max)`` along the null directions.
+        ``l_i`` and ``|z_i| <= tol sqrt(l_max)`` along the null directions (those under
+        1e-12 of ``l_max``, rounding for a flat set); or, where those ``l_i`` are
+        positive (a thin set, not a flat one), the same sum over all of them.
         """
         x = np.asarray(x, dtype=float)
         lam, vec = self._eig
         z = (np.atleast_2d(x) - self.centre) @ vec
         pos = lam > _RANK_RTOL * max(lam.max(initial=0.0), 1e-300)
         q = np.sum(z[:, pos] ** 2 / lam[pos], axis=1)
-        off = np.sqrt(np.sum(z[:, ~pos] ** 2, axis=1))
+        z_null = z[:, ~pos]
+        off = np.sqrt(np.sum(z_null**2, axis=1))
         scale = np.sqrt(lam.max(initial=0.0)) + 1e-300
-        inside = (q <= (1.0 + tol) ** 2) & (off <= tol * max(scale, 1.0))
+        bound = (1.0 + tol) ** 2
+        inside = (q <= bound) & (off <= tol * max(scale, 1.0))
+        if np.all(lam[~pos] > 0.0):
+            # a set thinner than the rank threshold still holds its own thin points
+            inside |= q + np.sum(z_null**2 / lam[~pos], axis=1) <= bound
         return bool(inside[0]) if x.ndim == 1 else inside
 
     # -- outer bounds ----------------------------------------------------------------
@@ -230,14 +237,19 @@ class Ellipsoid:
         c = self.centre + other.centre
         p1, p2 = self.shape, other.shape
         t1, t2 = np.trace(p1), np.trace(p2)
+        c_scale = np.abs(self.centre) + np.abs(other.centre)
         if t1 <= 0.0 or t2 <= 0.0:  # a point: the sum is the other ellipsoid, shifted
-            return Ellipsoid._make(c, p1 + p2)
+            return _covered(c, p1 + p2, float(np.linalg.norm(p1 + p2)), c_scale)
         p = np.sqrt(t1 / t2)
         if criterion == "volume":
             p = _volume_sum_parameter(p1, p2, self.rank, other.rank, p)
         elif criterion != "trace":
             raise ValueError(f"unknown criterion {criterion!r}")
-        return Ellipsoid._make(c, (1.0 + 1.0 / p) * p1 + (1.0 + p) * p2)
+        w1, w2 = 1.0 + 1.0 / p, 1.0 + p
+        # the sum of the centres and of the scaled shapes is rounded: a thin sum (two
+        # intervals 2e-5 wide at 1e3) left its extreme points 5e-9 outside in q
+        p_scale = w1 * float(np.linalg.norm(p1)) + w2 * float(np.linalg.norm(p2))
+        return _covered(c, w1 * p1 + w2 * p2, p_scale, c_scale)
 
     def intersect_strip(
         self, a: ArrayLike, b: float, r: float, criterion: Criterion = "volume"
@@ -442,5 +454,16 @@ def _volume_sum_parameter(p1, p2, rank1: int, rank2: int, fallback: float) -> fl
         def f(q: float) -> float:
             return float(np.sum((q * q - lam) / (lam + q)))
 
-        p = brentq(f, max(lo, 1e-9 * hi), hi, xtol=1e-14 * hi, rtol=1e-12)
+        # f <= 0 at sqrt(l_min) and tends to minus the number of l_i > 0 as q -> 0+
+        # (f(0) itself is 0/0 for a singular P1); a floor of 1e-9 hi could lie past the
+        # root (l = 1e-20, 1e20: f = 9 there) and brentq then found no sign change
+        a = lo if lo > 0.0 else 1e-9 * hi
+        while f(a) > 0.0 and a > 1e-300:
+            a *= 1e-3
+        if f(a) >= 0.0:
+            p = a
+        elif f(hi) <= 0.0:  # rounding at the top end
+            p = hi
+        else:
+            p = brentq(f, a, hi, xtol=1e-14 * hi, rtol=1e-12)
     return 1.0 / p if flip else p
