@@ -10,6 +10,10 @@ FloatArray = NDArray[np.float64]
 #: Relative tolerance below which a slab that misses a set by rounding is taken to touch it.
 TOUCH_RTOL = 1e-12
 
+#: A bound on the relative rounding of the few operations behind one computed number
+#: (the outer updates widen their results by it times the magnitudes involved).
+ROUND_RTOL = 8 * np.finfo(float).eps
+
 
 class EmptyIntersectionError(ValueError):
     """The intersection is empty: the measurement is inconsistent with the set."""

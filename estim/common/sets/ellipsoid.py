@@ -63,6 +63,7 @@ from typing import Literal
 
 import numpy as np
 from kalman_vs_infoset.estim.common.sets._common import (
+    ROUND_RTOL,
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
@@ -285,8 +286,8 @@ class Ellipsoid:
             return self
         m = float(a @ self.centre)
         abs_a = np.abs(a)
-        err_s = _ROUND * float(abs_a @ np.abs(v))
-        err_m = _ROUND * float(abs_a @ np.abs(self.centre))
+        err_s = ROUND_RTOL * float(abs_a @ np.abs(v))
+        err_m = ROUND_RTOL * float(abs_a @ np.abs(self.centre))
         t_lo, t_hi = sorted(((lo - m) / s, (hi - m) / s))
         # within [-1, 1]; a slab that touches an end to rounding leaves that end
         t_lo, t_hi = min(max(t_lo, -1.0), 1.0), max(min(t_hi, 1.0), -1.0)
@@ -295,10 +296,10 @@ class Ellipsoid:
         t_c, t_r = 0.5 * (t_lo + t_hi), 0.5 * (t_hi - t_lo)
         centre = self.centre + t_c * v
         t_err = (
-            (max(abs(t_lo), abs(t_hi)) * err_s + err_m + _ROUND * (abs(lo) + abs(hi) + abs(m)))
+            (max(abs(t_lo), abs(t_hi)) * err_s + err_m + ROUND_RTOL * (abs(lo) + abs(hi) + abs(m)))
             / abs(s)
-            + _ROUND * (abs(t_c) + t_r)
-            + _ROUND
+            + ROUND_RTOL * (abs(t_c) + t_r)
+            + ROUND_RTOL
             * float(np.linalg.norm(np.abs(self.centre) + np.abs(t_c * v)))
             / float(np.linalg.norm(v))
         )
@@ -324,10 +325,10 @@ class Ellipsoid:
         if self.rank == 1:  # a segment: its part in the slab is a sub-segment (exact)
             return self._cut_segment(a, lo, hi)
         if r <= 1e-12 * half:  # a hyperplane: the section is an ellipsoid (exact)
-            return _section(c, p, pa, g, e, r, _ROUND * (abs(y) + abs(m)))
+            return _section(c, p, pa, g, e, r, ROUND_RTOL * (abs(y) + abs(m)))
         # the slab's middle and the set's a.x are rounded to their magnitudes: a slab so
         # much wider holds every point the exact one does
-        r += _ROUND * (abs(y) + abs(m) + abs(e))
+        r += ROUND_RTOL * (abs(y) + abs(m) + abs(e))
         gn, eps = g / r**2, e**2 / r**2
         if criterion == "volume":
             rho = _volume_rho(self.rank, gn, eps)
@@ -351,19 +352,15 @@ class Ellipsoid:
         )
 
 
-#: a bound on the relative rounding of the few operations behind one computed number
-_ROUND = 8 * np.finfo(float).eps
-
-
 def _covered(c: FloatArray, p: FloatArray, p_scale: float, c_scale: FloatArray) -> Ellipsoid:
     """``E(c, p)`` grown to hold the exact result whose computed shape ``p`` is rounded
-    by at most :data:`_ROUND` ``p_scale`` per entry (``+ delta I``, Weyl, as
-    :meth:`Ellipsoid.affine`) and whose computed centre ``c`` by :data:`_ROUND`
+    by at most :data:`ROUND_RTOL` ``p_scale`` per entry (``+ delta I``, Weyl, as
+    :meth:`Ellipsoid.affine`) and whose computed centre ``c`` by :data:`ROUND_RTOL`
     ``c_scale`` per coordinate (the Minkowski sum with a ball of that radius, the
     minimum-trace member of Schweppe's family)."""
     n = c.size
-    p = p + (n * _ROUND * p_scale) * np.eye(n)
-    rad2 = float(np.sum((_ROUND * c_scale) ** 2))
+    p = p + (n * ROUND_RTOL * p_scale) * np.eye(n)
+    rad2 = float(np.sum((ROUND_RTOL * c_scale) ** 2))
     tr = float(np.trace(p))
     if rad2 > 0.0 and tr > 0.0:
         q = np.sqrt(tr / (n * rad2))
@@ -384,7 +381,8 @@ def _section(
     ratio = e * e / g
     f = max(1.0 - ratio, 0.0)
     # rounding of 1 - e^2/g (g itself to about 1e-15 here), then the slab's width
-    df = _ROUND * (1.0 + 4.0 * ratio) + 2.0 * abs(e) * err_e / g + (2.0 * abs(e) * r + r * r) / g
+    df = ROUND_RTOL * (1.0 + 4.0 * ratio) + 2.0 * abs(e) * err_e / g
+    df += (2.0 * abs(e) * r + r * r) / g
     scale = f + df
     flat = p - np.outer(pa, pa) / g
     return _covered(

@@ -16,8 +16,9 @@ Operations
 * :meth:`Box.intersect_halfspace` -- the same with ``a.x <= b``.
 * :meth:`Box.support` -- ``h(d) = m.d + h.|d|``; :meth:`Box.contains`.
 
-Rounding is not directed: results are outer bounds in exact arithmetic and within a few
-ulps in floating point (as for the ellipsoid and the zonotope).
+Rounding is not directed: results are outer bounds in exact arithmetic, and the
+contraction widens its bounds by a bound on its own rounding (a few ulps of the terms
+``a_i x_i``), so that it holds the exact hull at any distance from the origin.
 
 References
 ----------
@@ -31,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from kalman_vs_infoset.estim.common.sets._common import (
+    ROUND_RTOL,
     EmptyIntersectionError,
     FloatArray,
     clip_slab,
@@ -148,14 +150,19 @@ class Box:
         if lo <= s_lo and hi >= s_hi:
             return self
         # backward: a_i x_i in [lo - (others' max), hi - (others' min)] ∩ [tlo_i, thi_i]
-        new_tlo = np.maximum(tlo, lo - (s_hi - thi))
-        new_thi = np.minimum(thi, hi - (s_lo - tlo))
+        # widened by their rounding (the sums and differences are rounded to the terms'
+        # magnitudes: at coordinates of 1e8 a point on the slab's edge fell 1e-8 outside)
+        err = ROUND_RTOL * (float(np.abs(tlo).sum() + np.abs(thi).sum()) + abs(s_lo) + abs(s_hi))
+        new_tlo = np.maximum(tlo, lo - (s_hi - thi) - err)
+        new_thi = np.minimum(thi, hi - (s_lo - tlo) + err)
         new_thi = np.maximum(new_thi, new_tlo)  # touching within rounding
         nz = a != 0.0
         a_safe = np.where(nz, a, 1.0)
         x1, x2 = new_tlo / a_safe, new_thi / a_safe
-        new_lo = np.where(nz, np.minimum(x1, x2), self.lo)
-        new_hi = np.where(nz, np.maximum(x1, x2), self.hi)
+        # the quotients are rounded too (half an ulp each)
+        x_err = ROUND_RTOL * np.maximum(np.abs(x1), np.abs(x2))
+        new_lo = np.where(nz, np.minimum(x1, x2) - x_err, self.lo)
+        new_hi = np.where(nz, np.maximum(x1, x2) + x_err, self.hi)
         # the contraction never leaves the input box (guards rounding at the edges)
         new_lo = np.clip(new_lo, self.lo, self.hi)
         new_hi = np.clip(new_hi, new_lo, self.hi)
