@@ -197,6 +197,44 @@ def test_contains_lp_holds_the_vertices_of_a_flat_zonotope(seed, n, m):
     assert np.all(z.contains(pts, method="lp"))
 
 
+def _far_zonotope_point_and_cut(seed: int, n: int, m: int, cut: str):
+    """A zonotope up to 1e8 from the origin, of any size, a point ``c + G xi`` of it (a
+    vertex half of the time) and a slab with the point on its edge."""
+    rng = np.random.default_rng(seed)
+    c = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 8)
+    z = Zonotope(c, rng.normal(size=(n, m)) * 10.0 ** rng.uniform(-3, 2))
+    xi = rng.uniform(-1.0, 1.0, size=m)
+    if rng.random() < 0.5:
+        xi = np.sign(xi)
+    x = c + z.generators @ xi
+    a = rng.normal(size=n)
+    ax = float(a @ x)
+    slab = {"below": (-np.inf, ax), "above": (ax, np.inf), "plane": (ax, ax)}[cut]
+    return z, x, a, slab
+
+
+@FEW
+@given(SEEDS, DIMS, st.integers(1, 5), st.sampled_from(["below", "above", "plane"]))
+# each failed before (found by a search over seeds): the cut's centre shift multiplies
+# the rounding of y - a.c, and coordinates of 1e7 are rounded to more than the
+# containment's tolerance of the zonotope's size
+@example(seed=1, n=1, m=4, cut="plane")
+@example(seed=8, n=1, m=4, cut="above")
+@example(seed=116, n=2, m=1, cut="plane")  # a segment cut almost along itself
+def test_cut_through_a_point_of_a_far_zonotope_keeps_it(seed, n, m, cut):
+    """A point of the zonotope on the edge of the slab is in both, so the update must
+    hold it wherever the zonotope lies."""
+    z, x, a, (lo, hi) = _far_zonotope_point_and_cut(seed, n, m, cut)
+    assume(z.contains(x, tol=1e-12))
+    if np.isinf(lo):
+        out = z.intersect_halfspace(a, hi)
+    elif np.isinf(hi):
+        out = z.intersect_halfspace(-a, -lo)
+    else:
+        out = z.intersect_strip(a, 0.5 * (lo + hi), 0.5 * (hi - lo))
+    assert out.contains(x)
+
+
 def test_vertices_2d_match_the_convex_hull_of_all_sign_vertices():
     rng = np.random.default_rng(4)
     for m in (1, 2, 5, 7):

@@ -15,7 +15,8 @@ Operations
   - s lam eta``.) We use their choice that minimises the **Frobenius norm** of the new
   generator matrix (the "F-radius"): ``lam* = G G^T a / (a^T G G^T a + s^2)``. The strip
   is first clipped to the range of ``a.x`` over ``Z`` (same intersection, tighter
-  bound). Each update adds one generator; see :meth:`reduce`.
+  bound), then widened by the rounding of ``y - a.c`` (which ``lam`` multiplies: the
+  widened ``s lam`` covers it). Each update adds one generator; see :meth:`reduce`.
 * :meth:`Zonotope.reduce` -- order reduction to at most ``max_generators`` columns
   (``>= n``): keep the ``max_generators - n`` largest generators and replace the others
   by their interval hull ``diag(sum |g|)`` (``n`` axis-aligned generators). Ranking by
@@ -48,6 +49,7 @@ from typing import Literal
 
 import numpy as np
 from kalman_vs_infoset.estim.common.sets._common import (
+    ROUND_RTOL,
     TOUCH_RTOL,
     EmptyIntersectionError,
     FloatArray,
@@ -154,7 +156,8 @@ class Zonotope:
     def contains(
         self, x: ArrayLike, tol: float = 1e-9, method: Literal["auto", "lp", "facets"] = "auto"
     ) -> bool | np.ndarray:
-        """Whether ``x`` (shape (n,) or (k, n)) lies in ``Z``; exact up to ``tol``.
+        """Whether ``x`` (shape (n,) or (k, n)) lies in ``Z``; exact up to ``tol`` times
+        the zonotope's size and a few ulps of the coordinates (:data:`ROUND_RTOL`).
 
         ``"facets"``: for a full-dimensional ``Z`` every facet normal is orthogonal to
         ``n - 1`` generators, so ``Z = {x : |d.(x - c)| <= sum_j |d.g_j|}`` over the
@@ -168,19 +171,23 @@ class Zonotope:
         x = np.asarray(x, dtype=float)
         pts = np.atleast_2d(x)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
+        # and a few ulps of the coordinates: far from the origin (1e7) they are rounded
+        # to more than tol times the zonotope's size
+        slack = tol * scale + ROUND_RTOL * (
+            np.abs(pts).sum(axis=1) + float(np.abs(self.centre).sum())
+        )
         normals = self._facet_normals if method != "lp" else None
         if method == "facets" and normals is None:
             raise ValueError("facets need a full-dimensional zonotope with few generators")
         if normals is not None:
             h = np.abs(normals @ self.generators).sum(axis=1)
             dist = np.abs((pts - self.centre) @ normals.T) - h
-            inside = np.all(dist <= tol * scale, axis=1)
+            inside = np.all(dist <= slack[:, None], axis=1)
         else:
             lo, hi = self.interval_hull()
-            slack = tol * scale
-            inside = np.all((pts >= lo - slack) & (pts <= hi + slack), axis=1)
+            inside = np.all((pts >= lo - slack[:, None]) & (pts <= hi + slack[:, None]), axis=1)
             for i in np.flatnonzero(inside):
-                inside[i] = self._lp_norm(pts[i] - self.centre, slack) <= 1.0 + tol
+                inside[i] = self._lp_norm(pts[i] - self.centre, slack[i]) <= 1.0 + tol
         return bool(inside[0]) if x.ndim == 1 else inside
 
     @cached_property
@@ -257,6 +264,9 @@ class Zonotope:
         if (lo <= m - half and hi >= m + half) or flat_along(half, m, rounding):
             return self  # the slab holds the zonotope (or touches it where it is flat)
         y, s = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        # y - m is rounded to their magnitudes, and lam multiplies that error along lam
+        # (by 45 for a cut almost along a generator): the strip's own generator covers it
+        s += ROUND_RTOL * (abs(y) + abs(m))
         gga = g @ ga
         lam = gga / (float(ga @ ga) + s * s)
         new_g = np.hstack([g - np.outer(lam, ga), (s * lam)[:, None]])
