@@ -129,13 +129,14 @@ def test_halfspace_contains_points_of_the_intersection(seed, n):
 CUTS = st.sampled_from(["below", "above", "thin_strip", "plane"])
 
 
-def _point_and_cut(seed: int, n: int, deficit: int, cut: str):
-    """An ellipsoid of any scale, position and rank, a point of it (on its boundary or
-    inside) and a slab with the point on its edge: a halfspace from below or above, a
-    strip 1e-3 of the set's width wide, or a hyperplane through the point."""
+def _point_and_cut(seed: int, n: int, deficit: int, cut: str, far: bool = False):
+    """An ellipsoid of any scale, position (up to 1e3 from the origin, or 1e8 if
+    ``far``) and rank, a point of it (on its boundary or inside) and a slab with the
+    point on its edge: a halfspace from below or above, a strip 1e-3 of the set's width
+    wide, or a hyperplane through the point."""
     rng = np.random.default_rng(seed)
     rank = max(n - deficit, 1)
-    c = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3)
+    c = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 8 if far else 3)
     f = np.zeros((n, n))
     f[:, :rank] = rng.normal(size=(n, rank)) * 10.0 ** rng.uniform(-3, 2)
     e = Ellipsoid(c, f @ f.T)
@@ -155,20 +156,22 @@ def _point_and_cut(seed: int, n: int, deficit: int, cut: str):
 
 
 @FEW
-@given(SEEDS, DIMS, st.integers(0, 3), CUTS, st.sampled_from(["trace", "volume"]))
+@given(SEEDS, DIMS, st.integers(0, 3), CUTS, st.sampled_from(["trace", "volume"]), st.booleans())
 # each failed before the updates covered their rounding (found by a search over seeds)
-@example(seed=13, n=2, deficit=0, cut="thin_strip", criterion="volume")  # a thin cap
-@example(seed=71, n=1, deficit=0, cut="below", criterion="volume")  # an interval's end
-@example(seed=3, n=2, deficit=2, cut="thin_strip", criterion="volume")  # a segment
-@example(seed=119, n=2, deficit=2, cut="below", criterion="volume")
-@example(seed=711, n=2, deficit=0, cut="plane", criterion="volume")  # near a touch
-def test_cut_through_a_point_of_the_set_keeps_it(seed, n, deficit, cut, criterion):
+@example(seed=13, n=2, deficit=0, cut="thin_strip", criterion="volume", far=False)  # a thin cap
+@example(seed=71, n=1, deficit=0, cut="below", criterion="volume", far=False)  # an interval's end
+@example(seed=3, n=2, deficit=2, cut="thin_strip", criterion="volume", far=False)  # a segment
+@example(seed=119, n=2, deficit=2, cut="below", criterion="volume", far=False)
+@example(seed=711, n=2, deficit=0, cut="plane", criterion="volume", far=False)  # near a touch
+# a segment at 1e8, whose cut's centre is rounded off the segment by more than tol
+@example(seed=60, n=3, deficit=2, cut="thin_strip", criterion="volume", far=True)
+def test_cut_through_a_point_of_the_set_keeps_it(seed, n, deficit, cut, criterion, far):
     """A point of ``E`` on the edge of the slab is in ``E`` and the slab, so every update
     must hold it: the halfspace, strip and hyperplane updates cover their rounding. (A
     thin cap cut from a round ellipsoid left its boundary points up to 1e-8 outside in
     ``q``, a segment almost normal to ``a`` lost 1e-5 of its length, and a plane near a
     touch left the section's rim outside, before the updates covered it.)"""
-    e, x, a, (lo, hi) = _point_and_cut(seed, n, deficit, cut)
+    e, x, a, (lo, hi) = _point_and_cut(seed, n, deficit, cut, far)
     assume(e.contains(x, tol=1e-12))
     # a flat set holds its points to within the tolerance off its hull (rounding of x):
     # a plane through such a point cuts the hull elsewhere by that offset over |a|'s

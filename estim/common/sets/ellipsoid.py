@@ -206,8 +206,9 @@ class Ellipsoid:
         """Whether ``x`` (shape (n,) or (k, n)) lies in ``E``, up to a relative ``tol``.
 
         In the eigenbasis of ``P``, ``sum z_i^2 / l_i <= (1 + tol)^2`` over the nonzero
-        ``l_i`` and ``|z_i| <= tol sqrt(l_max)`` along the null directions (those under
-        1e-12 of ``l_max``, rounding for a flat set); or, where those ``l_i`` are
+        ``l_i`` and ``|z_i| <= tol max(sqrt(l_max), 1)`` plus a few ulps of the
+        coordinates along the null directions (those under 1e-12 of ``l_max``, rounding
+        for a flat set); or, where those ``l_i`` are
         positive (a thin set, not a flat one), the same sum over all of them.
         """
         x = np.asarray(x, dtype=float)
@@ -219,7 +220,12 @@ class Ellipsoid:
         off = np.sqrt(np.sum(z_null**2, axis=1))
         scale = np.sqrt(lam.max(initial=0.0)) + 1e-300
         bound = (1.0 + tol) ** 2
-        inside = (q <= bound) & (off <= tol * max(scale, 1.0))
+        # off the hull: tol times the size, and a few ulps of the coordinates (far from
+        # the origin they are rounded to more than that)
+        slack = tol * max(scale, 1.0) + ROUND_RTOL * (
+            np.linalg.norm(np.atleast_2d(x), axis=1) + float(np.linalg.norm(self.centre))
+        )
+        inside = (q <= bound) & (off <= slack)
         if np.all(lam[~pos] > 0.0):
             # a set thinner than the rank threshold still holds its own thin points
             inside |= q + np.sum(z_null**2 / lam[~pos], axis=1) <= bound
