@@ -82,3 +82,24 @@ def points_in_slab(pts: np.ndarray, a: np.ndarray, lo: float, hi: float) -> np.n
     level = np.where(sq > hi, hi, lo)
     t = (level - sp) / (sq - sp)
     return np.vstack([ins, p + t[:, None] * (q - p)])
+
+
+def edge_slab(ax: float, cut: str, width: float = 0.0) -> tuple[float, float]:
+    """A slab with ``a.x = ax`` on its edge: the halfspace ``below`` or ``above`` it, a
+    ``thin_strip`` of ``width`` above it, or the ``plane`` through it."""
+    return {
+        "below": (-np.inf, ax),
+        "above": (ax, np.inf),
+        "thin_strip": (ax, ax + width),
+        "plane": (ax, ax),
+    }[cut]
+
+
+def cut_by_slab(s, a: np.ndarray, lo: float, hi: float, *args):
+    """``s`` (any set family) cut by ``lo <= a.x <= hi``: a halfspace where one end is
+    infinite, a strip otherwise (``args``: the family's options, e.g. a criterion)."""
+    if np.isinf(lo):
+        return s.intersect_halfspace(a, hi, *args)
+    if np.isinf(hi):
+        return s.intersect_halfspace(-a, -lo, *args)
+    return s.intersect_strip(a, 0.5 * (lo + hi), 0.5 * (hi - lo), *args)

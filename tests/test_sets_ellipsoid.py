@@ -146,13 +146,7 @@ def _point_and_cut(seed: int, n: int, deficit: int, cut: str, far: bool = False)
     a = rng.normal(size=n)
     ax = float(a @ x)
     width = 2.0 * np.sqrt(float(a @ e.shape @ a))
-    slab = {
-        "below": (-np.inf, ax),
-        "above": (ax, np.inf),
-        "thin_strip": (ax, ax + 1e-3 * width),
-        "plane": (ax, ax),
-    }[cut]
-    return e, x, a, slab
+    return e, x, a, S.edge_slab(ax, cut, 1e-3 * width)
 
 
 @FEW
@@ -177,13 +171,7 @@ def test_cut_through_a_point_of_the_set_keeps_it(seed, n, deficit, cut, criterio
     # a plane through such a point cuts the hull elsewhere by that offset over |a|'s
     # angle to the hull, which no update of the set can cover
     assume(cut != "plane" or e.rank == n)
-    if np.isinf(lo):
-        out = e.intersect_halfspace(a, hi)
-    elif np.isinf(hi):
-        out = e.intersect_halfspace(-a, -lo)
-    else:
-        out = e.intersect_strip(a, 0.5 * (lo + hi), 0.5 * (hi - lo), criterion)
-    assert out.contains(x)
+    assert S.cut_by_slab(e, a, lo, hi, criterion).contains(x)
 
 
 @pytest.mark.parametrize("criterion", ["trace", "volume"])

@@ -94,8 +94,7 @@ def _far_box_point_and_cut(seed: int, n: int, cut: str):
     x = np.clip(c + r * side * depth, box.lo, box.hi)
     a = rng.normal(size=n)
     ax = float(a @ x)
-    slab = {"below": (-np.inf, ax), "above": (ax, np.inf), "plane": (ax, ax)}[cut]
-    return box, x, a, slab
+    return box, x, a, S.edge_slab(ax, cut)
 
 
 @FEW
@@ -110,13 +109,7 @@ def test_cut_through_a_point_of_a_far_box_keeps_it(seed, n, cut):
     hold it wherever the box lies: its sums and quotients are rounded to the
     coordinates' magnitude, which it covers."""
     box, x, a, (lo, hi) = _far_box_point_and_cut(seed, n, cut)
-    if np.isinf(lo):
-        out = box.intersect_halfspace(a, hi)
-    elif np.isinf(hi):
-        out = box.intersect_halfspace(-a, -lo)
-    else:
-        out = box.intersect_strip(a, 0.5 * (lo + hi), 0.5 * (hi - lo))
-    assert out.contains(x)
+    assert S.cut_by_slab(box, a, lo, hi).contains(x)
 
 
 def test_strip_contraction_worked_by_hand():

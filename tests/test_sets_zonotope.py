@@ -209,8 +209,7 @@ def _far_zonotope_point_and_cut(seed: int, n: int, m: int, cut: str):
     x = c + z.generators @ xi
     a = rng.normal(size=n)
     ax = float(a @ x)
-    slab = {"below": (-np.inf, ax), "above": (ax, np.inf), "plane": (ax, ax)}[cut]
-    return z, x, a, slab
+    return z, x, a, S.edge_slab(ax, cut)
 
 
 @FEW
@@ -226,13 +225,7 @@ def test_cut_through_a_point_of_a_far_zonotope_keeps_it(seed, n, m, cut):
     hold it wherever the zonotope lies."""
     z, x, a, (lo, hi) = _far_zonotope_point_and_cut(seed, n, m, cut)
     assume(z.contains(x, tol=1e-12))
-    if np.isinf(lo):
-        out = z.intersect_halfspace(a, hi)
-    elif np.isinf(hi):
-        out = z.intersect_halfspace(-a, -lo)
-    else:
-        out = z.intersect_strip(a, 0.5 * (lo + hi), 0.5 * (hi - lo))
-    assert out.contains(x)
+    assert S.cut_by_slab(z, a, lo, hi).contains(x)
 
 
 def test_vertices_2d_match_the_convex_hull_of_all_sign_vertices():
