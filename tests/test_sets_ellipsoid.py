@@ -214,6 +214,12 @@ def test_shallow_cut_leaves_the_ellipsoid_unchanged_under_the_volume_criterion()
     ball = Ellipsoid.ball(np.zeros(3), 1.0)
     assert ball.intersect_strip([1, 0, 0], 0.0, 0.6) is ball  # 0.6 > 1/sqrt(3)
     assert ball.intersect_strip([0, 1, 0], 0.0, 1.5) is ball  # holds the whole ball
+    # just inside the threshold the cut shrinks the volume by less than the rounding
+    # cover adds (1e-14 in log det): never larger than the input, which is returned
+    disc = Ellipsoid.ball(np.zeros(2), 1.0)
+    for d in (1e-8, 1e-10, 1e-12):
+        out = disc.intersect_strip([1.0, 0.0], 0.0, 1.0 / np.sqrt(2.0) - d)
+        assert _logvol(out) <= _logvol(disc)
 
 
 def test_one_dimensional_and_segment_cuts_are_exact():

@@ -347,7 +347,7 @@ class Ellipsoid:
         k = rho / den
         shape = delta * (p - k * np.outer(pa, pa))
         shift = (rho * e / den) * pa
-        return _covered(
+        out = _covered(
             c + shift,
             shape,
             # P - k P a a^T P cancels along a down to r^2 / den of P: its rounding is of
@@ -356,6 +356,12 @@ class Ellipsoid:
             delta * (float(np.linalg.norm(p)) + k * float(pa @ pa)),
             np.abs(c) + np.abs(shift),
         )
+        if criterion == "volume" and self.rank == self.dim:
+            # a cut barely past the threshold shrinks the volume by less than the cover
+            # adds: the input, which holds the intersection too, is then the smaller
+            if np.linalg.slogdet(out.shape)[1] >= np.linalg.slogdet(p)[1]:
+                return self
+        return out
 
 
 def _covered(c: FloatArray, p: FloatArray, p_scale: float, c_scale: FloatArray) -> Ellipsoid:
