@@ -356,9 +356,11 @@ class Ellipsoid:
             delta * (float(np.linalg.norm(p)) + k * float(pa @ pa)),
             np.abs(c) + np.abs(shift),
         )
+        # a cut barely past the threshold shrinks the size by less than the cover adds:
+        # the input, which holds the intersection too, is then the smaller
+        if criterion == "trace" and np.trace(out.shape) >= np.trace(p):
+            return self
         if criterion == "volume" and self.rank == self.dim:
-            # a cut barely past the threshold shrinks the volume by less than the cover
-            # adds: the input, which holds the intersection too, is then the smaller
             if np.linalg.slogdet(out.shape)[1] >= np.linalg.slogdet(p)[1]:
                 return self
         return out
