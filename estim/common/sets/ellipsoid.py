@@ -276,24 +276,6 @@ class Ellipsoid:
             vector(a, self.dim, "a"), -np.inf, halfspace_bound(b), criterion
         )
 
-    @cached_property
-    def _is_segment(self) -> bool:
-        """Rank 1, and thinner across than :meth:`contains` tells apart at its default
-        ``tol`` (1e-9 of the long axis, or of 1, and a few ulps of the centre): a thin
-        set whose other axes ``contains`` reads as its own is cut by the general update,
-        which keeps them."""
-        if self.rank != 1:
-            return False
-        lam = self._eig[0]
-        return lam.size == 1 or lam[-2] <= self._across**2
-
-    @cached_property
-    def _across(self) -> float:
-        """How far off its hull :meth:`contains` (default ``tol``) holds points of a flat
-        set: 1e-9 of its largest axis (or of 1) and a few ulps of the centre."""
-        big = float(np.sqrt(self._eig[0][-1])) if self.dim else 0.0
-        return 1e-9 * max(big, 1.0) + 2.0 * ROUND_RTOL * float(np.linalg.norm(self.centre))
-
     def _cut_segment(self, a: FloatArray, lo: float, hi: float) -> Ellipsoid:
         """The part of the segment ``{c + t v : |t| <= 1}`` (rank-1 ``P = v v^T``) with
         ``lo <= a.x <= hi`` (the slab already clipped to it and not holding all of it).
@@ -302,9 +284,7 @@ class Ellipsoid:
         ``t in [(lo - m) / s, (hi - m) / s]``. ``s`` is computed from ``v``, not as
         ``sqrt(a.P a)``, whose cancellation squares the conditioning (a segment almost
         normal to ``a`` lost 1e-5 of its length), and the part is lengthened by the
-        rounding of ``m``, ``s``, the slab's ends and the new centre (in ``t``), and by
-        what points :meth:`contains` holds off the segment (:attr:`_across`) add to
-        ``a.x``."""
+        rounding of ``m``, ``s``, the slab's ends and the new centre (in ``t``)."""
         lam, vec = self._eig
         v = np.sqrt(lam[-1]) * vec[:, -1]
         s = float(a @ v)
@@ -328,7 +308,6 @@ class Ellipsoid:
             + ROUND_RTOL
             * float(np.linalg.norm(np.abs(self.centre) + np.abs(t_c * v)))
             / float(np.linalg.norm(v))
-            + float(np.linalg.norm(a)) * self._across / abs(s)
         )
         return Ellipsoid._make(centre, (t_r + t_err) ** 2 * np.outer(v, v))
 
@@ -349,7 +328,7 @@ class Ellipsoid:
             return self  # the slab holds the ellipsoid (or touches it where it is flat)
         y, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
         e = y - m
-        if self._is_segment:  # its part in the slab is a sub-segment (exact)
+        if self.rank == 1:  # a segment: its part in the slab is a sub-segment (exact)
             return self._cut_segment(a, lo, hi)
         if r <= 1e-12 * half:  # a hyperplane: the section is an ellipsoid (exact)
             return _section(c, p, pa, g, e, r, ROUND_RTOL * (abs(y) + abs(m)))
@@ -358,9 +337,7 @@ class Ellipsoid:
         r += ROUND_RTOL * (abs(y) + abs(m) + abs(e))
         gn, eps = g / r**2, e**2 / r**2
         if criterion == "volume":
-            # a thin set of rank 1 (not a segment, above) is weighed as a flat disc: any
-            # weight is sound, and the rank-1 formula has no root for it
-            rho = _volume_rho(max(self.rank, min(self.dim, 2)), gn, eps)
+            rho = _volume_rho(self.rank, gn, eps)
         else:
             rho = _trace_rho(float(np.trace(p)), float(pa @ pa) / r**2, gn, eps)
         if rho <= 0.0:
