@@ -83,6 +83,10 @@ __all__ = ["Ellipsoid", "EmptyIntersectionError"]
 
 Criterion = Literal["volume", "trace"]
 _RANK_RTOL = 1e-12
+#: eigenvalues under this fraction of the largest are rounding (a computed ``L L^T`` of
+#: rank 1 has others of about 1e-16 of it); between it and ``_RANK_RTOL`` a set is thin,
+#: not flat: :meth:`Ellipsoid.contains` reads those axes, and cuts keep them
+_THIN_RTOL = 1e-14
 #: a.P a under this fraction of |a|^2 tr P is rounding (the ellipsoid is flat along a)
 FLAT_G_RTOL = 1e-13
 
@@ -226,8 +230,8 @@ class Ellipsoid:
             np.linalg.norm(np.atleast_2d(x), axis=1) + float(np.linalg.norm(self.centre))
         )
         inside = (q <= bound) & (off <= slack)
-        if np.all(lam[~pos] > 0.0):
-            # a set thinner than the rank threshold still holds its own thin points
+        if np.all(lam[~pos] > _THIN_RTOL * lam.max(initial=0.0)):
+            # a set thinner than the rank threshold, not flat, holds its own thin points
             inside |= q + np.sum(z_null**2 / lam[~pos], axis=1) <= bound
         return bool(inside[0]) if x.ndim == 1 else inside
 
@@ -275,6 +279,14 @@ class Ellipsoid:
         return self._intersect_slab(
             vector(a, self.dim, "a"), -np.inf, halfspace_bound(b), criterion
         )
+
+    @cached_property
+    def _is_segment(self) -> bool:
+        """Rank 1 and flat across to rounding (:data:`_THIN_RTOL`): a set of rank 1 that
+        is thin, not flat, is cut by the general update, which keeps its thin axes
+        (:meth:`contains` reads them)."""
+        lam = self._eig[0]
+        return self.rank == 1 and (lam.size == 1 or lam[-2] <= _THIN_RTOL * lam[-1])
 
     def _cut_segment(self, a: FloatArray, lo: float, hi: float) -> Ellipsoid:
         """The part of the segment ``{c + t v : |t| <= 1}`` (rank-1 ``P = v v^T``) with
@@ -328,7 +340,7 @@ class Ellipsoid:
             return self  # the slab holds the ellipsoid (or touches it where it is flat)
         y, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
         e = y - m
-        if self.rank == 1:  # a segment: its part in the slab is a sub-segment (exact)
+        if self._is_segment:  # its part in the slab is a sub-segment (exact)
             return self._cut_segment(a, lo, hi)
         if r <= 1e-12 * half:  # a hyperplane: the section is an ellipsoid (exact)
             return _section(c, p, pa, g, e, r, ROUND_RTOL * (abs(y) + abs(m)))
@@ -337,7 +349,9 @@ class Ellipsoid:
         r += ROUND_RTOL * (abs(y) + abs(m) + abs(e))
         gn, eps = g / r**2, e**2 / r**2
         if criterion == "volume":
-            rho = _volume_rho(self.rank, gn, eps)
+            # a thin set of rank 1 (not a segment, above) is weighed as a flat disc: any
+            # weight is sound, and the rank-1 formula has no root for it
+            rho = _volume_rho(max(self.rank, min(self.dim, 2)), gn, eps)
         else:
             rho = _trace_rho(float(np.trace(p)), float(pa @ pa) / r**2, gn, eps)
         if rho <= 0.0:
