@@ -216,21 +216,23 @@ class Ellipsoid:
         positive (a thin set, not a flat one), the same sum over all of them.
         """
         x = np.asarray(x, dtype=float)
+        pts = np.atleast_2d(x)
         lam, vec = self._eig
-        z = (np.atleast_2d(x) - self.centre) @ vec
-        pos = lam > _RANK_RTOL * max(lam.max(initial=0.0), 1e-300)
+        lam_max = lam.max(initial=0.0)
+        z = (pts - self.centre) @ vec
+        pos = lam > _RANK_RTOL * max(lam_max, 1e-300)
         q = np.sum(z[:, pos] ** 2 / lam[pos], axis=1)
         z_null = z[:, ~pos]
         off = np.sqrt(np.sum(z_null**2, axis=1))
-        scale = np.sqrt(lam.max(initial=0.0)) + 1e-300
+        scale = np.sqrt(lam_max) + 1e-300
         bound = (1.0 + tol) ** 2
         # off the hull: tol times the size, and a few ulps of the coordinates (far from
         # the origin they are rounded to more than that)
         slack = tol * max(scale, 1.0) + ROUND_RTOL * (
-            np.linalg.norm(np.atleast_2d(x), axis=1) + float(np.linalg.norm(self.centre))
+            np.linalg.norm(pts, axis=1) + float(np.linalg.norm(self.centre))
         )
         inside = (q <= bound) & (off <= slack)
-        if np.all(lam[~pos] > _THIN_RTOL * lam.max(initial=0.0)):
+        if np.all(lam[~pos] > _THIN_RTOL * lam_max):
             # a set thinner than the rank threshold, not flat, holds its own thin points
             inside |= q + np.sum(z_null**2 / lam[~pos], axis=1) <= bound
         return bool(inside[0]) if x.ndim == 1 else inside
