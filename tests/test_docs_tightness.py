@@ -343,6 +343,27 @@ def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_r
     # the row of docs_checks.CHECKS that reads this number points at the worst run's file
     row = next(c for c in CHECKS if c[0] == "README.md" and "with the range finder" in c[1])
     assert json.loads((ROOT / row[2]).read_text()) == worst
+    # the option that holds the range finder's runs within 1.03 (extreme_bands/), and its
+    # CPU-time ratios on Fig. 5 with the range finder (speed/kp_fig5_range-trials-*)
+    opt = [json.loads(p.read_text()) for folder in ("seeds_701", "range_707")
+           for p in (tight / "extreme_bands" / folder).glob("*.json")]  # fmt: skip
+    assert all(all(r["exact_inside"]) for r in opt)
+    best_opt = max(r["max_ratio"] for r in opt)
+    row = next(c for c in CHECKS if c[0] == "README.md" and "range-finder runs on" in c[1])
+    assert json.loads((ROOT / row[2]).read_text())["max_ratio"] == best_opt
+    assert (f'`band_trials="extreme_bands"` holds all {len(opt)} range-finder runs on seeds '
+            f"701-740 within {best_opt:.3f}") in text  # fmt: skip
+    speed = ROOT / "docs/results/speed"
+    names = ("default", "default-repeat", "extreme_bands", "extreme_bands-repeat")
+    cpu = {n: {r["noise"]: r["cpu_s"] for r in json.loads(
+               (speed / f"kp_fig5_range-trials-{n}.json").read_text())["rows"]}
+           for n in names}  # fmt: skip
+    ratios = sorted(
+        (cpu["extreme_bands"][k] + cpu["extreme_bands-repeat"][k])
+        / (cpu["default"][k] + cpu["default-repeat"][k])
+        for k in ("random", "game")
+    )
+    assert f"within {best_opt:.3f} at {ratios[0]:.2f}-{ratios[1]:.2f} times the CPU time" in text
 
 
 def test_infoset_page_seeds_701_paragraph_matches_its_results_files():
@@ -380,3 +401,78 @@ def test_infoset_page_seeds_701_paragraph_matches_its_results_files():
     reads = ", ".join(f"{wide[s]['max_ratio']:.3f}" for s in seeds[:-1])
     reads += f" and {wide[seeds[-1]]['max_ratio']:.3f}"
     assert f"the three read {reads} (seeds {seeds[0]}, {seeds[1]}, {seeds[2]})" in text
+
+
+def test_infoset_page_extreme_bands_paragraph_matches_its_results_files():
+    """The option ``band_trials="extreme_bands"``: seed 731 unguided with 4 (the
+    default), 8 and 16 bands and with the option (``extreme_bands/unguided/``); the 52
+    range-finder runs of ``seeds_701/`` and ``range_707/`` again with the option (the
+    exact interval inside, none wider than with the default, the three past 1.03); the
+    CPU-time ratios and the moves of the means (``speed/*-trials-*.json``)."""
+    page = (ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split("\n\n")
+    (text,) = [" ".join(p.split()) for p in page if "`extreme_bands/unguided/`" in p]
+    tight = ROOT / "docs/results/tightness"
+    unguided = {}
+    for p in (tight / "extreme_bands/unguided").glob("*.json"):
+        r = json.loads(p.read_text())
+        assert not r["guided"] and r["seed"] == 731 and all(r["exact_inside"])
+        unguided[r["scenario"].removeprefix("kp_fig5_range")] = r
+    at30 = {k: r["times_s"].index(30.0) for k, r in unguided.items()}
+    past = {k: r["exact_lo_m"][at30[k]] - r["set_lo_m"][at30[k]] for k, r in unguided.items()}
+    default = unguided[""]
+    assert f"read {default['ratio'][at30['']]:.3f} at 30 s" in text
+    assert f"lay {past['']:.1f} m past the exact one" in text
+    assert (f"lay {past['+estimator.infoset.n_bands=8']:.1f} m and "
+            f"{past['+estimator.infoset.n_bands=16']:.1f} m past") in text  # fmt: skip
+    opt = "+estimator.infoset.band_trials=_extreme_bands_"
+    assert (
+        f"then lay {past[opt]:.1f} m past at 30 s ({unguided[opt]['ratio'][at30[opt]]:.3f})" in text
+    )
+
+    pairs = []
+    for folder in ("seeds_701", "range_707"):
+        for p in (tight / "extreme_bands" / folder).glob("*.json"):
+            r = json.loads(p.read_text())
+            assert r["scenario"] == "kp_fig5_range" + opt
+            base = tight / folder / p.name.replace(opt, "")
+            pairs.append((r, json.loads(base.read_text())))
+    assert len(pairs) == 52 and "The same 52 range-finder runs" in text
+    assert all(r["guided"] and all(r["exact_inside"]) for r, _ in pairs)
+    assert all(r["max_ratio"] <= d["max_ratio"] + 1e-12 for r, d in pairs)
+    worst = max((r for r, _ in pairs), key=lambda r: r["max_ratio"])
+    assert (f"read at most {worst['max_ratio']:.3f} (seed {worst['seed']}, at "
+            f"{_worst_time_s(worst):.0f} s)") in text  # fmt: skip
+    was = sorted(((r, d) for r, d in pairs if d["max_ratio"] > 1.03), key=lambda x: x[0]["seed"])
+    assert len(was) == 3
+    now = (
+        ", ".join(f"{r['max_ratio']:.3f}" for r, _ in was[:-1])
+        + f" and {was[-1][0]['max_ratio']:.3f}"
+    )
+    seeds = ", ".join(str(r["seed"]) for r, _ in was)
+    assert f"the three past 1.03 now {now} (seeds {seeds})" in text, now
+
+    speed = ROOT / "docs/results/speed"
+    for scenario, wording in (
+        ("kp_fig5_range", "it costs {} and {} times the CPU time of the default"),
+        ("kp_fig5", "): it costs {} and {} times the CPU"),
+    ):
+        rows = {name: {r["noise"]: r for r in json.loads(
+                    (speed / f"{scenario}-trials-{name}.json").read_text())["rows"]}
+                for name in ("default", "default-repeat", "extreme_bands",
+                             "extreme_bands-repeat")}  # fmt: skip
+        assert all(r["truth_outside"] == 0 for v in rows.values() for r in v.values())
+        ratio = [
+            sum(rows[f"extreme_bands{t}"][n]["cpu_s"] for t in ("", "-repeat"))
+            / sum(rows[f"default{t}"][n]["cpu_s"] for t in ("", "-repeat"))
+            for n in ("random", "game")
+        ]
+        assert wording.format(f"{ratio[0]:.2f}", f"{ratio[1]:.2f}") in text, (scenario, ratio)
+        a, b = rows["default"], rows["extreme_bands"]
+        if scenario == "kp_fig5_range":
+            dmiss = max(abs(a[n]["miss_m"]["mean"] - b[n]["miss_m"]["mean"]) for n in a)
+            dfuel = max(abs(a[n]["fuel_mps"]["mean"] - b[n]["fuel_mps"]["mean"]) for n in a)
+            assert dmiss <= 0.003 and dfuel <= 0.02, (dmiss, dfuel)
+            assert "mean miss by at most 0.003 m and the mean fuel by at most 0.02 m/s" in text
+        else:
+            miss = (b["game"]["miss_m"]["mean"], a["game"]["miss_m"]["mean"])
+            assert "the game's mean miss reads {:.2f} m against {:.2f} m".format(*miss) in text

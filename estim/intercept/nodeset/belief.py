@@ -89,6 +89,10 @@ class NodeSet(Belief):
     band_trial_after_s : float
         No split of a band for the impulses' spread is tried before this time (s, as
         ``t_s``): a trial that did not pay waits (:mod:`.bands`).
+    live_band_target : int
+        Live closing-speed bands the set keeps splitting towards, when more than the
+        estimator started with (a paid trial of ``band_trials="extreme_bands"``
+        doubles it; 0: the estimator's start).
     """
 
     model: ChannelModel
@@ -108,6 +112,7 @@ class NodeSet(Belief):
     n_simplified: int = 0
     impulse_moment_m: float = 0.0
     band_trial_after_s: float = -np.inf
+    live_band_target: int = 0
 
     def __post_init__(self) -> None:
         for name, kind in _ARRAY_FIELDS.items():

@@ -103,6 +103,18 @@ class InfosetOptions(SlabOptions):
             "over the band it was recorded in, cheaper and looser)"
         ),
     ] = True
+    # the default keeps the published results; extreme_bands holds the range finder's
+    # sets within 1.03 of the exact width where the default read up to 1.043 early in
+    # the approach (seeds 706, 720, 731; docs/infoset.md)
+    band_trials: Annotated[
+        Literal["impulse_spread", "extreme_bands"],
+        Field(
+            description="nodes: which closing-speed bands a trial split tests: those the "
+            "impulses may have spread (a paying trial splits that band), or, every few "
+            "seconds, those at the set's extremes of the miss (a paying trial halves every "
+            "live band; tighter with a range finder)"
+        ),
+    ] = "impulse_spread"
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
@@ -141,6 +153,7 @@ class InfosetOptions(SlabOptions):
             split_bands=self.split_bands,
             max_bands=self.max_bands,
             impulse_per_piece=self.impulse_per_piece,
+            band_trials=self.band_trials,
         )
 
 
