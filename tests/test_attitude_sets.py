@@ -13,7 +13,7 @@ from itertools import product
 import numpy as np
 import pytest
 from harness_texts import TINY_RW, run_cli
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeEstimator
@@ -166,19 +166,52 @@ def _random_ellipsoids(rng, runs=3):
     return rng.normal(size=(runs, 6)), f @ f.transpose(0, 2, 1)
 
 
+def _repeat_eig(eig, r: int, k: int):
+    return tuple(np.repeat(a[r : r + 1], k, 0) for a in eig)
+
+
 def test_ellipsoid_membership_equals_estim_sets():
     rng = np.random.default_rng(5)
     c, p = _random_ellipsoids(rng)
-    lam, vec = np.linalg.eigh(p)
+    eig = ell.scaled_eig(p)
     for r in range(3):
         e = Ellipsoid(c[r], p[r])
         pts = sample_ellipsoid(e, rng, 100)
         pts = np.vstack([pts, c[r] + (pts - c[r]) * 1.001, c[r] + (pts - c[r]) * 0.999])
         got = ell.ellipsoid_inside(np.repeat(c[r : r + 1], len(pts), 0),
-                                   (np.repeat(lam[r : r + 1], len(pts), 0),
-                                    np.repeat(vec[r : r + 1], len(pts), 0)),
-                                   pts - c[r], 1e-12)  # fmt: skip
+                                   _repeat_eig(eig, r, len(pts)), pts - c[r], 1e-12)  # fmt: skip
         np.testing.assert_array_equal(got, e.contains(pts, tol=1e-9))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    log_scales=st.lists(st.floats(-8.0, 0.0), min_size=6, max_size=6),
+    margin=st.sampled_from([1e-6, 1e-3]),
+)
+@example(seed=1, log_scales=[0.0, 0.0, 0.0, -8.0, -8.0, -8.0], margin=1e-6)
+@example(seed=2, log_scales=[0.0, 0.0, 0.0, -7.0, -7.0, -7.0], margin=1e-3)
+def test_ellipsoid_membership_in_mixed_units_reads_points_near_the_boundary(
+    seed, log_scales, margin
+):
+    """Attitude (rad) and rate (rad/s) axes of scales up to 1e8 apart, correlated: points
+    ``c + S (1 -+ margin) C^(1/2) u`` (``|u| = 1``, ``P = S C S``) are inside and outside
+    as the quadratic form says. On ``P``'s own eigenvalues (1e-16 of the largest for
+    axes 1e8 apart) the narrow axes read as flat or as rounding and points inside were
+    rejected: the examples failed on the unscaled test."""
+    rng = np.random.default_rng(seed)
+    f = rng.normal(size=(6, 6))
+    corr = f @ f.T + 0.5 * np.eye(6)  # a well-conditioned correlation-like shape
+    s = 10.0 ** np.array(log_scales)
+    p = corr * s[:, None] * s[None, :]
+    lam, vec = np.linalg.eigh(corr)
+    u = rng.normal(size=(50, 6))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    d = (u @ (vec * np.sqrt(lam)).T) * s  # on the boundary of E(0, P), exactly S C^(1/2) u
+    eig = _repeat_eig(ell.scaled_eig(p[None]), 0, 50)
+    zero = np.zeros((50, 6))
+    assert ell.ellipsoid_inside(zero, eig, d * (1.0 - margin), 0.0).all()
+    assert not ell.ellipsoid_inside(zero, eig, d * (1.0 + margin), 0.0).any()
 
 
 def test_ellipsoid_from_box_is_the_library_minimum_volume_one():

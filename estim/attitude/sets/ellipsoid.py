@@ -54,10 +54,12 @@ outer bound whatever its free parameter, the parameter choosing only the tightne
   previous.
 
 Membership (:meth:`EllipsoidAttitudeBelief.set_inside`) is exact: in the eigenbasis of
-``P`` (``P = V \\Lambda V^T``), :math:`\\sqrt{\\sum_k z_k^2 / \\lambda_k} \\le 1 +
-tol/\\sqrt{\\lambda_{max}}`, ``z = V^T (x - c)``, i.e. within ``tol`` of ``E`` at most
-(the absolute ``tol`` of the box's test), directions of a vanishing eigenvalue (none
-when the remainders inflate, as they do) being held to ``|z_k| <= tol``.
+the axis-scaled shape ``S^-1 P S^-1 = V \\Lambda V^T`` (``S = diag(sqrt(P_ii))``: the
+state mixes rad and rad/s, :func:`scaled_eig`), :math:`\\sqrt{\\sum_k z_k^2 /
+\\lambda_k} \\le 1 + tol/\\sqrt{\\lambda_{max}(P)}`, ``z = V^T S^-1 (x - c)``, i.e.
+within ``tol`` of ``E`` at most (the absolute ``tol`` of the box's test), directions of
+a vanishing eigenvalue (none when the remainders inflate, as they do) being held to a
+length ``|z_k| |S v_k| <= tol``.
 
 **Tightness.** An ellipsoid around a box-shaped set is wide on the axes (about
 :math:`\\sqrt{6}` times the box for the smallest one around a 6-D box), and the data are
@@ -236,16 +238,43 @@ def axis_strips(
     return c, p, empty
 
 
+#: eigenvalues of the axis-scaled shape (unit diagonal) under this times the largest are
+#: rounding: those directions are flat
+FLAT_RTOL = 1e-14
+
+
+def scaled_eig(p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``(s, lam, V, lmax)``: the axes' radii ``s = sqrt(P_ii)`` (1 where 0), the
+    eigen-decomposition ``lam, V`` of the axis-scaled shape ``P_ij / (s_i s_j)`` (unit
+    diagonal), and the largest eigenvalue ``lmax`` of ``P`` itself, per run.
+
+    The state mixes units (rad and rad/s), and ``P``'s eigenvalues then span the
+    squared ratio of the axes' scales: a rate axis a million times narrower than the
+    attitude has eigenvalues at 1e-12 of the largest, where the rounding of ``eigh``
+    (``eps`` times the largest) is a part in 1e4 of them, and under 1e-14 they would
+    read as flat. Scaled to a unit diagonal the eigenvalues are at most ``n``, and only
+    the correlations make one small."""
+    s = np.sqrt(np.clip(np.diagonal(p, axis1=-2, axis2=-1), 0.0, None))
+    s = np.where(s > 0.0, s, 1.0)
+    lam, vec = np.linalg.eigh(_sym(p / (s[..., :, None] * s[..., None, :])))
+    lmax = np.linalg.eigvalsh(p)[..., -1]
+    return s, np.clip(lam, 0.0, None), vec, np.clip(lmax, 0.0, None)
+
+
 def ellipsoid_inside(c, eig, d, tol: float) -> NDArray[np.bool_]:
-    """Per run: whether ``c + d`` is in ``E`` given ``eig = (lambda, V)`` of ``P``
-    (module docstring)."""
-    lam, vec = eig
-    z = np.einsum("rji,rj->ri", vec, d)
-    lmax = np.max(lam, axis=-1, keepdims=True)
-    pos = lam > 1e-14 * np.maximum(lmax, 1e-300)
+    """Per run: whether ``c + d`` is in ``E`` given ``eig`` (:func:`scaled_eig` of
+    ``P``): :math:`\\sqrt{\\sum_k z_k^2 / \\lambda_k} \\le 1 + tol / \\sqrt{\\lambda_{max}(P)}`
+    with ``z = V^T (d / s)`` (the quadratic form is the same in scaled axes), and a
+    flat direction ``k`` held to ``|z_k| |s * v_k| <= tol`` (its length in the state's
+    units)."""
+    s, lam, vec, lmax = eig
+    z = np.einsum("rji,rj->ri", vec, d / s)
+    top = np.max(lam, axis=-1, keepdims=True)
+    pos = lam > FLAT_RTOL * np.maximum(top, 1e-300)
     quad = np.sum(np.where(pos, z * z / np.where(pos, lam, 1.0), 0.0), axis=-1)
-    flat_ok = np.all(pos | (np.abs(z) <= tol), axis=-1)
-    return (np.sqrt(quad) <= 1.0 + tol / np.sqrt(np.maximum(lmax[:, 0], 1e-300))) & flat_ok
+    length = np.linalg.norm(s[..., :, None] * vec, axis=-2)  # |s * v_k|, per direction
+    flat_ok = np.all(pos | (np.abs(z) * length <= tol), axis=-1)
+    return (np.sqrt(quad) <= 1.0 + tol / np.sqrt(np.maximum(lmax, 1e-300))) & flat_ok
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,9 +286,8 @@ class EllipsoidAttitudeBelief(SetAttitudeBelief):
         return ellipsoid_radius(self.z_m)
 
     @cached_property
-    def _eig(self) -> tuple[FloatArray, FloatArray]:
-        lam, vec = np.linalg.eigh(_sym(np.nan_to_num(self.z_m)))
-        return np.clip(lam, 0.0, None), vec
+    def _eig(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        return scaled_eig(_sym(np.nan_to_num(self.z_m)))
 
     def set_inside(self, d: FloatArray, tol: float) -> NDArray[np.bool_]:
         return ellipsoid_inside(self.z_c, self._eig, d, tol)
