@@ -54,6 +54,18 @@ def test_a_paying_trial_halves_every_live_band(monkeypatch):
     np.testing.assert_allclose(np.array(halves), np.array(expected), rtol=1e-15)
 
 
+def test_a_paying_trial_whose_splits_fail_keeps_no_target_and_waits(monkeypatch):
+    """When the halves cannot be told from empty (``_split_band`` refuses every split), a
+    paying trial leaves the bands as they were, keeps no unreachable target (else every
+    update would replay the refused splits) and waits ``RETRY_S`` like one that did not
+    pay: over 12 one-second steps at most three rounds of trials."""
+    monkeypatch.setattr(bands, "_split_band", lambda *a: None)
+    est, b, start, calls = _unguided_range_set(monkeypatch, 1e12, 12)
+    assert bands.live_bands(b) == start and b.live_band_target == len(start)
+    assert 1 <= len(calls) <= 2 * 3
+    assert b.band_trial_after_s > b.t_s - bands.RETRY_S
+
+
 def test_a_trial_that_does_not_pay_waits_and_keeps_the_bands(monkeypatch):
     """A trial that gains nothing leaves the bands, and the next waits ``RETRY_S``: over
     12 one-second steps at most three rounds of (at most two) trials."""

@@ -275,7 +275,13 @@ def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float)
     gains = [_node_gain(est, s, *bands[i]) for i in tried if ok[i]]
     if gains and max(gains) >= GAIN * rtol * width:
         target = min(max_bands, 2 * max(len(bands), min_live))
-        return _split_loosest(est, evolve(s, live_band_target=target), target, max_bands, rtol)
+        out = _split_loosest(est, s, target, max_bands, rtol)
+        reached = len(live_bands(out))
+        if reached >= target:
+            return evolve(out, live_band_target=target)
+        # a target the splits could not reach (a half that cannot be told from empty) is
+        # not kept, and the trials wait: else every update would replay those splits
+        return evolve(out, live_band_target=reached, band_trial_after_s=s.t_s + RETRY_S)
     return evolve(s, band_trial_after_s=s.t_s + RETRY_S)
 
 
