@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
+from hypothesis import strategies as st
 from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
 from kalman_vs_infoset.estim.intercept.model import Bearing, Range
 from kalman_vs_infoset.estim.intercept.nodeset.bands import live_bands
@@ -22,6 +23,23 @@ from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 
 ROOT = Path(__file__).resolve().parents[1]
+
+#: hypothesis strategies of a schedule: which end of the box on each of ``(Y, V, x, e)``,
+#: the switch times (s) of the bearing error and of the disturbance, and their first signs
+BOX_CORNERS = st.tuples(*(st.booleans() for _ in range(4)))
+SIGNS = st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0]))
+
+
+def switch_times(max_size: int, last_s: float = 16.0):
+    """Sorted switch times in ``[0, last_s]`` s, at most ``max_size``."""
+    return st.lists(st.floats(0.0, last_s), max_size=max_size).map(sorted)
+
+
+def corner_state(corner, x_box, e_box) -> tuple[float, float, float, float]:
+    """``(Y m, V m/s, x m, e m/s)`` of a corner of the box: ``Y`` +-10 km, ``V`` +-100
+    m/s, ``x`` and ``e`` at the ends of ``x_box`` and ``e_box``."""
+    return (10e3 if corner[0] else -10e3, 100.0 if corner[1] else -100.0,
+            x_box[int(corner[2])], e_box[int(corner[3])])  # fmt: skip
 
 
 def winding_and_turn(xy: np.ndarray) -> tuple[float, float]:

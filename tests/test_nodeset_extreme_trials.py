@@ -20,7 +20,7 @@ from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.estim.intercept.nodeset import bands
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
-from nodeset_schedules import run_schedule
+from nodeset_schedules import BOX_CORNERS, SIGNS, corner_state, run_schedule, switch_times
 
 from kalman_vs_infoset.api import load_scenario, run_engagement
 
@@ -120,10 +120,10 @@ def test_extreme_trials_bring_the_range_finder_seeds_within_1_03_of_the_exact_lp
 
 @settings(max_examples=12, deadline=None)
 @given(
-    corner=st.tuples(*(st.booleans() for _ in range(4))),
-    error_switch_s=st.lists(st.floats(0.0, 16.0), max_size=3).map(sorted),
-    disturbance_switch_s=st.lists(st.floats(0.0, 16.0), max_size=3).map(sorted),
-    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+    corner=BOX_CORNERS,
+    error_switch_s=switch_times(3),
+    disturbance_switch_s=switch_times(3),
+    signs=SIGNS,
     every_trial_pays=st.booleans(),
 )
 def test_extreme_trials_keep_the_truth_from_every_corner(
@@ -134,15 +134,12 @@ def test_extreme_trials_keep_the_truth_from_every_corner(
     the truth inside after every update, with the trials as measured or with every
     trial paying (every live band halved each time, where a split is sound: a range
     that pins ``u`` at a band's edge leaves halves that cannot be told from empty)."""
-    x_box, e_box = (801.3e3, 951.3e3), (57.9e3, 58.1e3)
-    y = 10e3 if corner[0] else -10e3
-    v = 100.0 if corner[1] else -100.0
+    start = corner_state(corner, (801.3e3, 951.3e3), (57.9e3, 58.1e3))
     with pytest.MonkeyPatch.context() as mp:
         if every_trial_pays:
             mp.setattr(bands, "_node_gain", lambda *a: np.inf)
         r = run_schedule(
-            "kp_fig5_range", (y, v, x_box[int(corner[2])], e_box[int(corner[3])]),
-            error_switch_s, disturbance_switch_s, *signs,
+            "kp_fig5_range", start, error_switch_s, disturbance_switch_s, *signs,
             overrides=[*SHORT_APPROACH, EXTREME],
         )  # fmt: skip
     assert r["outside"] == 0

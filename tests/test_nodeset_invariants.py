@@ -22,7 +22,16 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.common import _kernels as _k
 from kalman_vs_infoset.estim.intercept.nodeset import _kernels as _nk
-from nodeset_schedules import DENT_TOL, ROOT, run_schedule, winding_and_turn
+from nodeset_schedules import (
+    BOX_CORNERS,
+    DENT_TOL,
+    ROOT,
+    SIGNS,
+    corner_state,
+    run_schedule,
+    switch_times,
+    winding_and_turn,
+)
 
 #: the corner runs of the outside check: (scenario, (Y, V, x, e) in m, m/s, m, m/s)
 CORNERS = {
@@ -91,10 +100,10 @@ def test_corner_schedule_runs_to_the_threshold_convex_and_with_the_truth(scenari
 
 @settings(max_examples=50, deadline=None)
 @given(
-    corner=st.tuples(*(st.booleans() for _ in range(4))),
-    error_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
-    disturbance_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
-    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+    corner=BOX_CORNERS,
+    error_switch_s=switch_times(4),
+    disturbance_switch_s=switch_times(4),
+    signs=SIGNS,
     scenario=st.sampled_from(["kp_fig3", "kp_fig5"]),
 )
 # found by `make fuzz` (seed 5120261205): from the corner at the fast end of the
@@ -116,12 +125,9 @@ def test_slices_stay_convex_and_wind_once_after_every_operation(
     every stored slice is convex and winds once, and the truth stays inside."""
     x_box = (801.3e3, 951.3e3)
     e_box = (57.9e3, 58.1e3) if scenario == "kp_fig5" else (58.0e3, 58.0e3)
-    y = 10e3 if corner[0] else -10e3
-    v = 100.0 if corner[1] else -100.0
-    x = x_box[int(corner[2])]
-    e = e_box[int(corner[3])]
     r = run_schedule(
-        scenario, (y, v, x, e), error_switch_s, disturbance_switch_s, *signs,
+        scenario, corner_state(corner, x_box, e_box), error_switch_s, disturbance_switch_s,
+        *signs,
         overrides=SHORT_APPROACH,
     )  # fmt: skip
     assert r["outside"] == 0
@@ -130,10 +136,10 @@ def test_slices_stay_convex_and_wind_once_after_every_operation(
 
 @settings(max_examples=25, deadline=None)
 @given(
-    corner=st.tuples(*(st.booleans() for _ in range(4))),
-    error_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
-    disturbance_switch_s=st.lists(st.floats(0.0, 16.0), max_size=4).map(sorted),
-    signs=st.tuples(st.sampled_from([-1.0, 1.0]), st.sampled_from([-1.0, 1.0])),
+    corner=BOX_CORNERS,
+    error_switch_s=switch_times(4),
+    disturbance_switch_s=switch_times(4),
+    signs=SIGNS,
 )
 def test_range_finder_schedules_keep_the_truth_while_bands_split(
     corner, error_switch_s, disturbance_switch_s, signs
@@ -142,11 +148,9 @@ def test_range_finder_schedules_keep_the_truth_while_bands_split(
     error): the slices stay convex, the truth stays inside after every update, also
     when the closing-speed bands split (their halves are recomputed)."""
     x_box, e_box = (801.3e3, 951.3e3), (57.9e3, 58.1e3)
-    y = 10e3 if corner[0] else -10e3
-    v = 100.0 if corner[1] else -100.0
     r = run_schedule(
-        "kp_fig5_range", (y, v, x_box[int(corner[2])], e_box[int(corner[3])]),
-        error_switch_s, disturbance_switch_s, *signs,
+        "kp_fig5_range", corner_state(corner, x_box, e_box), error_switch_s,
+        disturbance_switch_s, *signs,
         overrides=SHORT_APPROACH,
     )  # fmt: skip
     assert r["outside"] == 0
