@@ -214,11 +214,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # test_docs_tightness checks that it is the largest)
     # (the counts and the threshold: test_docs_tightness)
     (README, r"within 1\.03 times its width in all but \d+ of the \d+ guided runs on unseen "
-     r"seeds, and at most ([\d.]+) times \(with the range finder",
+     r"seeds, and at most ([\d.]+) times\. Those three are range-finder runs",
      "docs/results/tightness/range_707/kp_fig5_range-tightness-infoset-random-seed731-guided.json",
      ("max_ratio",)),
     # the widest of the three with 16 bands from the start
-    (README, r"starting with 16 closing-speed bands brings those three to ([\d.]+) at most",
+    (README, r"16 closing-speed bands from the start bring them to ([\d.]+) at most",
      "docs/results/tightness/seeds_701/n_bands_16/"
      "kp_fig5_range+estimator.infoset.n_bands=16-tightness-infoset-random-seed731-guided.json",
      ("max_ratio",)),
