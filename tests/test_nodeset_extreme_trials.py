@@ -18,6 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.estim.intercept.nodeset import bands
+from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.intercept import build_estimator
 from nodeset_schedules import BOX_CORNERS, SIGNS, corner_state, run_schedule, switch_times
@@ -84,6 +85,13 @@ def test_the_default_rule_is_unchanged_and_the_option_is_checked():
     assert est.band_trials == "impulse_spread"
     with pytest.raises(InputError, match="extreme_bands"):
         load_scenario("kp_fig5_range", estimator={"infoset": {"band_trials": "all"}})
+
+
+def test_the_estimator_refuses_an_unknown_band_trials():
+    """Built from Python without the options model, the estimator checks it too."""
+    with pytest.raises(ValueError, match="band_trials"):
+        NodeSetEstimator(band_trials="all")
+    assert NodeSetEstimator(band_trials="extreme_bands").band_trials == "extreme_bands"
 
 
 def test_bad_band_trials_on_the_command_line_exits_2_with_one_line(capsys, tmp_path):
