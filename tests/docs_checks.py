@@ -222,12 +222,12 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      "docs/results/tightness/seeds_701/n_bands_16/"
      "kp_fig5_range+estimator.infoset.n_bands=16-tightness-infoset-random-seed731-guided.json",
      ("max_ratio",)),
-    # the widest of the 52 range-finder runs with band_trials="extreme_bands" (the count,
+    # the widest of the 92 range-finder runs with band_trials="extreme_bands" (the count,
     # the seeds and the CPU-time ratios: test_docs_tightness)
     (README, r"holds all \d+ range-finder runs on seeds \d+-\d+ within ([\d.]+) at "
      r"[\d.]+-[\d.]+ times the CPU time",
-     "docs/results/tightness/extreme_bands/range_707/kp_fig5_range+estimator.infoset."
-     "band_trials=_extreme_bands_-tightness-infoset-random-seed725-guided.json",
+     "docs/results/tightness/extreme_bands/range_741/kp_fig5_range+estimator.infoset."
+     "band_trials=_extreme_bands_-tightness-infoset-random-seed745-guided.json",
      ("max_ratio",)),
     (README, r"The estimators on the same (\d+) Fig\. 5 engagements", CMP, ("runs",)),
     (README, r"the set misses by ([\d.]+) m for ([\d.]+) m/s; the EKF by ([\d.]+) m for "

@@ -94,6 +94,8 @@ def split_live_bands(
     min_live = max(min_live, s.live_band_target)
     s = _split_loosest(est, s, min_live, max_bands, rtol)
     if trials == "extreme_bands":
+        # the impulses' candidates as by default, then the bands at the extremes
+        s = _impulse_splits(est, s, max_bands, rtol, wait=False)
         return _extreme_trials(est, s, min_live, max_bands, rtol)
     return _impulse_splits(est, s, max_bands, rtol)
 
@@ -197,7 +199,7 @@ def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
     return float(max(gain_lo, 0.0) + max(gain_hi, 0.0))
 
 
-def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
+def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float, wait: bool = True) -> NodeSet:
     """Split the bands whose spread of the impulses may widen ``w`` by more than
     ``rtol`` of the set's width, where a trial shows that it does.
 
@@ -211,7 +213,8 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
     (:func:`_node_gain`), and the best is split when
     the halves narrow them by at least ``GAIN * rtol`` of the set's width (a split
     takes about half the spread). A trial that does not pay waits ``RETRY_S``
-    seconds: a few cheap trials an engagement.
+    seconds: a few cheap trials an engagement (``wait=False``: the caller decides
+    whether to wait, after trials of its own).
     """
     m = s.impulse_moment_m
     if m == 0.0 or s.t_s < s.band_trial_after_s or s.is_empty:
@@ -243,13 +246,15 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
             if out is not None and not out.is_empty:
                 s = out
                 continue
-        s = evolve(s, band_trial_after_s=s.t_s + RETRY_S)
+        if wait:
+            s = evolve(s, band_trial_after_s=s.t_s + RETRY_S)
         break
     return s
 
 
 def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float) -> NodeSet:
-    """Halve every live band when a trial at the set's extremes shows that it pays.
+    """Halve every live band when a trial at the set's extremes shows that it pays
+    (after :func:`_impulse_splits`, whose candidates are tried first, as by default).
 
     A band relaxes more than the miss's own ``2 |w| du / u``: its ``u`` spread scales
     the prior box, the disturbance and the impulses too, and with a range finder

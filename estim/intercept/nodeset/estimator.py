@@ -160,8 +160,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         Which bands a trial split tests (:mod:`.bands`). ``"impulse_spread"`` (the
         default): those whose spread of the impulses may widen the miss by more than
         ``tighten_rtol`` of the set's width; a trial that pays splits that band.
-        ``"extreme_bands"``: every few seconds the bands that attain the set's
-        extremes of the miss, impulses or not; a trial that pays halves every live
+        ``"extreme_bands"``: those, then every few seconds the bands that attain the
+        set's extremes of the miss, impulses or not; a trial that pays halves every live
         band, because the relaxation it measured (the band's ``u`` spread over the
         prior, the disturbance and the impulses) is shared by all bands of that
         width. With a range finder it holds the set within 1.03 of the exact width

@@ -110,9 +110,9 @@ class InfosetOptions(SlabOptions):
         Literal["impulse_spread", "extreme_bands"],
         Field(
             description="nodes: which closing-speed bands a trial split tests: those the "
-            "impulses may have spread (a paying trial splits that band), or, every few "
-            "seconds, those at the set's extremes of the miss (a paying trial halves every "
-            "live band; tighter with a range finder)"
+            "impulses may have spread (a paying trial splits that band), or those and, "
+            "every few seconds, the bands at the set's extremes of the miss (a paying "
+            "trial halves every live band; tighter with a range finder)"
         ),
     ] = "impulse_spread"
 
