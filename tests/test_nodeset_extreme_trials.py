@@ -64,7 +64,7 @@ def test_a_paying_trial_whose_splits_fail_keeps_no_target_and_waits(monkeypatch)
     est, b, start, calls = _unguided_range_set(monkeypatch, 1e12, 12)
     assert bands.live_bands(b) == start and b.live_band_target == len(start)
     assert 1 <= len(calls) <= 2 * 3
-    assert b.band_trial_after_s > b.t_s - bands.RETRY_S
+    assert b.extreme_trial_after_s > b.t_s - bands.RETRY_S
 
 
 def test_a_trial_that_does_not_pay_waits_and_keeps_the_bands(monkeypatch):
@@ -73,7 +73,29 @@ def test_a_trial_that_does_not_pay_waits_and_keeps_the_bands(monkeypatch):
     est, b, start, calls = _unguided_range_set(monkeypatch, 0.0, 12)
     assert bands.live_bands(b) == start and b.live_band_target == 0
     assert 1 <= len(calls) <= 2 * 3
-    assert b.band_trial_after_s > b.t_s - bands.RETRY_S
+    assert b.extreme_trial_after_s > b.t_s - bands.RETRY_S
+
+
+@pytest.mark.parametrize("noise", ["random", "game"])
+def test_the_extreme_trials_keep_the_impulse_trials_schedule(monkeypatch, noise):
+    """A Fig. 5 engagement with the range finder and trials that never pay: the option
+    makes every trial the default makes, at the same times (its own trials wait on a
+    clock of their own), and the engagement is the default's to the last digit (a trial
+    that does not pay changes nothing): the option only adds trials."""
+    made = {}
+    for trials in ("impulse_spread", "extreme_bands"):
+        calls: list[tuple[float, float, float]] = []
+
+        def trial(est, s, ua, ub, calls=calls):
+            calls.append((s.t_s, ua, ub))
+            return 0.0
+
+        monkeypatch.setattr(bands, "_node_gain", trial)
+        sc = load_scenario("kp_fig5_range", estimator={"infoset": {"band_trials": trials}})
+        made[trials] = (calls, run_engagement(sc, "infoset", noise, run=0))
+    (default, r0), (extreme, r1) = made["impulse_spread"], made["extreme_bands"]
+    assert default and set(default) < set(extreme)
+    assert (r0.miss_m, r0.fuel_mps, r0.n_impulses) == (r1.miss_m, r1.fuel_mps, r1.n_impulses)
 
 
 def test_the_default_rule_is_unchanged_and_the_option_is_checked():

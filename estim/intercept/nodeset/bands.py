@@ -86,18 +86,18 @@ def split_live_bands(
     est, s: NodeSet, min_live: int, max_bands: int, rtol: float, trials: str = "impulse_spread"
 ) -> NodeSet:
     """Split live bands in halves (:func:`_loosest_band` chooses) while fewer than
-    ``max_bands`` are live and a split is sound, then try the splits ``trials`` names
-    (:func:`_impulse_splits` or :func:`_extreme_trials`); ``est`` is the
+    ``max_bands`` are live and a split is sound, then the impulses' trial splits
+    (:func:`_impulse_splits`) and, with ``trials="extreme_bands"``, the trials at the
+    set's extremes (:func:`_extreme_trials`); ``est`` is the
     :class:`~.estimator.NodeSetEstimator` (its ``_apply``, ``_prior`` and refinement)."""
     if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
         return s  # a known closing speed (or bands already at their finest)
     min_live = max(min_live, s.live_band_target)
     s = _split_loosest(est, s, min_live, max_bands, rtol)
-    if trials == "extreme_bands":
-        # the impulses' candidates as by default, then the bands at the extremes
-        s = _impulse_splits(est, s, max_bands, rtol, wait=False)
+    s = _impulse_splits(est, s, max_bands, rtol)
+    if trials == "extreme_bands":  # then the bands at the set's extremes
         return _extreme_trials(est, s, min_live, max_bands, rtol)
-    return _impulse_splits(est, s, max_bands, rtol)
+    return s
 
 
 def _split_loosest(est, s: NodeSet, min_live: int, max_bands: int, rtol: float) -> NodeSet:
@@ -199,7 +199,7 @@ def _node_gain(est, s: NodeSet, ua: float, ub: float) -> float:
     return float(max(gain_lo, 0.0) + max(gain_hi, 0.0))
 
 
-def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float, wait: bool = True) -> NodeSet:
+def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
     """Split the bands whose spread of the impulses may widen ``w`` by more than
     ``rtol`` of the set's width, where a trial shows that it does.
 
@@ -213,8 +213,7 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float, wait: bool = T
     (:func:`_node_gain`), and the best is split when
     the halves narrow them by at least ``GAIN * rtol`` of the set's width (a split
     takes about half the spread). A trial that does not pay waits ``RETRY_S``
-    seconds: a few cheap trials an engagement (``wait=False``: the caller decides
-    whether to wait, after trials of its own).
+    seconds: a few cheap trials an engagement.
     """
     m = s.impulse_moment_m
     if m == 0.0 or s.t_s < s.band_trial_after_s or s.is_empty:
@@ -246,8 +245,7 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float, wait: bool = T
             if out is not None and not out.is_empty:
                 s = out
                 continue
-        if wait:
-            s = evolve(s, band_trial_after_s=s.t_s + RETRY_S)
+        s = evolve(s, band_trial_after_s=s.t_s + RETRY_S)
         break
     return s
 
@@ -265,9 +263,11 @@ def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float)
     set's width, the live-band target doubles (up to ``max_bands``) and
     :func:`_loosest_band` halves the widest bands up to it: halving only the extreme
     band would leave its neighbours, relaxed alike, at nearly the same extreme. A
-    trial that does not pay waits ``RETRY_S`` seconds.
+    trial that does not pay waits ``RETRY_S`` seconds, on a clock of its own
+    (``extreme_trial_after_s``): the impulses' trials keep the default's schedule.
     """
-    if s.is_empty or s.t_s < s.band_trial_after_s:
+    # a clock of their own: the impulses' trials neither delay these nor are delayed
+    if s.is_empty or s.t_s < s.extreme_trial_after_s:
         return s
     bands = live_bands(s)
     if len(bands) >= max_bands:
@@ -286,8 +286,8 @@ def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float)
             return evolve(out, live_band_target=target)
         # a target the splits could not reach (a half that cannot be told from empty) is
         # not kept, and the trials wait: else every update would replay those splits
-        return evolve(out, live_band_target=reached, band_trial_after_s=s.t_s + RETRY_S)
-    return evolve(s, band_trial_after_s=s.t_s + RETRY_S)
+        return evolve(out, live_band_target=reached, extreme_trial_after_s=s.t_s + RETRY_S)
+    return evolve(s, extreme_trial_after_s=s.t_s + RETRY_S)
 
 
 def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:

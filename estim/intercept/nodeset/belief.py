@@ -93,6 +93,9 @@ class NodeSet(Belief):
         Live closing-speed bands the set keeps splitting towards, when more than the
         estimator started with (a paid trial of ``band_trials="extreme_bands"``
         doubles it; 0: the estimator's start).
+    extreme_trial_after_s : float
+        No trial at the set's extremes (``band_trials="extreme_bands"``) before this
+        time (s): a clock of its own, so that these trials never delay the impulses'.
     """
 
     model: ChannelModel
@@ -113,6 +116,7 @@ class NodeSet(Belief):
     impulse_moment_m: float = 0.0
     band_trial_after_s: float = -np.inf
     live_band_target: int = 0
+    extreme_trial_after_s: float = -np.inf
 
     def __post_init__(self) -> None:
         for name, kind in _ARRAY_FIELDS.items():
