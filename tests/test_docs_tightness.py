@@ -506,3 +506,31 @@ def test_infoset_page_seeds_741_paragraph_matches_its_results_files():
         printed = (f"on {sc} at most {r['max_ratio']:.3f} (seed {r['seed']}, at "
                    f"{_worst_time_s(r):.0f} s, {r['noise']} errors)")  # fmt: skip
         assert printed in text, printed
+
+
+def test_infoset_page_sixteen_bands_sentence_matches_its_results_files():
+    """The 92 range-finder runs of ``extreme_bands/`` started with 16 bands instead
+    (``n_bands_16/``): the same seeds, noises and times, the exact interval inside, the
+    largest ratio, and the CPU-time ratios against the default
+    (``speed/kp_fig5_range-bands16-*.json``, two alternated pairs)."""
+    text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
+    tight = ROOT / "docs/results/tightness"
+    runs = [json.loads(p.read_text()) for p in (tight / "n_bands_16").glob("*.json")]
+    opt = [json.loads(p.read_text()) for folder in ("seeds_701", "range_707", "range_741")
+           for p in (tight / "extreme_bands" / folder).glob("*.json")]  # fmt: skip
+    key = [(r["seed"], r["noise"], r["times_s"]) for r in runs]
+    assert sorted(key) == sorted((r["seed"], r["noise"], r["times_s"]) for r in opt)
+    assert all(r["scenario"] == "kp_fig5_range+estimator.infoset.n_bands=16" for r in runs)
+    assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
+    assert f"the same {len(runs)} runs in `n_bands_16/`" in text
+    w = max(runs, key=lambda r: r["max_ratio"])
+    assert (f"reads at most {w['max_ratio']:.3f} (seed {w['seed']}, at "
+            f"{_worst_time_s(w):.0f} s), tighter") in text  # fmt: skip
+    speed = ROOT / "docs/results/speed"
+    cpu = {n: {r["noise"]: r["cpu_s"] for r in json.loads(
+               (speed / f"kp_fig5_range-bands16-{n}.json").read_text())["rows"]}
+           for n in ("default", "default-repeat", "n_bands_16", "n_bands_16-repeat")}  # fmt: skip
+    ratio = [(cpu["n_bands_16"][k] + cpu["n_bands_16-repeat"][k])
+             / (cpu["default"][k] + cpu["default-repeat"][k])
+             for k in ("random", "game")]  # fmt: skip
+    assert f"costs {ratio[0]:.2f} and {ratio[1]:.2f} times the CPU time of the default" in text
