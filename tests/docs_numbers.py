@@ -41,6 +41,14 @@ def speed_cpu_s(name: str) -> dict[str, float]:
     return {noise: r["cpu_s"] for noise, r in speed_rows(f"kp_fig5-{name}").items()}
 
 
+def paired_cpu_ratio(option: str, default: str) -> dict[str, float]:
+    """CPU-time ratio per noise of ``speed/OPTION.json`` to ``speed/DEFAULT.json``, each
+    measured twice alternately (``STEM`` and ``STEM-repeat``): the sums' ratio."""
+    a, b = ([speed_rows(s), speed_rows(f"{s}-repeat")] for s in (option, default))
+    return {n: (a[0][n]["cpu_s"] + a[1][n]["cpu_s"]) / (b[0][n]["cpu_s"] + b[1][n]["cpu_s"])
+            for n in a[0]}  # fmt: skip
+
+
 def speed_base_cpu_s() -> dict[str, float]:
     """The defaults' CPU-s per noise: the mean of the first row and the two repeats, the
     base the text's speed ratios are taken against."""

@@ -8,9 +8,11 @@ from pathlib import Path
 
 import pytest
 from docs_checks import CHECKS
-from docs_numbers import agrees, speed_base_cpu_s, speed_cpu_s
+from docs_numbers import agrees, paired_cpu_ratio, speed_base_cpu_s, speed_cpu_s, speed_rows
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the range-finder runs repeated with band_trials="extreme_bands" (docs/results/tightness)
+OPTION_FOLDERS = ("seeds_701", "range_707", "range_741")
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
 
 
@@ -346,7 +348,7 @@ def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_r
     assert json.loads((ROOT / row[2]).read_text()) == worst
     # the option that holds the range finder's runs within 1.03 (extreme_bands/), and its
     # CPU-time ratios on Fig. 5 with the range finder (speed/kp_fig5_range-trials-*)
-    opt = [json.loads(p.read_text()) for folder in ("seeds_701", "range_707", "range_741")
+    opt = [json.loads(p.read_text()) for folder in OPTION_FOLDERS
            for p in (tight / "extreme_bands" / folder).glob("*.json")]  # fmt: skip
     assert all(all(r["exact_inside"]) for r in opt)
     best_opt = max(r["max_ratio"] for r in opt)
@@ -354,16 +356,8 @@ def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_r
     assert json.loads((ROOT / row[2]).read_text())["max_ratio"] == best_opt
     assert (f'`band_trials="extreme_bands"` holds all {len(opt)} range-finder runs on seeds '
             f"701-780 within {best_opt:.3f}") in text  # fmt: skip
-    speed = ROOT / "docs/results/speed"
-    names = ("default", "default-repeat", "extreme_bands", "extreme_bands-repeat")
-    cpu = {n: {r["noise"]: r["cpu_s"] for r in json.loads(
-               (speed / f"kp_fig5_range-trials-{n}.json").read_text())["rows"]}
-           for n in names}  # fmt: skip
-    ratios = sorted(
-        (cpu["extreme_bands"][k] + cpu["extreme_bands-repeat"][k])
-        / (cpu["default"][k] + cpu["default-repeat"][k])
-        for k in ("random", "game")
-    )
+    ratio = paired_cpu_ratio("kp_fig5_range-trials-extreme_bands", "kp_fig5_range-trials-default")
+    ratios = sorted(ratio[k] for k in ("random", "game"))
     assert f"within {best_opt:.3f} at {ratios[0]:.2f}-{ratios[1]:.2f} times the CPU time" in text
 
 
@@ -432,7 +426,7 @@ def test_infoset_page_extreme_bands_paragraph_matches_its_results_files():
     )
 
     pairs = []
-    for folder in ("seeds_701", "range_707", "range_741"):
+    for folder in OPTION_FOLDERS:
         for p in (tight / "extreme_bands" / folder).glob("*.json"):
             r = json.loads(p.read_text())
             assert r["scenario"] == "kp_fig5_range" + opt
@@ -458,22 +452,16 @@ def test_infoset_page_extreme_bands_paragraph_matches_its_results_files():
     seeds = ", ".join(str(r["seed"]) for r, _ in was)
     assert f"the three past 1.03 now {now} (seeds {seeds})" in text, now
 
-    speed = ROOT / "docs/results/speed"
     for scenario, wording in (
         ("kp_fig5_range", "it costs {} and {} times the CPU time of the default"),
         ("kp_fig5", "): it costs {} and {} times the CPU"),
     ):
-        rows = {name: {r["noise"]: r for r in json.loads(
-                    (speed / f"{scenario}-trials-{name}.json").read_text())["rows"]}
-                for name in ("default", "default-repeat", "extreme_bands",
-                             "extreme_bands-repeat")}  # fmt: skip
+        names = ("default", "default-repeat", "extreme_bands", "extreme_bands-repeat")
+        rows = {name: speed_rows(f"{scenario}-trials-{name}") for name in names}
         assert all(r["truth_outside"] == 0 for v in rows.values() for r in v.values())
-        ratio = [
-            sum(rows[f"extreme_bands{t}"][n]["cpu_s"] for t in ("", "-repeat"))
-            / sum(rows[f"default{t}"][n]["cpu_s"] for t in ("", "-repeat"))
-            for n in ("random", "game")
-        ]
-        assert wording.format(f"{ratio[0]:.2f}", f"{ratio[1]:.2f}") in text, (scenario, ratio)
+        ratio = paired_cpu_ratio(f"{scenario}-trials-extreme_bands", f"{scenario}-trials-default")
+        printed = wording.format(f"{ratio['random']:.2f}", f"{ratio['game']:.2f}")
+        assert printed in text, (scenario, ratio)
         a, b = rows["default"], rows["extreme_bands"]
         if scenario == "kp_fig5_range":
             dmiss = max(abs(a[n]["miss_m"]["mean"] - b[n]["miss_m"]["mean"]) for n in a)
@@ -516,7 +504,7 @@ def test_infoset_page_sixteen_bands_sentence_matches_its_results_files():
     text = " ".join((ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split())
     tight = ROOT / "docs/results/tightness"
     runs = [json.loads(p.read_text()) for p in (tight / "n_bands_16").glob("*.json")]
-    opt = [json.loads(p.read_text()) for folder in ("seeds_701", "range_707", "range_741")
+    opt = [json.loads(p.read_text()) for folder in OPTION_FOLDERS
            for p in (tight / "extreme_bands" / folder).glob("*.json")]  # fmt: skip
     key = [(r["seed"], r["noise"], r["times_s"]) for r in runs]
     assert sorted(key) == sorted((r["seed"], r["noise"], r["times_s"]) for r in opt)
@@ -526,11 +514,8 @@ def test_infoset_page_sixteen_bands_sentence_matches_its_results_files():
     w = max(runs, key=lambda r: r["max_ratio"])
     assert (f"reads at most {w['max_ratio']:.3f} (seed {w['seed']}, at "
             f"{_worst_time_s(w):.0f} s), tighter") in text  # fmt: skip
-    speed = ROOT / "docs/results/speed"
-    cpu = {n: {r["noise"]: r["cpu_s"] for r in json.loads(
-               (speed / f"kp_fig5_range-bands16-{n}.json").read_text())["rows"]}
-           for n in ("default", "default-repeat", "n_bands_16", "n_bands_16-repeat")}  # fmt: skip
-    ratio = [(cpu["n_bands_16"][k] + cpu["n_bands_16-repeat"][k])
-             / (cpu["default"][k] + cpu["default-repeat"][k])
-             for k in ("random", "game")]  # fmt: skip
-    assert f"costs {ratio[0]:.2f} and {ratio[1]:.2f} times the CPU time of the default" in text
+    ratio = paired_cpu_ratio("kp_fig5_range-bands16-n_bands_16", "kp_fig5_range-bands16-default")
+    printed = (
+        f"costs {ratio['random']:.2f} and {ratio['game']:.2f} times the CPU time of the default"
+    )
+    assert printed in text
