@@ -16,7 +16,7 @@ import pytest
 from harness_texts import run_cli as run
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.estim.intercept.model import Bearing
+from kalman_vs_infoset.estim.intercept.model import Bearing, Range
 from kalman_vs_infoset.estim.intercept.nodeset import bands
 from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
 from kalman_vs_infoset.experiments.errors import InputError
@@ -26,6 +26,7 @@ from nodeset_schedules import BOX_CORNERS, SIGNS, corner_state, run_schedule, sw
 from kalman_vs_infoset.api import load_scenario, run_engagement
 
 EXTREME = 'estimator.infoset.band_trials="extreme_bands"'
+IMPULSE_ONLY = 'estimator.infoset.band_trials="impulse_spread"'
 SHORT_APPROACH = ["estimator.x_km=[801.3, 951.3]", "truth.x_km=[801.3, 951.3]", "model.dt_s=1.0"]
 
 
@@ -98,15 +99,52 @@ def test_the_extreme_trials_keep_the_impulse_trials_schedule(monkeypatch, noise)
     assert (r0.miss_m, r0.fuel_mps, r0.n_impulses) == (r1.miss_m, r1.fuel_mps, r1.n_impulses)
 
 
-def test_the_default_rule_is_unchanged_and_the_option_is_checked():
-    """The default is ``impulse_spread`` (the published results); a bad value is refused
-    by the options with the allowed values named."""
+def test_the_default_is_auto_and_the_option_is_checked():
+    """The default is ``auto``; a bad value is refused by the options with the allowed
+    values named."""
     est, _ = build_estimator(
         "infoset", sc := load_scenario("kp_fig5_range"), sc.channel_model(), "lateral"
     )
-    assert est.band_trials == "impulse_spread"
+    assert est.band_trials == "auto"
     with pytest.raises(InputError, match="extreme_bands"):
         load_scenario("kp_fig5_range", estimator={"infoset": {"band_trials": "all"}})
+
+
+def test_auto_tries_the_extremes_at_every_range_and_only_there(monkeypatch):
+    """``auto``: bearings make no trial at the set's extremes; every range update does,
+    without waiting on a clock (two ranges a step apart are both tried, where
+    ``extreme_bands`` would wait ``RETRY_S``)."""
+    tried: list[tuple[float, bool]] = []
+    inner = bands._extreme_trials
+
+    def spy(est, s, *a):
+        tried.append((s.t_s, a[-1]))
+        return inner(est, s, *a)
+
+    monkeypatch.setattr(bands, "_extreme_trials", spy)
+    monkeypatch.setattr(bands, "_node_gain", lambda *a: 0.0)  # no trial pays
+    sc = load_scenario("kp_fig5_range")
+    est, b = build_estimator("infoset", sc, sc.channel_model(), "lateral")
+    for _ in range(4):
+        b = est.predict(est.update(b, Bearing(0.0)), sc.model.dt_s, 0.0)
+    assert tried == []
+    for _ in range(2):
+        b = est.update(b, Range(0.5 * sum(b.x_range_m()), off_axis_rad=0.0))
+        b = est.predict(est.update(b, Bearing(0.0)), sc.model.dt_s, 0.0)
+    assert tried == [(2.0, False), (2.5, False)]
+
+
+@pytest.mark.parametrize("noise", ["random", "game"])
+def test_auto_is_impulse_spread_to_the_last_digit_with_bearings_only(noise):
+    """Without a range finder ``auto`` is ``impulse_spread``: the same Fig. 5
+    engagement to the last digit (the published bearings-only results stand)."""
+    runs = [
+        run_engagement(load_scenario("kp_fig5", estimator=e), "infoset", noise, run=1)
+        for e in ({}, {"infoset": {"band_trials": "impulse_spread"}})
+    ]
+    assert [(r.miss_m, r.fuel_mps, r.n_impulses) for r in runs].count(
+        (runs[0].miss_m, runs[0].fuel_mps, runs[0].n_impulses)
+    ) == 2
 
 
 def test_the_estimator_refuses_an_unknown_band_trials():
@@ -123,8 +161,8 @@ def test_bad_band_trials_on_the_command_line_exits_2_with_one_line(capsys, tmp_p
     assert len(r.stderr.strip().splitlines()) == 1 and "band_trials" in r.stderr
 
 
-#: seeds where the default rule read past 1.03 with the range finder (random errors,
-#: guided; docs/results/tightness/range_707 and seeds_701): (seed, time s)
+#: seeds where the impulse trials alone read past 1.03 with the range finder (random
+#: errors, guided; docs/results/tightness/range_707 and seeds_701): (seed, time s)
 PAST_1_03 = [(731, 30), (720, 30), (706, 10)]
 
 
@@ -132,20 +170,21 @@ PAST_1_03 = [(731, 30), (720, 30), (706, 10)]
 def test_extreme_trials_bring_the_range_finder_seeds_within_1_03_of_the_exact_lp_set(
     tmp_path, capsys, seed, time_s
 ):
-    """Guided, range finder, random errors: the default rule left these seeds 1.032 to
-    1.043 times as wide as the exact interval of the miss (exact_reference's LP, an
-    independent computation); with ``extreme_bands`` they are within 1.03 and narrower,
-    the exact interval inside both."""
+    """Guided, range finder, random errors: the impulse trials alone left these seeds
+    1.032 to 1.043 times as wide as the exact interval of the miss (exact_reference's
+    LP, an independent computation); with the default (``auto``: the extreme trials
+    after the first range) they are within 1.03 and narrower, the exact interval inside
+    both."""
     out = {}
-    for name, extra in (("default", []), ("extreme", ["--set", EXTREME])):
+    for name, extra in (("impulse", ["--set", IMPULSE_ONLY]), ("default", [])):
         r = run(capsys, "tightness", "kp_fig5_range", "--guided", "--noise", "random",
                 "--seed", str(seed), "--times", str(time_s), "--out", tmp_path / name,
                 "--json", *extra)  # fmt: skip
         assert r.returncode == 0, r.stderr
         out[name] = json.loads(r.stdout.strip().splitlines()[-1])
-    assert out["default"]["exact_inside"] == out["extreme"]["exact_inside"] == [True]
-    assert out["default"]["ratio"][0] > 1.03
-    assert 1.0 <= out["extreme"]["ratio"][0] <= 1.03
+    assert out["impulse"]["exact_inside"] == out["default"]["exact_inside"] == [True]
+    assert out["impulse"]["ratio"][0] > 1.03
+    assert 1.0 <= out["default"]["ratio"][0] <= 1.03
 
 
 @settings(max_examples=12, deadline=None)

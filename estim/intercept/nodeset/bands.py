@@ -34,6 +34,8 @@ GAIN = 0.5
 RETRY_S = 5.0
 #: candidate bands tried at the nodes in one round
 TRIALS = 2
+#: the values of ``band_trials`` (the estimator's docstring)
+BAND_TRIALS = ("auto", "impulse_spread", "extreme_bands")
 
 
 def live_bands(s: NodeSet) -> list[tuple[float, float]]:
@@ -83,20 +85,21 @@ def _loosest_band(
 
 
 def split_live_bands(
-    est, s: NodeSet, min_live: int, max_bands: int, rtol: float, trials: str = "impulse_spread"
+    est, s: NodeSet, min_live: int, max_bands: int, rtol: float, trials: str = "auto"
 ) -> NodeSet:
     """Split live bands in halves (:func:`_loosest_band` chooses) while fewer than
     ``max_bands`` are live and a split is sound, then the impulses' trial splits
-    (:func:`_impulse_splits`) and, with ``trials="extreme_bands"``, the trials at the
-    set's extremes (:func:`_extreme_trials`); ``est`` is the
-    :class:`~.estimator.NodeSetEstimator` (its ``_apply``, ``_prior`` and refinement)."""
+    (:func:`_impulse_splits`) and, with ``trials="extreme_bands"`` (on their clock) or
+    ``"at_range"`` (now: ``"auto"`` at a range update), the trials at the set's extremes
+    (:func:`_extreme_trials`); ``est`` is the :class:`~.estimator.NodeSetEstimator`
+    (its ``_apply``, ``_prior`` and refinement)."""
     if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
         return s  # a known closing speed (or bands already at their finest)
     min_live = max(min_live, s.live_band_target)
     s = _split_loosest(est, s, min_live, max_bands, rtol)
     s = _impulse_splits(est, s, max_bands, rtol)
-    if trials == "extreme_bands":  # then the bands at the set's extremes
-        return _extreme_trials(est, s, min_live, max_bands, rtol)
+    if trials in ("extreme_bands", "at_range"):  # then the bands at the set's extremes
+        return _extreme_trials(est, s, min_live, max_bands, rtol, trials == "extreme_bands")
     return s
 
 
@@ -250,7 +253,9 @@ def _impulse_splits(est, s: NodeSet, max_bands: int, rtol: float) -> NodeSet:
     return s
 
 
-def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float) -> NodeSet:
+def _extreme_trials(
+    est, s: NodeSet, min_live: int, max_bands: int, rtol: float, clock: bool = True
+) -> NodeSet:
     """Halve every live band when a trial at the set's extremes shows that it pays
     (after :func:`_impulse_splits`, whose candidates are tried first, as by default).
 
@@ -264,10 +269,12 @@ def _extreme_trials(est, s: NodeSet, min_live: int, max_bands: int, rtol: float)
     :func:`_loosest_band` halves the widest bands up to it: halving only the extreme
     band would leave its neighbours, relaxed alike, at nearly the same extreme. A
     trial that does not pay waits ``RETRY_S`` seconds, on a clock of its own
-    (``extreme_trial_after_s``): the impulses' trials keep the default's schedule.
+    (``extreme_trial_after_s``): the impulses' trials keep their schedule. Without
+    ``clock`` (``band_trials="auto"``, called at range updates only) the trials run
+    every call.
     """
     # a clock of their own: the impulses' trials neither delay these nor are delayed
-    if s.is_empty or s.t_s < s.extreme_trial_after_s:
+    if s.is_empty or (clock and s.t_s < s.extreme_trial_after_s):
         return s
     bands = live_bands(s)
     if len(bands) >= max_bands:

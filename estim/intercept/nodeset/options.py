@@ -103,18 +103,19 @@ class InfosetOptions(SlabOptions):
             "over the band it was recorded in, cheaper and looser)"
         ),
     ] = True
-    # the default keeps the published results; extreme_bands holds the range finder's
-    # sets within 1.03 of the exact width where the default read up to 1.043 early in
-    # the approach (seeds 706, 720, 731; docs/infoset.md)
+    # auto: the extreme trials once a range was measured. Without them range-finder sets
+    # read up to 1.043 of the exact width early in the approach (seeds 706, 720, 731);
+    # with bearings only they cost 1.1-1.7x for no tightness need (docs/infoset.md)
     band_trials: Annotated[
-        Literal["impulse_spread", "extreme_bands"],
+        Literal["auto", "impulse_spread", "extreme_bands"],
         Field(
             description="nodes: which closing-speed bands a trial split tests: those the "
-            "impulses may have spread (a paying trial splits that band), or those and, "
-            "every few seconds, the bands at the set's extremes of the miss (a paying "
-            "trial halves every live band; tighter with a range finder)"
+            "impulses may have spread (impulse_spread: a paying trial splits that band), "
+            "or those and, every few seconds, the bands at the set's extremes of the miss "
+            "(extreme_bands: a paying trial halves every live band); auto: "
+            "extreme_bands once a range has been measured, impulse_spread before"
         ),
-    ] = "impulse_spread"
+    ] = "auto"
 
     @model_validator(mode="after")
     def _room_for_the_nodes(self) -> InfosetOptions:
