@@ -134,6 +134,24 @@ def test_auto_tries_the_extremes_at_every_range_and_only_there(monkeypatch):
     assert tried == [(2.0, False), (2.5, False)]
 
 
+def test_auto_waits_after_a_trial_that_did_not_pay_unless_a_range_narrowed_the_set(monkeypatch):
+    """Within ``RETRY_S`` of a trial that did not pay, a range update tries the extremes
+    again only when the set's interval of the miss is narrower than ``NARROWED`` of what
+    it was then (the relaxation grows relative to the width where the data cut it)."""
+    sc = load_scenario("kp_fig5_range")
+    for narrowed, expected in ((bands.NARROWED, 1), (1e9, 3)):
+        gains: list[float] = []
+        monkeypatch.setattr(bands, "_node_gain", lambda *a, g=gains: g.append(a[1].t_s) or 0.0)
+        monkeypatch.setattr(bands, "NARROWED", narrowed)
+        est, b = build_estimator("infoset", sc, sc.channel_model(), "lateral")
+        b = est.predict(est.update(b, Bearing(0.0)), sc.model.dt_s, 0.0)
+        x_m = 0.5 * sum(b.x_range_m())
+        for _ in range(3):  # the same range, three steps: the set hardly narrows
+            b = est.predict(est.update(b, Range(x_m, off_axis_rad=0.0)), sc.model.dt_s, 0.0)
+        assert b.t_s - 0.5 < bands.RETRY_S
+        assert len(set(gains)) == expected, gains
+
+
 @pytest.mark.parametrize("noise", ["random", "game"])
 def test_auto_is_impulse_spread_to_the_last_digit_with_bearings_only(noise):
     """Without a range finder ``auto`` is ``impulse_spread``: the same Fig. 5

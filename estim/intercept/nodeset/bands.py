@@ -34,6 +34,9 @@ GAIN = 0.5
 RETRY_S = 5.0
 #: candidate bands tried at the nodes in one round
 TRIALS = 2
+#: at a range update within ``RETRY_S`` of a trial that did not pay, the extremes are
+#: tried again only when the set's interval of the miss is this much narrower
+NARROWED = 0.7
 #: the values of ``band_trials`` (the estimator's docstring)
 BAND_TRIALS = ("auto", "impulse_spread", "extreme_bands")
 
@@ -281,6 +284,8 @@ def _extreme_trials(
         return s
     w_lo, w_hi = _band_extremes(s, bands)
     width = float(w_hi.max() - w_lo.min())
+    if not clock and s.t_s < s.extreme_trial_after_s and width > NARROWED * s.extreme_trial_width_m:
+        return s  # at a range: within RETRY_S of a trial that did not pay, and no narrower
     ua, ub = np.array(bands).T
     ok = ((ub - ua) > MIN_BAND_REL * ub) & (w_hi >= w_lo)
     tried = sorted({int(np.argmin(w_lo)), int(np.argmax(w_hi))})
@@ -293,8 +298,11 @@ def _extreme_trials(
             return evolve(out, live_band_target=target)
         # a target the splits could not reach (a half that cannot be told from empty) is
         # not kept, and the trials wait: else every update would replay those splits
-        return evolve(out, live_band_target=reached, extreme_trial_after_s=s.t_s + RETRY_S)
-    return evolve(s, extreme_trial_after_s=s.t_s + RETRY_S)
+        return evolve(
+            out, live_band_target=reached, extreme_trial_after_s=s.t_s + RETRY_S,
+            extreme_trial_width_m=width,
+        )  # fmt: skip
+    return evolve(s, extreme_trial_after_s=s.t_s + RETRY_S, extreme_trial_width_m=width)
 
 
 def _split_band(est, s: NodeSet, ua: float, ub: float) -> NodeSet | None:

@@ -96,6 +96,10 @@ class NodeSet(Belief):
     extreme_trial_after_s : float
         No trial at the set's extremes (``band_trials="extreme_bands"``) before this
         time (s): a clock of its own, so that these trials never delay the impulses'.
+    extreme_trial_width_m : float
+        The set's width of the miss (m) at the last trial at its extremes that did not
+        pay: ``band_trials="auto"`` tries again before ``extreme_trial_after_s`` only
+        when a range has narrowed the set below ``NARROWED`` of it (:mod:`.bands`).
     """
 
     model: ChannelModel
@@ -117,6 +121,7 @@ class NodeSet(Belief):
     band_trial_after_s: float = -np.inf
     live_band_target: int = 0
     extreme_trial_after_s: float = -np.inf
+    extreme_trial_width_m: float = np.inf
 
     def __post_init__(self) -> None:
         for name, kind in _ARRAY_FIELDS.items():
