@@ -13,6 +13,9 @@ from docs_numbers import agrees, paired_cpu_ratio, speed_base_cpu_s, speed_cpu_s
 ROOT = Path(__file__).resolve().parents[1]
 #: the range-finder runs repeated with band_trials="extreme_bands" (docs/results/tightness)
 OPTION_FOLDERS = ("seeds_701", "range_707", "range_741")
+#: the guided runs on unseen seeds (301-318, 401-780), every scenario (docs/results/tightness)
+UNSEEN_FOLDERS = ("guided_range", "switch_range", "seeds_401", "seeds_501", "seeds_601",
+                  "seeds_701", "range_707", "seeds_741", "range_741")  # fmt: skip
 ROW = re.compile(r"^\| kp_fig5_range \((\d+)\) \| random \| none \|(.*)\|$", re.M)
 
 
@@ -318,47 +321,57 @@ def test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files():
     assert "mean miss by at most 0.003 m and the mean fuel by at most 0.02 m/s" in text
 
 
+def _unseen_seed_runs(range_from: str) -> list[dict]:
+    """Every guided run on seeds 301-318 and 401-780 (``guided_range/`` ... ``range_741/``):
+    bearings only from those folders, the range finder's from ``range_from`` (``""``: the
+    same folders, made with ``impulse_spread``; ``"auto"``: ``auto/FOLDER/``, the same
+    runs with today's default)."""
+    tight = ROOT / "docs/results/tightness"
+    runs = []
+    for folder in UNSEEN_FOLDERS:
+        for p in sorted((tight / folder).glob("*.json")):
+            r = json.loads(p.read_text())
+            if r["scenario"] == "kp_fig5_range" and range_from:
+                r = json.loads((tight / range_from / folder / p.name).read_text())
+            runs.append(r)
+    return runs
+
+
 def test_readme_tightness_claim_is_the_largest_ratio_of_the_guided_unseen_seed_runs():
-    """README: 'within 1.03 times its width in all but 3 of the 752 guided runs on unseen
-    seeds, and at most 1.043 times': every guided run on seeds 301-318 and 401-780 with
-    the defaults (``guided_range/``, ``switch_range/``, ``seeds_401/``, ``seeds_501/``,
-    ``seeds_601/``, ``seeds_701/``, ``range_707/``, ``seeds_741/``, ``range_741/``), the
-    exact interval inside in all;
-    the three past 1.03, and what they read with 16 bands (``seeds_701/n_bands_16/``)."""
+    """README: 'within 1.03 times its width in all 752 guided runs on unseen seeds, at
+    most X times': every guided run on seeds 301-318 and 401-780 with the defaults, the
+    range finder's again with ``auto`` (``auto/``; no run of the folders left out), the
+    exact interval inside in all; with ``impulse_spread`` three range-finder runs past
+    1.03; the extreme trials' CPU-time ratios on Fig. 5 with the range finder; four of
+    the seeds every second of the first minute (``auto/dense/``)."""
     text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     tight = ROOT / "docs/results/tightness"
-    folders = ("guided_range", "switch_range", "seeds_401", "seeds_501", "seeds_601",
-               "seeds_701", "range_707", "seeds_741", "range_741")  # fmt: skip
-    paths = [p for folder in folders for p in (tight / folder).glob("*.json")]
-    runs = [json.loads(p.read_text()) for p in paths]
-    assert all(r["guided"] and all(r["exact_inside"]) for r in runs)
-    assert all("+" not in r["scenario"] for r in runs)  # the defaults, no --set
+    runs, before = _unseen_seed_runs("auto"), _unseen_seed_runs("")
+    key = [(r["scenario"], r["noise"], r["seed"], r["times_s"]) for r in runs]
+    assert key == [(r["scenario"], r["noise"], r["seed"], r["times_s"]) for r in before]
+    assert all(r["guided"] and all(r["exact_inside"]) for r in runs + before)
+    assert all("+" not in r["scenario"] for r in runs + before)  # the defaults, no --set
     worst = max(runs, key=lambda r: r["max_ratio"])
-    past = [r for r in runs if r["max_ratio"] > 1.03]
-    assert f"within 1.03 times its width in all but {len(past)} of the {len(runs)} guided" in text
-    assert f"and at most {worst['max_ratio']:.3f} times. Those three are range-finder runs" in text
-    assert all(r["scenario"] == "kp_fig5_range" for r in past)
-    wide = [json.loads(p.read_text()) for p in (tight / "seeds_701/n_bands_16").glob("*.json")]
-    assert sorted(r["seed"] for r in wide) == sorted(r["seed"] for r in past)
-    assert all(r["scenario"] == "kp_fig5_range+estimator.infoset.n_bands=16" for r in wide)
-    best = max(r["max_ratio"] for r in wide)
-    assert f"from the start bring them to {best:.3f} at most" in text
-    # the row of docs_checks.CHECKS that reads this number points at the worst run's file
-    row = next(c for c in CHECKS if c[0] == "README.md" and "Those three are" in c[1])
+    assert worst["max_ratio"] <= 1.03
+    assert f"within 1.03 times its width in all {len(runs)} guided runs on unseen seeds" in text
+    assert f"at most {worst['max_ratio']:.3f} times" in text
+    row = next(c for c in CHECKS if c[0] == "README.md" and "guided runs on unseen" in c[1])
     assert json.loads((ROOT / row[2]).read_text()) == worst
-    # the option that holds the range finder's runs within 1.03 (extreme_bands/), and its
-    # CPU-time ratios on Fig. 5 with the range finder (speed/kp_fig5_range-trials-*)
-    opt = [json.loads(p.read_text()) for folder in OPTION_FOLDERS
-           for p in (tight / "extreme_bands" / folder).glob("*.json")]  # fmt: skip
-    assert all(all(r["exact_inside"]) for r in opt)
-    best_opt = max(r["max_ratio"] for r in opt)
-    row = next(c for c in CHECKS if c[0] == "README.md" and "range-finder runs on" in c[1])
-    assert json.loads((ROOT / row[2]).read_text())["max_ratio"] == best_opt
-    assert (f'`band_trials="extreme_bands"` holds all {len(opt)} range-finder runs on seeds '
-            f"701-780 within {best_opt:.3f}") in text  # fmt: skip
-    ratio = paired_cpu_ratio("kp_fig5_range-trials-extreme_bands", "kp_fig5_range-trials-default")
-    ratios = sorted(ratio[k] for k in ("random", "game"))
-    assert f"within {best_opt:.3f} at {ratios[0]:.2f}-{ratios[1]:.2f} times the CPU time" in text
+    past = [r for r in before if r["max_ratio"] > 1.03]
+    assert all(r["scenario"] == "kp_fig5_range" for r in past)
+    old = max(past, key=lambda r: r["max_ratio"])
+    assert f"{len(past)} of those runs read past 1.03, at most {old['max_ratio']:.3f}" in text
+    row = next(c for c in CHECKS if c[0] == "README.md" and "read past 1" in c[1])
+    assert json.loads((ROOT / row[2]).read_text()) == old
+    ratio = paired_cpu_ratio("kp_fig5_range-auto-default", "kp_fig5_range-auto-impulse_spread")
+    lo, hi = sorted(ratio.values())
+    assert f"the range-finder runs cost {lo:.2f}-{hi:.2f} times the CPU time" in text
+    dense = [json.loads(p.read_text()) for p in (tight / "auto/dense").glob("*.json")]
+    assert len(dense) == 4 and all(r["times_s"] == list(range(1, 61)) for r in dense)
+    assert all(r["guided"] and all(r["exact_inside"]) for r in dense)
+    past = [[x for x in r["ratio"] if x > 1.03] for r in dense]
+    assert sum(map(bool, past)) == 1 and max(map(len, past)) == 1
+    assert "one of four seeds still passed 1.03 for a second" in text
 
 
 def test_infoset_page_seeds_701_paragraph_matches_its_results_files():
@@ -368,7 +381,7 @@ def test_infoset_page_seeds_701_paragraph_matches_its_results_files():
     runs past 1.03 as the paragraph prints them, and the same runs with 16 bands
     (``seeds_701/n_bands_16/``)."""
     page = (ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split("\n\n")
-    (text,) = [" ".join(p.split()) for p in page if "`seeds_701/`" in p]
+    (text,) = [" ".join(p.split()) for p in page if p.startswith("On 6 more unseen seeds")]
     tight = ROOT / "docs/results/tightness"
     runs = [json.loads(p.read_text()) for p in sorted((tight / "seeds_701").glob("*.json"))]
     _check_grid_and_maxima(runs, text, range(701, 707))
@@ -519,3 +532,84 @@ def test_infoset_page_sixteen_bands_sentence_matches_its_results_files():
         f"costs {ratio['random']:.2f} and {ratio['game']:.2f} times the CPU time of the default"
     )
     assert printed in text
+
+
+def test_infoset_page_auto_paragraph_matches_its_results_files():
+    """ "The default, `auto`": the range-finder runs of the unseen-seed folders again with
+    the default (``auto/``) against the same runs with ``impulse_spread``; four seeds every
+    second of the first minute with each (``auto/dense/``, ``auto/dense_impulse_spread/``);
+    the CPU-time ratios and the moves of the means (``speed/kp_fig5_range-auto-*``)."""
+    page = (ROOT / "docs" / "infoset.md").read_text(encoding="utf-8").split("\n\n")
+    (text,) = [" ".join(p.split()) for p in page if p.startswith("The default, `auto`.")]
+    tight = ROOT / "docs/results/tightness"
+    pairs = [
+        (json.loads((tight / "auto" / folder / p.name).read_text()), json.loads(p.read_text()))
+        for folder in UNSEEN_FOLDERS
+        for p in sorted((tight / folder).glob("kp_fig5_range-*.json"))
+    ]
+    assert len(pairs) == len(list((tight / "auto").glob("*_*/kp_fig5_range-*-guided.json")))
+    assert all(all(r["exact_inside"]) and r["max_ratio"] <= 1.03 for r, _ in pairs)
+    assert f"again with it (the same commands: {len(pairs)} runs of" in text
+    worst = max(pairs, key=lambda x: x[0]["max_ratio"])[0]
+    assert f"none past 1.03, at most {_worst(worst)}" in text
+    three = sorted(((r, b) for r, b in pairs if b["max_ratio"] > 1.03), key=lambda x: x[0]["seed"])
+    assert [r["seed"] for r, _ in three] == [706, 720, 731]
+    now = (
+        ", ".join(f"{r['max_ratio']:.3f}" for r, _ in three[:2])
+        + f" and {three[2][0]['max_ratio']:.3f}"
+    )
+    assert f"the three past 1.03 read {now} (seeds 706, 720, 731)" in text
+    wider = [(r, b) for r, b in pairs if r["max_ratio"] > b["max_ratio"] + 1e-4]
+    r, b = max(wider, key=lambda x: x[0]["max_ratio"] - x[1]["max_ratio"])
+    assert (f"and {len(wider)} read wider than with `impulse_spread` by more than 0.0001, at "
+            f"most by {r['max_ratio'] - b['max_ratio']:.3f} ({_worst(r)[7:-1]}, where "
+            f"`impulse_spread` read {b['max_ratio']:.3f})") in text  # fmt: skip
+    dense = {
+        r["seed"]: r
+        for r in (json.loads(p.read_text()) for p in (tight / "auto/dense").glob("*.json"))
+    }
+    assert sorted(dense) == [706, 720, 731, 745]
+    three_max = max(dense[s]["max_ratio"] for s in (706, 731, 745))
+    assert f"seeds 706, 731 and 745 read at most {three_max:.3f}" in text
+    r = dense[720]
+    at = r["times_s"].index(22.0)
+    assert f"seed 720 read {r['ratio'][at]:.3f} at 22 s, for one second" in text
+    assert f"the next range brought it to {r['ratio'][at + 1]:.3f}" in text
+    assert r["max_ratio"] == r["ratio"][at]
+    width = [r["exact_hi_m"][i] - r["exact_lo_m"][i] for i in (at - 1, at)]
+    past = [(r["exact_lo_m"][i] - r["set_lo_m"][i], r["set_hi_m"][i] - r["exact_hi_m"][i])
+            for i in (at - 1, at)]  # fmt: skip
+    assert f"from {width[0]:.0f} m to {width[1]:.0f} m wide" in text
+    assert f"lay {past[1][0]:.1f} and {past[1][1]:.1f} m past the exact ones" in text
+    assert f"({past[0][0]:.1f} and {past[0][1]:.1f} m a second before)" in text
+    seed706 = [json.loads(p.read_text()) for p in (tight / "auto/seed706").glob("*.json")]
+    assert sorted(r["scenario"].split("=")[-1] for r in seed706) == [
+        "_extreme_bands_", "_impulse_spread_"
+    ]  # fmt: skip
+    at9 = {f"{r['ratio'][r['times_s'].index(9.0)]:.3f}" for r in seed706}
+    assert at9 == {f"{r['max_ratio']:.3f}" for r in seed706} and len(at9) == 1
+    assert f"seed 706 read {at9.pop()} at 9 s with the option as with" in text
+    old = {
+        r["seed"]: r
+        for r in (
+            json.loads(p.read_text()) for p in (tight / "auto/dense_impulse_spread").glob("*.json")
+        )
+    }
+    for seed, span in ((720, "from 22 s to 42 s"), (731, "from 22 s to 34 s")):
+        past = [
+            t for t, x in zip(old[seed]["times_s"], old[seed]["ratio"], strict=True) if x > 1.03
+        ]
+        assert f"{past[0]:.0f} s to {past[-1]:.0f} s" == span.removeprefix("from ")
+        assert past == [t for t in old[seed]["times_s"] if past[0] <= t <= past[-1]]
+    assert f"stays past 1.03 from 22 s to 42 s (up to {old[720]['max_ratio']:.3f})" in text
+    assert f"seed 731 from 22 s to 34 s ({old[731]['max_ratio']:.3f})" in text
+    ratio = paired_cpu_ratio("kp_fig5_range-auto-default", "kp_fig5_range-auto-impulse_spread")
+    assert f"it costs {ratio['random']:.2f} and {ratio['game']:.2f} times the CPU time" in text
+    a, b = speed_rows("kp_fig5_range-auto-default"), speed_rows("kp_fig5_range-auto-impulse_spread")
+    assert all(row["truth_outside"] == 0 for row in [*a.values(), *b.values()])
+    dmiss = max(abs(a[n]["miss_m"]["mean"] - b[n]["miss_m"]["mean"]) for n in a)
+    dfuel = max(abs(a[n]["fuel_mps"]["mean"] - b[n]["fuel_mps"]["mean"]) for n in a)
+    m = re.search(
+        r"moves the mean miss by at most ([\d.]+) m and the mean fuel by at most ([\d.]+) m/s", text
+    )
+    assert agrees(m[1], dmiss) and agrees(m[2], dfuel), (dmiss, dfuel)
