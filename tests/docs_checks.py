@@ -389,6 +389,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) times the runs per CPU-second", VS,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
       "cpu_s_35e3739/2", "runs_per_cpu_s_ratio_mean")),
+    (PERF, r"`docs/results/vs_35e3739_at_f15e898.json`\), the same comparison read ([\d.]+), "
+     r"([\d.]+) and ([\d.]+) CPU-s against ([\d.]+), ([\d.]+) and ([\d.]+), ([\d.]+) times",
+     "docs/results/vs_35e3739_at_f15e898.json",
+     ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",
+      "cpu_s_35e3739/2", "runs_per_cpu_s_ratio_mean")),
     (PERF, r"`docs/results/vs_35e3739_at_5f9e157.json`\),\s+read ([\d.]+), ([\d.]+) and "
      r"([\d.]+) CPU-s against ([\d.]+), ([\d.]+) and ([\d.]+), ([\d.]+) times", VS_5F9,
      ("cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_35e3739/0", "cpu_s_35e3739/1",

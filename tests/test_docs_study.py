@@ -257,3 +257,23 @@ def test_the_piece_split_floor_tightness_sentence_matches_its_files():
     everything = ("kp_fig5", "kp_fig3", "kp_fig5_range")
     assert agrees(found.group(5), widest(floor, everything))
     assert agrees(found.group(5), widest(default, everything))
+
+
+def test_the_study_note_on_auto_is_the_measured_ratio():
+    """The large study predates ``band_trials="auto"``: the note gives its CPU-time ratios
+    on the range-finder variants from the alternated comparisons."""
+    from docs_numbers import paired_cpu_ratio
+
+    ratio = paired_cpu_ratio("kp_fig5_range-auto-default", "kp_fig5_range-auto-impulse_spread")
+    found = _found(r"the two range-finder rows cost ([\d.]+) and ([\d.]+) times as much "
+                   r"\(random, game")  # fmt: skip
+    assert agrees(found.group(1), ratio["random"]) and agrees(found.group(2), ratio["game"])
+
+
+def test_the_old_commits_cpu_time_on_the_two_hosts_of_the_35e3739_comparison():
+    """'That host ran the old commit's command 1.22 times slower than the table's host
+    did': the mean CPU time of commit 35e3739's runs in the two comparisons."""
+    now, before = (results(f"docs/results/vs_35e3739{s}.json") for s in ("", "_at_f15e898"))
+    found = _found(r"ran the old commit's command ([\d.]+) times slower than the table's host")
+    old = [sum(r["cpu_s_35e3739"]) / len(r["cpu_s_35e3739"]) for r in (now, before)]
+    assert agrees(found.group(1), old[0] / old[1])
