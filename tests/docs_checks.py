@@ -496,6 +496,22 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
       "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent",
       "help_cpu_s_max", "first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
+    # docs/performance.md: kvi bench --json on an AMD host, this release and an hour before
+    (PERF, r"`docs/results/bench_amd_host.json`, load average ([\d.]+)\), the bench's UKF "
+     r"step read (\d+) us and its set step (\d+) us; the engagements (\d+) / (\d+) UKF steps, "
+     r"the whole approach ([\d.]+) and the cost exponent ([\d.]+); the costliest `--help` "
+     r"([\d.]+) CPU-s; the first run's compilation ([\d.]+) CPU-s; the Monte Carlo ([\d.]+) / "
+     r"([\d.]+) runs per CPU-second", "docs/results/bench_amd_host.json",
+     ("machine/load_average", "step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps", "whole_approach_ratio", "cost_exponent",
+      "help_cpu_s_max", "first_run_compile_s", "runs_per_cpu_s/1", "runs_per_cpu_s/2")),
+    (PERF, r"read a UKF step of (\d+) us and a set step of (\d+) us, (\d+) / (\d+) UKF steps "
+     r"for the engagements: within the hour", "docs/results/bench_amd_host_first.json",
+     ("step_us/ukf", "step_us/infoset", "engagement_in_ukf_steps",
+      "engagement_random_in_ukf_steps")),
+    (PERF, r"`kvi intercept --help` took ([\d.]+) CPU-s, the other commands ([\d.]+) to "
+     r"([\d.]+): one start", "docs/results/bench_amd_host_first.json",
+     ("help_cpu_s/intercept", "help_cpu_s/plot", "help_cpu_s/adversaries")),
     # docs/performance.md: kvi bench --json with the per-piece impulse replay
     (PERF, r"`docs/results/bench_per_piece.json`, load average ([\d.]+), nothing else",
      BENCH_PP, ("machine/load_average",)),
