@@ -88,12 +88,13 @@ def _loosest_band(
 
 
 def split_live_bands(
-    est, s: NodeSet, min_live: int, max_bands: int, rtol: float, trials: str = "auto"
+    est, s: NodeSet, min_live: int, max_bands: int, rtol: float, trials: str = "impulse_spread"
 ) -> NodeSet:
     """Split live bands in halves (:func:`_loosest_band` chooses) while fewer than
     ``max_bands`` are live and a split is sound, then the impulses' trial splits
     (:func:`_impulse_splits`) and, with ``trials="extreme_bands"`` (on their clock) or
-    ``"at_range"`` (now: ``"auto"`` at a range update), the trials at the set's extremes
+    ``"at_range"`` (now, without the clock: the estimator's ``"auto"`` at a range
+    update, ``"impulse_spread"`` at a bearing), the trials at the set's extremes
     (:func:`_extreme_trials`); ``est`` is the :class:`~.estimator.NodeSetEstimator`
     (its ``_apply``, ``_prior`` and refinement)."""
     if s.is_empty or not np.any(s.u_hi - s.u_lo > MIN_BAND_REL * s.u_hi):
