@@ -205,29 +205,31 @@ def test_extreme_trials_bring_the_range_finder_seeds_within_1_03_of_the_exact_lp
     assert 1.0 <= out["default"]["ratio"][0] <= 1.03
 
 
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=16, deadline=None)
 @given(
     corner=BOX_CORNERS,
     error_switch_s=switch_times(3),
     disturbance_switch_s=switch_times(3),
     signs=SIGNS,
     every_trial_pays=st.booleans(),
+    option=st.sampled_from([[EXTREME], []]),
 )
 def test_extreme_trials_keep_the_truth_from_every_corner(
-    corner, error_switch_s, disturbance_switch_s, signs, every_trial_pays
+    corner, error_switch_s, disturbance_switch_s, signs, every_trial_pays, option
 ):
-    """With the option, from any corner of a (shortened) a-priori box, errors and
-    disturbances at their bounds switching at random times: the slices stay convex and
-    the truth inside after every update, with the trials as measured or with every
-    trial paying (every live band halved each time, where a split is sound: a range
-    that pins ``u`` at a band's edge leaves halves that cannot be told from empty)."""
+    """With the option or the default (``auto``: the trials at every range), from any
+    corner of a (shortened) a-priori box, errors and disturbances at their bounds
+    switching at random times: the slices stay convex and the truth inside after every
+    update, with the trials as measured or with every trial paying (every live band
+    halved each time, where a split is sound: a range that pins ``u`` at a band's edge
+    leaves halves that cannot be told from empty)."""
     start = corner_state(corner, (801.3e3, 951.3e3), (57.9e3, 58.1e3))
     with pytest.MonkeyPatch.context() as mp:
         if every_trial_pays:
             mp.setattr(bands, "_node_gain", lambda *a: np.inf)
         r = run_schedule(
             "kp_fig5_range", start, error_switch_s, disturbance_switch_s, *signs,
-            overrides=[*SHORT_APPROACH, EXTREME],
+            overrides=[*SHORT_APPROACH, *option],
         )  # fmt: skip
     assert r["outside"] == 0
     assert r["steps"] >= 12
