@@ -339,8 +339,8 @@ def engagement_ms(sc, noise: str, repeat: int) -> float:
 def help_cpu_s(commands, repeat: int = 3) -> dict[str, float]:
     """CPU time (s) of ``kvi CMD --help`` for each of ``commands`` ("" for ``kvi
     --help``), each in a fresh interpreter, the median of ``repeat`` starts: what
-    starting the command line costs (the first start after the files were read from
-    disk pays for reading them: one start measured that 0.55 CPU-s, its repeats 0.3)."""
+    starting the command line costs (one start moves by half on a busy host: 0.55
+    CPU-s once where repeats read 0.3)."""
     out = {}
     for cmd in commands:
         times = []

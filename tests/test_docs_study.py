@@ -7,7 +7,15 @@ from __future__ import annotations
 
 import re
 
-from docs_numbers import ROOT, agrees, results, speed_base_cpu_s, speed_cpu_s, speed_rows
+from docs_numbers import (
+    ROOT,
+    agrees,
+    paired_cpu_ratio,
+    results,
+    speed_base_cpu_s,
+    speed_cpu_s,
+    speed_rows,
+)
 
 STUDY = "docs/results/study/fig5-"
 TEXT = " ".join((ROOT / "docs/performance.md").read_text(encoding="utf-8").split())
@@ -262,8 +270,6 @@ def test_the_piece_split_floor_tightness_sentence_matches_its_files():
 def test_the_study_note_on_auto_is_the_measured_ratio():
     """The large study predates ``band_trials="auto"``: the note gives its CPU-time ratios
     on the range-finder variants from the alternated comparisons."""
-    from docs_numbers import paired_cpu_ratio
-
     ratio = paired_cpu_ratio("kp_fig5_range-auto-default", "kp_fig5_range-auto-impulse_spread")
     found = _found(r"the two range-finder rows cost ([\d.]+) and ([\d.]+) times as much "
                    r"\(random, game")  # fmt: skip

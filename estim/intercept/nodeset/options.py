@@ -103,17 +103,17 @@ class InfosetOptions(SlabOptions):
             "over the band it was recorded in, cheaper and looser)"
         ),
     ] = True
-    # auto: the extreme trials once a range was measured. Without them range-finder sets
-    # read up to 1.043 of the exact width early in the approach (seeds 706, 720, 731);
-    # with bearings only they cost 1.1-1.7x for no tightness need (docs/infoset.md)
+    # auto: the extreme trials at each range update. Without them range-finder sets read
+    # up to 1.043 of the exact width early in the approach (seeds 706, 720, 731); with
+    # bearings only they cost 1.1-1.7x for no tightness need (docs/infoset.md)
     band_trials: Annotated[
         Literal["auto", "impulse_spread", "extreme_bands"],
         Field(
             description="nodes: which closing-speed bands a trial split tests: those the "
             "impulses may have spread (impulse_spread: a paying trial splits that band), "
             "or those and, every few seconds, the bands at the set's extremes of the miss "
-            "(extreme_bands: a paying trial halves every live band); auto: "
-            "extreme_bands once a range has been measured, impulse_spread before"
+            "(extreme_bands: a paying trial halves every live band); auto: the impulses' "
+            "trials, and those at the extremes at every range measurement (no clock)"
         ),
     ] = "auto"
 
