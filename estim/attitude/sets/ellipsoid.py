@@ -33,7 +33,8 @@ outer bound whatever its free parameter, the parameter choosing only the tightne
 * **axis strip** :math:`lo_i \\le x_i \\le hi_i` (Fogel & Huang 1982): the strip is first
   clipped to the range :math:`c_i \\pm \\sqrt{P_{ii}}` of ``x_i`` over ``E`` (disjoint:
   the run is empty; the whole range: ``E`` unchanged); with ``y`` and ``r`` its centre and
-  half-width (``r`` at least :math:`10^{-6} \\sqrt{P_{ii}}`, a wider strip), ``e = y -
+  half-width (``r`` at least :math:`10^{-6} \\sqrt{P_{ii}}`, and wider by a few ulps of
+  :math:`|y| + |c_i| + \\sqrt{P_{ii}}`, the rounding of the centres: a wider strip), ``e = y -
   c_i``, ``g = P_{ii}``, ``p = P e_i``, every point of ``E`` in the strip satisfies, for
   every :math:`\\lambda \\ge 0`,
   :math:`(x - c)^T P^{-1} (x - c) + \\lambda (x_i - y)^2 / r^2 \\le 1 + \\lambda`, the
@@ -41,7 +42,10 @@ outer bound whatever its free parameter, the parameter choosing only the tightne
 
   .. math:: c^+ = c + \\frac{\\lambda e}{r^2 + \\lambda g}\\, p, \\qquad
             P^+ = \\delta \\Big(P - \\frac{\\lambda}{r^2 + \\lambda g}\\, p p^T\\Big),
-            \\qquad \\delta = 1 + \\lambda - \\frac{\\lambda e^2}{r^2 + \\lambda g}.
+            \\qquad \\delta = 1 + \\lambda - \\frac{\\lambda e^2}{r^2 + \\lambda g}
+
+  (``P^+`` formed in Joseph's form, :func:`strip_update`, which does not cancel when
+  the strip is much narrower than ``E``).
 
   ``criterion="volume"``: Fogel & Huang's minimum of :math:`\\det P^+`, the positive root
   of :math:`(n-1) G^2 \\lambda^2 + G (2n - 1 + \\varepsilon - G) \\lambda + n (1 -
@@ -100,6 +104,9 @@ REGULARISATION = 1e-12
 RANGE_INFLATION = 1e-12
 #: least strip half-width relative to ``sqrt(P_ii)`` (a wider strip: an outer bound)
 MIN_STRIP = 1e-6
+#: a strip's half-width grows by this many ulps of ``|y| + |c_i| + sqrt(P_ii)``
+STRIP_ROUNDING = 4.0
+EPS = float(np.finfo(float).eps)
 
 
 def ellipsoid_from_box(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -197,7 +204,17 @@ def strip_weight(g, e, r, tr, m2, n: int, criterion: Criterion = "volume") -> Fl
 
 def strip_update(c, p, i: int, y, r, lam) -> tuple[FloatArray, FloatArray]:
     """Fogel & Huang's member :math:`(c^+, P^+)` of weight ``lam`` for the strip
-    :math:`|x_i - y| \\le r` (module docstring; ``lam = 0``: unchanged)."""
+    :math:`|x_i - y| \\le r` (module docstring; ``lam = 0``: unchanged).
+
+    ``P^+`` is formed in Joseph's form, a sum of two positive semi-definite terms,
+
+    .. math:: P - a\\, p p^T = (I - a\\, p e_i^T) P (I - a\\, p e_i^T)^T
+              + a (1 - a g)\\, p p^T, \\qquad a = \\frac{\\lambda}{r^2 + \\lambda g},
+
+    with :math:`1 - a g = r^2 / (r^2 + \\lambda g)` computed as that ratio: for a strip
+    much narrower than ``E`` (``lam g >> r^2``) the plain difference cancels, and its
+    rounding (``eps g``, against a result near ``r^2``) left points of ``E`` at the
+    strip's edge outside ``P^+``."""
     pa = p[:, :, i]
     g = p[:, i, i]
     e = y - c[:, i]
@@ -205,8 +222,13 @@ def strip_update(c, p, i: int, y, r, lam) -> tuple[FloatArray, FloatArray]:
     dens = np.where(den > 0, den, 1.0)
     delta = 1.0 + lam - lam * e * e / dens
     c_new = c + (lam * e / dens)[:, None] * pa
+    a = lam / dens
+    m = np.broadcast_to(np.eye(p.shape[-1]), p.shape).copy()
+    m[:, :, i] -= a[:, None] * pa
+    m[:, i, i] = r * r / dens  # 1 - a g, without the cancellation
+    rest = a * (r * r / dens)  # a (1 - a g) >= 0
     p_new = delta[:, None, None] * (
-        p - (lam / dens)[:, None, None] * pa[:, :, None] * pa[:, None, :]
+        m @ p @ np.swapaxes(m, -1, -2) + rest[:, None, None] * pa[:, :, None] * pa[:, None, :]
     )
     return c_new, _sym(p_new)
 
@@ -227,6 +249,9 @@ def axis_strips(
         cut = (a <= b) & ((a > mid - half) | (b < mid + half)) & (g > 0.0) & ~empty
         y = 0.5 * (a + b)
         r = np.maximum(0.5 * (b - a), MIN_STRIP * np.sqrt(g))
+        # wider by the rounding of the strip's centre and of E's (the new centre lands
+        # within a few ulps of these; for a narrow strip that is a part of r)
+        r = r + STRIP_ROUNDING * EPS * (np.abs(y) + np.abs(mid) + np.sqrt(g))
         rs = np.where(cut, r, 1.0)
         gs = np.where(cut, g, 1.0)
         e = np.where(cut, y - mid, 0.0)
