@@ -120,6 +120,17 @@ def _render_default(result: dict[str, Any], indent: str = "") -> str:
     return "\n".join(lines)
 
 
+DESCRIPTION = """Set-membership estimation (the information set) against Kalman filters in
+spacecraft intercept guidance and attitude control, on the same noise realisations
+(the models and the papers: docs/models.md)."""
+EPILOG = """examples:
+  kvi scenarios                                  the bundled scenarios
+  kvi fig5 --runs 50                             the intercept paper's Fig. 5 statistics
+  kvi compare kp_fig5 --estimators infoset,ukf --noise random,game --runs 20
+  kvi attitude smallsat_rw --estimators box,ukf --runs 4
+  kvi COMMAND --help                             a command's options"""
+
+
 def _command_named(argv: Sequence[str]) -> str | None:
     """The command on a command line: its first word that is not an option (the top
     level has no option taking a value), when it names a command."""
@@ -132,7 +143,12 @@ def _command_named(argv: Sequence[str]) -> str | None:
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``kvi``; only ``command``'s module is imported for its arguments
     (None: no command module is imported, which is all ``kvi --help`` needs)."""
-    parser = _Parser(prog="kvi", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="kvi",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     from kalman_vs_infoset import __version__
 
     parser.add_argument("--version", action="version", version=f"kvi {__version__}")

@@ -527,3 +527,18 @@ def test_code_identity_follows_the_sources_that_decide_a_run(tmp_path, monkeypat
     with (tmp_path / "estim" / "infoset.py").open("a") as fh:
         fh.write("\n# an edit\n")
     assert identity()["sources_sha256"] != h0
+
+
+def test_the_examples_of_kvi_help_parse():
+    """Every example line of ``kvi --help`` is a command line the parser accepts (so the
+    examples cannot go stale), and the page lists every command."""
+    from kalman_vs_infoset.experiments import cli
+
+    examples = [line.strip().split("  ")[0].split()[1:] for line in cli.EPILOG.splitlines()[1:]]
+    runnable = [argv for argv in examples if argv and argv[0] in cli.COMMANDS]
+    assert len(runnable) >= 4
+    for argv in runnable:
+        args = cli.build_parser(argv[0]).parse_args(argv)
+        assert args.command == argv[0]
+    text = cli.build_parser().format_help()
+    assert all(name in text for name in cli.COMMANDS) and "examples:" in text
