@@ -26,6 +26,7 @@ BENCH_TAIL = "docs/results/bench_tail.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
+SLOW10 = "docs/results/speed/kp_fig3-closing_"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
@@ -581,6 +582,24 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) with the previous release's: ([\d.]+) times the runs per CPU-second", VS_1F4,
      ("runs_per_variant", "cpu_s_now/0", "cpu_s_now/1", "cpu_s_now/2", "cpu_s_1f4367d/0",
       "cpu_s_1f4367d/1", "cpu_s_1f4367d/2", "runs_per_cpu_s_ratio_mean")),
+    # docs/performance.md and the README: a slow encounter (10 km/s against 58)
+    (PERF, r"measured two runs of the information set at ([\d.]+) CPU-s,\s+against ([\d.]+) "
+     r"CPU-s at 58 km/s, and the UKF's at ([\d.]+) against ([\d.]+) CPU-s", SLOW10 + "10kmps.json",
+     (*_row("infoset", "random", "cpu_s", path=SLOW10 + "10kmps.json"),
+      *_row("infoset", "random", "cpu_s", path=SLOW10 + "58kmps.json"),
+      *_row("ukf", "random", "cpu_s", path=SLOW10 + "10kmps.json"),
+      *_row("ukf", "random", "cpu_s", path=SLOW10 + "58kmps.json"))),
+    (PERF, r"\((\d+) steps outside; the UKF's\s+3-sigma ellipsoid (\d+)\) and missed by ([\d.]+) "
+     r"m for ([\d.]+) m/s \(the UKF: ([\d.]+) m for ([\d.]+)\s+m/s\)", SLOW10 + "10kmps.json",
+     (*_row("infoset", "random", "truth_outside", path=SLOW10 + "10kmps.json"),
+      *_row("ukf", "random", "truth_outside", path=SLOW10 + "10kmps.json"),
+      *_row("infoset", "random", "miss_m/mean", "fuel_mps/mean", path=SLOW10 + "10kmps.json"),
+      *_row("ukf", "random", "miss_m/mean", "fuel_mps/mean", path=SLOW10 + "10kmps.json"))),
+    (README, r"at 10 km/s\s+instead of 58 \(an approach about six times longer\) two Fig\. 3 runs "
+     r"of the set took\s+([\d.]+) CPU-s against ([\d.]+)",
+     SLOW10 + "10kmps.json",
+     (*_row("infoset", "random", "cpu_s", path=SLOW10 + "10kmps.json"),
+      *_row("infoset", "random", "cpu_s", path=SLOW10 + "58kmps.json"))),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),
