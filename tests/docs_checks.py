@@ -27,6 +27,7 @@ VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
 SLOW10 = "docs/results/speed/kp_fig3-closing_"
+SLOW_T = "docs/results/tightness/slow_encounter/kp_fig3-closing_10kmps-tightness-"
 CONS = "docs/results/constrained/compare_kp_fig5_kalman_constrained.json"
 E2E = "docs/results/e2e/kp_fig3_attitude-infoset-"
 INFL = "docs/results/sweeps/kp_fig5_kalman_inflated-noise_inflation.json"
@@ -595,6 +596,14 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       *_row("ukf", "random", "truth_outside", path=SLOW10 + "10kmps.json"),
       *_row("infoset", "random", "miss_m/mean", "fuel_mps/mean", path=SLOW10 + "10kmps.json"),
       *_row("ukf", "random", "miss_m/mean", "fuel_mps/mean", path=SLOW10 + "10kmps.json"))),
+    (PERF, r"Capping them\s+\(`--set estimator\.infoset\.max_bands=8`, 64 by default\) made the "
+     r"same two runs cost\s+([\d.]+) CPU-s, with a miss of ([\d.]+) m for ([\d.]+) m/s and the "
+     r"truth inside at every step", SLOW10 + "10kmps-max_bands_8.json",
+     _row("infoset", "random", "cpu_s", "miss_m/mean", "fuel_mps/mean",
+          path=SLOW10 + "10kmps-max_bands_8.json")),
+    (PERF, r"within ([\d.]+) of the exact set's width at 60, 200, 400 and 540 s of the first "
+     r"run, where\s+the default read at most ([\d.]+)", SLOW_T + "max_bands_8.json",
+     ("max_ratio", f"{SLOW_T}default.json::max_ratio")),
     (README, r"at 10 km/s\s+instead of 58 \(an approach about six times longer\) two Fig\. 3 runs "
      r"of the set took\s+([\d.]+) CPU-s against ([\d.]+)",
      SLOW10 + "10kmps.json",

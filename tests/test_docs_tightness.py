@@ -613,3 +613,17 @@ def test_infoset_page_auto_paragraph_matches_its_results_files():
         r"moves the mean miss by at most ([\d.]+) m and the mean fuel by at most ([\d.]+) m/s", text
     )
     assert agrees(m[1], dmiss) and agrees(m[2], dfuel), (dmiss, dfuel)
+
+
+def test_the_slow_encounter_runs_keep_the_truth_and_the_exact_interval():
+    """docs/performance.md's slow encounter (10 km/s): both settings keep the truth at
+    every step of their runs, and the set holds the exact interval at every sampled time
+    (the page gives only the width ratios)."""
+    speed = ROOT / "docs/results/speed"
+    for name in ("kp_fig3-closing_10kmps.json", "kp_fig3-closing_10kmps-max_bands_8.json"):
+        rows = [r for r in json.loads((speed / name).read_text())["rows"]
+                if r["estimator"] == "infoset"]  # fmt: skip
+        assert rows and all(r["truth_outside"] == 0 and r["failures"] == 0 for r in rows), name
+    folder = ROOT / "docs/results/tightness/slow_encounter"
+    runs = [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))]
+    assert len(runs) == 2 and all(all(r["exact_inside"]) for r in runs)
