@@ -620,7 +620,9 @@ def test_the_slow_encounter_runs_keep_the_truth_and_the_exact_interval():
     every step of their runs, and the set holds the exact interval at every sampled time
     (the page gives only the width ratios)."""
     speed = ROOT / "docs/results/speed"
-    for name in ("kp_fig3-closing_10kmps.json", "kp_fig3-closing_10kmps-max_bands_8.json"):
+    names = ("kp_fig3-closing_10kmps.json", "kp_fig3-closing_10kmps-known.json",
+             "kp_fig3-closing_10kmps-max_bands_8.json")  # fmt: skip
+    for name in names:
         rows = [r for r in json.loads((speed / name).read_text())["rows"]
                 if r["estimator"] == "infoset"]  # fmt: skip
         assert rows and all(r["truth_outside"] == 0 and r["failures"] == 0 for r in rows), name
