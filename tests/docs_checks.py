@@ -42,6 +42,12 @@ VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
 VS_6CA6544 = "docs/results/vs_35e3739_at_6ca6544.json"
 VS_BEFORE = "docs/results/vs_35e3739_before_trial_splits.json"
 N = "numbers/"
+#: docs/attitude.md's results files (docs/results/README.txt lists their commands)
+PDG = "docs/results/attitude/pd_gains.json"
+GYC = "docs/results/attitude/gyrostat_game-seed1-constant.json"
+SMALL = "docs/results/attitude/smallsat_rw.json"
+LQR = "docs/results/attitude/lqr_large_angle.json"
+SETS = "docs/results/attitude/smallsat_rw-sets.json"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
 
@@ -186,6 +192,34 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
      FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
     (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
+    # docs/attitude.md, the PD gains (kvi pd-gains --json)
+    (ATT, r"The best k_q on the grid at k_w 2\.625 is ([\d.]+), which settles in ([\d.]+) s",
+     PDG, ("map/efficient_kq_at_kw_2.625", "map/efficient_settle_at_kw_2.625_s")),
+    (ATT, r"1 deg ([\d.]+) vs ([\d.]+), 2 deg ([\d.]+) vs ([\d.]+), 6 deg ([\d.]+) vs "
+     r"([\d.]+)\)", PDG,
+     ("f0/1", "seed_table/1", "f0/2", "seed_table/2", "f0/6", "seed_table/6")),
+    (ATT, r"c1 ([\d.]+), p1 ([\d.]+), c2 ([\d.]+), p2 ([\d.]+) \(seed, written with the "
+     r"vector part, i\.e\. 2x the table: ([\d.]+), ([\d.]+), ([\d.]+), ([\d.]+)\)", PDG,
+     ("fit/c1", "fit/p1", "fit/c2", "fit/p2", "seed_fit_eq28/c1", "seed_fit_eq28/p1",
+      "seed_fit_eq28/c2", "seed_fit_eq28/p2")),
+    # docs/attitude.md, Resurs-P and the gyrostat
+    (ATT, r"the energy-saving turn is within 0\.2 deg only at ([\d]+) s, not 300 s", FIGS,
+     (N + "resurs/within_tolerance_from_s",)),
+    (ATT, r"settles in ([\d.]+) s on average and ([\d.]+) s at most, within tau, for an "
+     r"energy index of ([\d.]+) N\^2 m\^2 s and a final error of ([\d.e-]+) deg", GYC,
+     ("settle_time_s/mean", "settle_time_s/max", "energy_N2m2s/mean", "final_angle_deg/mean")),
+    (ATT, r"measured peak ([\d.]+) alpha", FIGS, (N + "gyrostat/max_torque_ratio/box/game",)),
+    # docs/attitude.md, the estimators (kvi attitude SCENARIO ... --json)
+    (ATT, r"smallsat ([\d.]+) deg vs ([\d.]+) deg for the UKF and ([\d.]+) deg for the raw "
+     r"measurement", SMALL,
+     ("rows/[estimator=box,noise=game]/final_angle_deg/mean",
+      "rows/[estimator=ukf,noise=game]/final_angle_deg/mean",
+      "rows/[estimator=perfect,noise=game]/final_angle_deg/mean")),
+    (ATT, r"steady error ([\d.]+) deg with the raw measurement", LQR,
+     ("rows/[estimator=perfect,noise=random]/final_angle_deg/mean",)),
+    (ATT, r"\(([\d.]+) and ([\d.]+) s against ([\d.]+) s of wall time for those 4 runs\)", SETS,
+     ("rows/[estimator=zonotope]/wall_s", "rows/[estimator=ellipsoid]/wall_s",
+      "rows/[estimator=box]/wall_s")),
     # README: the runs per CPU-second against release 35e3739
     (README, r"Fig\. 5's Monte Carlo does ([\d.]+) times the runs per CPU-second of release "
      r"(?:`35e3739` )?\((\d+) runs,", VS, ("runs_per_cpu_s_ratio_mean", "runs")),

@@ -292,8 +292,9 @@ def test_seed_000_accuracy_at_300s_is_set_by_printed_f1_f2_not_by_covariances(wh
 def test_seed_000_300s_point_needs_f1_six_percent_above_the_print():
     """What the seed's 300-s accuracy would take (our computation, not the seed's):
     f1_0 = 2.65e-5 instead of the printed 2.5e-5 (growth unchanged) brings the linear
-    loop within 0.2 deg and 0.02 deg/s at 300 s, for an index Z about 11 % higher
-    (the README gives the full gyrodine simulation: 0.19 deg, Z = 2564)."""
+    loop within 0.2 deg and 0.02 deg/s at 300 s (the full gyrodine simulation's error
+    and index Z are in docs/attitude.md, from ``paper_figures.json``'s
+    ``resurs/f1_raised``)."""
     printed = _linear_turn_error_deg(CONFIG, 3000)[3000]
     cfg = dataclasses.replace(CONFIG, f1_0=2.65e-5)
     moved = _linear_turn_error_deg(cfg, 3000)[3000]
