@@ -192,6 +192,18 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
      FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
     (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
+    # docs/figures.md: the papers' numbers as the results file records them, and ours
+    (FIGMD, r"against the paper's ([\d.]+) m and ([\d.]+) m/s \(one realisation each\)", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/random/0", N + "kp_fig3/paper_miss_fuel/random/1")),
+    (FIGMD, r"\(miss [\d.]+ m against ([\d.]+) m\): the Fig\. 3 game fuel", FIGS,
+     (N + "kp_fig3/paper_miss_fuel/game/0",)),
+    (FIGMD, r"the 300-s error is ([\d.]+) deg under every reading", FIGS,
+     (N + "resurs/angle_at_300s_deg",)),
+    (FIGMD, r"at [\d.]+ s against the paper's ([\d.]+) s", FIGS,
+     (N + "akimov/akimov_fig12/paper_settle_s",)),
+    (FIGMD, r"round-off, ([\d.e-]+)\)", FIGS, (N + "lqr_lyapunov/max_increase",)),
+    (FIGMD, r"rotor torques stay at ([\d.]+) of their limits", FIGS,
+     (N + "gyrostat/max_torque_ratio/box/game",)),
     # docs/attitude.md, the PD gains (kvi pd-gains --json)
     (ATT, r"The best k_q on the grid at k_w 2\.625 is ([\d.]+), which settles in ([\d.]+) s",
      PDG, ("map/efficient_kq_at_kw_2.625", "map/efficient_settle_at_kw_2.625_s")),

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from docs_checks import ATT, CHECKS, FIGS, GYC, PDG, SETS
 from docs_numbers import ROOT, agrees, lookup, results
-from test_docs_numbers import unchecked_numbers
+from test_docs_numbers import unlisted_numbers
 
 ATTITUDE = "docs/results/attitude/"
 SCENARIOS = ("smallsat_rw", "lqr_large_angle", "gyrostat_game", "resurs_p")
@@ -228,22 +228,11 @@ def test_the_box_never_lost_the_truth_in_any_scenario():
                 assert row["truth_outside"] == int(printed) and row["empty_steps"] == 0, scenario
 
 
-def _prose() -> str:
-    lines = (ROOT / ATT).read_text(encoding="utf-8").splitlines()
-    return "\n".join(line for line in lines if not line.lstrip().startswith("|"))
-
-
 def test_every_number_of_the_attitude_page_is_checked():
     """A number in docs/attitude.md's prose is read by a row of ``CHECKS``, derived by a
     test here, or is an input (``INPUTS``)."""
     patterns = [c[1] for c in CHECKS if c[0] == ATT] + list(DERIVED.values())
-    flat = unchecked_numbers(_prose(), patterns)
-    left = []
-    for line in flat:
-        for pattern in INPUTS:
-            line = re.sub(pattern, " ", line)
-        left += re.findall(r"(?<![\w.])\d[\d.]*", line)  # numbers, not names (phi0, DOP853)
-    assert left == []
+    assert unlisted_numbers(ATT, patterns, INPUTS) == []
 
 
 @pytest.mark.parametrize("key", sorted(DERIVED))
