@@ -52,20 +52,28 @@ NOT_RESULTS = (
 )
 
 
-def unchecked_numbers(text: str, patterns: list[str]) -> list[str]:
-    """The lines of ``text`` that still hold a digit once code, link targets, the spans
-    the ``patterns`` match and the ``NOT_RESULTS`` are removed."""
-    text = re.sub(r"```.*?```", " ", text, flags=re.S)  # code blocks: commands
-    text = re.sub(r"`[^`]*`", " ", text)  # inline code: names, commands, files
-    text = re.sub(r"\]\([^)]*\)", "]", text)  # link targets
-    flat = " ".join(text.split())
-    # each pattern is matched against the whole text (not what the others left), so two
-    # rows may read overlapping sentences
+def _blank(flat: str, patterns: list[str]) -> str:
+    """``flat`` with every span a pattern matches blanked; each pattern is matched against
+    the whole text (not what the others left), so two rows may read overlapping
+    sentences."""
     chars = list(flat)
     for pattern in patterns:
         for match in re.finditer(pattern, flat):
-            chars[match.start() : match.end()] = " " * (match.end() - match.start())
-    flat = "".join(chars)
+            for i in range(match.start(), match.end()):
+                if chars[i] != "`":  # backticks stay, paired for the inline code's removal
+                    chars[i] = " "
+    return " ".join("".join(chars).split())
+
+
+def unchecked_numbers(text: str, patterns: list[str]) -> list[str]:
+    """The lines of ``text`` that still hold a digit once code, link targets, the spans
+    the ``patterns`` match and the ``NOT_RESULTS`` are removed. The patterns read the text
+    as printed (as ``mismatches`` does) and again with inline code removed."""
+    text = re.sub(r"```.*?```", " ", text, flags=re.S)  # code blocks: commands
+    text = re.sub(r"\]\([^)]*\)", "]", text)  # link targets
+    flat = _blank(" ".join(text.split()), patterns)
+    flat = re.sub(r"`[^`]*`", " ", flat)  # inline code: names, commands, files
+    flat = _blank(" ".join(flat.split()), patterns)
     lines = re.sub(r"\s(?=\d\. )", "\n", flat).split("\n")  # numbered items on their own
     for pattern in NOT_RESULTS:
         lines = [re.sub(pattern, " ", line) for line in lines]
