@@ -23,7 +23,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
-from kalman_vs_infoset.experiments import options
+from kalman_vs_infoset.experiments import options, usage
 from kalman_vs_infoset.experiments.attitude_loops import (
     LOOPS,
     AttitudeLoop,
@@ -164,7 +164,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     results, frames, files, histories = [], [], [], []
     for est in req.estimators:
         for noise in req.noises:
-            t0 = time.perf_counter()
+            t0, cpu0 = time.perf_counter(), usage.cpu_s()
             choice = {"controller": controller, "estimator": est, "noise": noise}
             base = {"scenario": req.name, **choice, "seed": seed}
             job = Job(
@@ -187,6 +187,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             res = loop.summarise(setups[noise], controller, noise, est, req.runs, seed, ok,
                                  failures)  # fmt: skip
             res["wall_s"] = time.perf_counter() - t0
+            # as the intercept's: a remote cluster's workers are not this process's children
+            local = not args.scheduler
+            res["cpu_s"] = usage.cpu_s() - cpu0 if local else None
+            res["worker_peak_rss_mb"] = usage.peak_rss_mb(children=True) if local else None
             results.append(res)
             frames.append(df)
             files.append(str(job_path(req.out, job)))

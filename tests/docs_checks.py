@@ -233,9 +233,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       "rows/[estimator=perfect,noise=game]/final_angle_deg/mean")),
     (ATT, r"steady error ([\d.]+) deg with the raw measurement", LQR,
      ("rows/[estimator=perfect,noise=random]/final_angle_deg/mean",)),
-    (ATT, r"\(([\d.]+) and ([\d.]+) s against ([\d.]+) s of wall time for those 4 runs\)", SETS,
-     ("rows/[estimator=zonotope]/wall_s", "rows/[estimator=ellipsoid]/wall_s",
-      "rows/[estimator=box]/wall_s")),
+    (ATT, r"\(([\d.]+) and ([\d.]+) CPU-s against ([\d.]+) for those 4 runs", SETS,
+     ("rows/[estimator=zonotope]/cpu_s", "rows/[estimator=ellipsoid]/cpu_s",
+      "rows/[estimator=box]/cpu_s")),
     # README: the runs per CPU-second against release 35e3739
     (README, r"Fig\. 5's Monte Carlo does ([\d.]+) times the runs per CPU-second of release "
      r"(?:`35e3739` )?\((\d+) runs,", VS, ("runs_per_cpu_s_ratio_mean", "runs")),

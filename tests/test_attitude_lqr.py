@@ -132,6 +132,8 @@ def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
     assert out["settle_time_s"]["max"] < 300.0
     assert abs(out["constraint_residual"]) < 1e-12
     assert out["max_torque_Nm"] <= 0.1 + 1e-12
+    # the runs' CPU time, as the intercept commands report it (docs/models.md §3.1)
+    assert out["cpu_s"] > 0.0 and out["worker_peak_rss_mb"] >= 0.0
 
 
 def test_attitude_dispatcher_reports_unavailable_and_bad_input(monkeypatch, capsys):
