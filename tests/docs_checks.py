@@ -45,8 +45,6 @@ N = "numbers/"
 #: docs/attitude.md's results files (docs/results/README.txt lists their commands)
 PDG = "docs/results/attitude/pd_gains.json"
 GYC = "docs/results/attitude/gyrostat_game-seed1-constant.json"
-SMALL = "docs/results/attitude/smallsat_rw.json"
-LQR = "docs/results/attitude/lqr_large_angle.json"
 SETS = "docs/results/attitude/smallsat_rw-sets.json"
 SIGNS = N + "resurs_inertia_signs/"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
@@ -225,17 +223,6 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"energy index of ([\d.]+) N\^2 m\^2 s and a final error of ([\d.e-]+) deg", GYC,
      ("settle_time_s/mean", "settle_time_s/max", "energy_N2m2s/mean", "final_angle_deg/mean")),
     (ATT, r"measured peak ([\d.]+) alpha", FIGS, (N + "gyrostat/max_torque_ratio/box/game",)),
-    # docs/attitude.md, the estimators (kvi attitude SCENARIO ... --json)
-    (ATT, r"smallsat ([\d.]+) deg vs ([\d.]+) deg for the UKF and ([\d.]+) deg for the raw "
-     r"measurement", SMALL,
-     ("rows/[estimator=box,noise=game]/final_angle_deg/mean",
-      "rows/[estimator=ukf,noise=game]/final_angle_deg/mean",
-      "rows/[estimator=perfect,noise=game]/final_angle_deg/mean")),
-    (ATT, r"steady error ([\d.]+) deg with the raw measurement", LQR,
-     ("rows/[estimator=perfect,noise=random]/final_angle_deg/mean",)),
-    (ATT, r"\(([\d.]+) and ([\d.]+) CPU-s against ([\d.]+) for those 4 runs", SETS,
-     ("rows/[estimator=zonotope]/cpu_s", "rows/[estimator=ellipsoid]/cpu_s",
-      "rows/[estimator=box]/cpu_s")),
     # README: the runs per CPU-second against release 35e3739
     (README, r"Fig\. 5's Monte Carlo does ([\d.]+) times the runs per CPU-second of release "
      r"(?:`35e3739` )?\((\d+) runs,", VS, ("runs_per_cpu_s_ratio_mean", "runs")),

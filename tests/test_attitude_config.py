@@ -205,7 +205,7 @@ def test_set_overrides_reach_the_typed_attitude_tables(capsys, tmp_path):
     assert by_set["scenario"] == "smallsat_rw" + "".join(
         f"+{key}={new}" for key, (_, new) in sets.items()
     )
-    for key in ("scenario", "wall_s", "files"):
+    for key in ("scenario", "wall_s", "files", "cpu_s", "worker_peak_rss_mb"):
         del by_set[key], by_file[key]
     assert by_set == by_file
 

@@ -1,6 +1,7 @@
 """docs/attitude.md against its results files: the numbers its prose derives from them
 (maxima, ratios, percentages), and an inventory like the README's: every number of its
-prose is read by a row of ``CHECKS``, by a test here (``DERIVED``), or is an input
+prose is read by a row of ``CHECKS``, by a test here (``DERIVED``) or in
+``test_docs_attitude_estimators.py`` (the estimators' section), or is an input
 (``INPUTS``). Its tables are checked by ``test_docs_tables.py``.
 
 The results files and their commands are listed in ``docs/results/README.txt``.
@@ -14,10 +15,10 @@ import numpy as np
 import pytest
 from docs_checks import ATT, CHECKS, FIGS, GYC, PDG, SETS
 from docs_numbers import ROOT, agrees, lookup, results
+from test_docs_attitude_estimators import PRINTED
 from test_docs_numbers import unlisted_numbers
 
 ATTITUDE = "docs/results/attitude/"
-SCENARIOS = ("smallsat_rw", "lqr_large_angle", "gyrostat_game", "resurs_p")
 
 #: the sentences whose numbers the tests below derive, by test
 DERIVED = {
@@ -27,14 +28,11 @@ DERIVED = {
     "f1_z": r"(\d+) % above the seed's 2150 and still ([\d.]+)x below our baseline",
     "aux": r"the unforced auxiliary system \(4\.6\) alone is at ([\d.]+) deg at 300 s",
     "a_star": r"a\* = \(([\d.]+), ([\d.]+), ([\d.]+)\)e-4 s\^-2, beta\* = ([\d.]+)e-5 s\^-2",
-    "gate": r"gate on up to ([\d.]+) % of the steps under adversarial torques \(smallsat\) and "
-    r"on at most ([\d.]+) % under random noise \(Resurs-P; ([\d.]+) to ([\d.]+) % in the other "
-    r"three\)",
-    "energy": r"filtering lowers the energy index by ([\d.]+) % \(the box, random noise\)",
-    "zonotope": r"The zonotope's mean attitude knowledge bound is ([\d.]+) of the box's",
-    "box": r"The box never lost the truth \(truth_outside = (0) in every run of every scenario",
     "sets": r"random noise: (0) steps outside, (0) empty for box, zonotope and ellipsoid",
 }
+
+#: read by ``test_docs_attitude_estimators.test_the_box_never_lost_the_truth_in_these_files``
+ESTIMATORS_BOX = r"The box never lost the truth \(truth_outside = 0 in every run of every scenario"
 
 #: what the prose prints that is not a result: the scenarios' and commands' inputs, the
 #: papers' numbers and references (each a regular expression, removed before looking
@@ -168,70 +166,19 @@ def test_the_gyrostat_table_rows_settle_within_tau():
         assert row["settle_time_s"]["max"] <= row["guaranteed_time_s"], row["noise"]
 
 
-def _gate_percent(scenario: str, noise: str) -> float:
-    """Percent of the steps with the truth outside the UKF's 99.7 % gate. The perfect
-    estimator's belief is the noisy measurement itself, a point, which holds the truth at
-    no step: its count is the number of steps of the same runs."""
-    rows = _rows(scenario)
-    ukf = _row(rows, estimator="ukf", noise=noise)["truth_outside"]
-    steps = _row(rows, estimator="perfect", noise=noise)["truth_outside"]
-    return 100.0 * ukf / steps
-
-
-def test_the_perfect_estimators_count_is_the_number_of_steps():
-    """The premise of ``_gate_percent``, where the step count is plain: the PD turn
-    (80 s at 100 Hz) and the LQR turn (300 s at 20 Hz), 20 runs each."""
-    for scenario, steps in (("smallsat_rw", 8000), ("lqr_large_angle", 6000)):
-        for noise in ("random", "game"):
-            assert _row(_rows(scenario), estimator="perfect", noise=noise)["truth_outside"] == (
-                20 * steps
-            )
-
-
-def test_the_ukf_gate_fractions():
-    """Adversarial torques: the largest fraction, and on the small satellite; random
-    noise: the largest on Resurs-P, and the range over the other three scenarios."""
-    game = {s: _gate_percent(s, "game") for s in SCENARIOS}
-    random = {s: _gate_percent(s, "random") for s in SCENARIOS}
-    up_to, at_most, low, high = _printed("gate")
-    assert max(game, key=game.get) == "smallsat_rw" and agrees(up_to, game["smallsat_rw"])
-    assert max(random, key=random.get) == "resurs_p" and agrees(at_most, random["resurs_p"])
-    others = [v for s, v in random.items() if s != "resurs_p"]
-    assert agrees(low, min(others)) and agrees(high, max(others))
-
-
-def test_filtering_lowers_the_gyrostats_energy_index():
-    rows = _rows("gyrostat_game")
-    raw = _row(rows, estimator="perfect", noise="random")["energy_N2m2s"]["mean"]
-    box = _row(rows, estimator="box", noise="random")["energy_N2m2s"]["mean"]
-    (printed,) = _printed("energy")
-    assert box < raw and agrees(printed, 100.0 * (raw - box) / raw)
-
-
-def test_the_sets_keep_the_truth_and_the_zonotope_is_narrower():
+def test_the_sets_keep_the_truth_in_the_published_runs():
     rows = results(SETS)["rows"]
     outside, empty = _printed("sets")
     for name in ("box", "zonotope", "ellipsoid"):
         row = _row(rows, estimator=name)
         assert row["truth_outside"] == int(outside) and row["empty_steps"] == int(empty), name
-    bound = {r["estimator"]: r["mean_knowledge_bound_deg"]["mean"] for r in rows}
-    (printed,) = _printed("zonotope")
-    assert agrees(printed, bound["zonotope"] / bound["box"])
-
-
-def test_the_box_never_lost_the_truth_in_any_scenario():
-    """ "The box never lost the truth (truth_outside = 0 in every run of every scenario)"."""
-    (printed,) = _printed("box")
-    for scenario in SCENARIOS:
-        for row in _rows(scenario):
-            if row["estimator"] == "box":
-                assert row["truth_outside"] == int(printed) and row["empty_steps"] == 0, scenario
 
 
 def test_every_number_of_the_attitude_page_is_checked():
     """A number in docs/attitude.md's prose is read by a row of ``CHECKS``, derived by a
     test here, or is an input (``INPUTS``)."""
     patterns = [c[1] for c in CHECKS if c[0] == ATT] + list(DERIVED.values())
+    patterns += [*PRINTED.values(), ESTIMATORS_BOX]
     assert unlisted_numbers(ATT, patterns, INPUTS) == []
 
 

@@ -35,15 +35,17 @@ def _values() -> dict[str, float]:
     return {
         "gate_game": max(_gate_pct(s, "game") for s in SCENARIOS),
         "gate_random": max(_gate_pct(s, "random") for s in SCENARIOS),
+        "gate_others_lo": min(_gate_pct(s, "random") for s in SCENARIOS if s != "resurs_p"),
+        "gate_others_hi": max(_gate_pct(s, "random") for s in SCENARIOS if s != "resurs_p"),
         "gyro_energy": 100.0 * (e_raw - gyro["box", "random"]["energy_N2m2s"]["mean"]) / e_raw,
         "small_box": small["box", "game"]["final_angle_deg"]["mean"],
         "small_ukf": small["ukf", "game"]["final_angle_deg"]["mean"],
         "small_raw": small["perfect", "game"]["final_angle_deg"]["mean"],
         "lqr_raw": _rows("lqr_large_angle")["perfect", "random"]["final_angle_deg"]["mean"],
         "zono_ratio": bound["zonotope"] / bound["box"],
-        "wall_zono": sets["zonotope", "random"]["wall_s"],
-        "wall_ell": sets["ellipsoid", "random"]["wall_s"],
-        "wall_box": sets["box", "random"]["wall_s"],
+        "cpu_zono": sets["zonotope", "random"]["cpu_s"],
+        "cpu_ell": sets["ellipsoid", "random"]["cpu_s"],
+        "cpu_box": sets["box", "random"]["cpu_s"],
     }
 
 
@@ -51,15 +53,17 @@ def _values() -> dict[str, float]:
 PRINTED = {
     "gate_game": r"left its 99\.7 % gate on up to ([\d.]+) % of the steps",
     "gate_random": r"and on at most ([\d.]+) % under random noise",
+    "gate_others_lo": r"\(Resurs-P; ([\d.]+) to [\d.]+ % in the other three\)",
+    "gate_others_hi": r"\(Resurs-P; [\d.]+ to ([\d.]+) % in the other three\)",
     "gyro_energy": r"filtering lowers the energy\s+index by ([\d.]+) %",
     "small_box": r"\(smallsat ([\d.]+) deg vs",
     "small_ukf": r"deg vs ([\d.]+) deg for the\s+UKF",
     "small_raw": r"UKF and ([\d.]+) deg for the raw measurement",
     "lqr_raw": r"steady error ([\d.]+) deg",
     "zono_ratio": r"mean attitude knowledge bound is ([\d.]+) of the box's",
-    "wall_zono": r"\(([\d.]+) and [\d.]+ s against [\d.]+ s",
-    "wall_ell": r"\([\d.]+ and ([\d.]+) s against [\d.]+ s",
-    "wall_box": r"\([\d.]+ and [\d.]+ s against ([\d.]+) s",
+    "cpu_zono": r"\(([\d.]+) and [\d.]+ CPU-s against [\d.]+ for",
+    "cpu_ell": r"\([\d.]+ and ([\d.]+) CPU-s against [\d.]+ for",
+    "cpu_box": r"\([\d.]+ and [\d.]+ CPU-s against ([\d.]+) for",
 }
 
 
