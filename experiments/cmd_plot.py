@@ -9,7 +9,9 @@ set in 3-D at ``t = 1 s`` before and after the measurements (the seed's Fig. 4),
 pictures at six times and an animation (GIF). Attitude traces give the time histories
 of :func:`kalman_vs_infoset.experiments.plots_attitude.time_histories`. The paper's printed miss and
 fuel are marked when the results' description (``_meta/``) holds a ``[reference]``.
-Figures are PNG and SVG beside the first trace (or in ``--out``).
+Figures are PNG and SVG beside the first trace (or in ``--out``). A folder stands for
+the traces under it: ``kvi plot results/kp_fig3`` redraws every trace a command wrote
+to that ``--out``.
 """
 
 from __future__ import annotations
@@ -31,14 +33,31 @@ def plot_files(paths: list[Path], **kwargs: Any) -> list[Path]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("traces", nargs="+", help="trace files (*-trace.parquet)")
+    p.add_argument(
+        "traces", nargs="+", help="trace files (*-trace.parquet), or folders holding them"
+    )
     p.add_argument("--out", help="folder of the figures (default: beside the first trace)")
     p.add_argument("--no-animation", action="store_true", help="no GIF of the set")
 
 
+def _expand(arguments: list[str]) -> list[Path]:
+    """The trace files named, a folder standing for those under it (a results ``--out``
+    keeps them in ``_traces/``)."""
+    out = []
+    for p in map(Path, arguments):
+        if p.is_dir():
+            found = sorted(p.rglob("*-trace.parquet"))
+            if not found:
+                raise InputError(f"{p}: no trace files in this folder (write them with --trace)")
+            out += found
+        else:
+            out.append(p)
+    return out
+
+
 def run(args) -> dict[str, Any]:
     paths = []
-    for p in map(Path, args.traces):
+    for p in _expand(args.traces):
         if p.name.endswith("-trace-sets.parquet"):  # `plot *trace*` names both files
             step = p.with_name(p.name.replace("-trace-sets.parquet", "-trace.parquet"))
             if not step.is_file():

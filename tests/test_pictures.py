@@ -175,6 +175,11 @@ def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
     # the plot command redraws a trace (the UKF's: no sets), marking the paper's numbers
     assert main(["plot", traces[1], "--out", str(tmp_path / "p")]) == 0
     assert (tmp_path / "p" / "kp_fig3-ukf-game-s3-run0-processes.svg").exists()
+    capsys.readouterr()
+    # the results folder stands for its traces: both, as when named
+    assert main(["plot", str(tmp_path / "o"), "--no-animation", "--json"]) == 0
+    drawn = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert sorted(drawn["traces"]) == traces
 
 
 def test_trace_arguments_are_checked(tmp_path, capsys):
@@ -186,6 +191,10 @@ def test_trace_arguments_are_checked(tmp_path, capsys):
     assert main([*args, "--trace", "1"]) == 2  # only run 0 exists
     assert "--trace 1" in capsys.readouterr().err
     assert main(["plot", str(tmp_path / "none.parquet")]) == 2
+    (tmp_path / "empty").mkdir()
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "empty")]) == 2  # a folder without traces
+    assert "no trace files in this folder" in capsys.readouterr().err
 
 
 def test_default_attitude_run_draws_time_histories(tmp_path, capsys, checked):
