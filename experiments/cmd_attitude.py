@@ -226,3 +226,47 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
         fig = plots_attitude.time_histories(histories, f"{stem}: time histories")
         files += [str(f) for f in figstyle.save(fig, req.out / f"{stem}-history")]
     return files
+
+
+def _stat(value: float | None, fmt: str) -> str:
+    """A statistic as printed: ``-`` when no run gave one (no run settled), ``inf``."""
+    return "-" if value is None else format(value, fmt)
+
+
+def _summary(r: dict[str, Any]) -> list[str]:
+    """One row's lines, as the intercept command prints its runs."""
+    s, e, a = r["settle_time_s"], r["energy_N2m2s"], r["final_angle_deg"]
+    lines = [
+        f"{r['scenario']}: {r['controller']} on {r['estimator']} / {r['noise']} noise, "
+        f"{r['runs']} runs, seed {r['seed']}",
+        f"  settle s            mean {_stat(s['mean'], '.2f')}  p90 {_stat(s['p90'], '.2f')}  "
+        f"max {_stat(s['max'], '.2f')}  (not settled: {r.get('not_settled', 0)} runs)",
+        f"  energy N^2 m^2 s    mean {_stat(e['mean'], '.4g')}  max {_stat(e['max'], '.4g')}",
+        f"  final angle deg     mean {_stat(a['mean'], '.3g')}  max {_stat(a['max'], '.3g')}",
+        f"  truth outside belief: {r['truth_outside']} steps; empty: {r['empty_steps']} "
+        f"steps; unbounded: {r['unbounded_steps']} steps; failures: {r['failures']}",
+    ]
+    if r.get("guaranteed_time_s") is not None:
+        lines.append(f"  guaranteed settle time tau: {r['guaranteed_time_s']:.1f} s")
+    ref = r.get("seed_reference")
+    if ref and ref.get("settle_time_s") is not None:
+        lines.append(f"  paper: settles in {ref['settle_time_s']} s ({ref['source']})")
+    return lines
+
+
+def render(result: dict[str, Any]) -> str:
+    """The runs of every estimator x noise, then the cost and the files written."""
+    rows = result.get("rows", [result])
+    cpu = [r.get("cpu_s") for r in rows]
+    cost = (
+        f"{result['wall_s']:.1f} s" if len(rows) == 1 else f"{sum(r['wall_s'] for r in rows):.1f} s"
+    )
+    if all(c is not None for c in cpu):
+        cost += f", {sum(cpu):.1f} CPU-s"
+    return "\n".join(
+        [
+            *(line for r in rows for line in _summary(r)),
+            f"  done ({cost}); files:",
+            *(f"  {f}" for f in result.get("files", [])),
+        ]
+    )

@@ -95,3 +95,20 @@ def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsy
     assert _summary(local) == _summary(dask)
     # the cluster's workers are not the command's processes: their CPU time is not counted
     assert local["cpu_s"] > 0.0 and dask["cpu_s"] is None and dask["worker_peak_rss_mb"] is None
+
+
+def test_the_text_summary_has_one_block_per_estimator_and_noise(scenario, tmp_path, capsys):
+    """Without ``--json`` every estimator x noise gets its lines (settle, energy, final
+    error, containment), then the cost and the files; no raw record is printed."""
+    args = ["attitude", str(scenario), "--noise", "random,game", "--estimators", "box,perfect",
+            "--runs", "2", "--out", str(tmp_path / "o"), "--no-progress"]  # fmt: skip
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    heads = [line for line in text.splitlines() if not line.startswith(" ")]
+    assert heads == [
+        f"{scenario.stem}: pd on {e} / {n} noise, 2 runs, seed 0"
+        for e in ("box", "perfect")
+        for n in ("random", "game")
+    ]
+    assert text.count("truth outside belief: ") == 4 and "CPU-s); files:" in text
+    assert "{" not in text and "settle s" in text
