@@ -258,9 +258,7 @@ def render(result: dict[str, Any]) -> str:
     """The runs of every estimator x noise, then the cost and the files written."""
     rows = result.get("rows", [result])
     cpu = [r.get("cpu_s") for r in rows]
-    cost = (
-        f"{result['wall_s']:.1f} s" if len(rows) == 1 else f"{sum(r['wall_s'] for r in rows):.1f} s"
-    )
+    cost = f"{sum(r['wall_s'] for r in rows):.1f} s"
     if all(c is not None for c in cpu):
         cost += f", {sum(cpu):.1f} CPU-s"
     return "\n".join(
