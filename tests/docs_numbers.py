@@ -81,6 +81,15 @@ def lookup(data, key: str):
     return data
 
 
+def printed(doc: str, pattern: str) -> tuple[str, ...]:
+    """The numbers a sentence of ``doc`` prints (the pattern's groups; the document's line
+    breaks read as spaces); a sentence that is gone fails, naming the document."""
+    flat = " ".join((ROOT / doc).read_text(encoding="utf-8").split())
+    match = re.search(pattern, flat)
+    assert match, f"{doc}: no sentence matches {pattern!r} (re-point it)"
+    return match.groups()
+
+
 def agrees(printed: str, value: float) -> bool:
     """Whether ``printed`` is ``value`` rounded to the printed digits."""
     mantissa, _, exponent = printed.partition("e")

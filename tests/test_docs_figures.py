@@ -7,11 +7,9 @@ results file holds (``READINGS``, listed so that they stay few and visible).
 
 from __future__ import annotations
 
-import re
-
 import pytest
 from docs_checks import CHECKS, FIGMD, FIGS
-from docs_numbers import ROOT, agrees, lookup, results
+from docs_numbers import agrees, lookup, printed, results
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -77,10 +75,7 @@ INPUTS = (
 
 
 def _printed(key: str) -> tuple[str, ...]:
-    flat = " ".join((ROOT / FIGMD).read_text(encoding="utf-8").split())
-    match = re.search(DERIVED[key], flat)
-    assert match, f"the sentence of {key!r} is gone from {FIGMD}: re-point DERIVED"
-    return match.groups()
+    return printed(FIGMD, DERIVED[key])
 
 
 def _numbers(key: str):
@@ -90,15 +85,15 @@ def _numbers(key: str):
 def test_the_range_finder_saves_fuel_under_random_errors_seed_003_fig_5():
     means = _numbers("kp_fig5/mean_miss_fuel")
     saved = means["bearings only, random"][1] - means["bearings + range, random"][1]
-    (printed,) = _printed("fuel")
-    assert agrees(printed, saved)
+    (shown,) = _printed("fuel")
+    assert agrees(shown, saved)
 
 
 def test_the_energy_index_against_the_papers_seed_000():
     resurs = _numbers("resurs")
-    (printed,) = _printed("z")
+    (shown,) = _printed("z")
     z, paper = resurs["Z_ours"]["energy"], resurs["Z_paper"]["energy"]
-    assert agrees(printed, 100.0 * (z / paper - 1.0))
+    assert agrees(shown, 100.0 * (z / paper - 1.0))
 
 
 def test_f0_against_the_papers_table_at_the_figures_angles_seed_001_fig_14():

@@ -6,13 +6,12 @@ its prose is read by a row of ``CHECKS``, by a test here (``DERIVED``), is an in
 
 from __future__ import annotations
 
-import re
 import tomllib
 
 import numpy as np
 import pytest
 from docs_checks import ADV5, CHECKS, INT
-from docs_numbers import ROOT, agrees, results
+from docs_numbers import ROOT, agrees, printed, results
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -54,14 +53,8 @@ INPUTS = (
 )
 
 
-def _flat() -> str:
-    return " ".join((ROOT / INT).read_text(encoding="utf-8").split())
-
-
 def _printed(key: str) -> tuple[str, ...]:
-    match = re.search(DERIVED[key], _flat())
-    assert match, f"the sentence of {key!r} is gone from {INT}: re-point DERIVED"
-    return match.groups()
+    return printed(INT, DERIVED[key])
 
 
 def test_the_worst_point_is_covered_with_the_truth_seed_003_fig_3_game():
@@ -116,10 +109,10 @@ def test_the_constrained_filters_interval_reaches_eps_early():
 
 
 def test_the_set_keeps_the_truth_under_every_adversary():
-    (printed,) = _printed("guarantee")
+    (shown,) = _printed("guarantee")
     rows = [r for r in results(ADV5)["rows"] if r["estimator"] == "infoset"]
     assert {r["rule"] for r in rows} == {"game", "targeted", "lookahead"}
-    assert all(r["truth_outside"] == int(printed) for r in rows)
+    assert all(r["truth_outside"] == int(shown) for r in rows)
 
 
 @pytest.mark.parametrize("key", sorted(DERIVED))
