@@ -26,10 +26,32 @@ def summary_stats(values: Iterable[float], finite_only: bool = True) -> dict[str
     with np.errstate(invalid="ignore"):
         return {
             "mean": float(np.mean(v)),
-            "p50": float(np.percentile(v, 50)),
-            "p90": float(np.percentile(v, 90)),
+            "p50": percentile(v, 50.0),
+            "p90": percentile(v, 90.0),
             "max": float(np.max(v)),
         }
+
+
+def percentile(values: np.ndarray, q: float) -> float:
+    """The ``q``-th percentile by numpy's default (linear) rule, exact with infinities.
+
+    The rule is ``x[lo] + t (x[hi] - x[lo])`` at the position ``h = (n - 1) q / 100``
+    of the sorted samples, ``lo``, ``hi`` its neighbours and ``t = h - lo``. numpy
+    evaluates it in a form that reads NaN as soon as a neighbour is infinite
+    (``inf - inf`` or ``0 * inf``): its p50 of ``[1, 2, inf]`` is NaN where the rule
+    gives 2. Finite neighbours keep numpy's value to the last digit; otherwise an exact
+    hit is that sample, and between a finite and an infinite sample the infinite one.
+    """
+    x = np.sort(np.asarray(values, dtype=float).ravel())
+    h = (x.size - 1) * q / 100.0
+    lo = int(np.floor(h))
+    hi = min(lo + 1, x.size - 1)
+    a, b = x[lo], x[hi]
+    if np.isfinite(a) and np.isfinite(b):
+        return float(np.percentile(x, q))
+    if h == lo or a == b:
+        return float(a)
+    return float(b if np.isinf(b) and np.isfinite(a) else a if np.isfinite(b) else np.nan)
 
 
 def ok_mean(table, column: str) -> float | None:

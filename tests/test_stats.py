@@ -1,0 +1,38 @@
+"""The summary statistics (mean / p50 / p90 / max) every command prints, against numpy's
+percentile for finite samples and against the rule's limit when samples are infinite
+(runs that never settled enter the attitude summaries as ``inf``)."""
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+from kalman_vs_infoset.experiments.stats import percentile, summary_stats
+
+finite = st.floats(-1e6, 1e6, allow_nan=False)
+QS = st.sampled_from([0.0, 10.0, 50.0, 90.0, 100.0]) | st.floats(0.0, 100.0)
+
+
+@given(st.lists(finite, min_size=1, max_size=30), QS)
+def test_finite_samples_give_numpys_percentile_to_the_last_digit(xs, q):
+    assert percentile(np.array(xs), q) == float(np.percentile(xs, q))
+
+
+@given(st.lists(finite, min_size=0, max_size=20), st.integers(1, 10), QS)
+def test_infinite_samples_give_the_limit_of_a_growing_sample(xs, n_inf, q):
+    """Replacing each ``inf`` by a huge ``M`` and letting ``M`` grow: the percentile either
+    stays put (it does not reach the replaced samples) or grows without bound."""
+    ours = percentile(np.array([*xs, *[np.inf] * n_inf]), q)
+    big = [float(np.percentile([*xs, *[m] * n_inf], q)) for m in (1e200, 1e250)]
+    if big[0] == big[1]:
+        assert ours == big[0]
+    else:
+        assert ours == np.inf
+
+
+def test_runs_that_never_settled_give_inf_statistics_not_nan():
+    """A summary over settle times with unsettled runs (kept as ``inf``): all unsettled
+    reads inf throughout; one unsettled of three leaves the median finite."""
+    s = summary_stats([np.inf] * 3, finite_only=False)
+    assert s == {"mean": np.inf, "p50": np.inf, "p90": np.inf, "max": np.inf}
+    s = summary_stats([1.0, 2.0, np.inf], finite_only=False)
+    assert s["p50"] == 2.0 and s["p90"] == np.inf and s["max"] == np.inf
+    assert summary_stats([1.0, 2.0, np.inf])["p90"] == float(np.percentile([1.0, 2.0], 90))
