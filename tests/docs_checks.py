@@ -423,6 +423,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # docs/performance.md, side by side with 35e3739: /usr/bin/time of kvi fig5 --runs 20
     # and, on that commit, python -m experiments fig5 --runs 20, alternately (pairs)
     (PERF, r"today's `kvi fig5 --runs (\d+)`", VS, ("runs_per_variant",)),
+    (PERF, r"Fig\. 5 with (\d+) runs per variant, today's", VS, ("runs_per_variant",)),
     (PERF, r"`docs/results/vs_35e3739.json`, measured with this release's code\): ([\d.]+), "
      r"([\d.]+) and ([\d.]+) CPU-s today against ([\d.]+), ([\d.]+) and ([\d.]+), i\.e\. "
      r"([\d.]+) times the runs per CPU-second", VS,
@@ -464,6 +465,10 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) of the set's\s+CPU time", BENCH_TAIL,
      ("whole_approach_head_ratio", "whole_approach_tail_share/infoset")),
     # docs/performance.md: ``kvi bench``
+    (PERF, r"mean over the first (\d+) steps of a Fig\. 3 approach", BENCH,
+     ("steps_timed/infoset",)),
+    (PERF, r"UKF over the whole approach \((\d+) steps, to the blind range\)", BENCH,
+     ("whole_approach_steps/infoset",)),
     (PERF, r"whole approach's (\d+) steps the last (\d+) took\s+([\d.]+) of the set's CPU time "
      r"and ([\d.]+) of the UKF's; before them a set step cost (\d+) us\s+against the UKF's "
      r"(\d+) us \(ratio ([\d.]+)\), where over all \d+ it cost (\d+) against (\d+) us\s+"
@@ -613,8 +618,6 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       f"{BENCH}::engagement_in_ukf_steps", f"{BENCH}::engagement_random_in_ukf_steps")),
     (PERF, r"`docs/results/bench_at_1f4367d.json`\) read (\d+) us and (\d+) us", BENCH_PREV,
      ("step_us/ukf", "step_us/infoset")),
-    (PERF, r"at earlier releases' measurements, ([\d.]+) in the reading half an hour before "
-     r"this one, and ([\d.]+) here", BENCH_39E, ("cost_exponent", f"{BENCH}::cost_exponent")),
     (PERF, r"`kvi fig5 --runs (\d+)` \(three pairs, `docs/results/vs_1f4367d.json`\) cost "
      r"([\d.]+), ([\d.]+) and ([\d.]+) CPU-s with this code against ([\d.]+), ([\d.]+) and "
      r"([\d.]+) with the previous release's: ([\d.]+) times the runs per CPU-second", VS_1F4,

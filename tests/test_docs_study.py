@@ -136,6 +136,15 @@ def test_impulse_per_band_costs_what_the_text_says():
     runs = [speed_cpu_s(n) for n in ("impulse_per_band", "impulse_per_band-repeat")]
     for noise, printed in zip(("random", "game"), found.groups(), strict=True):
         assert agrees(printed, base[noise] / (0.5 * (runs[0][noise] + runs[1][noise])))
+    # the same game ratio where the 35e3739 comparison quotes it
+    again = _found(r"own band \(docs/infoset\.md\), which costs ([\d.]+) times the per-band "
+                   r"replay's CPU time in the bearings-only game runs")  # fmt: skip
+    assert again.group(1) == found.group(2)
+    # and the game's mean miss both ways (each file's two measurements: the same runs)
+    miss = _found(r"the game's mean miss is ([\d.]+) m against the defaults' ([\d.]+) m")
+    for printed, name in zip(miss.groups(), ("impulse_per_band", "default"), strict=True):
+        for stem in (name, f"{name}-repeat"):
+            assert agrees(printed, speed_rows(f"kp_fig5-{stem}")["game"]["miss_m"]["mean"])
 
 
 def test_fewer_nodes_save_what_the_text_says():

@@ -1,0 +1,163 @@
+"""docs/performance.md: an inventory like the README's. Every number of its prose is read
+by a row of ``CHECKS``, by a regular expression a test of ``test_docs_study.py`` or
+``test_docs_tightness.py`` searches (``searched_patterns``: read from those tests' own
+source, so a pattern listed here is one a test checks), is an input (``INPUTS``), or is a
+reading kept in a results file that a row below reads. Its tables are
+``test_docs_tables.py``'s.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import math
+import tomllib
+
+import numpy as np
+import test_docs_study
+import test_docs_tightness
+from docs_checks import CHECKS, PERF
+from docs_numbers import ROOT, agrees, printed, results
+from test_docs_numbers import unlisted_numbers
+
+#: the sentences whose numbers the tests below derive, by test
+DERIVED = {
+    "exponent": r"that approach cost ([\d.]+) to ([\d.]+) ms and the exponent read ([\d.]+) to "
+    r"(\d+\.\d+)",
+    "memory": r"kept are runs with the cache filled, (\d+) to (\d+) MB a worker over all of them",
+    "old": r"the old commit's runs read ([\d.]+) to ([\d.]+) CPU-s",
+    "approach": r"an approach of about (\d+) steps instead of (\d+)\)",
+    "width": r"Fig\. 5's interval is ([\d.]+) % wide",
+    "bands": r"scale by its width, ([\d.]+) %, where four relax it by ([\d.]+) % each",
+}
+
+#: a sentence ``test_docs_tightness`` checks as a formatted string (its f-string's shape)
+TIGHTNESS = {
+    "test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files": (
+        r"up to [\d.]+ under random errors with the range finder and, under errors that "
+        r"switch sign, [\d.]+ with the range finder and [\d.]+ with bearings only, where "
+        r"the defaults stay within [\d.]+ and [\d.]+"
+    ),
+}
+
+#: the benchmark's and the studies' settings, the options' values, seeds and sections
+INPUTS = (
+    r"§\d(\.\d)?",
+    r"Figs?\. \d+",
+    r"median of 3 repetitions",
+    r"with 1 (and|/) 2\s+workers",
+    r"\b0\.5 target",
+    r'"5x" target',
+    r"commit 35e3739",
+    r"target 5: not met",
+    r"\(58 km/s exactly\); at 10 km/s",
+    r"known only to\s+within 1 %",
+    r"rounding of 1 AU",
+    r"0\.125-s steps",
+    r"runs on 2 workers",
+    r"50 runs a noise",
+    r"57\.9\.\.58\.1 km/s",
+    r"passes 1\.03 times",
+    r"with 8 nodes a piece instead of 12",
+    r"at 4 live nodes instead of 5",
+    r"\b0 by default",
+    r"seeds 601-610",
+    r"3-sigma",
+    r"10 000 runs per variant",
+    r"50 runs per variant",
+    r"pairs of 50-run",
+    r"host's 2 CPUs",
+    r"100-step approach",
+    r"100 / 200 / 400-step approaches",
+)
+
+
+def searched_patterns(module) -> list[str]:
+    """The literal patterns ``module``'s tests search the page with: the first argument
+    of each ``_found(...)`` and ``re.search(...)`` call written as a string literal."""
+    patterns = []
+    for node in ast.walk(ast.parse(inspect.getsource(module))):
+        if not (isinstance(node, ast.Call) and node.args):
+            continue
+        f = node.func
+        name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
+        arg = node.args[0]
+        if name in ("_found", "search") and isinstance(arg, ast.Constant):
+            patterns.append(arg.value)
+    return patterns
+
+
+def test_the_tightness_sentences_are_the_tests():
+    """Each ``TIGHTNESS`` pattern names a test that exists."""
+    assert all(callable(getattr(test_docs_tightness, name)) for name in TIGHTNESS)
+
+
+def test_every_number_of_the_performance_page_is_checked():
+    """A number in docs/performance.md's prose is read by a row of ``CHECKS``, searched
+    by a test of the study or tightness checks, or an input."""
+    patterns = [c[1] for c in CHECKS if c[0] == PERF]
+    patterns += searched_patterns(test_docs_study) + list(TIGHTNESS.values())
+    patterns += list(DERIVED.values())
+    assert unlisted_numbers(PERF, patterns, INPUTS) == []
+
+
+def _read(key: str) -> tuple[str, ...]:
+    return printed(PERF, DERIVED[key])
+
+
+def test_the_exponents_spread_is_the_table_hosts_readings():
+    """The 100-step approach's cost and the cost exponent over the bench readings kept
+    from the table's host (``kvi bench --json``); the workers' peak memory over every
+    kept reading."""
+    table_host = ("bench", "bench_tail", "bench_at_39ec9cf", "bench_at_1f4367d")
+    runs = [results(f"docs/results/{name}.json") for name in table_host]
+    ms = [r["cost_ms"][0] for r in runs]
+    exponent = [r["cost_exponent"] for r in runs]
+    assert all(r["cost_steps"][0] == 100 for r in runs)
+    got = _read("exponent")
+    for p, v in zip(got, (min(ms), max(ms), min(exponent), max(exponent)), strict=True):
+        assert agrees(p, v), (p, v)
+    peaks = [
+        mb
+        for path in sorted((ROOT / "docs/results").glob("bench*.json"))
+        for mb in results(str(path.relative_to(ROOT)))["worker_peak_rss_mb"].values()
+    ]
+    lo, hi = _read("memory")
+    assert agrees(lo, min(peaks)) and agrees(hi, max(peaks))
+
+
+def test_the_old_commits_runs_spread_over_the_three_comparisons_of_that_day():
+    """'the old commit's runs read 56.5 to 69.6 CPU-s': commit 35e3739's runs in the
+    three comparisons the paragraph quotes."""
+    old = [
+        cpu
+        for tag in ("e8e92a3", "6ca6544", "8790e49")
+        for cpu in results(f"docs/results/vs_35e3739_at_{tag}.json")["cpu_s_35e3739"]
+    ]
+    lo, hi = _read("old")
+    assert agrees(lo, min(old)) and agrees(hi, max(old))
+
+
+def _scenario(name: str) -> dict:
+    return tomllib.loads((ROOT / f"data/scenarios/{name}.toml").read_text(encoding="utf-8"))
+
+
+def test_the_slow_encounters_approach_is_its_steps_to_the_blind_range():
+    """The steps until the range falls to eps, ``ceil((x0 - eps) / (e dt))``, of Fig. 3's
+    engagement at 10 km/s and at its own 58 km/s."""
+    sc = _scenario("kp_fig3")
+    x0, eps, dt = sc["truth"]["x_km"][0], sc["model"]["eps_km"], sc["model"]["dt_s"]
+    slow, fast = _read("approach")
+    assert int(slow) == math.ceil((x0 - eps) / (10.0 * dt))
+    assert int(fast) == math.ceil((x0 - eps) / (sc["model"]["closing_speed_kmps"] * dt))
+
+
+def test_the_closing_speed_bands_relative_widths():
+    """Fig. 5's closing-speed interval (57.9..58.1 km/s), ``e_hi / e_lo - 1``, and the
+    widest of four bands cut as the node set cuts them: equal pieces of ``u = 1/e``."""
+    e_lo, e_hi = _scenario("kp_fig5")["estimator"]["closing_speed_kmps"]
+    (width,) = _read("width")
+    one, four = _read("bands")
+    assert agrees(width, 100.0 * (e_hi / e_lo - 1.0)) and one == width
+    u = np.linspace(1.0 / e_hi, 1.0 / e_lo, 5)
+    assert agrees(four, 100.0 * float(np.max(u[1:] / u[:-1] - 1.0)))
