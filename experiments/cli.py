@@ -30,7 +30,13 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from kalman_vs_infoset.experiments import signals
-from kalman_vs_infoset.experiments.errors import InputError, Terminated, clear_stop, reraise_stop
+from kalman_vs_infoset.experiments.errors import (
+    InputError,
+    Terminated,
+    clear_stop,
+    reraise_stop,
+    runs_text,
+)
 
 from kalman_vs_infoset._numba_cache import CompileNotice
 
@@ -278,7 +284,7 @@ def _run(parser, module, args) -> int:
     runner = sys.modules.get(_RUNNER)
     failed = runner.failed_runs() if runner is not None else 0
     if failed:
-        print(f"{where}: {failed} runs failed (their errors are above and in the results "
+        print(f"{where}: {runs_text(failed)} failed (their errors are above and in the results "
               "tables); rerun the same command to run them again", file=sys.stderr)  # fmt: skip
         return 1
     return 0

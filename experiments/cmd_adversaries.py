@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
+from kalman_vs_infoset.experiments.errors import runs_text
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -131,7 +132,8 @@ def table_markdown(result: dict[str, Any]) -> str:
 
 def render(result: dict[str, Any]) -> str:
     return (
-        f"{result['scenario']}: adversary strength, {result['runs']} runs, seed {result['seed']}"
+        f"{result['scenario']}: adversary strength, {runs_text(result['runs'])}, "
+        f"seed {result['seed']}"
         f" (the seed's game: fuel {result['seed_fuel_game_mps']} m/s, miss "
         f"{result['seed_miss_game_m']} m)\n"
         + table_markdown(result)

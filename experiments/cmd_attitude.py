@@ -31,7 +31,7 @@ from kalman_vs_infoset.experiments.attitude_loops import (
     loop_of,
     same_loop,
 )
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, runs_text
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
 if TYPE_CHECKING:  # the runs' libraries are imported by run(), not to parse
@@ -238,9 +238,9 @@ def _summary(r: dict[str, Any]) -> list[str]:
     s, e, a = r["settle_time_s"], r["energy_N2m2s"], r["final_angle_deg"]
     lines = [
         f"{r['scenario']}: {r['controller']} on {r['estimator']} / {r['noise']} noise, "
-        f"{r['runs']} runs, seed {r['seed']}",
+        f"{runs_text(r['runs'])}, seed {r['seed']}",
         f"  settle s            mean {_stat(s['mean'], '.2f')}  p90 {_stat(s['p90'], '.2f')}  "
-        f"max {_stat(s['max'], '.2f')}  (not settled: {r.get('not_settled', 0)} runs)",
+        f"max {_stat(s['max'], '.2f')}  (not settled: {runs_text(r.get('not_settled', 0))})",
         f"  energy N^2 m^2 s    mean {_stat(e['mean'], '.4g')}  max {_stat(e['max'], '.4g')}",
         f"  final angle deg     mean {_stat(a['mean'], '.3g')}  max {_stat(a['max'], '.3g')}",
         f"  truth outside belief: {r['truth_outside']} steps; empty: {r['empty_steps']} "

@@ -12,6 +12,7 @@ import time
 from typing import Any
 
 from kalman_vs_infoset.experiments import options
+from kalman_vs_infoset.experiments.errors import runs_text
 from kalman_vs_infoset.experiments.noise import NOISES
 
 #: the runs use the compiled kernels (the command line announces their compilation)
@@ -51,13 +52,13 @@ def _summary(r: dict[str, Any]) -> list[str]:
     m, f = r["miss_m"], r["fuel_mps"]
     return [
         f"{r['scenario']}: {r['estimator']} / {r['noise']} noise, "
-        f"{r['runs']} runs, seed {r['seed']}",
+        f"{runs_text(r['runs'])}, seed {r['seed']}",
         f"  miss  m   mean {m['mean']:.2f}  p50 {m['p50']:.2f}  p90 {m['p90']:.2f}  "
         f"max {m['max']:.2f}",
         f"  fuel m/s  mean {f['mean']:.1f}  p50 {f['p50']:.1f}  p90 {f['p90']:.1f}  "
         f"max {f['max']:.1f}",
         f"  truth outside belief: {r['truth_outside']} steps; empty set: "
-        f"{r['empty_set']} runs; diverged: {r['diverged']} runs; "
+        f"{runs_text(r['empty_set'])}; diverged: {runs_text(r['diverged'])}; "
         f"failures: {r['failures']}",
     ]
 

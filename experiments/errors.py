@@ -19,6 +19,11 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 
+def runs_text(n: int) -> str:
+    """``"1 run"``, ``"2 runs"``: a count of runs as the messages print it."""
+    return f"{n} run" if n == 1 else f"{n} runs"
+
+
 class InputError(Exception):
     """Bad user input: a missing file, bad TOML, an unknown key, a value out of range.
 

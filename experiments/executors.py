@@ -34,6 +34,7 @@ from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import (
     InputError,
     check_stop,
+    runs_text,
     stop_requested,
     stops_deferred,
 )
@@ -232,12 +233,13 @@ def results(job, todo: list[int], executor, workers, scheduler, limits: RunLimit
         with executor_or(executor, n, scheduler) as ex:
             window = len(chunks) if scheduler or executor else IN_FLIGHT * n
             yield from _pooled(ex, task, chunks, window, lost)
-    why = [f"{lost['dead']} runs lost to a dead worker"] if lost["dead"] else []
+    why = [f"{runs_text(lost['dead'])} lost to a dead worker"] if lost["dead"] else []
     if lost["dead"] and oom_before is not None and (oom_kills() or 0) > oom_before:
         # a worker killed by the kernel for memory raises no MemoryError: it just dies
         why[0] += " (the system's out-of-memory killer ended a process meanwhile: try "
         why[0] += "fewer --workers or smaller options)"
-    why += [f"{lost['memory']} runs out of memory (try fewer --workers)"] if lost["memory"] else []
+    if lost["memory"]:
+        why.append(f"{runs_text(lost['memory'])} out of memory (try fewer --workers)")
     if why:
         raise WorkerLost(f"{'; '.join(why)}; finished runs are saved; rerun the same command")
 
@@ -275,7 +277,7 @@ def _pooled(ex: Executor, task, chunks: list[list[int]], window: int, lost: dict
                 if time.monotonic() - idle_since > NO_WORKER_TIMEOUT_S:
                     left = sum(map(len, pending.values())) + sum(map(len, queue))
                     raise WorkerLost(
-                        f"no live Dask worker for {NO_WORKER_TIMEOUT_S:g} s ({left} runs not "
+                        f"no live Dask worker for {NO_WORKER_TIMEOUT_S:g} s ({runs_text(left)} not "
                         "run); finished runs are saved; start workers and rerun the same command"
                     )
             else:

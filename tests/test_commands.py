@@ -297,3 +297,21 @@ def test_on_a_terminal_a_slow_run_draws_a_bar_of_its_steps(monkeypatch, capsys):
             shown(k)
     err = capsys.readouterr().err
     assert "slow run:" in err and "/50 [" in err and "step" in err
+
+
+def test_a_count_of_one_run_reads_singular_in_the_summaries(monkeypatch):
+    """'1 run, seed 3' and 'empty set: 1 run', not '1 runs' (and plural otherwise)."""
+    from kalman_vs_infoset.experiments import cmd_adversaries, cmd_intercept
+    from kalman_vs_infoset.experiments.errors import runs_text
+
+    assert [runs_text(n) for n in (0, 1, 2)] == ["0 runs", "1 run", "2 runs"]
+    stats = dict.fromkeys(("mean", "p50", "p90", "max"), 1.0)
+    row = {"scenario": "kp_fig3", "estimator": "infoset", "noise": "game", "runs": 1,
+           "seed": 3, "miss_m": stats, "fuel_mps": stats, "truth_outside": 0,
+           "empty_set": 1, "diverged": 0, "failures": 0}  # fmt: skip
+    text = "\n".join(cmd_intercept._summary(row))
+    assert "1 run, seed 3" in text and "empty set: 1 run;" in text and "diverged: 0 runs" in text
+    adv = {"scenario": "kp_fig3", "runs": 1, "seed": 3, "seed_fuel_game_mps": 521.7,
+           "seed_miss_game_m": 9.5, "files": []}  # fmt: skip
+    monkeypatch.setattr(cmd_adversaries, "table_markdown", lambda result: "")
+    assert "adversary strength, 1 run, seed 3" in cmd_adversaries.render(adv)

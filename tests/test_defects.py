@@ -111,7 +111,7 @@ def test_e_a_failed_attitude_run_reports_its_error(tiny_rw, tmp_path, capsys, mo
     out = tmp_path / "out"
     r = run(capsys, "attitude", tiny_rw, "--out", out, "--json")
     assert r.returncode == 1, r.stderr  # a command with failed runs exits 1
-    assert "1 runs failed" in r.stderr.strip().splitlines()[-1]
+    assert "1 run failed" in r.stderr.strip().splitlines()[-1]
     assert json.loads(r.stdout.strip().splitlines()[-1])["failures"] == 1
     assert "broken law for the test" in r.stderr  # said, not swallowed
     df = pd.read_parquet(_parquet(out))

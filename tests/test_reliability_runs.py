@@ -203,7 +203,7 @@ def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monk
     )
     r = run(capsys, *args)
     assert r.returncode == 1
-    assert "1 runs failed" in r.stderr.strip().splitlines()[-1] and "rerun" in r.stderr
+    assert "1 run failed" in r.stderr.strip().splitlines()[-1] and "rerun" in r.stderr
     assert list(_table(out)["status"]) == ["ok", "failed", "ok"]
     monkeypatch.setattr(intercept_runs, "run_engagement", real)
     r = run(capsys, *args)
@@ -221,7 +221,7 @@ def test_memory_error_is_not_recorded_as_a_failed_run(short, tmp_path, capsys, m
     monkeypatch.setattr(intercept_runs, "run_engagement", _fails_on_run_1(real, MemoryError()))
     r = run(capsys, *args)
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
-    assert "1 runs out of memory" in r.stderr
+    assert "1 run out of memory" in r.stderr
     assert sorted(_table(out)["run"]) == [0, 2]  # missing, not failed
     monkeypatch.setattr(intercept_runs, "run_engagement", real)
     assert run(capsys, *args).returncode == 0
