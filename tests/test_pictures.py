@@ -161,7 +161,7 @@ def test_recorder_keeps_sets_when_asked():
     assert [s for s in range(25) if rec.wants_sets(s)] == [0, 1, 2, 10, 20]
 
 
-def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
+def test_compare_trace_overlays_estimators(tmp_path, capsys, checked, monkeypatch):
     p = _short_kp_fig3(tmp_path)
     args = ["compare", str(p), "--estimators", "infoset,ukf", "--noise", "game"]
     assert main([*args, "--trace", "0", "--out", str(tmp_path / "o"), "--workers", "1",
@@ -176,10 +176,15 @@ def test_compare_trace_overlays_estimators(tmp_path, capsys, checked):
     assert main(["plot", traces[1], "--out", str(tmp_path / "p")]) == 0
     assert (tmp_path / "p" / "kp_fig3-ukf-game-s3-run0-processes.svg").exists()
     capsys.readouterr()
-    # the results folder stands for its traces: both, as when named
+    # the results folder stands for its traces: both, as when named (handed to the
+    # drawing drawn above, not drawn again)
+    from kalman_vs_infoset.experiments import cmd_plot
+
+    handed: list = []
+    monkeypatch.setattr(cmd_plot, "plot_files", lambda paths, **kw: handed.extend(paths) or [])
     assert main(["plot", str(tmp_path / "o"), "--no-animation", "--json"]) == 0
     drawn = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert sorted(drawn["traces"]) == traces
+    assert sorted(drawn["traces"]) == traces == sorted(map(str, handed))
 
 
 def test_trace_arguments_are_checked(tmp_path, capsys):
