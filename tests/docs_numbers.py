@@ -8,6 +8,8 @@ representation); a number in scientific notation, to its printed significant dig
 
 from __future__ import annotations
 
+import ast
+import inspect
 import json
 import re
 from dataclasses import dataclass, field
@@ -88,6 +90,44 @@ def printed(doc: str, pattern: str) -> tuple[str, ...]:
     match = re.search(pattern, flat)
     assert match, f"{doc}: no sentence matches {pattern!r} (re-point it)"
     return match.groups()
+
+
+#: what a formatted value of a checked f-string prints at either end of it: a number,
+#: perhaps with a parenthesis after it ("1.034 (seed 425, at 60 s)"); inside it, anything
+#: short between the literal parts
+_END_VALUE, _INNER_VALUE = r"-?[\d.]+(?:e-?\d+)?(?: \([^)]*\))?", r".{1,120}?"
+
+
+def _fstring_pattern(node: ast.JoinedStr) -> str:
+    parts = node.values
+    return "".join(
+        re.escape(v.value) if isinstance(v, ast.Constant)
+        else _END_VALUE if i in (0, len(parts) - 1) else _INNER_VALUE
+        for i, v in enumerate(parts)
+    )  # fmt: skip
+
+
+def searched_patterns(module) -> list[str]:
+    """The sentences ``module``'s tests check, as regular expressions read from their
+    source: the literal first argument of each ``_found(...)`` and ``re.search(...)``, and
+    the left side of each ``... in text`` written as a string or an f-string (the f-string's
+    literal parts, its values as :data:`_END_VALUE` / :data:`_INNER_VALUE`). An inventory
+    counts what they match as checked: a pattern listed here is one a test checks."""
+    out = []
+    for node in ast.walk(ast.parse(inspect.getsource(module))):
+        if isinstance(node, ast.Call) and node.args:
+            f = node.func
+            name = getattr(f, "id", None) or getattr(f, "attr", "")
+            arg = node.args[0]
+            if name in ("_found", "search") and isinstance(arg, ast.Constant):
+                out.append(arg.value)
+        elif isinstance(node, ast.Compare) and isinstance(node.ops[0], ast.In):
+            left = node.left
+            if isinstance(left, ast.JoinedStr):
+                out.append(_fstring_pattern(left))
+            elif isinstance(left, ast.Constant) and isinstance(left.value, str):
+                out.append(re.escape(left.value))
+    return out
 
 
 def agrees(printed: str, value: float) -> bool:

@@ -1,15 +1,12 @@
 """docs/performance.md: an inventory like the README's. Every number of its prose is read
-by a row of ``CHECKS``, by a regular expression a test of ``test_docs_study.py`` or
-``test_docs_tightness.py`` searches (``searched_patterns``: read from those tests' own
-source, so a pattern listed here is one a test checks), is an input (``INPUTS``), or is a
-reading kept in a results file that a row below reads. Its tables are
-``test_docs_tables.py``'s.
+by a row of ``CHECKS``, by a sentence a test of ``test_docs_study.py`` or
+``test_docs_tightness.py`` checks (``docs_numbers.searched_patterns``, read from those
+tests' own source), by a test here (``DERIVED``), or is an input (``INPUTS``). Its tables
+are ``test_docs_tables.py``'s.
 """
 
 from __future__ import annotations
 
-import ast
-import inspect
 import math
 import tomllib
 
@@ -17,7 +14,7 @@ import numpy as np
 import test_docs_study
 import test_docs_tightness
 from docs_checks import CHECKS, PERF
-from docs_numbers import ROOT, agrees, printed, results
+from docs_numbers import ROOT, agrees, printed, results, searched_patterns
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -29,15 +26,6 @@ DERIVED = {
     "approach": r"an approach of about (\d+) steps instead of (\d+)\)",
     "width": r"Fig\. 5's interval is ([\d.]+) % wide",
     "bands": r"scale by its width, ([\d.]+) %, where four relax it by ([\d.]+) % each",
-}
-
-#: a sentence ``test_docs_tightness`` checks as a formatted string (its f-string's shape)
-TIGHTNESS = {
-    "test_infoset_page_impulse_per_piece_paragraph_matches_its_results_files": (
-        r"up to [\d.]+ under random errors with the range finder and, under errors that "
-        r"switch sign, [\d.]+ with the range finder and [\d.]+ with bearings only, where "
-        r"the defaults stay within [\d.]+ and [\d.]+"
-    ),
 }
 
 #: the benchmark's and the studies' settings, the options' values, seeds and sections
@@ -72,31 +60,11 @@ INPUTS = (
 )
 
 
-def searched_patterns(module) -> list[str]:
-    """The literal patterns ``module``'s tests search the page with: the first argument
-    of each ``_found(...)`` and ``re.search(...)`` call written as a string literal."""
-    patterns = []
-    for node in ast.walk(ast.parse(inspect.getsource(module))):
-        if not (isinstance(node, ast.Call) and node.args):
-            continue
-        f = node.func
-        name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
-        arg = node.args[0]
-        if name in ("_found", "search") and isinstance(arg, ast.Constant):
-            patterns.append(arg.value)
-    return patterns
-
-
-def test_the_tightness_sentences_are_the_tests():
-    """Each ``TIGHTNESS`` pattern names a test that exists."""
-    assert all(callable(getattr(test_docs_tightness, name)) for name in TIGHTNESS)
-
-
 def test_every_number_of_the_performance_page_is_checked():
     """A number in docs/performance.md's prose is read by a row of ``CHECKS``, searched
     by a test of the study or tightness checks, or an input."""
     patterns = [c[1] for c in CHECKS if c[0] == PERF]
-    patterns += searched_patterns(test_docs_study) + list(TIGHTNESS.values())
+    patterns += searched_patterns(test_docs_study) + searched_patterns(test_docs_tightness)
     patterns += list(DERIVED.values())
     assert unlisted_numbers(PERF, patterns, INPUTS) == []
 
