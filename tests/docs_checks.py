@@ -414,6 +414,12 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      F3 + "game.json", (*MISS_FUEL, "truth_outside")),
     (INT, r"guaranteed knowledge bound, ([\d.]+) deg, to the bearing", E2E + "random-s3.parquet",
      ("0/pointing_knowledge_bound_deg",)),
+    # docs/infoset.md: the extreme-band trials with bearings only (kvi compare kp_fig5, the
+    # option and the defaults, each measured twice)
+    ("docs/infoset.md", r"the game's\s+mean miss reads ([\d.]+) m against ([\d.]+) m",
+     SPEED + "trials-extreme_bands.json",
+     ("rows/[noise=game]/miss_m/mean",
+      f"{SPEED}trials-default.json::rows/[noise=game]/miss_m/mean")),
     # docs/infoset.md, fine steps: kvi intercept kp_fig3 --set model.dt_s=DT --noise NOISE
     # --runs 1 --json
     *[("docs/infoset.md", rf"\| {re.escape(dt)} \| {noise} \| ([\d.]+) \| ([\d.]+) \| (\d+) \|",

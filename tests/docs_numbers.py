@@ -92,41 +92,65 @@ def printed(doc: str, pattern: str) -> tuple[str, ...]:
     return match.groups()
 
 
-#: what a formatted value of a checked f-string prints at either end of it: a number,
-#: perhaps with a parenthesis after it ("1.034 (seed 425, at 60 s)"); inside it, anything
-#: short between the literal parts
-_END_VALUE, _INNER_VALUE = r"-?[\d.]+(?:e-?\d+)?(?: \([^)]*\))?", r".{1,120}?"
+#: what a formatted value of a checked f-string prints: at its end, a number, perhaps with
+#: a parenthesis after it ("1.034 (seed 425, at 60 s)"), or two such joined by "and"; at
+#: its start, that or a few words without digits (a label); inside it, anything short
+#: between the literal parts
+_ONE = r"-?[\d.]+(?:e-?\d+)?(?: \([^)]*\))?"
+_END_VALUE = rf"{_ONE}(?: and {_ONE})?"
+_START_VALUE, _INNER_VALUE = rf"(?:{_END_VALUE}|[A-Za-z_ ]{{1,40}}?)", r".{1,120}?"
 
 
-def _fstring_pattern(node: ast.JoinedStr) -> str:
-    parts = node.values
-    return "".join(
-        re.escape(v.value) if isinstance(v, ast.Constant)
-        else _END_VALUE if i in (0, len(parts) - 1) else _INNER_VALUE
-        for i, v in enumerate(parts)
-    )  # fmt: skip
+def _fstring_pattern(node: ast.JoinedStr, assigned: dict[str, ast.expr]) -> str:
+    """An f-string as a pattern; a value that names another f-string of the same test
+    (``assigned``) reads as that one's pattern."""
+    parts, out = node.values, []
+    for i, v in enumerate(parts):
+        inner = assigned.get(v.value.id) if isinstance(v, ast.FormattedValue) and isinstance(
+            v.value, ast.Name) else None  # fmt: skip
+        if isinstance(v, ast.Constant):
+            out.append(re.escape(v.value))
+        elif isinstance(inner, ast.JoinedStr):
+            out.append(_fstring_pattern(inner, assigned))
+        else:
+            out.append(_START_VALUE if i == 0 else _END_VALUE if i == len(parts) - 1
+                       else _INNER_VALUE)  # fmt: skip
+    return "".join(out)
 
 
 def searched_patterns(module) -> list[str]:
     """The sentences ``module``'s tests check, as regular expressions read from their
     source: the literal first argument of each ``_found(...)`` and ``re.search(...)``, and
-    the left side of each ``... in text`` written as a string or an f-string (the f-string's
-    literal parts, its values as :data:`_END_VALUE` / :data:`_INNER_VALUE`). An inventory
-    counts what they match as checked: a pattern listed here is one a test checks."""
+    what each ``... in text`` looks for, written as a string or an f-string there or
+    assigned to the name it tests (an f-string's literal parts stay, its values read as
+    :data:`_START_VALUE`, :data:`_INNER_VALUE`, :data:`_END_VALUE`). An inventory counts
+    what they match as checked: a pattern listed here is one a test checks."""
     out = []
-    for node in ast.walk(ast.parse(inspect.getsource(module))):
-        if isinstance(node, ast.Call) and node.args:
-            f = node.func
-            name = getattr(f, "id", None) or getattr(f, "attr", "")
-            arg = node.args[0]
-            if name in ("_found", "search") and isinstance(arg, ast.Constant):
-                out.append(arg.value)
-        elif isinstance(node, ast.Compare) and isinstance(node.ops[0], ast.In):
-            left = node.left
-            if isinstance(left, ast.JoinedStr):
-                out.append(_fstring_pattern(left))
-            elif isinstance(left, ast.Constant) and isinstance(left.value, str):
-                out.append(re.escape(left.value))
+    for func in ast.walk(ast.parse(inspect.getsource(module))):
+        if not isinstance(func, ast.FunctionDef):
+            continue
+        assigned = {
+            t.id: n.value
+            for n in ast.walk(func)
+            if isinstance(n, ast.Assign)
+            for t in n.targets
+            if isinstance(t, ast.Name)
+        }
+        for node in ast.walk(func):
+            if isinstance(node, ast.Call) and node.args:
+                f = node.func
+                name = getattr(f, "id", None) or getattr(f, "attr", "")
+                arg = node.args[0]
+                if name in ("_found", "search") and isinstance(arg, ast.Constant):
+                    out.append(arg.value)
+            elif isinstance(node, ast.Compare) and isinstance(node.ops[0], ast.In):
+                left = node.left
+                if isinstance(left, ast.Name):
+                    left = assigned.get(left.id, left)
+                if isinstance(left, ast.JoinedStr):
+                    out.append(_fstring_pattern(left, assigned))
+                elif isinstance(left, ast.Constant) and isinstance(left.value, str):
+                    out.append(re.escape(left.value))
     return out
 
 
