@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from kalman_vs_infoset.experiments.attitude_cmg import run, setup_from_scenario
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import load_toml
@@ -134,7 +135,7 @@ def test_euler_profile_phases_and_boundary_conditions():
 
 
 def test_scenario_file_loads_and_bad_input_is_one_line_input_error():
-    path = "data/scenarios/resurs_p.toml"
+    path = str(ROOT / "data/scenarios/resurs_p.toml")
     scenario = load_toml(path)
     assert scenario["controller"] == "energy"
     setup = setup_from_scenario(path, scenario)

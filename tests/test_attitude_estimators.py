@@ -12,6 +12,7 @@ import json
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeEstimator
@@ -245,7 +246,7 @@ def test_attitude_command_estimators_paired_and_counted(tmp_path):
 
     scen = tmp_path / "short.toml"
     text = (
-        open("data/scenarios/smallsat_rw.toml")
+        open(ROOT / "data/scenarios/smallsat_rw.toml")
         .read()
         .replace("duration_s = 80.0", "duration_s = 1.0")
     )

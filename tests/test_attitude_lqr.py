@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim import PerfectEstimator, PointBelief
@@ -123,7 +124,7 @@ def test_attitude_command_lqr_scenario_json(capsys, tmp_path):
 
     from kalman_vs_infoset.experiments.cli import main
 
-    args = ["attitude", "data/scenarios/lqr_large_angle.toml", "--runs", "2", "--json"]
+    args = ["attitude", str(ROOT / "data/scenarios/lqr_large_angle.toml"), "--runs", "2", "--json"]
     assert main([*args, "--out", str(tmp_path)]) == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     for key in ("settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps"):
@@ -146,9 +147,12 @@ def test_attitude_dispatcher_reports_unavailable_and_bad_input(monkeypatch, caps
     )
     with pytest.raises(InputError, match="controller game is not available"):
         attitude_loops.loop_of("game")
-    assert main(["attitude", "data/scenarios/lqr_large_angle.toml", "--controller", "zzz"]) == 2
+    assert (
+        main(["attitude", str(ROOT / "data/scenarios/lqr_large_angle.toml"), "--controller", "zzz"])
+        == 2
+    )
     with pytest.raises(SystemExit) as refused:  # the noises are parsed before any work
-        main(["attitude", "data/scenarios/lqr_large_angle.toml", "--noise", "loud"])
+        main(["attitude", str(ROOT / "data/scenarios/lqr_large_angle.toml"), "--noise", "loud"])
     assert refused.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "zzz" in err[0] and "loud" in err[1]

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from harness_texts import cli_inproc
 from kalman_vs_infoset.estim import registry
 
@@ -87,7 +88,7 @@ def test_bench_counts_nodes_only_of_a_belief_with_nodes():
     from kalman_vs_infoset.experiments.cmd_bench import approach_nodes
     from kalman_vs_infoset.experiments.scenario import load_scenario
 
-    fig3 = load_scenario("data/scenarios/kp_fig3.toml")
+    fig3 = load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"))
     assert approach_nodes("ukf", fig3, 4.0) is None
     made = approach_nodes("infoset", fig3, 4.0)
     assert made is not None and made["head"] + made["tail"] > 0.0
@@ -122,7 +123,7 @@ def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
     from kalman_vs_infoset.experiments.cmd_bench import step_cost_us
     from kalman_vs_infoset.experiments.scenario import load_scenario
 
-    fig3 = load_scenario("data/scenarios/kp_fig3.toml")
+    fig3 = load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"))
     model = fig3.channel_model()  # the bench's truth starts at 5801.3 km
     approach = int((5801.3e3 - model.eps_m) / model.e / fig3.model.dt_s)
     for name in registry.names("intercept"):

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
@@ -262,7 +263,7 @@ def test_kernel_warm_up_covers_every_signature_an_engagement_uses():
         if hasattr(getattr(m, n), "signatures")
     }
     before = {n: len(f.signatures) for n, f in kernels.items()}
-    sc = load_scenario("data/scenarios/kp_fig5.toml")
+    sc = load_scenario(str(ROOT / "data/scenarios/kp_fig5.toml"))
     for noise in ("random", "game", "bias"):
         run_engagement(sc, "infoset", noise, np.random.default_rng(2))
     assert {n: len(f.signatures) for n, f in kernels.items()} == before
@@ -327,7 +328,7 @@ def test_the_piece_split_floor_splits_fewer_pieces_next_to_the_target():
 
     most = {}
     for sets in ([], ["estimator.infoset.min_split_tau_s=1.0"]):
-        sc = load_scenario("data/scenarios/kp_fig5.toml", sets)
+        sc = load_scenario(str(ROOT / "data/scenarios/kp_fig5.toml"), sets)
         eng = Engagement(sc, "infoset", "game", np.random.default_rng(run_seed(5, 0)))
         pieces = []
         while eng.step():

@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.gaussian.belief import GaussianBelief, psd_cholesky
 from kalman_vs_infoset.estim.intercept.gaussian.estimator import KalmanChannelEstimator
@@ -319,7 +320,7 @@ def test_one_engagement_on_fig3_runs_with_the_ekf():
     from kalman_vs_infoset.experiments.scenario import load_scenario
     from kalman_vs_infoset.experiments.sim.intercept import run_engagement
 
-    sc = load_scenario("data/scenarios/kp_fig3.toml")
+    sc = load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"))
     res = run_engagement(sc, "ekf", "random", np.random.default_rng(3))
     assert res.contradictions == 0
     assert 0 <= res.truth_outside <= res.checked_steps
@@ -417,7 +418,7 @@ def test_constrained_range_stays_in_the_moving_interval_that_holds_the_truth(kin
     import kalman_vs_infoset.experiments.sim.intercept as eng
     from kalman_vs_infoset.experiments.scenario import load_scenario
 
-    sc = load_scenario("data/scenarios/kp_fig5_kalman_constrained.toml")
+    sc = load_scenario(str(ROOT / "data/scenarios/kp_fig5_kalman_constrained.toml"))
     e_lo, e_hi = (v * 1e3 for v in sc.closing_speed_kmps)
     x_lo, x_hi = (v * 1e3 for v in sc.estimator.x_km)
     truth_x = []
@@ -564,8 +565,8 @@ def test_kalman_variant_scenarios_differ_from_kp_fig5_in_their_one_key(variant, 
         }
         return out
 
-    base = resolved(load_scenario("data/scenarios/kp_fig5.toml"))
-    var = resolved(load_scenario(f"data/scenarios/{variant}.toml"))
+    base = resolved(load_scenario(str(ROOT / "data/scenarios/kp_fig5.toml")))
+    var = resolved(load_scenario(str(ROOT / f"data/scenarios/{variant}.toml")))
     for name, option in legacy_options()[key]:
         assert var["estimator"]["options"][name][option] == value
         assert base["estimator"]["options"][name][option] != value

@@ -8,6 +8,7 @@ the nodes) for the bounds between nodes, and shapely for the slices themselves.
 import numpy as np
 import pytest
 import shapely
+from docs_numbers import ROOT
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from kalman_vs_infoset.estim.base import Status
@@ -329,7 +330,7 @@ def test_thin_piece_with_few_nodes_is_refined_until_bounded(monkeypatch):
         return ext
 
     monkeypatch.setattr(ForecastCentringLaw, "forecast", recording)
-    sc = load_scenario("data/scenarios/kp_fig5.toml", ["estimator.infoset.n_nodes=6"])
+    sc = load_scenario(str(ROOT / "data/scenarios/kp_fig5.toml"), ["estimator.infoset.n_nodes=6"])
     eng = Engagement(sc, "infoset", "random", np.random.default_rng(run_seed(5, 38)), None)
     while eng.step():
         pass

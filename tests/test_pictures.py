@@ -17,6 +17,7 @@ import matplotlib
 import numpy as np
 import pandas as pd
 import pytest
+from docs_numbers import ROOT
 from harness_texts import TINY_RW
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.base import PointBelief
@@ -88,7 +89,7 @@ SHORT = [  # the Fig. 3 engagement started 290 km out: 10 s, 20 steps
 
 @pytest.fixture(scope="module")
 def short():
-    return load_scenario("data/scenarios/kp_fig3.toml", SHORT)
+    return load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"), SHORT)
 
 
 # -- traces ------------------------------------------------------------------------------
@@ -96,7 +97,7 @@ def _short_kp_fig3(tmp_path) -> Path:
     """kp_fig3 (same name, so the same file names) started 290 km out (``SHORT``): the
     trace commands draw and check every step of a 20-step approach instead of ~200."""
     p = tmp_path / "short.toml"
-    text = open("data/scenarios/kp_fig3.toml").read()
+    text = open(ROOT / "data/scenarios/kp_fig3.toml").read()
     text = text.replace("x_km = [5801.3, 5801.3]", "x_km = [290.0, 290.0]")
     p.write_text(text.replace("x_km = [5301.3, 6301.3]", "x_km = [250.0, 330.0]"))
     return p
@@ -188,7 +189,7 @@ def test_compare_trace_overlays_estimators(tmp_path, capsys, checked, monkeypatc
 
 
 def test_trace_arguments_are_checked(tmp_path, capsys):
-    args = ["intercept", "data/scenarios/kp_fig3.toml", "--out", str(tmp_path)]
+    args = ["intercept", str(ROOT / "data/scenarios/kp_fig3.toml"), "--out", str(tmp_path)]
     for bad in ("x", "0,0", "-1", ""):
         with pytest.raises(SystemExit) as exc:
             main([*args, "--trace", bad])

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from docs_numbers import ROOT
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
 from kalman_vs_infoset.estim.intercept.exact_reference import (
@@ -289,7 +290,7 @@ def test_tightness_command_measures_a_family_with_its_margin_off(capsys, tmp_pat
     from kalman_vs_infoset.experiments.scenario import load_scenario
     from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 
-    fig5 = "data/scenarios/kp_fig5.toml"
+    fig5 = str(ROOT / "data/scenarios/kp_fig5.toml")
     sc = auxiliary_model_options(load_scenario(fig5), False, names=("infoset", "zonotope"))
     assert sc.estimator.options_for("zonotope").kinematic_margin is False
     assert sc.estimator.options_for("infoset").kinematic_margin is False
