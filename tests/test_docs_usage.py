@@ -1,0 +1,59 @@
+"""docs/usage.md: an inventory like the README's. Its prose states the interface's
+limits; each number is the code's constant (``DERIVED``, read from the module that
+enforces it) or an input named in ``INPUTS`` (the papers' seeds and figures, exit
+statuses the reliability tests check, names holding digits).
+"""
+
+from __future__ import annotations
+
+from docs_numbers import printed
+from test_docs_numbers import unlisted_numbers
+
+DOC = "docs/usage.md"
+
+#: the sentences whose numbers the tests below read from the code, by test
+DERIVED = {
+    "fig5": r"Fig\. 5 \(four variants x (\d+) runs\)",
+    "seed": r"a seed beyond 2\^(\d+) - 1",
+    "steps": r"a run longer than (\d+) (\d+)\s+steps",
+    "chunk": r"(\d+) for the vectorised attitude loops",
+    "worker": r"without a live worker for (\d+) s",
+}
+
+INPUTS = (
+    r"[Ss]eed 00\d('s)?",
+    r"Figs?\. \d+(-\d+)?",
+    r"§\d(\.\d)?",
+    r"exit status 1 if any",
+    r"exit (130|143|1|2)\b",
+    r"exits? (with status )?[12]\b",
+    r"SHA-256",
+    r"3-D",
+    r"2-D",
+    r"up to 1e8 from the origin",
+    r"non-UTF-8",
+)
+
+
+def test_every_number_of_the_usage_page_is_checked():
+    """A number in docs/usage.md's prose is a constant of the code or an input."""
+    assert unlisted_numbers(DOC, list(DERIVED.values()), INPUTS) == []
+
+
+def test_the_usage_pages_limits_are_the_codes():
+    """The main experiment's runs per variant, the largest seed, the longest run, the
+    attitude loops' chunk and the wait for a Dask worker, as the code sets them."""
+    from kalman_vs_infoset.experiments import attitude_gyrostat, attitude_rw, executors, options
+    from kalman_vs_infoset.experiments.cli import build_parser
+    from kalman_vs_infoset.experiments.sim import intercept_config
+
+    args = build_parser("fig5").parse_args(["fig5"])
+    assert printed(DOC, DERIVED["fig5"]) == (str(args.runs),)
+    (power,) = printed(DOC, DERIVED["seed"])
+    assert options.MAX_SEED == 2 ** int(power) - 1
+    thousands, units = printed(DOC, DERIVED["steps"])
+    assert intercept_config.MAX_STEPS == int(thousands + units)
+    (chunk,) = printed(DOC, DERIVED["chunk"])
+    assert attitude_rw.CHUNK == attitude_gyrostat.CHUNK == int(chunk)
+    (wait,) = printed(DOC, DERIVED["worker"])
+    assert executors.NO_WORKER_TIMEOUT_S == float(wait)
