@@ -33,6 +33,23 @@ def results(path: str) -> dict | list:
     return json.loads((ROOT / path).read_text(encoding="utf-8"))
 
 
+def scenario_tables(name: str) -> dict:
+    """A bundled scenario file's tables (``data/scenarios/NAME.toml``), as written."""
+    import tomllib
+
+    return tomllib.loads((ROOT / f"data/scenarios/{name}.toml").read_text(encoding="utf-8"))
+
+
+def band_widths_pct(name: str, n_bands: int) -> list[float]:
+    """Relative widths ``u_hi / u_lo - 1`` (per cent) of the scenario's closing-speed
+    interval cut, as the node set cuts it, into ``n_bands`` equal pieces of ``u = 1/e``."""
+    import numpy as np
+
+    e_lo, e_hi = scenario_tables(name)["estimator"]["closing_speed_kmps"]
+    u = np.linspace(1.0 / e_hi, 1.0 / e_lo, n_bands + 1)
+    return [float(w) for w in 100.0 * (u[1:] / u[:-1] - 1.0)]
+
+
 def speed_rows(stem: str) -> dict[str, dict]:
     """The rows of ``docs/results/speed/STEM.json`` (``kvi compare``), by noise."""
     return {r["noise"]: r for r in results(f"docs/results/speed/{stem}.json")["rows"]}
