@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -39,19 +40,25 @@ def percentile(values: np.ndarray, q: float) -> float:
     of the sorted samples, ``lo``, ``hi`` its neighbours and ``t = h - lo``. numpy
     evaluates it in a form that reads NaN as soon as a neighbour is infinite
     (``inf - inf`` or ``0 * inf``): its p50 of ``[1, 2, inf]`` is NaN where the rule
-    gives 2. Finite neighbours keep numpy's value to the last digit; otherwise an exact
-    hit is that sample, and between a finite and an infinite sample the infinite one.
+    gives 2. Finite samples keep numpy's value to the last digit. With infinite ones
+    the position is taken exactly (a rational: rounding must not make a neighbour of
+    an exact hit), an exact hit is that sample, and between a finite and an infinite
+    sample the rule gives the infinite one.
     """
     x = np.sort(np.asarray(values, dtype=float).ravel())
-    h = (x.size - 1) * q / 100.0
-    lo = int(np.floor(h))
-    hi = min(lo + 1, x.size - 1)
-    a, b = x[lo], x[hi]
-    if np.isfinite(a) and np.isfinite(b):
+    if np.all(np.isfinite(x)):
         return float(np.percentile(x, q))
-    if h == lo or a == b:
+    h = Fraction(q) * (x.size - 1) / 100
+    lo = int(h)  # h >= 0
+    a, b = x[lo], x[min(lo + 1, x.size - 1)]
+    t = h - lo
+    if t == 0 or a == b:
         return float(a)
-    return float(b if np.isinf(b) and np.isfinite(a) else a if np.isfinite(b) else np.nan)
+    if np.isfinite(a) and np.isfinite(b):
+        return float(a + float(t) * (b - a))
+    if np.isfinite(a) or np.isfinite(b):
+        return float(b if np.isfinite(a) else a)
+    return float("nan")  # -inf and +inf
 
 
 def ok_mean(table, column: str) -> float | None:

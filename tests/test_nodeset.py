@@ -70,12 +70,25 @@ def _assert_inside(b, row):
     seed=st.integers(0, 2**16),
 )
 @example(y=-10e3, vy=-100.0, x0=6301.299e3, e=58.1e3, kind="bound", seed=0)  # once failed
+# every corner at once, the disturbance at +nu against the kinematic term's sign: with
+# the (physical) kinematic margin on, this auxiliary-model truth left the set by 0.6 %
+# of nu (fuzz seed 1205051103); the margin is off here, see the docstring
+@example(y=10e3, vy=100.0, x0=5301.3e3, e=58.1e3, kind="bound", seed=236)
 def test_truth_inside_at_every_step_in_physical_coordinates(y, vy, x0, e, kind, seed):
     """Seed 003 section 4's guarantee, for any state of the a-priori box (corners
     included) and any closing speed of the interval: errors uniform, held at the
-    bound or switched, disturbances at +-nu, impulses of either sign."""
+    bound or switched, disturbances at +-nu, impulses of either sign.
+
+    The truth moves by the seed's auxiliary model (``Y'' = v``, ``|v| <= nu``), so the
+    set is the seed's: without the kinematic margin, which adds the physical motion's
+    term ``-2 omega^2 x tan(alpha)`` with its sign (a truth of the auxiliary model
+    pushing against that sign at a corner of everything can then lie outside the
+    set by a fraction of the term). Physical truths with the margin on are
+    ``test_soundness_physical.py``'s."""
     rng = np.random.default_rng(seed)
-    est = NodeSetEstimator(MODEL, closing_speed_mps=SPEEDS, n_nodes=8, min_live_nodes=4)
+    est = NodeSetEstimator(
+        MODEL, closing_speed_mps=SPEEDS, n_nodes=8, min_live_nodes=4, kinematic_margin=False
+    )
     sign = rng.choice([-1.0, 1.0])
 
     def errors(k, a):

@@ -2,8 +2,11 @@
 percentile for finite samples and against the rule's limit when samples are infinite
 (runs that never settled enter the attitude summaries as ``inf``)."""
 
+from fractions import Fraction
+
 import numpy as np
-from hypothesis import given
+import pytest
+from hypothesis import example, given
 from hypothesis import strategies as st
 from kalman_vs_infoset.experiments.stats import percentile, summary_stats
 
@@ -16,14 +19,27 @@ def test_finite_samples_give_numpys_percentile_to_the_last_digit(xs, q):
     assert percentile(np.array(xs), q) == float(np.percentile(xs, q))
 
 
+def _exact_rule(xs: list[float], q: float) -> Fraction:
+    """The linear rule in exact rationals (samples and position), an independent
+    reference for finite samples."""
+    x = sorted(Fraction(v) for v in xs)
+    h = Fraction(q) * (len(x) - 1) / 100
+    lo = int(h)
+    hi = min(lo + 1, len(x) - 1)
+    return x[lo] + (h - lo) * (x[hi] - x[lo])
+
+
 @given(st.lists(finite, min_size=0, max_size=20), st.integers(1, 10), QS)
+# a position a hair past a finite sample (fuzz seed 1205051103): the rule reaches inf
+@example(xs=[1.0], n_inf=1, q=2.2250738585072014e-308)
 def test_infinite_samples_give_the_limit_of_a_growing_sample(xs, n_inf, q):
-    """Replacing each ``inf`` by a huge ``M`` and letting ``M`` grow: the percentile either
-    stays put (it does not reach the replaced samples) or grows without bound."""
+    """Replacing each ``inf`` by a huge ``M`` and letting ``M`` grow (the rule in exact
+    rationals): the percentile either stays put (it does not reach the replaced
+    samples) or grows without bound."""
     ours = percentile(np.array([*xs, *[np.inf] * n_inf]), q)
-    big = [float(np.percentile([*xs, *[m] * n_inf], q)) for m in (1e200, 1e250)]
+    big = [_exact_rule([*xs, *[m] * n_inf], q) for m in (1e200, 1e250)]
     if big[0] == big[1]:
-        assert ours == big[0]
+        assert ours == pytest.approx(float(big[0]), rel=1e-12, abs=1e-300)
     else:
         assert ours == np.inf
 
