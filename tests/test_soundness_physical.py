@@ -65,7 +65,10 @@ def _nodes(model: ChannelModel, box: Box, **options):
 
 #: name -> factory(model, box) -> (estimator, initial belief). One line per estimator.
 FACTORIES: dict[str, Callable] = {
-    "nodes": _nodes,
+    # the seed's set: the node set's kinematic margin adds the two-body term with its
+    # sign, which this truth (no such term) can push against at a corner of everything;
+    # the default node set holds the Cartesian truth below
+    "nodes": lambda m, b: _nodes(m, b, kinematic_margin=False),
     "slabs": _infoset,
     # the auxiliary-model truth needs no kinematic margin: the discretisation alone
     "slabs-no-margin": lambda m, b: _infoset(m, b, kinematic_margin=False),
@@ -78,6 +81,12 @@ FACTORIES: dict[str, Callable] = {
 #: kinematic margin bounds line-of-sight rates of rad/s; the run ends there, the truth
 #: contained until then
 MAY_DIVERGE = (FACTORIES["box"],)
+
+
+def _cartesian(y_m: float, v_mps: float, x_m: float, e_mps: float) -> np.ndarray:
+    """``(alpha, omega, x)`` of the same state read as Cartesian (``alpha = atan2(y,
+    x)``): the two-body motion the kinematic margin is for."""
+    return MODEL.from_cartesian(y_m, v_mps, x_m, -e_mps)
 
 
 def _observed(y_m: float, v_mps: float, x_m: float, e_mps: float) -> np.ndarray:
@@ -100,27 +109,30 @@ def _bearing_error(mode: str, bound: float, t_s: float, switch_s: float, rng) ->
     }[mode]()
 
 
-def _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, steps, dt_s=DT_S):
+def _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, steps, dt_s=DT_S,
+         cartesian=False):  # fmt: skip
     """Drive truth and set with steps of ``dt_s``; assert containment after every
     operation. Returns the number of steps run and the last set (a divergence reported
-    by a factory of ``MAY_DIVERGE`` ends the run)."""
+    by a factory of ``MAY_DIVERGE`` ends the run). ``cartesian``: the same motion read
+    as Cartesian (bearings ``atan2(y, x) + zeta``, the state :func:`_cartesian`)."""
     est, s = factory(MODEL, BOX)
     rng = np.random.default_rng(seed)
     law = ForecastCentringLaw(MODEL)
     x = x0
-    assert s.contains(_observed(y, v, x, e)), "initial set"
+    observe = _cartesian if cartesian else _observed
+    assert s.contains(observe(y, v, x, e)), "initial set"
     for step in range(steps):
         if x - e * dt_s < MODEL.eps_m or s.is_empty:
             break
         t = step * dt_s
         zeta = _bearing_error(mode, float(MODEL.bearing_bound(x)), t, switch_s, rng)
-        s = est.update(s, Bearing(y / x + zeta))
-        assert s.status == "ok" and s.contains(_observed(y, v, x, e)), f"bearing, step {step}"
+        s = est.update(s, Bearing((np.arctan2(y, x) if cartesian else y / x) + zeta))
+        assert s.status == "ok" and s.contains(observe(y, v, x, e)), f"bearing, step {step}"
         if controls == "range" and step % 4 == 1:
             b = MODEL.range_rel_bound
             # one channel of the auxiliary model: the range is x itself (no off-axis angle)
             s = est.update(s, Range(x * (1 + rng.choice([-b, b])), off_axis_rad=0.0))
-            assert s.contains(_observed(y, v, x, e)), f"range, step {step}"
+            assert s.contains(observe(y, v, x, e)), f"range, step {step}"
         k = 0.0
         if controls == "random" and step % 3 == 0:
             k = float(rng.uniform(-7.5, 7.5))
@@ -135,7 +147,7 @@ def _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, steps, dt
         y, v, x = y + v * dt_s + 0.5 * acc * dt_s**2, v + acc * dt_s, x - e * dt_s
         if abs(y / x) > 1.0:
             break  # an unguided truth far off the axis near eps: outside the channel model
-        assert s.status == "ok" and s.contains(_observed(y, v, x, e)), f"predict, step {step}"
+        assert s.status == "ok" and s.contains(observe(y, v, x, e)), f"predict, step {step}"
     return step, s
 
 
@@ -206,3 +218,42 @@ def test_set_contains_physical_truth_at_every_step(
         _run(FACTORIES[name], y, v, x0, e, mode, v_mode, controls, switch_s, seed, 200, 1.0)
     else:  # the switch at the same fraction of the short run as at 60 steps
         _run(FACTORIES[name], y, v, x0, e, mode, v_mode, controls, switch_s / 2, seed, 30)
+
+
+#: the strategies of the guarantee tests above
+_TRUTHS = dict(
+    y=_ends_or_inside(*BOX.y_m),
+    v=_ends_or_inside(*BOX.v_mps),
+    x0=_ends_or_inside(*BOX.x_m),
+    e=_ends_or_inside(*BOX.e_mps),
+    mode=st.sampled_from(["uniform", "bounds", "bias_high", "bias_low", "switch"]),
+    v_mode=st.sampled_from(["uniform", "bounds", "zero"]),
+    controls=st.sampled_from(["none", "random", "law", "range"]),
+    switch_s=st.floats(0.0, 60.0),
+    seed=st.integers(0, 2**32 - 1),
+    long=st.booleans(),
+)
+
+
+@settings(max_examples=50, deadline=None)
+@given(**_TRUTHS)
+# every coordinate at a corner, the disturbance at nu against the kinematic term's
+# sign (fuzz seed 1205051105): the auxiliary-model truth left the default set at step
+# 1; read as Cartesian, the motion the margin is for, it stays inside
+@example(
+    y=-10e3, v=-100.0, x0=5301.3e3, e=58.1e3, mode="bias_low", v_mode="bounds",
+    controls="random", switch_s=0.0, seed=0, long=False,
+)  # fmt: skip
+def test_default_node_set_contains_the_cartesian_truth_at_every_step(
+    y, v, x0, e, mode, v_mode, controls, switch_s, seed, long
+):
+    """The default node set (kinematic margin on) against the truth it models: the
+    motion above read as Cartesian (``x`` along the closing direction, ``Y'' = v``
+    across it, bearings ``atan2(y, x)``), corners of the prior included. Its margin
+    holds the two-body term ``-2 omega^2 x tan(alpha)`` that this reading carries."""
+    if long and controls == "law":
+        _run(_nodes, y, v, x0, e, mode, v_mode, controls, switch_s, seed, 200, 1.0,
+             cartesian=True)  # fmt: skip
+    else:
+        _run(_nodes, y, v, x0, e, mode, v_mode, controls, switch_s / 2, seed, 30,
+             cartesian=True)  # fmt: skip
