@@ -177,9 +177,8 @@ def test_initial_set_holds_every_corner_of_box_and_speed_interval(name):
     assert missing == []
 
 
-@pytest.mark.parametrize("name", FACTORIES)
-@settings(max_examples=100, deadline=None)
-@given(
+#: the truths of the guarantee tests: every end of every interval with positive probability
+_TRUTHS = dict(
     y=_ends_or_inside(*BOX.y_m),
     v=_ends_or_inside(*BOX.v_mps),
     x0=_ends_or_inside(*BOX.x_m),
@@ -191,6 +190,11 @@ def test_initial_set_holds_every_corner_of_box_and_speed_interval(name):
     seed=st.integers(0, 2**32 - 1),
     long=st.booleans(),
 )
+
+
+@pytest.mark.parametrize("name", FACTORIES)
+@settings(max_examples=100, deadline=None)
+@given(**_TRUTHS)
 @example(
     y=-10e3, v=-100.0, x0=6301.299e3, e=58.1e3, mode="bias_low", v_mode="zero",
     controls="none", switch_s=0.0, seed=0, long=False,
@@ -214,25 +218,17 @@ def test_set_contains_physical_truth_at_every_step(
     were 60 steps, and the long runs in 0.5 s steps, at twice the CPU time: the node
     set's work per step grows along the approach. The corner schedules of
     tests/test_nodeset_invariants.py run the node set down to eps in 0.5 s steps.)"""
+    _guarantee_run(FACTORIES[name], y, v, x0, e, mode, v_mode, controls, switch_s, seed, long)
+
+
+def _guarantee_run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, long,
+                   cartesian=False):  # fmt: skip
+    """30 steps of 0.5 s, or (``long`` with the law) down to eps in 1 s steps."""
     if long and controls == "law":  # down to eps in 1 s steps: half the steps
-        _run(FACTORIES[name], y, v, x0, e, mode, v_mode, controls, switch_s, seed, 200, 1.0)
+        _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, 200, 1.0, cartesian)
     else:  # the switch at the same fraction of the short run as at 60 steps
-        _run(FACTORIES[name], y, v, x0, e, mode, v_mode, controls, switch_s / 2, seed, 30)
-
-
-#: the strategies of the guarantee tests above
-_TRUTHS = dict(
-    y=_ends_or_inside(*BOX.y_m),
-    v=_ends_or_inside(*BOX.v_mps),
-    x0=_ends_or_inside(*BOX.x_m),
-    e=_ends_or_inside(*BOX.e_mps),
-    mode=st.sampled_from(["uniform", "bounds", "bias_high", "bias_low", "switch"]),
-    v_mode=st.sampled_from(["uniform", "bounds", "zero"]),
-    controls=st.sampled_from(["none", "random", "law", "range"]),
-    switch_s=st.floats(0.0, 60.0),
-    seed=st.integers(0, 2**32 - 1),
-    long=st.booleans(),
-)
+        _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s / 2, seed, 30,
+             cartesian=cartesian)  # fmt: skip
 
 
 @settings(max_examples=50, deadline=None)
@@ -251,9 +247,4 @@ def test_default_node_set_contains_the_cartesian_truth_at_every_step(
     motion above read as Cartesian (``x`` along the closing direction, ``Y'' = v``
     across it, bearings ``atan2(y, x)``), corners of the prior included. Its margin
     holds the two-body term ``-2 omega^2 x tan(alpha)`` that this reading carries."""
-    if long and controls == "law":
-        _run(_nodes, y, v, x0, e, mode, v_mode, controls, switch_s, seed, 200, 1.0,
-             cartesian=True)  # fmt: skip
-    else:
-        _run(_nodes, y, v, x0, e, mode, v_mode, controls, switch_s / 2, seed, 30,
-             cartesian=True)  # fmt: skip
+    _guarantee_run(_nodes, y, v, x0, e, mode, v_mode, controls, switch_s, seed, long, True)
