@@ -205,7 +205,7 @@ def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = ""
 
 
 def read(
-    path: str | Path, overrides: Sequence[str] = (), kind: Kind = "attitude"
+    path: str | Path, overrides: Sequence[str] = (), kind: Kind = "attitude", via: str = "--set"
 ) -> tuple[dict[str, Any], str]:
     """The file's tables with the overrides applied, the scenario's name set (the file's
     stem unless given; ``+key=value`` per override) and the source for messages.
@@ -224,14 +224,16 @@ def read(
         return data, str(path)
     data = apply_overrides(data, overrides)
     data["name"] = data["name"] + override_suffix(overrides)
-    return data, f"{path} (with --set)"
+    return data, f"{path} (with {via})"  # how the caller gave them: --set, or keywords
 
 
-def load_scenario(path: str | Path, overrides: Sequence[str] = ()) -> InterceptScenario:
+def load_scenario(
+    path: str | Path, overrides: Sequence[str] = (), via: str = "--set"
+) -> InterceptScenario:
     """Read and validate an intercept scenario file (or a bundled scenario by name),
     with optional ``TABLE.KEY=VALUE`` overrides (:func:`apply_overrides`; the name gets a
     ``+key=value`` suffix each)."""
-    data, source = read(path, overrides, kind="intercept")
+    data, source = read(path, overrides, kind="intercept", via=via)
     return validate(InterceptScenario, data, source)
 
 

@@ -115,7 +115,7 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenar
     'kp_fig5+experiment.runs=4+model.nu_mps2=0.0'
     """
     sets = [f"{key}={_toml(v)}" for key, v in _flatten("", overrides)]
-    return _scenario.load_scenario(name_or_path, sets)
+    return _scenario.load_scenario(name_or_path, sets, via="keyword overrides")
 
 
 def _resolve(scenario: InterceptScenario | str | Path) -> InterceptScenario:

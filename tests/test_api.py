@@ -117,8 +117,10 @@ def test_results_of_an_earlier_release_resume(tmp_path):
 def test_bad_input_through_the_api_is_one_clear_error():
     with pytest.raises(InputError, match="kvi scenarios"):
         api.load_scenario("kp_fig33")
-    with pytest.raises(InputError, match="model.nu_mps2"):
+    with pytest.raises(InputError, match="model.nu_mps2") as bad:
         api.load_scenario("kp_fig3", model={"nu_mps2": -1.0})
+    # the message names the overrides as the caller gave them, not the command's --set
+    assert "(with keyword overrides)" in str(bad.value) and "--set" not in str(bad.value)
     with pytest.raises(InputError, match="no such results folder"):
         api.load_results("/nonexistent/folder")
     with pytest.raises(ValueError):
