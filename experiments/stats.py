@@ -45,9 +45,10 @@ def percentile(values: np.ndarray, q: float) -> float:
     an exact hit), an exact hit is that sample, and between a finite and an infinite
     sample the rule gives the infinite one.
     """
-    x = np.sort(np.asarray(values, dtype=float).ravel())
+    x = np.asarray(values, dtype=float).ravel()
     if np.all(np.isfinite(x)):
         return float(np.percentile(x, q))
+    x = np.sort(x)  # numpy sorts its own copy; only this path needs the order
     h = Fraction(q) * (x.size - 1) / 100
     lo = int(h)  # h >= 0
     a, b = x[lo], x[min(lo + 1, x.size - 1)]
