@@ -21,6 +21,17 @@ DERIVED = {
     "early": r"reaches eps about (\d+) s before closest approach",
     "reach": r"= ([\d.]+) s against ~(\d+) s\)",
     "guarantee": r"its guarantee holds under all three \((\d+) steps outside\)",
+    "study": r"`docs/results/study/fig5-w2-1000\.json`; the first (\d+) runs of each variant",
+    "study_all": r"In none of the (\d+) engagements did the truth leave the set, and no set "
+    r"emptied or diverged\. The (\d+)-run table's findings hold with (\w+) times the runs",
+    "study_range": r"helps a little \(mean miss ([\d.]+) -> ([\d.]+) m, fuel ([\d.]+) -> "
+    r"([\d.]+) m/s\), under the game it makes the miss worse \(([\d.]+) -> ([\d.]+) m\)\. "
+    r"The (\d+)-run means were within ([\d.]+) m and ([\d.]+) m/s of these, the miss's "
+    r"largest moves in the game rows \(([\d.]+) -> ([\d.]+) m with bearings only, "
+    r"([\d.]+) -> ([\d.]+) m with the range finder\)",
+    "study_max": r"as maxima do \(bearings-only random ([\d.]+) -> ([\d.]+) m\)",
+    "study_fuel": r"Perfect-information fuel ([\d.]+) m/s over the (\d+) runs \(a lower bound of "
+    r"the fuel; ([\d.]+)\s+m/s over the first (\d+)\)",
 }
 
 #: quoted checks made outside the package (no results file here can hold them)
@@ -113,6 +124,48 @@ def test_the_set_keeps_the_truth_under_every_adversary():
     rows = [r for r in results(ADV5)["rows"] if r["estimator"] == "infoset"]
     assert {r["rule"] for r in rows} == {"game", "targeted", "lookahead"}
     assert all(r["truth_outside"] == int(shown) for r in rows)
+
+
+def test_the_1000_run_fig5_study_against_the_50_run_table():
+    """docs/intercept.md's Fig. 5 at 1000 runs per variant (``kvi fig5 --runs 1000``)
+    against the 50-run table (``docs/results/fig5.json``): the runs and engagements
+    counted, no truth outside, the range finder's effect both ways, how far the 50-run
+    means were (the largest gaps, and that the game rows have the largest miss gaps),
+    the maximum's growth and the perfect-information fuel."""
+    big, small = results("docs/results/study/fig5-w2-1000.json"), results("docs/results/fig5.json")
+    rows = {(v["variant"], v["noise"]): v for v in big["variants"]}
+    table = {(v["variant"], v["noise"]): v for v in small["variants"]}
+    assert rows.keys() == table.keys()
+    (first,) = _printed("study")
+    assert int(first) == small["runs"] and big["runs"] > small["runs"]
+    engagements, n_table, times = _printed("study_all")
+    assert int(engagements) == sum(v["runs"] for v in big["variants"])
+    assert int(n_table) == small["runs"]
+    assert times == {20: "twenty"}[big["runs"] // small["runs"]]
+    assert all(v["truth_outside"] == v["empty_set"] == v["diverged"] == 0 for v in rows.values())
+    mean = lambda r, k: r[k]["mean"]  # noqa: E731
+    bo, br = ("bearing only", "random"), ("bearing + range", "random")
+    bg, rg = ("bearing only", "game"), ("bearing + range", "game")
+    miss_gap = {k: abs(mean(rows[k], "miss_m") - mean(table[k], "miss_m")) for k in rows}
+    fuel_gap = {k: abs(mean(rows[k], "fuel_mps") - mean(table[k], "fuel_mps")) for k in rows}
+    values = [
+        mean(rows[bo], "miss_m"), mean(rows[br], "miss_m"), mean(rows[bo], "fuel_mps"),
+        mean(rows[br], "fuel_mps"), mean(rows[bg], "miss_m"), mean(rows[rg], "miss_m"),
+        small["runs"], max(miss_gap.values()), max(fuel_gap.values()),
+        mean(table[bg], "miss_m"), mean(rows[bg], "miss_m"), mean(table[rg], "miss_m"),
+        mean(rows[rg], "miss_m"),
+    ]  # fmt: skip
+    for shown, value in zip(_printed("study_range"), values, strict=True):
+        assert agrees(shown, value), (shown, value)
+    assert mean(rows[br], "miss_m") < mean(rows[bo], "miss_m")  # helps a little
+    assert mean(rows[rg], "miss_m") > mean(rows[bg], "miss_m")  # worse under the game
+    assert sorted(miss_gap, key=miss_gap.get)[-2:] in ([bg, rg], [rg, bg])
+    before, after = _printed("study_max")
+    assert agrees(before, table[bo]["miss_m"]["max"]) and agrees(after, rows[bo]["miss_m"]["max"])
+    assert all(rows[k]["miss_m"]["max"] >= table[k]["miss_m"]["max"] for k in rows)
+    fuel, n, fuel_50, n_50 = _printed("study_fuel")
+    assert agrees(fuel, big["fuel_perfect_info_mps"]) and int(n) == big["runs"]
+    assert agrees(fuel_50, small["fuel_perfect_info_mps"]) and int(n_50) == small["runs"]
 
 
 @pytest.mark.parametrize("key", sorted(DERIVED))

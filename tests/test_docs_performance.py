@@ -61,6 +61,7 @@ INPUTS = (
     r"50 runs per variant",
     r"pairs of 50-run",
     r"host's 2 CPUs",
+    r"--workers [12]`",
     r"100-step approach",
     r"100 / 200 / 400-step approaches",
 )

@@ -10,7 +10,6 @@ import re
 from docs_numbers import (
     ROOT,
     agrees,
-    paired_cpu_ratio,
     results,
     speed_base_cpu_s,
     speed_cpu_s,
@@ -21,17 +20,98 @@ STUDY = "docs/results/study/fig5-"
 TEXT = " ".join((ROOT / "docs/performance.md").read_text(encoding="utf-8").split())
 
 
-def test_ten_thousand_runs_per_variant_are_200_times_the_measured_50():
-    """10 000 runs per variant = 200 x the 2-worker column's CPU time, in CPU-hours and
-    in hours on the host's 2 cores."""
-    found = re.search(r"200 times the 2-worker column: ([\d.]+) CPU-hours, ([\d.]+) hours on this "
-                      r"host's (\d+) cores", TEXT)  # fmt: skip
-    assert found, "the sentence was rewritten: re-point this test"
-    cpu_h = 200 * sum(v["cpu_s"] for v in results(STUDY + "w2.json")["variants"]) / 3600
-    cores = int(found.group(3))
+def _words(n: int) -> str:
+    return {3: "three", 10: "ten", 20: "twenty"}[n]
+
+
+def _cpu(path: str) -> list[float]:
+    return [v["cpu_s"] for v in results(path)["variants"]]
+
+
+def test_the_1000_run_study_costs_what_the_text_says():
+    """docs/performance.md's 1000 runs per variant (``kvi fig5 --runs 1000 --workers 2``):
+    twenty times ``make run``'s runs; the total CPU time and wall time; the CPU time a
+    run against the 50-run 2-worker column's, per variant (extremes, the variant of the
+    largest) and over all four; the workers' peak memory against the 50 runs'; and
+    10 000 runs a variant as ten times the study, in CPU-hours and in hours on the
+    host's cores. Every run kept the truth and none failed."""
+    big, small = results(STUDY + "w2-1000.json"), results(STUDY + "w2.json")
+    n_big, n_small = big["runs"], small["runs"]
+    found = _found(r"Measured at (\d+) runs per variant, (\w+) times `make run` \(`kvi fig5 "
+                   r"--runs (\d+) --workers 2`")  # fmt: skip
+    assert int(found.group(1)) == int(found.group(3)) == n_big
+    assert found.group(2) == _words(n_big // results("docs/results/fig5.json")["runs"])
+    found = _found(r"fig5-w2-1000\.json`\): (\d+) CPU-s for the four variants, ([\d.]+) minutes "
+                   r"on the host's (\d+) cores")  # fmt: skip
+    assert int(found.group(3)) == results("docs/results/bench.json")["machine"]["cpus"]
+    assert agrees(found.group(1), sum(_cpu(STUDY + "w2-1000.json")))
+    assert agrees(found.group(2), big["wall_s"] / 60.0)
+    per_run = [b / n_big / (s / n_small) for b, s in
+               zip(_cpu(STUDY + "w2-1000.json"), _cpu(STUDY + "w2.json"), strict=True)]  # fmt: skip
+    found = _found(r"A run cost ([\d.]+) to ([\d.]+) times the CPU time of the 2-worker column's "
+                   r"\(the most in the bearings-only game, ([\d.]+) over all four\)")  # fmt: skip
+    assert agrees(found.group(1), min(per_run)) and agrees(found.group(2), max(per_run))
+    most = big["variants"][per_run.index(max(per_run))]
+    assert (most["variant"], most["noise"]) == ("bearing only", "game")
+    overall = sum(_cpu(STUDY + "w2-1000.json")) / n_big / (sum(_cpu(STUDY + "w2.json")) / n_small)
+    assert agrees(found.group(3), overall)
+    found = _found(r"at a rate the (\d+)-run column underestimates by less than a fifth")
+    assert int(found.group(1)) == n_small and 1.0 < min(per_run) and max(per_run) < 1.2
+    peak = lambda d: max(v["worker_peak_rss_mb"] for v in d["variants"])  # noqa: E731
+    found = _found(r"worker peaked at (\d+) MB, (\d+) % more than over (\d+) runs, for (\w+) "
+                   r"times the runs")  # fmt: skip
+    assert int(found.group(3)) == n_small and found.group(4) == "twenty" == _words(n_big // n_small)
+    assert agrees(found.group(1), peak(big))
+    assert agrees(found.group(2), 100.0 * (peak(big) / peak(small) - 1.0))
+    found = _found(r"(\d+ \d+) runs per variant are (\w+) times this study: ([\d.]+) CPU-hours, "
+                   r"([\d.]+) hours on this host's (\d+) cores")  # fmt: skip
+    n_10k = int(found.group(1).replace(" ", ""))
+    assert found.group(2) == _words(n_10k // n_big)
+    cpu_h = n_10k / n_big * sum(_cpu(STUDY + "w2-1000.json")) / 3600
+    cores = int(found.group(5))
     assert cores == results("docs/results/bench.json")["machine"]["cpus"]
-    assert agrees(found.group(1), cpu_h)
-    assert agrees(found.group(2), cpu_h / cores)
+    assert agrees(found.group(3), cpu_h) and agrees(found.group(4), cpu_h / cores)
+    found = _found(r"The first (\d+) runs of each variant are the table's .* the statistics of "
+                   r"all (\d+) runs")  # fmt: skip
+    assert (int(found.group(1)), int(found.group(2))) == (n_small, n_big)
+    for v in big["variants"]:
+        assert v["runs"] == n_big
+        assert (v["truth_outside"], v["empty_set"], v["diverged"], v["failures"]) == (0,) * 4
+
+
+def test_the_study_against_5f9e157_on_one_host():
+    """The previous study (``*_at_5f9e157``) drew the same bearings-only runs at less CPU
+    on another host; run alternately on one host, the two codes cost the same there
+    (the ratios' extremes, the same results in every pair), and the range-finder rows
+    cost more, with other results (``band_trials="auto"``)."""
+    old_w1, now_w1 = (results(f"{STUDY}w1{tag}.json")["variants"] for tag in ("_at_5f9e157", ""))
+    found = _found(r"another host\) read ([\d.]+) and ([\d.]+) CPU-s for the bearings-only rows "
+                   r"with one worker, for the same runs to the last digit")  # fmt: skip
+    assert agrees(found.group(1), old_w1[0]["cpu_s"]) and agrees(found.group(2), old_w1[1]["cpu_s"])
+    keys = ("variant", "noise", "runs", "seed", "miss_m", "fuel_mps", "truth_outside")
+    for old, now in zip(old_w1[:2], now_w1[:2], strict=True):
+        assert old["variant"] == "bearing only" and {k: old[k] for k in keys} == {
+            k: now[k] for k in keys
+        }
+    side = results("docs/results/study/side_by_side_5f9e157.json")
+    found = _found(r"\((\w+) pairs of `kvi fig5 --runs (\d+) --workers 1`, the code of 5f9e157 "
+                   r"first")  # fmt: skip
+    assert found.group(1) == _words(len(side["pairs"]))
+    assert int(found.group(2)) == side["runs_per_variant"]
+    ratios: dict[bool, list[float]] = {True: [], False: []}  # by "bearing only"
+    for pair in side["pairs"]:
+        for old, now in zip(pair["5f9e157"]["variants"], pair["now"]["variants"], strict=True):
+            assert old["runs"] == now["runs"] == side["runs_per_variant"]
+            bearing_only = old["variant"] == "bearing only"
+            same = all(old[k] == now[k] for k in ("miss_m", "fuel_mps"))
+            assert same == bearing_only, (old["variant"], old["noise"])
+            ratios[bearing_only].append(now["cpu_s"] / old["cpu_s"])
+    found = _found(r"this code's bearings-only rows cost ([\d.]+) to ([\d.]+) times the CPU time "
+                   r"of 5f9e157's, with the same results\. Its range-finder rows cost ([\d.]+) to "
+                   r"([\d.]+) times as much, and their results differ")  # fmt: skip
+    values = (min(ratios[True]), max(ratios[True]), min(ratios[False]), max(ratios[False]))
+    for printed, value in zip(found.groups(), values, strict=True):
+        assert agrees(printed, value), (printed, value)
 
 
 def test_the_dask_run_drew_the_same_table_as_local_processes():
@@ -42,6 +122,8 @@ def test_the_dask_run_drew_the_same_table_as_local_processes():
     for other in runs[1:]:
         assert [{k: v[k] for k in keys} for v in other] == first
     assert all(v["cpu_s"] is None for v in runs[2])  # a cluster's workers: not counted
+    found = _found(r"The (\d+)-run study on a local Dask scheduler")
+    assert int(found.group(1)) == results(STUDY + "dask.json")["runs"]
 
 
 def test_the_speed_options_defaults_rows_are_the_published_runs():
@@ -117,7 +199,11 @@ def test_two_workers_cost_what_the_study_table_says_more_than_one():
     more = _more_with_two_workers()
     assert min(more) < 0 < max(more)
     assert agrees(found.group(1), -min(more)) and agrees(found.group(2), max(more))
-    found = _found(r"change to the pool they cost (\d+) % to (\d+) % more")
+    found = _found(r"and from (\d+) % less to (\d+) % more in the previous measurement")
+    more = _more_with_two_workers("_at_5f9e157")
+    assert min(more) < 0 < max(more)
+    assert agrees(found.group(1), -min(more)) and agrees(found.group(2), max(more))
+    found = _found(r"the pool's change they cost (\d+) % to (\d+) % more")
     more = _more_with_two_workers("_at_52398b6")
     assert 0 < min(more)
     assert agrees(found.group(1), min(more)) and agrees(found.group(2), max(more))
@@ -274,15 +360,6 @@ def test_the_piece_split_floor_tightness_sentence_matches_its_files():
     everything = ("kp_fig5", "kp_fig3", "kp_fig5_range")
     assert agrees(found.group(5), widest(floor, everything))
     assert agrees(found.group(5), widest(default, everything))
-
-
-def test_the_study_note_on_auto_is_the_measured_ratio():
-    """The large study predates ``band_trials="auto"``: the note gives its CPU-time ratios
-    on the range-finder variants from the alternated comparisons."""
-    ratio = paired_cpu_ratio("kp_fig5_range-auto-default", "kp_fig5_range-auto-impulse_spread")
-    found = _found(r"the two range-finder rows cost ([\d.]+) and ([\d.]+) times as much "
-                   r"\(random, game")  # fmt: skip
-    assert agrees(found.group(1), ratio["random"]) and agrees(found.group(2), ratio["game"])
 
 
 def test_the_old_commits_cpu_time_on_the_two_hosts_of_the_35e3739_comparison():

@@ -38,6 +38,15 @@ TABLES: list[TableCheck] = [
         {0: "variant", 1: "noise"},
         {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)},
     ),
+    # kvi fig5 --runs 1000 --workers 2 --json (the large study of docs/performance.md)
+    TableCheck(
+        INT,
+        "| variant | noise | 1000 runs: miss mean / p50 / p90 / max, m |",
+        "docs/results/study/fig5-w2-1000.json",
+        "variants",
+        {0: "variant", 1: "noise"},
+        {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)},
+    ),
     # kvi compare kp_fig5 --runs 50 --estimators infoset,ekf,ukf --noise random,bias,game
     TableCheck(
         INT,
