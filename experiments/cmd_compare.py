@@ -3,7 +3,10 @@
 Every (estimator, noise) pair runs on the same seeds, so run ``j`` has the same
 initial truth (and, for random noise, the same noise stream) for every estimator.
 Writes one Parquet table of all runs, CDFs of miss and fuel with one curve per
-estimator x noise, and a summary table.
+estimator x noise, a summary table and, with two estimators or more, the paired
+differences of miss and fuel against the reference estimator (the registry's reference,
+the information set, when compared; else the first named) run by run
+(:mod:`~kalman_vs_infoset.experiments.paired`).
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ import argparse
 import time
 from typing import Any
 
+from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
 
 #: the runs use the compiled kernels (the command line announces their compilation)
@@ -25,7 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
-    from kalman_vs_infoset.experiments import plots, traces
+    from kalman_vs_infoset.experiments import paired, plots, traces
     from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid, write_traces
     from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
     from kalman_vs_infoset.experiments.stats import ok_mean
@@ -46,9 +50,11 @@ def run(args) -> dict[str, Any]:
         table, ["estimator", "noise"], f"{sc.name}: estimators x noise, {runs} paired runs", marks
     )
     files += plots.save(fig, out / f"{sc.name}-compare-cdf")
-    files.append(
-        write_text(out / f"{sc.name}-compare.md", summary_markdown(rows, ["estimator", "noise"]))
-    )
+    compared = _paired(table, args.estimators)
+    text = summary_markdown(rows, ["estimator", "noise"])
+    if compared is not None:
+        text += "\n" + _paired_title(compared) + "\n\n" + paired.paired_markdown(compared)
+    files.append(write_text(out / f"{sc.name}-compare.md", text))
     if traced:  # one trace per estimator x noise, drawn together
         pairs = [(e, n) for e in args.estimators for n in args.noise]
         files += write_traces(sc, traced, pairs, frames, seed, out / "runs")
@@ -56,17 +62,47 @@ def run(args) -> dict[str, Any]:
         "scenario": sc.name,
         "runs": runs,
         "rows": rows,
+        "paired": compared,
         "out": str(out),
         "files": [str(f) for f in files],
         "wall_s": time.perf_counter() - t0,
     }
 
 
+def reference_of(estimators) -> str:
+    """The estimator the others are paired against: the registry's reference (the
+    information set) when it is compared, else the first named."""
+    ref = registry.reference("intercept").name
+    return ref if ref in estimators else estimators[0]
+
+
+def _paired(table, estimators) -> dict[str, Any] | None:
+    """The paired differences against :func:`reference_of` (None with one estimator)."""
+    from kalman_vs_infoset.experiments import paired
+
+    if len(set(estimators)) < 2:
+        return None
+    ref = reference_of(estimators)
+    return {"reference": ref, "confidence": paired.CONFIDENCE, "metrics": list(paired.METRICS),
+            "rows": paired.paired_rows(table, ref)}  # fmt: skip
+
+
+def _paired_title(compared: dict[str, Any]) -> str:
+    return (
+        f"Paired by run, each estimator minus {compared['reference']} over the runs both "
+        "finished (run j: the same initial truth and seed for every estimator):"
+    )
+
+
 def render(result: dict[str, Any]) -> str:
+    from kalman_vs_infoset.experiments.paired import paired_markdown
     from kalman_vs_infoset.experiments.report import summary_markdown
 
+    compared = result.get("paired")
+    more = "" if compared is None else f"\n{_paired_title(compared)}\n\n{paired_markdown(compared)}"
     return (
         summary_markdown(result["rows"], ["estimator", "noise"])
+        + more
         + "files:\n"
         + "\n".join("  " + f for f in result["files"])
     )

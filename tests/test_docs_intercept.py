@@ -29,6 +29,10 @@ DERIVED = {
     r"The (\d+)-run means were within ([\d.]+) m and ([\d.]+) m/s of these, the miss's "
     r"largest moves in the game rows \(([\d.]+) -> ([\d.]+) m with bearings only, "
     r"([\d.]+) -> ([\d.]+) m with the range finder\)",
+    "paired_level": r"its\s+mean advantage's (\d+) % interval above zero in every row",
+    "paired_bias": r"their intervals holding zero \(p ([\d.]+) and ([\d.]+)\)",
+    "paired_game": r"the EKF spends ([\d.]+) m/s more than the set \(p ([\d.]+)\) and the UKF "
+    r"about the\s+same \(p ([\d.]+)\)",
     "study_max": r"as maxima do \(bearings-only random ([\d.]+) -> ([\d.]+) m\)",
     "study_fuel": r"Perfect-information fuel ([\d.]+) m/s over the (\d+) runs \(a lower bound of "
     r"the fuel; ([\d.]+)\s+m/s over the first (\d+)\)",
@@ -166,6 +170,35 @@ def test_the_1000_run_fig5_study_against_the_50_run_table():
     fuel, n, fuel_50, n_50 = _printed("study_fuel")
     assert agrees(fuel, big["fuel_perfect_info_mps"]) and int(n) == big["runs"]
     assert agrees(fuel_50, small["fuel_perfect_info_mps"]) and int(n_50) == small["runs"]
+
+
+def test_the_paired_comparison_reads_as_its_file():
+    """docs/intercept.md's reading of the paired Kalman-filter rows (``paired`` of
+    ``kvi compare kp_fig5``): the set misses less in most runs of every row, each
+    interval of the mean miss difference above zero; under random errors the filters
+    spend more fuel in every run; the bias's fuel intervals hold zero (their p-values);
+    the game's fuel difference of the EKF (and its p) and the UKF's interval holding
+    zero (its p)."""
+    data = results("docs/results/compare_kp_fig5.json")
+    assert data["paired"]["reference"] == "infoset"
+    rows = {(r["estimator"], r["noise"]): r for r in data["paired"]["rows"]}
+    assert set(rows) == {(e, n) for e in ("ekf", "ukf") for n in ("random", "bias", "game")}
+    (level,) = _printed("paired_level")
+    assert int(level) / 100 == data["paired"]["confidence"]
+    for r in rows.values():
+        assert r["miss_m"]["larger_share"] > 0.5 and r["miss_m"]["ci"][0] > 0.0
+        assert r["miss_m"]["runs"] == r["fuel_mps"]["runs"] == data["runs"]
+    assert all(rows[(e, "random")]["fuel_mps"]["larger_share"] == 1.0 for e in ("ekf", "ukf"))
+    holds_zero = lambda r: r["fuel_mps"]["ci"][0] < 0.0 < r["fuel_mps"]["ci"][1]  # noqa: E731
+    p_ekf, p_ukf = _printed("paired_bias")
+    for e, p in (("ekf", p_ekf), ("ukf", p_ukf)):
+        assert holds_zero(rows[(e, "bias")]) and agrees(
+            p, rows[(e, "bias")]["fuel_mps"]["wilcoxon_p"]
+        )
+    more, p_more, p_same = _printed("paired_game")
+    ekf, ukf = rows[("ekf", "game")]["fuel_mps"], rows[("ukf", "game")]["fuel_mps"]
+    assert agrees(more, ekf["mean"]) and ekf["ci"][0] > 0.0 and agrees(p_more, ekf["wilcoxon_p"])
+    assert holds_zero(rows[("ukf", "game")]) and agrees(p_same, ukf["wilcoxon_p"])
 
 
 @pytest.mark.parametrize("key", sorted(DERIVED))

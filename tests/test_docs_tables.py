@@ -57,6 +57,23 @@ TABLES: list[TableCheck] = [
         {0: "estimator", 1: "noise"},
         {2: MISS4, 3: FUEL4, 4: ("truth_outside",)},
     ),
+    # the same command's paired differences against the information set
+    TableCheck(
+        INT,
+        "| estimator | noise | paired runs | miss - infoset: mean [95 % CI] / median, m |",
+        "docs/results/compare_kp_fig5.json",
+        "paired/rows",
+        {0: "estimator", 1: "noise"},
+        {
+            2: ("miss_m/runs",),
+            3: ("miss_m/mean", "miss_m/ci/0", "miss_m/ci/1", "miss_m/median"),
+            4: ("miss_m/larger_share",),
+            5: ("miss_m/wilcoxon_p",),
+            6: ("fuel_mps/mean", "fuel_mps/ci/0", "fuel_mps/ci/1", "fuel_mps/median"),
+            7: ("fuel_mps/larger_share",),
+            8: ("fuel_mps/wilcoxon_p",),
+        },
+    ),
     # kvi compare kp_fig5_kalman_constrained --estimators ekf,ukf --noise random,game --runs 50
     TableCheck(
         INT,

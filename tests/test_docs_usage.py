@@ -18,6 +18,7 @@ DERIVED = {
     "steps": r"a run longer than (\d+) (\d+)\s+steps",
     "chunk": r"(\d+) for the vectorised attitude loops",
     "worker": r"without a live worker for (\d+) s",
+    "paired": r"with their mean\s+and (\d+) % confidence interval",
 }
 
 INPUTS = (
@@ -42,8 +43,15 @@ def test_every_number_of_the_usage_page_is_checked():
 
 def test_the_usage_pages_limits_are_the_codes():
     """The main experiment's runs per variant, the largest seed, the longest run, the
-    attitude loops' chunk and the wait for a Dask worker, as the code sets them."""
-    from kalman_vs_infoset.experiments import attitude_gyrostat, attitude_rw, executors, options
+    attitude loops' chunk, the wait for a Dask worker and the paired differences'
+    confidence level, as the code sets them."""
+    from kalman_vs_infoset.experiments import (
+        attitude_gyrostat,
+        attitude_rw,
+        executors,
+        options,
+        paired,
+    )
     from kalman_vs_infoset.experiments.cli import build_parser
     from kalman_vs_infoset.experiments.sim import intercept_config
 
@@ -57,3 +65,5 @@ def test_the_usage_pages_limits_are_the_codes():
     assert attitude_rw.CHUNK == attitude_gyrostat.CHUNK == int(chunk)
     (wait,) = printed(DOC, DERIVED["worker"])
     assert executors.NO_WORKER_TIMEOUT_S == float(wait)
+    (level,) = printed(DOC, DERIVED["paired"])
+    assert paired.CONFIDENCE == int(level) / 100

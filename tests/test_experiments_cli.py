@@ -12,6 +12,7 @@ from harness_texts import RANGE_FINDER, cli_inproc, experiment
 from harness_texts import SHORT as SHORT_ENGAGEMENT
 from kalman_vs_infoset.experiments import intercept_runs, runner
 from kalman_vs_infoset.experiments.intercept_runs import run_experiment
+from kalman_vs_infoset.experiments.paired import paired_rows
 from kalman_vs_infoset.experiments.results import read_metadata
 from kalman_vs_infoset.experiments.scenario import load_scenario
 
@@ -309,6 +310,14 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
     table = pd.read_parquet(next(f for f in out["files"] if f.endswith(".parquet")))
     truth = table.groupby("run")[["x0_km", "y0_km", "vy0_kmps", "vx0_kmps"]].nunique()
     assert (truth == 1).all().all()  # every estimator and noise saw the same truth in run j
+    # the paired differences against the information set, from the same table
+    assert out["paired"]["reference"] == "infoset"
+    assert out["paired"]["rows"] == paired_rows(table, "infoset")
+    assert {(x["estimator"], x["noise"]) for x in out["paired"]["rows"]} == {
+        (e, n) for e in names[1:] for n in ("random", "game")
+    }
+    summary = (tmp_path / "a" / "short-compare.md").read_text()
+    assert "Paired by run, each estimator minus infoset" in summary
     r2 = cli_inproc(capsys, *args, "--out", tmp_path / "b")
     table2 = pd.read_parquet(Path(tmp_path / "b") / "short-compare.parquet")
     cols = ["estimator", "noise", "run", "miss_m", "fuel_mps", "truth_outside"]

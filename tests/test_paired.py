@@ -1,0 +1,110 @@
+"""Paired differences of ``kvi compare`` (:mod:`experiments.paired`), against independent
+computations: Student's t interval from its formula (``scipy.stats.t`` quantiles), the
+signed-rank test's exact p-value by enumerating every sign pattern, and the pairing
+itself on hand-made tables."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from kalman_vs_infoset.experiments.paired import paired_markdown, paired_rows, paired_stats
+from scipy import stats
+
+
+def test_mean_difference_interval_is_students_t_formula():
+    """``mean +- t_{n-1, 0.975} s / sqrt(n)`` with ``s`` the sample standard deviation."""
+    d = np.random.default_rng(11).normal(0.3, 2.0, size=23)
+    out = paired_stats(d)
+    half = stats.t.ppf(0.975, d.size - 1) * d.std(ddof=1) / np.sqrt(d.size)
+    assert out["mean"] == pytest.approx(d.mean(), rel=1e-14)
+    assert out["ci"] == pytest.approx([d.mean() - half, d.mean() + half], rel=1e-12)
+    assert out["median"] == np.median(d)
+    assert out["larger_share"] == np.count_nonzero(d > 0) / d.size
+
+
+def _exact_signed_rank_p(d: np.ndarray) -> float:
+    """Two-sided p of the signed-rank statistic by enumerating all 2^n sign patterns
+    (distinct, nonzero |d|: ranks 1..n)."""
+    ranks = stats.rankdata(np.abs(d))
+    observed = ranks[d > 0].sum()
+    sums = np.array([sum(r for r, s in zip(ranks, signs, strict=True) if s)
+                     for signs in itertools.product((False, True), repeat=d.size)])  # fmt: skip
+    low, high = np.mean(sums <= observed), np.mean(sums >= observed)
+    return min(1.0, 2.0 * min(low, high))
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_signed_rank_p_is_the_exact_enumeration(seed):
+    rng = np.random.default_rng(seed)
+    d = rng.permutation(np.arange(1, 11)) * rng.choice([-1.0, 1.0], size=10) + 0.5
+    assert paired_stats(d)["wilcoxon_p"] == pytest.approx(_exact_signed_rank_p(d), rel=1e-12)
+
+
+def test_undefined_statistics_are_none():
+    assert paired_stats(np.array([]))["mean"] is None
+    one = paired_stats(np.array([2.0]))
+    assert one["mean"] == 2.0 and one["ci"] is None and one["wilcoxon_p"] is not None
+    zeros = paired_stats(np.zeros(5))
+    assert zeros["ci"] == [0.0, 0.0] and zeros["wilcoxon_p"] is None
+    assert zeros["larger_share"] == 0.0
+
+
+def _table(values: dict[str, list[float]], status=None, noise="random") -> pd.DataFrame:
+    rows = []
+    for est, miss in values.items():
+        for j, m in enumerate(miss):
+            ok = "ok" if status is None or (est, j) not in status else "failed"
+            rows.append({"estimator": est, "noise": noise, "seed": 5, "run": j, "miss_m": m,
+                         "fuel_mps": 10.0 * m, "status": ok})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_runs_are_paired_by_index_not_by_order_and_failures_drop_out():
+    """A shuffled table gives the same rows; a run failed by either estimator, or with a
+    non-finite value, is left out of that pair."""
+    table = _table({"infoset": [1.0, 2.0, 3.0, 4.0], "ekf": [2.0, 2.5, np.inf, 9.0]},
+                   status={("infoset", 3)})  # fmt: skip
+    (row,) = paired_rows(table, "infoset")
+    assert (row["estimator"], row["noise"]) == ("ekf", "random")
+    assert row["miss_m"]["runs"] == 2  # run 2: inf; run 3: the reference failed
+    assert row["miss_m"]["mean"] == pytest.approx(np.mean([1.0, 0.5]))
+    assert row["fuel_mps"]["mean"] == pytest.approx(np.mean([10.0, 5.0]))
+    shuffled = table.sample(frac=1.0, random_state=3)
+    assert paired_rows(shuffled, "infoset") == [row]
+
+
+def test_without_the_reference_no_run_is_paired():
+    (row,) = paired_rows(_table({"ekf": [1.0, 2.0]}), "infoset")
+    assert row["miss_m"]["runs"] == 0 and row["miss_m"]["mean"] is None
+
+
+def test_the_markdown_prints_every_row_and_dashes_for_missing():
+    rows = paired_rows(_table({"infoset": [1.0, 2.0], "ekf": [1.5], "ukf": [3.0, 1.0]}), "infoset")
+    text = paired_markdown({"reference": "infoset", "confidence": 0.95, "rows": rows})
+    lines = text.strip().splitlines()
+    assert len(lines) == 2 + 2 and "95 % CI" in lines[0]
+    assert "| ekf | random | 1 | 0.50 [-] / 0.50 |" in text  # one pair: no interval
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 100), st.floats(0, 100)), min_size=2, max_size=12))
+def test_swapping_the_roles_negates_the_differences(pairs):
+    """Estimator against reference, and back: mean, interval and median negate, the
+    larger shares are those of the opposite sign, the two-sided p is the same."""
+    a, b = (list(x) for x in zip(*pairs, strict=True))
+    (ab,) = paired_rows(_table({"infoset": b, "ekf": a}), "infoset")
+    (ba,) = paired_rows(_table({"infoset": b, "ekf": a}), "ekf")
+    x, y = ab["miss_m"], ba["miss_m"]
+    assert x["mean"] == pytest.approx(-y["mean"], abs=1e-9)
+    assert x["median"] == pytest.approx(-y["median"], abs=1e-9)
+    assert x["ci"] == pytest.approx([-y["ci"][1], -y["ci"][0]], abs=1e-9)
+    d = np.subtract(a, b)
+    assert x["larger_share"] == np.mean(d > 0) and y["larger_share"] == np.mean(d < 0)
+    assert (x["wilcoxon_p"] is None) == (y["wilcoxon_p"] is None)
+    if x["wilcoxon_p"] is not None:
+        assert x["wilcoxon_p"] == pytest.approx(y["wilcoxon_p"], rel=1e-9)
