@@ -12,9 +12,10 @@ over the runs both finished. Reported per estimator x noise: the mean of ``d`` w
 Student's t confidence interval :math:`\\bar d \\pm t_{n-1,(1+c)/2}\\, s_d / \\sqrt{n}`
 (from ``scipy.stats.ttest_1samp``), the median of ``d``, the share of runs where the
 estimator's value is the larger, and the two-sided p-value of Wilcoxon's signed-rank
-test (``scipy.stats.wilcoxon``: distribution-free, exact for small samples without
-ties). Heavy tails (a filter that loses the target in a few runs) widen the t interval;
-the median, the share and the signed-rank test do not depend on them.
+test (``scipy.stats.wilcoxon``: distribution-free; scipy takes the exact or a
+permutation distribution for small samples, the normal approximation for large ones).
+Heavy tails (a filter that loses the target in a few runs) widen the t interval; the
+median, the share and the signed-rank test do not depend on them.
 """
 
 from __future__ import annotations

@@ -92,7 +92,8 @@ def test_the_markdown_prints_every_row_and_dashes_for_missing():
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.lists(st.tuples(st.floats(0, 100), st.floats(0, 100)), min_size=2, max_size=12))
+# (up to 8 pairs: with ties, scipy's signed-rank test enumerates 2^n sign patterns)
+@given(st.lists(st.tuples(st.floats(0, 100), st.floats(0, 100)), min_size=2, max_size=8))
 def test_swapping_the_roles_negates_the_differences(pairs):
     """Estimator against reference, and back: mean, interval and median negate, the
     larger shares are those of the opposite sign, the two-sided p is the same."""
