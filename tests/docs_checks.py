@@ -275,6 +275,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"([\d.]+) m", CMP,
      _row("ekf", "bias", "miss_m/mean") + _row("ukf", "bias", "miss_m/mean")
      + _row("infoset", "bias", "miss_m/mean")),
+    (README, r"the fuel differences are not significant \(signed-rank p\s+([\d.]+) and ([\d.]+)\)",
+     CMP, ("paired/rows/[estimator=ekf,noise=bias]/fuel_mps/wilcoxon_p",
+           "paired/rows/[estimator=ukf,noise=bias]/fuel_mps/wilcoxon_p")),
     (README, r"the set's miss grows to ([\d.]+) m for ([\d.]+) m/s, its guarantee holds "
      r"\((\d+) steps outside\)", CMP, _row("infoset", "game", *MISS_FUEL, "truth_outside")),
     (README, r"they miss by ([\d.]+) m \(EKF\) and ([\d.]+) m \(UKF\)", CMP,
