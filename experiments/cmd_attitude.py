@@ -144,7 +144,7 @@ def request(args: argparse.Namespace) -> AttitudeRequest:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
-    from kalman_vs_infoset.experiments import traces
+    from kalman_vs_infoset.experiments import paired, traces
     from kalman_vs_infoset.experiments.runner import (
         Job,
         batched_task,
@@ -204,7 +204,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     result = dict(results[0])
     if len(results) > 1:
         result["rows"] = results
-    files += _figures(req, pd.concat(frames, ignore_index=True), histories)
+    table = pd.concat(frames, ignore_index=True)
+    # several estimators: each against the box, run by run (the same seeds)
+    compared = paired.comparison(table, req.estimators, "attitude")
+    if compared is not None:
+        result["paired"] = compared
+    files += _figures(req, table, histories)
     result["files"] = files
     return result
 
@@ -261,9 +266,17 @@ def render(result: dict[str, Any]) -> str:
     cost = f"{sum(r['wall_s'] for r in rows):.1f} s"
     if all(c is not None for c in cpu):
         cost += f", {sum(cpu):.1f} CPU-s"
+    compared = result.get("paired")
+    if compared is not None:
+        from kalman_vs_infoset.experiments import paired
+
+        more = [paired.title(compared), paired.paired_markdown(compared, "attitude")]
+    else:
+        more = []
     return "\n".join(
         [
             *(line for r in rows for line in _summary(r)),
+            *more,
             f"  done ({cost}); files:",
             *(f"  {f}" for f in result.get("files", [])),
         ]

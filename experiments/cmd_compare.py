@@ -15,7 +15,6 @@ import argparse
 import time
 from typing import Any
 
-from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
 
 #: the runs use the compiled kernels (the command line announces their compilation)
@@ -50,10 +49,10 @@ def run(args) -> dict[str, Any]:
         table, ["estimator", "noise"], f"{sc.name}: estimators x noise, {runs} paired runs", marks
     )
     files += plots.save(fig, out / f"{sc.name}-compare-cdf")
-    compared = _paired(table, args.estimators)
+    compared = paired.comparison(table, args.estimators, "intercept")
     text = summary_markdown(rows, ["estimator", "noise"])
     if compared is not None:
-        text += "\n" + _paired_title(compared) + "\n\n" + paired.paired_markdown(compared)
+        text += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
     files.append(write_text(out / f"{sc.name}-compare.md", text))
     if traced:  # one trace per estimator x noise, drawn together
         pairs = [(e, n) for e in args.estimators for n in args.noise]
@@ -69,37 +68,15 @@ def run(args) -> dict[str, Any]:
     }
 
 
-def reference_of(estimators) -> str:
-    """The estimator the others are paired against: the registry's reference (the
-    information set) when it is compared, else the first named."""
-    ref = registry.reference("intercept").name
-    return ref if ref in estimators else estimators[0]
-
-
-def _paired(table, estimators) -> dict[str, Any] | None:
-    """The paired differences against :func:`reference_of` (None with one estimator)."""
-    from kalman_vs_infoset.experiments import paired
-
-    if len(set(estimators)) < 2:
-        return None
-    ref = reference_of(estimators)
-    return {"reference": ref, "confidence": paired.CONFIDENCE, "metrics": list(paired.METRICS),
-            "rows": paired.paired_rows(table, ref)}  # fmt: skip
-
-
-def _paired_title(compared: dict[str, Any]) -> str:
-    return (
-        f"Paired by run, each estimator minus {compared['reference']} over the runs both "
-        "finished (run j: the same initial truth and seed for every estimator):"
-    )
-
-
 def render(result: dict[str, Any]) -> str:
-    from kalman_vs_infoset.experiments.paired import paired_markdown
+    from kalman_vs_infoset.experiments import paired
     from kalman_vs_infoset.experiments.report import summary_markdown
 
     compared = result.get("paired")
-    more = "" if compared is None else f"\n{_paired_title(compared)}\n\n{paired_markdown(compared)}"
+    more = (
+        "" if compared is None
+        else f"\n{paired.title(compared)}\n\n{paired.paired_markdown(compared)}"
+    )  # fmt: skip
     return (
         summary_markdown(result["rows"], ["estimator", "noise"])
         + more

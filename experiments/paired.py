@@ -26,8 +26,18 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-#: the metrics compared, as columns of the per-run table
-METRICS = ("miss_m", "fuel_mps")
+#: per problem, the metrics compared: (column of the per-run table, printed name, unit,
+#: format of the printed values)
+COLUMNS = {
+    "intercept": (("miss_m", "miss", "m", ".2f"), ("fuel_mps", "fuel", "m/s", ".1f")),
+    "attitude": (
+        ("settle_time_s", "settle time", "s", ".2f"),
+        ("energy_N2m2s", "energy", "N^2 m^2 s", ".4g"),
+        ("final_angle_deg", "final angle", "deg", ".3g"),
+    ),
+}
+#: the intercept's metrics (``kvi compare``)
+METRICS = tuple(c[0] for c in COLUMNS["intercept"])
 #: the confidence level of the mean difference's interval
 CONFIDENCE = 0.95
 #: what identifies a run across the rows of one comparison
@@ -88,20 +98,55 @@ def paired_rows(
     return rows
 
 
-def paired_markdown(paired: dict[str, Any]) -> str:
-    """The paired differences as a markdown table (:func:`paired_rows` with its reference)."""
+def reference_of(problem: str, estimators: Sequence[str]) -> str:
+    """The estimator the others are paired against: the registry's reference for the
+    problem (the information set; the guaranteed box for attitude) when it is among
+    ``estimators``, else the first named."""
+    from kalman_vs_infoset.estim import registry
+
+    ref = registry.reference(problem).name
+    return ref if ref in estimators else estimators[0]
+
+
+def comparison(table: pd.DataFrame, estimators: Sequence[str], problem: str) -> dict | None:
+    """The ``paired`` object of a command's JSON: ``reference``, ``confidence``,
+    ``metrics`` and ``rows`` (:func:`paired_rows`); ``None`` with one estimator."""
+    if len(set(estimators)) < 2:
+        return None
+    ref = reference_of(problem, estimators)
+    # (a loop without one of the problem's metrics has no column for it)
+    metrics = [c[0] for c in COLUMNS[problem] if c[0] in table.columns]
+    return {"reference": ref, "confidence": CONFIDENCE, "metrics": metrics,
+            "rows": paired_rows(table, ref, metrics)}  # fmt: skip
+
+
+def title(paired: dict[str, Any]) -> str:
+    """The line above :func:`paired_markdown`'s table."""
+    return (
+        f"Paired by run, each estimator minus {paired['reference']} over the runs both "
+        "finished (run j: the same initial state and seed for every estimator):"
+    )
+
+
+def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
+    """The paired differences as a markdown table (:func:`comparison`); the paired runs
+    of each metric, once when they agree."""
     ref, level = paired["reference"], round(100 * paired["confidence"])
-    head = ["estimator", "noise", "paired runs", f"miss - {ref}: mean [{level} % CI] / median, m",
-            "share of larger miss", "Wilcoxon p", f"fuel - {ref}: mean [{level} % CI] / "
-            "median, m/s", "share of larger fuel", "Wilcoxon p"]  # fmt: skip
+    columns = tuple(c for c in COLUMNS[problem] if c[0] in paired["metrics"])
+    head = ["estimator", "noise", "paired runs"]
+    for _, name, unit, _ in columns:
+        head += [f"{name} - {ref}: mean [{level} % CI] / median, {unit}",
+                 f"share of larger {name}", "Wilcoxon p"]  # fmt: skip
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def num(v, fmt: str) -> str:
         return "-" if v is None else format(v, fmt)
 
     for r in paired["rows"]:
-        cells = [str(r["estimator"]), str(r["noise"]), str(r["miss_m"]["runs"])]
-        for m, fmt in (("miss_m", ".2f"), ("fuel_mps", ".1f")):
+        runs = [str(r[c[0]]["runs"]) for c in columns]
+        cells = [str(r["estimator"]), str(r["noise"])]
+        cells.append(runs[0] if len(set(runs)) == 1 else " / ".join(runs))
+        for m, _, _, fmt in columns:
             s = r[m]
             ci = "-" if s["ci"] is None else f"{s['ci'][0]:{fmt}}, {s['ci'][1]:{fmt}}"
             cells.append(f"{num(s['mean'], fmt)} [{ci}] / {num(s['median'], fmt)}")

@@ -241,7 +241,8 @@ def test_ukf_is_consistent_without_unmodelled_effects():
 
 def test_attitude_command_estimators_paired_and_counted(tmp_path):
     """Short smallsat runs through the CLI: three estimators on the same realisations,
-    Parquet + CDF figures written, the box never loses the truth."""
+    Parquet + CDF figures written, the box never loses the truth, and the others paired
+    with it run by run."""
     from kalman_vs_infoset.experiments.cli import main
 
     scen = tmp_path / "short.toml"
@@ -268,6 +269,15 @@ def test_attitude_command_estimators_paired_and_counted(tmp_path):
     df = pd.concat([pd.read_parquet(p) for p in tables])  # one per estimator, seed-named
     assert len(tables) == 3 and all(p.endswith("-s4.parquet") for p in tables)
     assert len(df) == 9 and set(df["estimator"]) == {"perfect", "ukf", "box"}
+    # paired run by run against the box (the attitude registry's reference), from the tables
+    from kalman_vs_infoset.experiments.paired import paired_rows
+
+    assert res["paired"]["reference"] == "box"
+    assert res["paired"]["metrics"] == ["settle_time_s", "energy_N2m2s", "final_angle_deg"]
+    assert res["paired"]["rows"] == paired_rows(df, "box", res["paired"]["metrics"])
+    assert [(r["estimator"], r["noise"]) for r in res["paired"]["rows"]] == [
+        ("perfect", "random"), ("ukf", "random"),
+    ]  # fmt: skip
     again = _run_cli(main, args)
     assert again["rows"][2]["energy_N2m2s"] == rows["box"]["energy_N2m2s"]
 

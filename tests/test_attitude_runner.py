@@ -99,16 +99,21 @@ def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsy
 
 def test_the_text_summary_has_one_block_per_estimator_and_noise(scenario, tmp_path, capsys):
     """Without ``--json`` every estimator x noise gets its lines (settle, energy, final
-    error, containment), then the cost and the files; no raw record is printed."""
+    error, containment), then the estimators paired with the box, then the cost and the
+    files; no raw record is printed."""
     args = ["attitude", str(scenario), "--noise", "random,game", "--estimators", "box,perfect",
             "--runs", "2", "--out", str(tmp_path / "o"), "--no-progress"]  # fmt: skip
     assert main(args) == 0
     text = capsys.readouterr().out
-    heads = [line for line in text.splitlines() if not line.startswith(" ")]
+    blocks, paired = text.split("Paired by run, each estimator minus box", 1)
+    heads = [line for line in blocks.splitlines() if not line.startswith(" ")]
     assert heads == [
         f"{scenario.stem}: pd on {e} / {n} noise, 2 runs, seed 0"
         for e in ("box", "perfect")
         for n in ("random", "game")
     ]
+    # then the estimators paired with the box, a table row per estimator x noise
+    table = [line for line in paired.splitlines() if line.startswith("| perfect |")]
+    assert [row.split(" | ")[1] for row in table] == ["random", "game"]
     assert text.count("truth outside belief: ") == 4 and "CPU-s); files:" in text
     assert "{" not in text and "settle s" in text

@@ -12,7 +12,13 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from kalman_vs_infoset.experiments.paired import paired_markdown, paired_rows, paired_stats
+from kalman_vs_infoset.experiments.paired import (
+    comparison,
+    paired_markdown,
+    paired_rows,
+    paired_stats,
+    reference_of,
+)
 from scipy import stats
 
 
@@ -83,9 +89,35 @@ def test_without_the_reference_no_run_is_paired():
     assert row["miss_m"]["runs"] == 0 and row["miss_m"]["mean"] is None
 
 
+def test_the_reference_is_the_registrys_when_compared_else_the_first():
+    assert reference_of("intercept", ["ekf", "infoset"]) == "infoset"
+    assert reference_of("intercept", ["ukf", "ekf"]) == "ukf"
+    assert reference_of("attitude", ["ukf", "box"]) == "box"
+    assert comparison(_table({"ekf": [1.0]}), ["ekf"], "intercept") is None
+    table = _table({"ukf": [1.0, 2.0], "ekf": [2.0, 2.0]})
+    out = comparison(table, ["ukf", "ekf"], "intercept")
+    assert out is not None and out["reference"] == "ukf"
+    assert out["rows"] == paired_rows(table, "ukf") and out["confidence"] == 0.95
+
+
+def test_a_missing_metric_column_is_left_out():
+    """An attitude loop without one of the problem's metrics (here, no final angle): the
+    others are compared, and the table prints them only."""
+    table = _table({"box": [1.0, 2.0], "ukf": [2.0, 4.0]}).rename(
+        columns={"miss_m": "settle_time_s", "fuel_mps": "energy_N2m2s"}
+    )
+    out = comparison(table, ["box", "ukf"], "attitude")
+    assert out is not None and out["metrics"] == ["settle_time_s", "energy_N2m2s"]
+    text = paired_markdown(out, "attitude")
+    assert "settle time - box" in text and "energy - box" in text and "final angle" not in text
+
+
 def test_the_markdown_prints_every_row_and_dashes_for_missing():
     rows = paired_rows(_table({"infoset": [1.0, 2.0], "ekf": [1.5], "ukf": [3.0, 1.0]}), "infoset")
-    text = paired_markdown({"reference": "infoset", "confidence": 0.95, "rows": rows})
+    text = paired_markdown(
+        {"reference": "infoset", "confidence": 0.95, "metrics": ["miss_m", "fuel_mps"],
+         "rows": rows}
+    )  # fmt: skip
     lines = text.strip().splitlines()
     assert len(lines) == 2 + 2 and "95 % CI" in lines[0]
     assert "| ekf | random | 1 | 0.50 [-] / 0.50 |" in text  # one pair: no interval
