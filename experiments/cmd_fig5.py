@@ -2,8 +2,9 @@
 
 Four variants, {bearing only, bearing + range} x {random, game} noise, 50 runs each
 on the same seeds; writes the per-run table (Parquet, CSV), a summary table
-(markdown) and the CDFs of miss and fuel (PNG, SVG) with the paper's Fig. 3
-single-run numbers and the lower bounds marked.
+(markdown), the range finder's effect run by run (the variants share truths and seeds:
+:func:`~kalman_vs_infoset.experiments.paired.variants`) and the CDFs of miss and fuel
+(PNG, SVG) with the paper's Fig. 3 single-run numbers and the lower bounds marked.
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def _stem(args) -> str:
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
-    from kalman_vs_infoset.experiments import plots
+    from kalman_vs_infoset.experiments import paired, plots
     from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid
     from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
     from kalman_vs_infoset.experiments.scenario import load_scenario, scenario_folder
@@ -107,12 +108,16 @@ def run(args) -> dict[str, Any]:
     fuel = "n/a (no successful run)" if floor is None else f"{floor:.1f} m/s (mean over runs)"
     md += f"\nLower bounds: perfect-information fuel {fuel}, "
     md += f"bearing-limited miss floor {miss_floor_m(sc):.2f} m.\n"
+    # the range finder's effect run by run (the variants share truths and seeds)
+    compared = paired.variants(table, VARIANTS[0][1])
+    md += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
     files.append(write_text(out / f"{stem}_summary.md", md))
     return {
         "runs": args.runs,
         "variants": rows,
         "fuel_perfect_info_mps": floor,
         "miss_floor_m": miss_floor_m(sc),
+        "paired": compared,
         "out": str(out),
         "files": [str(f) for f in files],
         "wall_s": time.perf_counter() - t0,
@@ -120,7 +125,11 @@ def run(args) -> dict[str, Any]:
 
 
 def render(result: dict[str, Any]) -> str:
+    from kalman_vs_infoset.experiments import paired
     from kalman_vs_infoset.experiments.report import summary_markdown
 
     md = summary_markdown(result["variants"], ["variant", "noise", "estimator"])
+    compared = result.get("paired")
+    if compared is not None:
+        md += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
     return md + "files:\n" + "\n".join("  " + f for f in result["files"])

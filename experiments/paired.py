@@ -75,20 +75,22 @@ def paired_rows(
     reference: str,
     metrics: Sequence[str] = METRICS,
     confidence: float = CONFIDENCE,
+    by: str = "estimator",
 ) -> list[dict[str, Any]]:
-    """Per estimator (other than ``reference``) and noise, the paired differences of
-    each metric against ``reference`` over the runs both finished (status ``ok``,
-    finite values), matched by noise, seed and run index."""
+    """Per value of the column ``by`` (the estimator; ``kvi fig5``: the variant) other
+    than ``reference``, and per noise, the paired differences of each metric against
+    ``reference`` over the runs both finished (status ``ok``, finite values), matched by
+    noise, seed and run index."""
     ok = table[table["status"] == "ok"] if "status" in table else table
     keys = list(RUN_KEYS)
-    ref = ok[ok["estimator"] == reference].set_index(keys)
+    ref = ok[ok[by] == reference].set_index(keys)
     rows = []
-    for (estimator, noise), part in ok.groupby(["estimator", "noise"], sort=False):
-        if estimator == reference:
+    for (value, noise), part in ok.groupby([by, "noise"], sort=False):
+        if value == reference:
             continue
         mine = part.set_index(keys)
         both = mine.index.intersection(ref.index)
-        row: dict[str, Any] = {"estimator": estimator, "noise": noise}
+        row: dict[str, Any] = {by: value, "noise": noise}
         for m in metrics:
             a = mine.loc[both, m].to_numpy(dtype=float)
             b = ref.loc[both, m].to_numpy(dtype=float)
@@ -120,11 +122,24 @@ def comparison(table: pd.DataFrame, estimators: Sequence[str], problem: str) -> 
             "rows": paired_rows(table, ref, metrics)}  # fmt: skip
 
 
+def variants(table: pd.DataFrame, reference: str) -> dict[str, Any]:
+    """``kvi fig5``'s ``paired`` object: each variant minus ``reference`` (bearings only),
+    per estimator and noise, on the intercept's metrics (the variants share the truths
+    and seeds)."""
+    rows = []
+    for estimator, part in table.groupby("estimator", sort=False):
+        rows += [{**r, "estimator": estimator}
+                 for r in paired_rows(part, reference, METRICS, by="variant")]  # fmt: skip
+    return {"reference": reference, "by": "variant", "confidence": CONFIDENCE,
+            "metrics": list(METRICS), "rows": rows}  # fmt: skip
+
+
 def title(paired: dict[str, Any]) -> str:
     """The line above :func:`paired_markdown`'s table."""
+    what = paired.get("by", "estimator")
     return (
-        f"Paired by run, each estimator minus {paired['reference']} over the runs both "
-        "finished (run j: the same initial state and seed for every estimator):"
+        f"Paired by run, each {what} minus {paired['reference']} over the runs both "
+        f"finished (run j: the same initial state and seed for every {what}):"
     )
 
 
@@ -133,7 +148,10 @@ def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
     of each metric, once when they agree."""
     ref, level = paired["reference"], round(100 * paired["confidence"])
     columns = tuple(c for c in COLUMNS[problem] if c[0] in paired["metrics"])
-    head = ["estimator", "noise", "paired runs"]
+    labels = [paired.get("by", "estimator"), "noise"]
+    if "by" in paired:  # kvi fig5: the estimator too
+        labels.append("estimator")
+    head = [*labels, "paired runs"]
     for _, name, unit, _ in columns:
         head += [f"{name} - {ref}: mean [{level} % CI] / median, {unit}",
                  f"share of larger {name}", "Wilcoxon p"]  # fmt: skip
@@ -144,7 +162,7 @@ def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
 
     for r in paired["rows"]:
         runs = [str(r[c[0]]["runs"]) for c in columns]
-        cells = [str(r["estimator"]), str(r["noise"])]
+        cells = [str(r[k]) for k in labels]
         cells.append(runs[0] if len(set(runs)) == 1 else " / ".join(runs))
         for m, _, _, fmt in columns:
             s = r[m]

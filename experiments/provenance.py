@@ -21,7 +21,15 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("estim", "guidance", "experiments")
 #: presentation only (command line, tables, figures, file writing): not hashed, so
 #: a new plot does not refuse a resume
-PRESENTATION = ("cli.py", "__main__.py", "cmd_*.py", "plots.py", "report.py", "files.py")
+PRESENTATION = (
+    "cli.py",
+    "__main__.py",
+    "cmd_*.py",
+    "plots.py",
+    "report.py",
+    "files.py",
+    "paired.py",
+)
 
 
 class CodeIdentity(TypedDict):

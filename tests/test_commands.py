@@ -191,6 +191,15 @@ def test_fig5_takes_overrides_for_both_variants_in_files_of_their_own(tmp_path, 
         "kp_fig5+estimator.infoset.min_split_tau_s=1",
         "kp_fig5_range+estimator.infoset.min_split_tau_s=1",
     ]
+    # the range finder against bearings only, run by run, from the same table
+    from kalman_vs_infoset.experiments.paired import variants
+
+    result = json.loads(r.stdout.strip().splitlines()[-1])
+    table = pd.read_parquet(out / f"{stem}_runs.parquet")
+    assert result["paired"] == variants(table, "bearing only")
+    assert [(x["variant"], x["noise"]) for x in result["paired"]["rows"]] == [
+        ("bearing + range", "random"), ("bearing + range", "game"),
+    ]  # fmt: skip
     bad = tmp_path / "bad"
     r = run(capsys, "fig5", "--runs", 1, "--out", bad, "--set",
             "estimator.infoset.min_split_tau_s=-1")  # fmt: skip

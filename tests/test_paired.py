@@ -18,6 +18,7 @@ from kalman_vs_infoset.experiments.paired import (
     paired_rows,
     paired_stats,
     reference_of,
+    variants,
 )
 from scipy import stats
 
@@ -141,3 +142,28 @@ def test_swapping_the_roles_negates_the_differences(pairs):
     assert (x["wilcoxon_p"] is None) == (y["wilcoxon_p"] is None)
     if x["wilcoxon_p"] is not None:
         assert x["wilcoxon_p"] == pytest.approx(y["wilcoxon_p"], rel=1e-9)
+
+
+def test_fig5_variants_are_paired_per_estimator():
+    """``kvi fig5``: the range finder's variant minus bearings only, per estimator and
+    noise, matched by run (here the UKF's runs differ from the set's)."""
+    one = _table({"infoset": [1.0, 2.0, 3.0], "ukf": [5.0, 5.0, 5.0]}).assign(variant="b")
+    two = _table({"infoset": [2.0, 2.0, 5.0], "ukf": [4.0, 6.0, 5.0]}).assign(variant="r")
+    out = variants(pd.concat([two, one]), "b")
+    assert out["reference"] == "b" and out["by"] == "variant"
+    rows = {r["estimator"]: r for r in out["rows"]}
+    assert rows["infoset"]["variant"] == "r" and rows["infoset"]["noise"] == "random"
+    assert rows["infoset"]["miss_m"]["mean"] == pytest.approx(1.0)  # (1 + 0 + 2) / 3
+    assert rows["ukf"]["miss_m"]["mean"] == pytest.approx(0.0)
+    assert rows["ukf"]["miss_m"]["larger_share"] == pytest.approx(1 / 3)
+    text = paired_markdown(out)
+    assert text.splitlines()[0].startswith("| variant | noise | estimator | paired runs |")
+
+
+def test_the_paired_summaries_do_not_refuse_a_resume():
+    """paired.py summarises stored runs: it is presentation, outside the code hash that
+    decides whether stored runs are resumed."""
+    from kalman_vs_infoset.experiments import provenance
+
+    assert any(provenance.ROOT.joinpath("experiments/paired.py").match(p)
+               for p in provenance.PRESENTATION)  # fmt: skip
