@@ -33,6 +33,10 @@ DERIVED = {
     "paired_bias": r"their intervals holding zero \(p ([\d.]+) and ([\d.]+)\)",
     "paired_game": r"the EKF spends ([\d.]+) m/s more than the set \(p ([\d.]+)\) and the UKF "
     r"about the\s+same \(p ([\d.]+)\)",
+    "range_random": r"essential improvement\"\): ([\d.]+) m of miss and ([\d.]+) m/s of fuel "
+    r"on average, both intervals below zero, with the miss smaller in only about half the runs",
+    "range_game": r"Under the game it costs ([\d.]+) m of miss on average, more in (\d+) % of "
+    r"the runs, for ([\d.]+) m/s less fuel",
     "study_max": r"as maxima do \(bearings-only random ([\d.]+) -> ([\d.]+) m\)",
     "study_fuel": r"Perfect-information fuel ([\d.]+) m/s over the (\d+) runs \(a lower bound of "
     r"the fuel; ([\d.]+)\s+m/s over the first (\d+)\)",
@@ -170,6 +174,35 @@ def test_the_1000_run_fig5_study_against_the_50_run_table():
     fuel, n, fuel_50, n_50 = _printed("study_fuel")
     assert agrees(fuel, big["fuel_perfect_info_mps"]) and int(n) == big["runs"]
     assert agrees(fuel_50, small["fuel_perfect_info_mps"]) and int(n_50) == small["runs"]
+
+
+def test_the_range_finders_paired_effect_at_1000_runs():
+    """docs/intercept.md's reading of ``kvi fig5 --runs 1000``'s paired variants (a second
+    run of the command, its runs the first's to the last digit): under random errors
+    the range finder saves miss and fuel (intervals below zero, the miss smaller in
+    about half the runs); under the game it adds miss in most runs and saves a little
+    fuel."""
+    first = results("docs/results/study/fig5-w2-1000.json")
+    again = results("docs/results/study/fig5-w2-1000-paired.json")
+    keys = ("variant", "noise", "runs", "seed", "miss_m", "fuel_mps", "truth_outside")
+    assert [{k: v[k] for k in keys} for v in again["variants"]] == [
+        {k: v[k] for k in keys} for v in first["variants"]
+    ]
+    paired = again["paired"]
+    assert (paired["reference"], paired["by"]) == ("bearing only", "variant")
+    rows = {r["noise"]: r for r in paired["rows"]}
+    assert all(r["variant"] == "bearing + range" and r["estimator"] == "infoset"
+               for r in rows.values())  # fmt: skip
+    rnd, game = rows["random"], rows["game"]
+    miss, fuel = _printed("range_random")
+    assert agrees(miss, -rnd["miss_m"]["mean"]) and agrees(fuel, -rnd["fuel_mps"]["mean"])
+    assert rnd["miss_m"]["ci"][1] < 0.0 and rnd["fuel_mps"]["ci"][1] < 0.0
+    # "smaller in only about half": the share of runs with a larger miss is 0.4 to 0.6
+    assert 0.4 < rnd["miss_m"]["larger_share"] < 0.6
+    more, share, less = _printed("range_game")
+    assert agrees(more, game["miss_m"]["mean"]) and game["miss_m"]["ci"][0] > 0.0
+    assert agrees(share, 100.0 * game["miss_m"]["larger_share"])
+    assert agrees(less, -game["fuel_mps"]["mean"]) and game["fuel_mps"]["ci"][1] < 0.0
 
 
 def test_the_paired_comparison_reads_as_its_file():

@@ -46,6 +46,17 @@ def test_the_1000_run_study_costs_what_the_text_says():
     assert int(found.group(3)) == results("docs/results/bench.json")["machine"]["cpus"]
     assert agrees(found.group(1), sum(_cpu(STUDY + "w2-1000.json")))
     assert agrees(found.group(2), big["wall_s"] / 60.0)
+    # a second run of the same command: the same runs, its own CPU and wall time
+    again = results(STUDY + "w2-1000-paired.json")
+    keys = ("variant", "noise", "runs", "seed", "miss_m", "fuel_mps", "truth_outside")
+    assert [{k: v[k] for k in keys} for v in again["variants"]] == [
+        {k: v[k] for k in keys} for v in big["variants"]
+    ]
+    found = _found(r"a second run of the same command right after it, whose runs are the same "
+                   r"to the last digit, read (\d+) CPU-s and ([\d.]+) minutes: "
+                   r"`fig5-w2-1000-paired\.json`")  # fmt: skip
+    assert agrees(found.group(1), sum(_cpu(STUDY + "w2-1000-paired.json")))
+    assert agrees(found.group(2), again["wall_s"] / 60.0)
     per_run = [b / n_big / (s / n_small) for b, s in
                zip(_cpu(STUDY + "w2-1000.json"), _cpu(STUDY + "w2.json"), strict=True)]  # fmt: skip
     found = _found(r"A run cost ([\d.]+) to ([\d.]+) times the CPU time of the 2-worker column's "

@@ -47,6 +47,23 @@ TABLES: list[TableCheck] = [
         {0: "variant", 1: "noise"},
         {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)},
     ),
+    # its second run's paired variants (the range finder minus bearings only)
+    TableCheck(
+        INT,
+        "| variant | noise | estimator | paired runs |",
+        "docs/results/study/fig5-w2-1000-paired.json",
+        "paired/rows",
+        {0: "variant", 1: "noise", 2: "estimator"},
+        {
+            3: ("miss_m/runs",),
+            4: ("miss_m/mean", "miss_m/ci/0", "miss_m/ci/1", "miss_m/median"),
+            5: ("miss_m/larger_share",),
+            6: ("miss_m/wilcoxon_p",),
+            7: ("fuel_mps/mean", "fuel_mps/ci/0", "fuel_mps/ci/1", "fuel_mps/median"),
+            8: ("fuel_mps/larger_share",),
+            9: ("fuel_mps/wilcoxon_p",),
+        },
+    ),
     # kvi compare kp_fig5 --runs 50 --estimators infoset,ekf,ukf --noise random,bias,game
     TableCheck(
         INT,
