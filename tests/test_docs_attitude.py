@@ -27,6 +27,12 @@ DERIVED = {
     "aux": r"the unforced auxiliary system \(4\.6\) alone is at ([\d.]+) deg at 300 s",
     "a_star": r"a\* = \(([\d.]+), ([\d.]+), ([\d.]+)\)e-4 s\^-2, beta\* = ([\d.]+)e-5 s\^-2",
     "sets": r"random noise: (0) steps outside, (0) empty for box, zonotope and ellipsoid",
+    "paired": r"the same (\d+) realisations per noise for every estimator\), the smallsat's "
+    r"settle time under random noise moves by (-?[\d.]+) s with the raw measurement and "
+    r"(-?[\d.]+) s with the UKF \(signed-rank p ([\d.]+) and ([\d.]+): no difference\); under "
+    r"the game torque both settle later than with the box, by ([\d.]+) s and ([\d.]+) s, in "
+    r"every run\. The box pays in the final error: the raw measurement's and the UKF's are "
+    r"smaller than the box's in every run but (\d+) of the UKF's (\d+) under random noise",
 }
 
 #: read by ``test_docs_attitude_estimators.test_the_box_never_lost_the_truth_in_these_files``
@@ -167,3 +173,29 @@ def test_every_number_of_the_attitude_page_is_checked():
 @pytest.mark.parametrize("key", sorted(DERIVED))
 def test_each_derived_sentence_is_on_the_page(key):
     assert _printed(key)
+
+
+def test_the_paired_attitude_reading_is_its_files():
+    """docs/attitude.md's paired reading of ``kvi attitude smallsat_rw --estimators
+    perfect,ukf,box``: the runs paired with the box, the settle time's mean differences
+    and p-values under random noise (no difference: p over 0.05), later in every run
+    under the game, and the final error smaller than the box's in all runs but the
+    UKF's printed ones."""
+    data = results(ATTITUDE + "smallsat_rw.json")
+    assert data["paired"]["reference"] == "box"
+    rows = {(r["estimator"], r["noise"]): r for r in data["paired"]["rows"]}
+    (n, d_raw, d_ukf, p_raw, p_ukf, g_raw, g_ukf, k, n_ukf) = printed(ATT, DERIVED["paired"])
+    settle = {key: r["settle_time_s"] for key, r in rows.items()}
+    assert all(s["runs"] == int(n) for s in settle.values()) and int(n_ukf) == int(n)
+    for shown, key in ((d_raw, "perfect"), (d_ukf, "ukf")):
+        assert agrees(shown, settle[(key, "random")]["mean"])
+    for shown, key in ((p_raw, "perfect"), (p_ukf, "ukf")):
+        p_value = settle[(key, "random")]["wilcoxon_p"]
+        assert agrees(shown, p_value) and p_value > 0.05
+    for shown, key in ((g_raw, "perfect"), (g_ukf, "ukf")):
+        assert agrees(shown, settle[(key, "game")]["mean"])
+        assert settle[(key, "game")]["larger_share"] == 1.0
+    final = {key: r["final_angle_deg"] for key, r in rows.items()}
+    larger = {key: round(f["larger_share"] * f["runs"]) for key, f in final.items()}
+    assert larger == {("perfect", "random"): 0, ("perfect", "game"): 0,
+                      ("ukf", "random"): int(k), ("ukf", "game"): 0}  # fmt: skip
