@@ -92,7 +92,7 @@ def _keys(text: str, overrides: list[str]) -> list[str]:
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
-    from kalman_vs_infoset.experiments import plots
+    from kalman_vs_infoset.experiments import paired, plots
     from kalman_vs_infoset.experiments.intercept_runs import run_grid
     from kalman_vs_infoset.experiments.report import summary_markdown, write_text
     from kalman_vs_infoset.experiments.scenario import load_scenario
@@ -108,15 +108,20 @@ def run(args) -> dict[str, Any]:
         load_scenario(args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)])
         for v in args.values
     ]
-    rows = []
+    rows, frames = [], []
     for value, sc in zip(args.values, scenarios, strict=True):
-        summaries, _ = run_grid(sc, args, runs, seed, out, args.estimators, args.noise)
+        summaries, dfs = run_grid(sc, args, runs, seed, out, args.estimators, args.noise)
         rows += [{"value": json.dumps(value), **row} for row in summaries]
+        frames += [df.assign(value=json.dumps(value)) for df in dfs]
+    # every value sees the same truths: each one minus the first, run by run
+    compared = paired.along(pd.concat(frames, ignore_index=True), "value",
+                            json.dumps(args.values[0]))  # fmt: skip
     stem = f"{base.name}-sweep-{key}"
     flat = pd.json_normalize(rows, sep="_")
     csv = out / f"{stem}.csv"
     atomic_write(csv, lambda tmp: flat.to_csv(tmp, index=False))
-    files = [csv, write_text(out / f"{stem}.md", summary_markdown(rows, _LABELS))]
+    text = summary_markdown(rows, _LABELS) + "\n" + _paired_text(compared)
+    files = [csv, write_text(out / f"{stem}.md", text)]
     title = f"{base.name}: {key} swept, {runs} paired runs per point"
     files += plots.save(plots.sweep_figure(flat, key, title), out / stem)
     return {
@@ -125,6 +130,7 @@ def run(args) -> dict[str, Any]:
         "values": args.values,
         "runs": runs,
         "rows": rows,
+        "paired": compared,
         "out": str(out),
         "files": [str(f) for f in files],
         "wall_s": time.perf_counter() - t0,
@@ -134,12 +140,23 @@ def run(args) -> dict[str, Any]:
 _LABELS = ("value", "estimator", "noise")
 
 
+def _paired_text(compared: dict[str, Any] | None) -> str:
+    """The paired differences' title and table (nothing for a single value)."""
+    from kalman_vs_infoset.experiments import paired
+
+    if compared is None or not compared["rows"]:
+        return ""
+    return paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
+
+
 def render(result: dict[str, Any]) -> str:
     from kalman_vs_infoset.experiments.report import summary_markdown
 
+    more = _paired_text(result.get("paired"))
     return (
         f"{result['key']} swept over {result['values']}\n"
         + summary_markdown(result["rows"], _LABELS)
+        + ("\n" + more if more else "")
         + "files:\n"
         + "\n".join("  " + f for f in result["files"])
     )

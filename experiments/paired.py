@@ -122,16 +122,22 @@ def comparison(table: pd.DataFrame, estimators: Sequence[str], problem: str) -> 
             "rows": paired_rows(table, ref, metrics)}  # fmt: skip
 
 
-def variants(table: pd.DataFrame, reference: str) -> dict[str, Any]:
-    """``kvi fig5``'s ``paired`` object: each variant minus ``reference`` (bearings only),
-    per estimator and noise, on the intercept's metrics (the variants share the truths
-    and seeds)."""
+def along(table: pd.DataFrame, column: str, reference: str) -> dict[str, Any]:
+    """The ``paired`` object of a command whose rows share truths and seeds along
+    ``column`` (``kvi fig5``: the variant; ``kvi sweep``: the swept value): each value
+    minus ``reference``, per estimator and noise, on the intercept's metrics."""
     rows = []
     for estimator, part in table.groupby("estimator", sort=False):
         rows += [{**r, "estimator": estimator}
-                 for r in paired_rows(part, reference, METRICS, by="variant")]  # fmt: skip
-    return {"reference": reference, "by": "variant", "confidence": CONFIDENCE,
+                 for r in paired_rows(part, reference, METRICS, by=column)]  # fmt: skip
+    return {"reference": reference, "by": column, "confidence": CONFIDENCE,
             "metrics": list(METRICS), "rows": rows}  # fmt: skip
+
+
+def variants(table: pd.DataFrame, reference: str) -> dict[str, Any]:
+    """``kvi fig5``'s ``paired`` object: each variant minus ``reference`` (bearings
+    only; :func:`along`)."""
+    return along(table, "variant", reference)
 
 
 def title(paired: dict[str, Any]) -> str:

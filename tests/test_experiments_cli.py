@@ -443,8 +443,9 @@ def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tm
 
 def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     """``sweep`` runs every value as a ``--set`` override: its rows equal ``intercept``
-    with that override (same seed, same truths), and it writes the table and the
-    figure. Names with dots (the key) keep their file extensions."""
+    with that override (same seed, same truths), it pairs each value with the first run
+    by run, and it writes the table and the figure. Names with dots (the key) keep
+    their file extensions."""
     out = tmp_path / "sw"
     r = cli_inproc(
         capsys, "sweep", short, "--key", "model.nu_mps2", "--values", "[0.002, 0.02]",
@@ -459,6 +460,18 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     ]  # fmt: skip
     for ext in ("csv", "md", "png", "svg"):
         assert (out / f"short-sweep-model.nu_mps2.{ext}").is_file()
+    # each value minus the first, run by run: with every run paired, the mean difference
+    # is the difference of the two rows' means
+    assert res["paired"]["reference"] == "0.002" and res["paired"]["by"] == "value"
+    pairs = {(p["value"], p["estimator"]): p for p in res["paired"]["rows"]}
+    assert set(pairs) == {("0.02", "infoset"), ("0.02", "ekf")}
+    for k, est in enumerate(("infoset", "ekf")):
+        for m in ("miss_m", "fuel_mps"):
+            got = pairs[("0.02", est)][m]
+            assert got["runs"] == 2
+            want = res["rows"][2 + k][m]["mean"] - res["rows"][k][m]["mean"]
+            assert got["mean"] == pytest.approx(want, rel=1e-12, abs=1e-12)
+    assert "each value minus 0.002" in (out / "short-sweep-model.nu_mps2.md").read_text()
     r2 = cli_inproc(
         capsys, "intercept", short, "--set", "model.nu_mps2=0.02", "--estimators", "ekf",
         "--noise", "random", "--runs", "2", "--out", tmp_path / "one", "--no-progress", "--json",
