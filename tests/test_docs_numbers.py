@@ -94,11 +94,44 @@ def unlisted_numbers(doc: str, patterns: list[str], inputs: tuple[str, ...]) -> 
     return left
 
 
+#: README sentences whose numbers a test derives from a results file (signs, sums)
+README_DERIVED = {
+    "range_finder": r"At (\d+) runs per variant \(`kvi fig5 --runs (\d+)`, (\d+) engagements, "
+    r"the truth never outside the set; .*?\), paired run by run, the range finder saves "
+    r"([\d.]+) m of miss \(95 % interval ([\d.]+) to ([\d.]+) m\) and ([\d.]+) m/s of fuel "
+    r"under random errors, the seed's \"no essential improvement\", and costs ([\d.]+) m of "
+    r"miss under the game",
+}
+
+
 def test_every_readme_number_is_checked():
-    """A number in the README is read by a row of ``CHECKS`` or is not a result."""
+    """A number in the README is read by a row of ``CHECKS``, derived by a test below
+    (``README_DERIVED``), or is not a result."""
     text = (ROOT / "README.md").read_text(encoding="utf-8")
-    patterns = [c[1] for c in CHECKS if c[0] == README]
+    patterns = [c[1] for c in CHECKS if c[0] == README] + list(README_DERIVED.values())
     assert unchecked_numbers(text, patterns) == []
+
+
+def test_the_readmes_range_finder_sentence_is_the_1000_run_study():
+    """The range finder's paired effect at 1000 runs per variant: the runs, the
+    engagements (all with the truth inside), the random errors' savings of miss (with
+    its 95 % interval, printed as savings) and fuel, and the game's added miss."""
+    from docs_numbers import printed
+
+    study = results("docs/results/study/fig5-w2-1000.json")
+    again = results("docs/results/study/fig5-w2-1000-paired.json")
+    (n, n_cmd, total, miss, lo, hi, fuel, game) = printed(
+        "README.md", README_DERIVED["range_finder"]
+    )
+    assert int(n) == int(n_cmd) == study["runs"] == again["runs"]
+    assert int(total) == sum(v["runs"] for v in study["variants"])
+    assert all(v["truth_outside"] == 0 for v in study["variants"])
+    rows = {r["noise"]: r for r in again["paired"]["rows"]}
+    rnd = rows["random"]
+    assert agrees(miss, -rnd["miss_m"]["mean"]) and agrees(fuel, -rnd["fuel_mps"]["mean"])
+    assert agrees(lo, -rnd["miss_m"]["ci"][1]) and agrees(hi, -rnd["miss_m"]["ci"][0])
+    assert rnd["fuel_mps"]["ci"][1] < 0.0
+    assert agrees(game, rows["game"]["miss_m"]["mean"]) and rows["game"]["miss_m"]["ci"][0] > 0
 
 
 def test_a_stale_number_fails():
@@ -131,7 +164,7 @@ def test_a_changed_number_in_a_copy_of_the_docs_fails():
             copy = text[: match.start(g)] + bumped + text[match.end(g) :]
             assert mismatches(copy, pattern, results(path), keys) != [], (doc, keys[g - 1])
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    patterns = [c[1] for c in CHECKS if c[0] == README]
+    patterns = [c[1] for c in CHECKS if c[0] == README] + list(README_DERIVED.values())
     added = readme.replace("## Install", "The set wins 97 % of runs.\n\n## Install")
     found = unchecked_numbers(added, patterns)
     assert len(found) == 1 and "The set wins 97 % of runs." in found[0]
