@@ -27,25 +27,35 @@ FAMILY_CELLS = {
     5: ("diverged", "empty_set"),
 }
 
+
+def _fig5(header: str, path: str) -> TableCheck:
+    """A ``kvi fig5`` summary table: per variant and noise, miss, fuel and the counts."""
+    cells = {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)}
+    return TableCheck(INT, header, path, "variants", {0: "variant", 1: "noise"}, cells)
+
+
+def _paired_cells(first: int) -> dict[int, tuple[str, ...]]:
+    """The cells of a paired-differences table from column ``first`` (its runs) on."""
+    cells: dict[int, tuple[str, ...]] = {first: ("miss_m/runs",)}
+    for k, m in enumerate(("miss_m", "fuel_mps")):
+        col = first + 1 + 3 * k
+        cells[col] = (f"{m}/mean", f"{m}/ci/0", f"{m}/ci/1", f"{m}/median")
+        cells[col + 1] = (f"{m}/larger_share",)
+        cells[col + 2] = (f"{m}/wilcoxon_p",)
+    return cells
+
+
 TABLES: list[TableCheck] = [
     # make run: kvi fig5 --out results/fig5 --json
-    TableCheck(
-        INT,
+    _fig5(
         "| variant | noise | miss mean / p50 / p90 / max, m | fuel mean / p50 / p90 / max, m/s "
         "| truth outside | empty set | failures |",
         "docs/results/fig5.json",
-        "variants",
-        {0: "variant", 1: "noise"},
-        {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)},
     ),
     # kvi fig5 --runs 1000 --workers 2 --json (the large study of docs/performance.md)
-    TableCheck(
-        INT,
+    _fig5(
         "| variant | noise | 1000 runs: miss mean / p50 / p90 / max, m |",
         "docs/results/study/fig5-w2-1000.json",
-        "variants",
-        {0: "variant", 1: "noise"},
-        {2: MISS4, 3: FUEL4, 4: ("truth_outside",), 5: ("empty_set",), 6: ("failures",)},
     ),
     # its second run's paired variants (the range finder minus bearings only)
     TableCheck(
@@ -54,15 +64,7 @@ TABLES: list[TableCheck] = [
         "docs/results/study/fig5-w2-1000-paired.json",
         "paired/rows",
         {0: "variant", 1: "noise", 2: "estimator"},
-        {
-            3: ("miss_m/runs",),
-            4: ("miss_m/mean", "miss_m/ci/0", "miss_m/ci/1", "miss_m/median"),
-            5: ("miss_m/larger_share",),
-            6: ("miss_m/wilcoxon_p",),
-            7: ("fuel_mps/mean", "fuel_mps/ci/0", "fuel_mps/ci/1", "fuel_mps/median"),
-            8: ("fuel_mps/larger_share",),
-            9: ("fuel_mps/wilcoxon_p",),
-        },
+        _paired_cells(3),
     ),
     # kvi compare kp_fig5 --runs 50 --estimators infoset,ekf,ukf --noise random,bias,game
     TableCheck(
@@ -81,15 +83,7 @@ TABLES: list[TableCheck] = [
         "docs/results/compare_kp_fig5.json",
         "paired/rows",
         {0: "estimator", 1: "noise"},
-        {
-            2: ("miss_m/runs",),
-            3: ("miss_m/mean", "miss_m/ci/0", "miss_m/ci/1", "miss_m/median"),
-            4: ("miss_m/larger_share",),
-            5: ("miss_m/wilcoxon_p",),
-            6: ("fuel_mps/mean", "fuel_mps/ci/0", "fuel_mps/ci/1", "fuel_mps/median"),
-            7: ("fuel_mps/larger_share",),
-            8: ("fuel_mps/wilcoxon_p",),
-        },
+        _paired_cells(2),
     ),
     # kvi compare kp_fig5_kalman_constrained --estimators ekf,ukf --noise random,game --runs 50
     TableCheck(
