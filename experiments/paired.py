@@ -1,4 +1,5 @@
-"""Paired differences between estimators run on the same truths (``kvi compare``).
+"""Paired differences between estimators (or variants, or swept values) run on the same
+truths: ``kvi compare``, ``attitude``, ``fig5`` and ``sweep``.
 
 Run ``j`` of every (estimator, noise) row of a comparison starts from the same truth and
 seed (:func:`~kalman_vs_infoset.experiments.runner.run_seed`): random errors come from
