@@ -266,17 +266,13 @@ def render(result: dict[str, Any]) -> str:
     cost = f"{sum(r['wall_s'] for r in rows):.1f} s"
     if all(c is not None for c in cpu):
         cost += f", {sum(cpu):.1f} CPU-s"
-    compared = result.get("paired")
-    if compared is not None:
-        from kalman_vs_infoset.experiments import paired
+    from kalman_vs_infoset.experiments import paired
 
-        more = [paired.title(compared), paired.paired_markdown(compared, "attitude")]
-    else:
-        more = []
+    more = paired.section(result.get("paired"), "attitude").strip("\n")
     return "\n".join(
         [
             *(line for r in rows for line in _summary(r)),
-            *more,
+            *([more] if more else []),
             f"  done ({cost}); files:",
             *(f"  {f}" for f in result.get("files", [])),
         ]

@@ -50,9 +50,7 @@ def run(args) -> dict[str, Any]:
     )
     files += plots.save(fig, out / f"{sc.name}-compare-cdf")
     compared = paired.comparison(table, args.estimators, "intercept")
-    text = summary_markdown(rows, ["estimator", "noise"])
-    if compared is not None:
-        text += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
+    text = summary_markdown(rows, ["estimator", "noise"]) + paired.section(compared)
     files.append(write_text(out / f"{sc.name}-compare.md", text))
     if traced:  # one trace per estimator x noise, drawn together
         pairs = [(e, n) for e in args.estimators for n in args.noise]
@@ -72,14 +70,9 @@ def render(result: dict[str, Any]) -> str:
     from kalman_vs_infoset.experiments import paired
     from kalman_vs_infoset.experiments.report import summary_markdown
 
-    compared = result.get("paired")
-    more = (
-        "" if compared is None
-        else f"\n{paired.title(compared)}\n\n{paired.paired_markdown(compared)}"
-    )  # fmt: skip
     return (
         summary_markdown(result["rows"], ["estimator", "noise"])
-        + more
+        + paired.section(result.get("paired"))
         + "files:\n"
         + "\n".join("  " + f for f in result["files"])
     )

@@ -110,7 +110,7 @@ def run(args) -> dict[str, Any]:
     md += f"bearing-limited miss floor {miss_floor_m(sc):.2f} m.\n"
     # the range finder's effect run by run (the variants share truths and seeds)
     compared = paired.variants(table, VARIANTS[0][1])
-    md += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
+    md += paired.section(compared)
     files.append(write_text(out / f"{stem}_summary.md", md))
     return {
         "runs": args.runs,
@@ -129,7 +129,5 @@ def render(result: dict[str, Any]) -> str:
     from kalman_vs_infoset.experiments.report import summary_markdown
 
     md = summary_markdown(result["variants"], ["variant", "noise", "estimator"])
-    compared = result.get("paired")
-    if compared is not None:
-        md += "\n" + paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
+    md += paired.section(result.get("paired"))
     return md + "files:\n" + "\n".join("  " + f for f in result["files"])

@@ -120,7 +120,7 @@ def run(args) -> dict[str, Any]:
     flat = pd.json_normalize(rows, sep="_")
     csv = out / f"{stem}.csv"
     atomic_write(csv, lambda tmp: flat.to_csv(tmp, index=False))
-    text = summary_markdown(rows, _LABELS) + "\n" + _paired_text(compared)
+    text = summary_markdown(rows, _LABELS) + paired.section(compared)
     files = [csv, write_text(out / f"{stem}.md", text)]
     title = f"{base.name}: {key} swept, {runs} paired runs per point"
     files += plots.save(plots.sweep_figure(flat, key, title), out / stem)
@@ -140,23 +140,14 @@ def run(args) -> dict[str, Any]:
 _LABELS = ("value", "estimator", "noise")
 
 
-def _paired_text(compared: dict[str, Any] | None) -> str:
-    """The paired differences' title and table (nothing for a single value)."""
-    from kalman_vs_infoset.experiments import paired
-
-    if compared is None or not compared["rows"]:
-        return ""
-    return paired.title(compared) + "\n\n" + paired.paired_markdown(compared)
-
-
 def render(result: dict[str, Any]) -> str:
+    from kalman_vs_infoset.experiments import paired
     from kalman_vs_infoset.experiments.report import summary_markdown
 
-    more = _paired_text(result.get("paired"))
     return (
         f"{result['key']} swept over {result['values']}\n"
         + summary_markdown(result["rows"], _LABELS)
-        + ("\n" + more if more else "")
+        + paired.section(result.get("paired"))
         + "files:\n"
         + "\n".join("  " + f for f in result["files"])
     )

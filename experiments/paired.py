@@ -150,6 +150,14 @@ def title(paired: dict[str, Any]) -> str:
     )
 
 
+def section(paired: dict[str, Any] | None, problem: str = "intercept") -> str:
+    """The paired differences as a command prints them after its summary: a blank line,
+    :func:`title`, the table (:func:`paired_markdown`); nothing when there is no pair."""
+    if paired is None or not paired["rows"]:
+        return ""
+    return "\n" + title(paired) + "\n\n" + paired_markdown(paired, problem)
+
+
 def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
     """The paired differences as a markdown table (:func:`comparison`); the paired runs
     of each metric, once when they agree."""
