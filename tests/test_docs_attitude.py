@@ -33,6 +33,11 @@ DERIVED = {
     r"the game torque both settle later than with the box, by ([\d.]+) s and ([\d.]+) s, in "
     r"every run\. The box pays in the final error: the raw measurement's and the UKF's are "
     r"smaller than the box's in every run but (\d+) of the UKF's (\d+) under random noise",
+    "paired_others": r"the raw measurement's is larger by ([\d.]+) deg and the UKF's by "
+    r"([\d.]+) deg, in every run; the raw measurement also spends ([\d.]+) N\^2 m\^2 s more "
+    r"energy \(p ([\d.]+)\), but it settles ([\d.]+) s earlier than the box in the (\d+) runs "
+    r"where both settle, and the UKF ([\d.]+) s earlier\. Under random noise Resurs-P shows "
+    r"no difference \(p from ([\d.]+) to ([\d.]+) over",
 }
 
 #: read by ``test_docs_attitude_estimators.test_the_box_never_lost_the_truth_in_these_files``
@@ -199,3 +204,37 @@ def test_the_paired_attitude_reading_is_its_files():
     larger = {key: round(f["larger_share"] * f["runs"]) for key, f in final.items()}
     assert larger == {("perfect", "random"): 0, ("perfect", "game"): 0,
                       ("ukf", "random"): int(k), ("ukf", "game"): 0}  # fmt: skip
+
+
+def test_the_paired_reading_of_the_other_scenarios_is_their_files():
+    """docs/attitude.md's paired reading of resurs_p, gyrostat_game and lqr_large_angle
+    (``kvi attitude SCENARIO --estimators perfect,ukf,box``, each minus the box): the
+    printed differences and p-values, "in every run" where the share of runs is 0 or 1,
+    and "no difference" where every p-value under random noise is over 0.05."""
+
+    def pairs(name):
+        data = results(f"{ATTITUDE}{name}.json")["paired"]
+        assert data["reference"] == "box"
+        return {(r["estimator"], r["noise"]): r for r in data["rows"]}
+
+    res = pairs("resurs_p")
+    (f_raw, f_ukf, e_raw, p_e, s_raw, n, s_ukf, p_lo, p_hi) = printed(ATT, DERIVED["paired_others"])
+    for shown, est in ((f_raw, "perfect"), (f_ukf, "ukf")):
+        final = res[(est, "game")]["final_angle_deg"]
+        assert agrees(shown, final["mean"]) and final["larger_share"] == 1.0
+    energy = res[("perfect", "game")]["energy_N2m2s"]
+    assert agrees(e_raw, energy["mean"]) and agrees(p_e, energy["wilcoxon_p"])
+    for shown, est in ((s_raw, "perfect"), (s_ukf, "ukf")):
+        settle = res[(est, "game")]["settle_time_s"]
+        assert agrees(shown, -settle["mean"]) and settle["runs"] == int(n)
+    random_p = [res[(e, "random")][m]["wilcoxon_p"] for e in ("perfect", "ukf")
+                for m in ("settle_time_s", "energy_N2m2s", "final_angle_deg")]  # fmt: skip
+    assert agrees(p_lo, min(random_p)) and agrees(p_hi, max(random_p)) and min(random_p) > 0.05
+    gyro = pairs("gyrostat_game")
+    assert gyro[("perfect", "random")]["energy_N2m2s"]["larger_share"] == 1.0
+    assert gyro[("ukf", "random")]["energy_N2m2s"]["larger_share"] == 0.0
+    lqr = pairs("lqr_large_angle")
+    for est in ("perfect", "ukf"):
+        for noise in ("random", "game"):
+            final = lqr[(est, noise)]["final_angle_deg"]
+            assert final["larger_share"] == 0.0 and final["runs"] == 20, (est, noise)
