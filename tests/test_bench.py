@@ -130,3 +130,31 @@ def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
         us, timed = step_cost_us(name, fig3, 10 * approach, 1)
         assert np.isfinite(us) and us > 0, name
         assert 0 < timed <= approach + 1, name
+
+
+def test_cost_exponent_is_the_slope_of_the_median_passes_interleaved(monkeypatch):
+    """Each approach's cost is the median of ``repeat`` passes, the step sizes taken in
+    turn pass by pass (so a drift of the host's speed reaches all three alike), and the
+    exponent is the least-squares slope through those medians (numpy's polyfit)."""
+    from kalman_vs_infoset.experiments import cmd_bench
+
+    dts = (1.0, 0.5, 0.25)
+    steps = {1.0: 100, 0.5: 200, 0.25: 400}
+    # pass k of dt: a cost with an outlier in one pass of each approach
+    costs = {1.0: [0.05, 0.09, 0.04], 0.5: [0.11, 0.10, 0.30], 0.25: [0.31, 0.29, 0.33]}
+    order: list[float] = []
+
+    def fake_pass(name, sc, n, dt):
+        order.append(dt)
+        return costs[dt][sum(d == dt for d in order) - 1], steps[dt]
+
+    monkeypatch.setattr(cmd_bench, "_approach_cpu_s", fake_pass)
+    monkeypatch.setattr(cmd_bench, "_approach_vertices", lambda name, sc, dt: (10.0, 20))
+    out = cmd_bench.cost_exponent(None, dts, repeat=3)
+    assert order == list(dts) * 3
+    assert out["cost_ms"] == pytest.approx([50.0, 110.0, 310.0])
+    assert out["cost_ms_passes"] == [pytest.approx([c * 1e3 for c in costs[d]]) for d in dts]
+    assert out["cost_steps"] == [100, 200, 400]
+    slope = np.polyfit(np.log([100, 200, 400]), np.log([50.0, 110.0, 310.0]), 1)[0]
+    assert out["cost_exponent"] == pytest.approx(slope)
+    assert out["cost_mean_vertices"] == [10.0] * 3 and out["cost_max_vertices"] == [20] * 3
