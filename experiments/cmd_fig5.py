@@ -35,7 +35,7 @@ def add_arguments(p) -> None:
     ref = seed_estimators()
     options.add_estimators(p, "intercept", ref, f"{ref[0]}, the seed's")
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
-    p.add_argument("--out", default="results/fig5", help="output directory")
+    p.add_argument("--out", default="results/fig5", help="output directory (default: %(default)s)")
     options.add_runner(p)
     # both variants take them (e.g. a node-set option); the files' stem names them
     options.add_overrides(p, "estimator.infoset.min_split_tau_s=1")

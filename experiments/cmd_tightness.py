@@ -99,7 +99,12 @@ def _positive(text: str) -> float:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help=SCENARIO_HELP)
     add = p.add_argument
-    add("--noise", choices=NOISE_KINDS, default="random", help="bearing errors")
+    add(
+        "--noise",
+        choices=NOISE_KINDS,
+        default="random",
+        help="bearing errors (default: %(default)s)",
+    )
     add("--seed", type=seed_int, help="seed (default: the scenario's)")
     add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip

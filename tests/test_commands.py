@@ -5,6 +5,7 @@ slow single run showing its steps; refused commands leaving nothing behind."""
 
 from __future__ import annotations
 
+import argparse
 import ast
 import dataclasses
 import json
@@ -324,3 +325,20 @@ def test_a_count_of_one_run_reads_singular_in_the_summaries(monkeypatch):
            "seed_miss_game_m": 9.5, "files": []}  # fmt: skip
     monkeypatch.setattr(cmd_adversaries, "table_markdown", lambda result: "")
     assert "adversary strength, 1 run, seed 3" in cmd_adversaries.render(adv)
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_every_option_with_a_default_says_it_in_its_help(command):
+    """``kvi COMMAND --help`` states the default of every option that has one (an
+    empty repeatable ``--set`` has none to state)."""
+    parser = build_parser(command)
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    silent = [
+        a.option_strings
+        for a in sub.choices[command]._actions
+        if a.help not in (None, argparse.SUPPRESS)
+        and not isinstance(a, argparse._HelpAction)
+        and a.default not in (None, False, [])
+        and "default" not in a.help
+    ]
+    assert silent == []
