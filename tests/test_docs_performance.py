@@ -32,6 +32,13 @@ DERIVED = {
     "approach": r"an approach of about (\d+) steps instead of (\d+)\)",
     "width": r"Fig\. 5's interval is ([\d.]+) % wide",
     "bands": r"scale by its width, ([\d.]+) %, where four relax it by ([\d.]+) % each",
+    "median": r"load average ([\d.]+) and ([\d.]+)\), read an exponent of ([\d.]+) and ([\d.]+) "
+    r"\(([\d.]+) / ([\d.]+) / ([\d.]+) ms and ([\d.]+) / ([\d.]+) / ([\d.]+) ms\)\. One pass "
+    r"moved by up to ([\d.]+) % from its approach's median, and the slope through one pass "
+    r"of each approach read ([\d.]+) to ([\d.]+) over the six passes",
+    "median_ratio": r"the whole approach read ([\d.]+) and ([\d.]+) UKF steps, because the "
+    r"UKF's step there moved \((\d+) and (\d+) us\) and the set's did not \((\d+) and (\d+) "
+    r"us\); the engagements read (\d+) / (\d+) and (\d+) / (\d+) UKF steps",
 }
 
 #: the benchmark's and the studies' settings, the options' values, seeds and sections
@@ -132,3 +139,37 @@ def test_the_closing_speed_bands_relative_widths():
     assert agrees(width, 100.0 * (e_hi / e_lo - 1.0)) and one == width
     assert agrees(one, band_widths_pct("kp_fig5", 1)[0])
     assert agrees(four, max(band_widths_pct("kp_fig5", 4)))
+
+
+def test_the_median_exponent_is_its_two_bench_runs():
+    """The two bench runs with the median cost exponent: each approach's cost the
+    median of its passes, the exponent numpy's slope through them, the largest move of
+    one pass from its median, and the slope through pass k of each approach (numpy's
+    polyfit, computed here); the whole approach and the engagements in UKF steps."""
+    import numpy as np
+
+    runs = [results(f"docs/results/bench_median_exponent_{i}.json") for i in (1, 2)]
+    got = _read("median")
+    shown = [r["machine"]["load_average"] for r in runs] + [r["cost_exponent"] for r in runs]
+    shown += [*runs[0]["cost_ms"], *runs[1]["cost_ms"]]
+    one_pass, moved = [], 0.0
+    for r in runs:
+        passes = np.array(r["cost_ms_passes"])  # approach x pass
+        median = np.median(passes, axis=1)
+        assert np.allclose(median, r["cost_ms"])
+        log_steps = np.log(r["cost_steps"])
+        assert math.isclose(r["cost_exponent"], np.polyfit(log_steps, np.log(median), 1)[0])
+        moved = max(moved, float(np.max(np.abs(passes / median[:, None] - 1.0))) * 100)
+        one_pass += [np.polyfit(log_steps, np.log(passes[:, k]), 1)[0] for k in range(3)]
+    assert len(one_pass) == 6
+    shown += [moved, min(one_pass), max(one_pass)]
+    for p, v in zip(got, shown, strict=True):
+        assert agrees(p, v), (p, v)
+    ratio = _read("median_ratio")
+    shown = [r["whole_approach_ratio"] for r in runs]
+    shown += [r["whole_approach_step_us"]["ukf"] for r in runs]
+    shown += [r["whole_approach_step_us"]["infoset"] for r in runs]
+    shown += [r[k] for r in runs for k in
+              ("engagement_in_ukf_steps", "engagement_random_in_ukf_steps")]  # fmt: skip
+    for p, v in zip(ratio, shown, strict=True):
+        assert agrees(p, v), (p, v)
