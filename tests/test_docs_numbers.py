@@ -101,6 +101,12 @@ README_DERIVED = {
     r"([\d.]+) m of miss \(95 % interval ([\d.]+) to ([\d.]+) m\) and ([\d.]+) m/s of fuel "
     r"under random errors, the seed's \"no essential improvement\", and costs ([\d.]+) m of "
     r"miss under the game",
+    "attitude": r"--noise random,game --runs (\d+)` on four scenarios; .*? end closer than the "
+    r"box in all but (\d+) of their (\d+) runs on the smallsat and the LQR turn, while under "
+    r"the adversarial torque on Resurs-P the box ends closest "
+    r"and spends the least energy \(the raw measurement ([\d.]+) N\^2 m\^2 s more, p "
+    r"([\d.]+); the UKF ([\d.]+) more, p ([\d.]+)\), but settles ([\d.]+) s later than the "
+    r"raw measurement",
 }
 
 
@@ -132,6 +138,39 @@ def test_the_readmes_range_finder_sentence_is_the_1000_run_study():
     assert agrees(lo, -rnd["miss_m"]["ci"][1]) and agrees(hi, -rnd["miss_m"]["ci"][0])
     assert rnd["fuel_mps"]["ci"][1] < 0.0
     assert agrees(game, rows["game"]["miss_m"]["mean"]) and rows["game"]["miss_m"]["ci"][0] > 0
+
+
+def test_the_readme_attitude_reading_is_the_four_attitude_files():
+    """The README's attitude paragraph: 20 runs per estimator and noise in each of the
+    four scenarios' files, the box never outside; the paired differences it prints (each
+    estimator minus the box) on Resurs-P under the game; the final errors' directions
+    ("end closer than the box": all but the runs where the final error is larger, smallsat
+    and LQR, random noise;
+    "ends closest": larger share 1 on Resurs-P, game)."""
+    from docs_numbers import printed
+
+    (runs, closer_not, closer_of, e_raw, p_raw, e_ukf, p_ukf, settle) = printed(
+        "README.md", README_DERIVED["attitude"]
+    )
+    names = ("smallsat_rw", "gyrostat_game", "lqr_large_angle", "resurs_p")
+    files = {n: results(f"docs/results/attitude/{n}.json") for n in names}
+    for name, data in files.items():
+        for row in data["rows"]:
+            assert row["runs"] == int(runs), (name, row["estimator"], row["noise"])
+            assert row["estimator"] != "box" or row["truth_outside"] == 0, (name, row["noise"])
+    pairs = {
+        (n, r["estimator"], r["noise"]): r for n, d in files.items() for r in d["paired"]["rows"]
+    }
+    final = [pairs[(n, est, "random")]["final_angle_deg"]
+             for n in ("smallsat_rw", "lqr_large_angle") for est in ("perfect", "ukf")]  # fmt: skip
+    assert sum(f["runs"] for f in final) == int(closer_of)
+    assert sum(round(f["larger_share"] * f["runs"]) for f in final) == int(closer_not)
+    res = {est: pairs[("resurs_p", est, "game")] for est in ("perfect", "ukf")}
+    for est, (e, p) in {"perfect": (e_raw, p_raw), "ukf": (e_ukf, p_ukf)}.items():
+        energy = res[est]["energy_N2m2s"]
+        assert agrees(e, energy["mean"]) and agrees(p, energy["wilcoxon_p"]) and energy["mean"] > 0
+        assert res[est]["final_angle_deg"]["larger_share"] == 1.0
+    assert agrees(settle, -res["perfect"]["settle_time_s"]["mean"])
 
 
 def test_a_stale_number_fails():
