@@ -59,6 +59,8 @@ def resolve(name_or_path: str | Path) -> Path:
             return bundled.scenario_file(p.name)
         except KeyError:
             pass
+    if p.is_dir():
+        raise InputError(f"{p}: a folder, not a scenario file (a TOML file, or a bundled name)")
     raise InputError(
         f"{p}: no such scenario file, nor a bundled scenario (`kvi scenarios` lists them)"
     )

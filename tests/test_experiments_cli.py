@@ -116,6 +116,17 @@ def test_bad_command_line_exits_2_with_one_line(capsys, args):
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
 
 
+def test_a_folder_given_as_the_scenario_is_named_as_a_folder(tmp_path, capsys):
+    """A folder where a scenario file is expected: one line that says so, not "no such
+    file"."""
+    folder = tmp_path / "runs.toml"
+    folder.mkdir()
+    r = cli_inproc(capsys, "intercept", folder, "--json")
+    assert r.returncode == 2 and r.stderr.strip().endswith(
+        f"{folder}: a folder, not a scenario file (a TOML file, or a bundled name)"
+    )
+
+
 @pytest.mark.parametrize("command", ["tightness", "intercept", "bench"])
 def test_an_unknown_option_is_named_with_its_command(capsys, command):
     """argparse said ``kvi: error: unrecognized arguments`` without the command."""
