@@ -126,8 +126,9 @@ def test_bench_steps_past_the_approach_or_a_diverged_set_are_not_timed():
     fig3 = load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"))
     model = fig3.channel_model()  # the bench's truth starts at 5801.3 km
     approach = int((5801.3e3 - model.eps_m) / model.e / fig3.model.dt_s)
-    for name in registry.names("intercept"):
-        us, timed = step_cost_us(name, fig3, 10 * approach, 1)
+    for name, (us, timed) in step_cost_us(
+        registry.names("intercept"), fig3, 10 * approach, 1
+    ).items():
         assert np.isfinite(us) and us > 0, name
         assert 0 < timed <= approach + 1, name
 
@@ -158,3 +159,33 @@ def test_cost_exponent_is_the_slope_of_the_median_passes_interleaved(monkeypatch
     slope = np.polyfit(np.log([100, 200, 400]), np.log([50.0, 110.0, 310.0]), 1)[0]
     assert out["cost_exponent"] == pytest.approx(slope)
     assert out["cost_mean_vertices"] == [10.0] * 3 and out["cost_max_vertices"] == [20] * 3
+
+
+def test_the_estimators_passes_are_interleaved_and_each_cost_their_median(monkeypatch):
+    """The step costs and the whole approach take the estimators in turn, pass by pass
+    (a drift of the host's speed reaches them alike, as the ratios between them assume),
+    and report each one's median pass."""
+    from kalman_vs_infoset.experiments import cmd_bench
+
+    order: list[str] = []
+    cost = {"a": [3.0, 1.0, 2.0], "b": [5.0, 9.0, 4.0]}  # CPU-s of pass k
+
+    def one_pass(name, sc, steps, dt):
+        order.append(name)
+        k = sum(n == name for n in order) - 1
+        return np.full(10, cost[name][k] / 10), 0.0
+
+    monkeypatch.setattr(cmd_bench, "_approach_step_cpu_s", one_pass)
+
+    class Sc:
+        class model:  # noqa: N801 (a stand-in for the scenario's table)
+            dt_s = 0.5
+
+    got = cmd_bench.step_cost_us(["a", "b"], Sc, 10, 3)
+    assert order == ["a", "b"] * 3
+    assert got == {"a": (pytest.approx(2e5), 10), "b": (pytest.approx(5e5), 10)}
+    order.clear()
+    whole = cmd_bench.whole_approach(["a", "b"], Sc, 0.5, 3)
+    assert order == ["a", "b"] * 3
+    assert whole["a"]["step_us"] == pytest.approx(2e5) and whole["b"]["steps"] == 10
+    assert whole["b"]["tail_share"] == pytest.approx(0.1)

@@ -36,6 +36,9 @@ DERIVED = {
     r"\(([\d.]+) / ([\d.]+) / ([\d.]+) ms and ([\d.]+) / ([\d.]+) / ([\d.]+) ms\)\. One pass "
     r"moved by up to ([\d.]+) % from its approach's median, and the slope through one pass "
     r"of each approach read ([\d.]+) to ([\d.]+) over the six passes",
+    "interleaved": r"\(`docs/results/bench_interleaved_1\.json` and `_2\.json`, load average "
+    r"([\d.]+) and ([\d.]+), the second beside a test run\) read the whole approach at "
+    r"([\d.]+) and ([\d.]+) UKF steps, the UKF's step there at (\d+) and (\d+) us",
     "median_ratio": r"the whole approach read ([\d.]+) and ([\d.]+) UKF steps, because the "
     r"UKF's step there moved \((\d+) and (\d+) us\) and the set's did not \((\d+) and (\d+) "
     r"us\); the engagements read (\d+) / (\d+) and (\d+) / (\d+) UKF steps",
@@ -172,4 +175,15 @@ def test_the_median_exponent_is_its_two_bench_runs():
     shown += [r[k] for r in runs for k in
               ("engagement_in_ukf_steps", "engagement_random_in_ukf_steps")]  # fmt: skip
     for p, v in zip(ratio, shown, strict=True):
+        assert agrees(p, v), (p, v)
+
+
+def test_the_interleaved_bench_runs_are_their_files():
+    """The two bench runs with the estimators' passes taken in turn: load, the whole
+    approach in UKF steps and the UKF's step there."""
+    runs = [results(f"docs/results/bench_interleaved_{i}.json") for i in (1, 2)]
+    shown = [r["machine"]["load_average"] for r in runs]
+    shown += [r["whole_approach_ratio"] for r in runs]
+    shown += [r["whole_approach_step_us"]["ukf"] for r in runs]
+    for p, v in zip(_read("interleaved"), shown, strict=True):
         assert agrees(p, v), (p, v)
