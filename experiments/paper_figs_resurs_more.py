@@ -56,6 +56,7 @@ def inertia_signs(ctx) -> dict[str, Any]:
         readings = [(1, 1, 1), (-1, -1, -1)]
     z: dict[str, dict[str, float]] = {"energy": {}, "euler": {}}
     u0: dict[str, list[float]] = {}
+    angle: dict[str, float] = {}  # the energy-saving turn's error at its end, deg
     for signs in readings:
         over = [f"inertia_products_sign={list(signs)}"]
         name = reading_name(signs)
@@ -63,6 +64,8 @@ def inertia_signs(ctx) -> dict[str, Any]:
             df, setup = trace(ctx, "resurs_p.toml", ctrl, "none", exact_estimator(), over)
             d = df[(df["axis"] == 1) & (df["t_s"] <= setup.duration_s + 1e-9)]
             z[ctrl][name] = float(d["energy_N2m2s"].iloc[-1])
+            if ctrl == "energy":
+                angle[name] = float(d["angle_deg"].iloc[-1])
         u0[name] = [round(float(v), 3) for v in _first_step_u0(signs, setup)]
     fig, axes = fs.figure(1, 2, size=(11.0, 4.6))
     names = [reading_name(s) for s in readings]
@@ -95,6 +98,7 @@ def inertia_signs(ctx) -> dict[str, Any]:
             "Z_energy": z["energy"],
             "Z_euler": z["euler"],
             "first_step_u0_Nm": u0,
+            "angle_at_300s_deg": angle,
             "paper_u0_Nm": list(PAPER_U0_NM),
         }
     }

@@ -338,10 +338,10 @@ def test_energy_saving_numbers_are_resurs_p_and_the_paper_figures():
     """§2.1 Energy-saving control with gyrodines against resurs_p.toml (step, initial
     error and its turn angle, gyrodines, flight baseline, accuracy) and
     ``docs/figures/paper_figures.json`` (``kvi paper-figures --runs 50``): the index ``Z``
-    under the inertia readings against the paper's, the error at 300 s (written for the
-    default reading only), the first step's torque under the eight readings against the
-    paper's initial torques (M_2 and M_3 round to the print under one reading only), the
-    calibrated baseline's ``Z`` and when the accuracy is reached."""
+    under the inertia readings against the paper's, the error at 300 s (the default
+    reading's, and each of the eight readings'), the first step's torque under the eight
+    readings against the paper's initial torques (M_2 and M_3 round to the print under one
+    reading only), the calibrated baseline's ``Z`` and when the accuracy is reached."""
     sc = scenario_tables("resurs_p")
     numbers = results(FIGS)["numbers"]
     res, signs = numbers["resurs"], numbers["resurs_inertia_signs"]
@@ -351,6 +351,9 @@ def test_energy_saving_numbers_are_resurs_p_and_the_paper_figures():
     std, paper = z["[-,-,-] standard"], res["Z_paper"]["energy"]
     _agree(_read("signs"), [std, paper, 100.0 * (std / paper - 1.0), z["[+,+,+] entries"],
                             z["[+,-,-]"], sc["duration_s"], res["angle_at_300s_deg"]])  # fmt: skip
+    angles = signs["angle_at_300s_deg"]  # "under all eight": each rounds to the print
+    assert set(angles) == set(z)
+    _agree([_read("signs")[-1]] * 8, angles.values())
     u0, u_paper = signs["first_step_u0_Nm"], signs["paper_u0_Nm"]
     m2, m3, *standard, m1, m1_paper = _read("torques")
     _agree([m2, m3, m1_paper], [u_paper[1], u_paper[2], u_paper[0]])

@@ -338,6 +338,10 @@ def _fig8_peaks_on_the_formulas_side(fig8) -> None:
 
 def _inertia_signs(signs) -> None:
     assert {"[-,-,-] standard", "[+,+,+] entries"} <= set(signs["Z_energy"])
+    # seed 000: the 300-s error is set by f1, f2, not by the inertia's signs
+    angles = signs["angle_at_300s_deg"]
+    assert set(angles) == set(signs["Z_energy"])
+    assert max(angles.values()) - min(angles.values()) < 1e-3
 
 
 #: checks of the published numbers of ``paper_figures.json``, by key
