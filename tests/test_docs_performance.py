@@ -36,6 +36,7 @@ DERIVED = {
     r"\(([\d.]+) / ([\d.]+) / ([\d.]+) ms and ([\d.]+) / ([\d.]+) / ([\d.]+) ms\)\. One pass "
     r"moved by up to ([\d.]+) % from its approach's median, and the slope through one pass "
     r"of each approach read ([\d.]+) to ([\d.]+) over the six passes",
+    "make_run": r"what `make run` runs after its install, took ([\d.]+) s\s+of wall clock",
     "interleaved": r"\(`docs/results/bench_interleaved_1\.json` and `_2\.json`, load average "
     r"([\d.]+) and ([\d.]+), the second beside a test run\) read the whole approach at "
     r"([\d.]+) and ([\d.]+) UKF steps, the UKF's step there at (\d+) and (\d+) us",
@@ -74,6 +75,8 @@ INPUTS = (
     r"--workers [12]`",
     r"100-step approach",
     r"100 / 200 / 400-step approaches",
+    r"The whole command with 2 workers",
+    r"the target of 30 s",
 )
 
 
@@ -187,3 +190,10 @@ def test_the_interleaved_bench_runs_are_their_files():
     shown += [r["whole_approach_step_us"]["ukf"] for r in runs]
     for p, v in zip(_read("interleaved"), shown, strict=True):
         assert agrees(p, v), (p, v)
+
+
+def test_the_make_run_wall_clock_is_the_study_file():
+    """`make run`'s command (``kvi fig5``, 50 runs per variant, 2 workers): its wall
+    clock as the study's results file records it."""
+    (wall,) = _read("make_run")
+    assert agrees(wall, results("docs/results/study/fig5-w2.json")["wall_s"])
