@@ -104,7 +104,7 @@ README_DERIVED = {
     "attitude": r"--noise random,game --runs (\d+)` on four scenarios; .*? end closer than the "
     r"box in all but (\d+) of their (\d+) runs on the smallsat and the LQR turn, while under "
     r"the adversarial torque on Resurs-P the box ends closest "
-    r"and spends the least energy \(the raw measurement ([\d.]+) N\^2 m\^2 s more, p "
+    r"and spends a little less energy \(the raw measurement ([\d.]+) N\^2 m\^2 s more, p "
     r"([\d.]+); the UKF ([\d.]+) more, p ([\d.]+)\), but settles ([\d.]+) s later than the "
     r"raw measurement",
 }
