@@ -179,6 +179,15 @@ def agrees(printed: str, value: float) -> bool:
     return abs(value - float(printed)) <= 0.5 * unit + 1e-9 * abs(value)
 
 
+def agree_each(shown, values) -> None:
+    """Each printed number agrees with its value (:func:`agrees`), in order, and there are
+    as many of each."""
+    values = list(values)
+    assert len(shown) == len(values), (shown, values)
+    for p, v in zip(shown, values, strict=True):
+        assert agrees(p, float(v)), (p, v)
+
+
 def mismatches(text: str, pattern: str, data, keys: tuple[str, ...]) -> list[str]:
     """What disagrees between a document's text and the results (empty: all agree).
 

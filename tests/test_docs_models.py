@@ -18,7 +18,7 @@ import signal
 
 import numpy as np
 from docs_checks import CHECKS, FIGS
-from docs_numbers import ROOT, agrees, lookup, printed, results, scenario_tables, tables
+from docs_numbers import ROOT, agree_each, agrees, lookup, printed, results, scenario_tables, tables
 from test_docs_numbers import unlisted_numbers
 
 MODELS = "docs/models.md"
@@ -148,14 +148,6 @@ def _read(key: str) -> tuple[str, ...]:
     return printed(MODELS, DERIVED[key])
 
 
-def _agree(shown, values) -> None:
-    """Each printed number agrees with its value, in order."""
-    values = list(values)
-    assert len(shown) == len(values), (shown, values)
-    for p, v in zip(shown, values, strict=True):
-        assert agrees(p, float(v)), (p, v)
-
-
 def _decade(shown: str, value: float) -> bool:
     """ "of order 1e-7": the value's decade is the printed power of ten."""
     return math.floor(math.log10(abs(value))) == int(shown.split("e")[1])
@@ -191,22 +183,24 @@ def test_truth_and_measurement_numbers_are_the_intercept_scenarios():
     assert _decade(order, a_rel_mps2) and order2 == order and agrees(nu, model["nu_mps2"])
     assert _decade(*_read("jitter"), float(np.spacing(d_sun)))
     for sc in (fig3, fig5, rng):
-        _agree(_read("steps"), [sc["model"]["dt_s"]])
-    _agree(_read("sun"), [d_sun, d_sun])
+        agree_each(_read("steps"), [sc["model"]["dt_s"]])
+    agree_each(_read("sun"), [d_sun, d_sun])
     assumed, truth = _read("closing")
     assert fig3["estimator"]["closing_speed_kmps"] == [float(assumed)] * 2
     assert agrees(truth, -fig5["truth"]["vx_kmps"][1]) and float(truth) < float(assumed)
-    _agree(_read("e"), [model["closing_speed_kmps"]])
+    agree_each(_read("e"), [model["closing_speed_kmps"]])
     m = rng["model"]
-    _agree(_read("bearing"), [m["bearing_bound_start_rad"], m["bearing_bound_end_rad"]])
+    agree_each(_read("bearing"), [m["bearing_bound_start_rad"], m["bearing_bound_end_rad"]])
     bound = BearingBound(m["bearing_bound_start_rad"], m["bearing_bound_end_rad"],
                          m["nominal_range_km"] * 1e3)  # fmt: skip
     far_km = rng["estimator"]["x_km"][1]
     smaller = min(bound.start_rad, bound.end_rad)
-    _agree(
+    agree_each(
         _read("far_edge"), [bound(far_km * 1e3), far_km, bound(10 * bound.max_range_m) / smaller]
     )
-    _agree(_read("range_finder"), [rng["range_finder"]["first_s"], rng["range_finder"]["period_s"]])
+    agree_each(
+        _read("range_finder"), [rng["range_finder"]["first_s"], rng["range_finder"]["period_s"]]
+    )
 
 
 def test_information_set_numbers_are_the_codes():
@@ -220,20 +214,22 @@ def test_information_set_numbers_are_the_codes():
     from kalman_vs_infoset.estim.intercept.nodeset.options import DEFAULTS as NODES
     from kalman_vs_infoset.estim.intercept.slabs.estimator import InformationSetEstimator
 
-    _agree(_read("secant"), [1.0 / MAX_SECANT_REACH])
-    _agree(_read("pieces"), [NODES.node_split_ratio])
-    _agree(_read("split"), [NODES.split_ratio, NODES.max_sections])
+    agree_each(_read("secant"), [1.0 / MAX_SECANT_REACH])
+    agree_each(_read("pieces"), [NODES.node_split_ratio])
+    agree_each(_read("split"), [NODES.split_ratio, NODES.max_sections])
     slabs = _defaults(InformationSetEstimator)
-    _agree(_read("simplify"), [slabs["simplify_rel_area"], slabs["max_vertices"]])
-    _agree(_read("off_axis"), [_defaults(ChannelModel)["max_off_axis_rad"]])
-    _agree(_read("diverged"), [DIVERGED_W_PER_X])
+    agree_each(_read("simplify"), [slabs["simplify_rel_area"], slabs["max_vertices"]])
+    agree_each(_read("off_axis"), [_defaults(ChannelModel)["max_off_axis_rad"]])
+    agree_each(_read("diverged"), [DIVERGED_W_PER_X])
     a = np.radians(np.linspace(0.0, 90.0, 90_001))
     g = np.cos(a) ** 3 * np.sin(a)
-    _agree(_read("peak"), [np.degrees(a[np.argmax(g)]), g.max(), MAX_BEARING_RAD, MAX_BEARING_RAD])
+    agree_each(
+        _read("peak"), [np.degrees(a[np.argmax(g)]), g.max(), MAX_BEARING_RAD, MAX_BEARING_RAD]
+    )
     sc = scenario_tables("kp_fig5")
     e, speeds = sc["model"]["closing_speed_kmps"], sc["estimator"]["closing_speed_kmps"]
     missed_m = 1e3 * max(abs(c - e) for c in speeds) * max(map(abs, sc["estimator"]["y_km"])) / e
-    _agree(_read("corners"), [missed_m])
+    agree_each(_read("corners"), [missed_m])
 
 
 def test_noise_and_filter_numbers_are_the_codes():
@@ -250,21 +246,21 @@ def test_noise_and_filter_numbers_are_the_codes():
     from kalman_vs_infoset.experiments.noise import BiasNoise
     from kalman_vs_infoset.experiments.sim.intercept_config import MAX_LEAVES, AdversaryTable
 
-    _agree(_read("margins") + _read("white_box"), [_defaults(BiasNoise)["margin"], MARGIN])
+    agree_each(_read("margins") + _read("white_box"), [_defaults(BiasNoise)["margin"], MARGIN])
     table = AdversaryTable()
-    _agree(_read("targeted"), [table.candidates])
-    _agree(_read("lookahead"), [table.lookahead_steps, table.lookahead_candidates, MAX_LEAVES])
+    agree_each(_read("targeted"), [table.candidates])
+    agree_each(_read("lookahead"), [table.lookahead_steps, table.lookahead_candidates, MAX_LEAVES])
     sc = scenario_tables("kp_fig5")
     theta = math.atan(max(map(abs, sc["estimator"]["z_km"])) / sc["estimator"]["x_km"][0])
     assert _decade(*_read("range_angle"), 1.0 / math.cos(theta) - 1.0)
     uniform_var = float(np.var(np.linspace(-1.0, 1.0, 200_001)))  # b^2 / 3 for b = 1
-    _agree(_read("inflation"), [KALMAN.noise_inflation, 1.0 / uniform_var])
+    agree_each(_read("inflation"), [KALMAN.noise_inflation, 1.0 / uniform_var])
     ukf = _defaults(KalmanChannelEstimator)
-    _agree(_read("ukf_points"), [ukf["ukf_alpha"], ukf["ukf_beta"], ukf["ukf_kappa"]])
-    _agree(_read("n_sigma"), [KALMAN.n_sigma])
+    agree_each(_read("ukf_points"), [ukf["ukf_alpha"], ukf["ukf_beta"], ukf["ukf_kappa"]])
+    agree_each(_read("n_sigma"), [KALMAN.n_sigma])
     assert sc["estimator"]["ekf"]["n_sigma"] == sc["estimator"]["ukf"]["n_sigma"] == KALMAN.n_sigma
-    _agree(_read("hinf"), [HINF.theta, 1.0 / HINF.theta, sc["model"]["dt_s"] / HINF.theta])
-    _agree(_read("pf"), [1.0 / PF.resample_threshold, PF.roughening])
+    agree_each(_read("hinf"), [HINF.theta, 1.0 / HINF.theta, sc["model"]["dt_s"] / HINF.theta])
+    agree_each(_read("pf"), [1.0 / PF.resample_threshold, PF.roughening])
 
 
 def test_reference_scenario_numbers_are_the_scenarios_and_the_fig3_run():
@@ -277,21 +273,21 @@ def test_reference_scenario_numbers_are_the_scenarios_and_the_fig3_run():
     t3, t5 = fig3["truth"], fig5["truth"]
     keys = ("y_km", "vy_kmps", "z_km", "vz_kmps", "x_km", "vx_kmps")
     assert all(t3[k][0] == t3[k][1] for k in keys)
-    _agree(_read("fig3"), [t3[k][0] for k in keys])
+    agree_each(_read("fig3"), [t3[k][0] for k in keys])
     assert t5["z_km"] == t5["vz_kmps"] == [0.0, 0.0]
     values = [*t5["y_km"], *t5["x_km"], *t5["vy_kmps"], *t5["vx_kmps"], fig5["experiment"]["runs"]]
-    _agree(_read("fig5"), values)
+    agree_each(_read("fig5"), values)
     y0, vy0, x0, vx0 = (t3[k][0] for k in ("y_km", "vy_kmps", "x_km", "vx_kmps"))
     t_go = -x0 / vx0
-    _agree(_read("perfect_fuel"), [abs(y0), t_go, 1e3 * abs(y0 + vy0 * t_go) / t_go])
+    agree_each(_read("perfect_fuel"), [abs(y0), t_go, 1e3 * abs(y0 + vy0 * t_go) / t_go])
     m = fig3["model"]
     end, eps = m["bearing_bound_end_rad"], m["eps_km"]
-    _agree(_read("miss_scale"), [end, eps, end * eps * 1e3])
-    _agree(_read("fig3_interval"), fig3["estimator"]["closing_speed_kmps"])
+    agree_each(_read("miss_scale"), [end, eps, end * eps * 1e3])
+    agree_each(_read("fig3_interval"), fig3["estimator"]["closing_speed_kmps"])
     for name in ("kp_fig5", "kp_fig5_range"):
-        _agree(_read("fig5_interval"), scenario_tables(name)["estimator"]["closing_speed_kmps"])
+        agree_each(_read("fig5_interval"), scenario_tables(name)["estimator"]["closing_speed_kmps"])
     assert fig5["estimator"]["closing_speed_kmps"] == [-v for v in reversed(t5["vx_kmps"])]
-    _agree(_read("a_priori_e"), [-v for v in reversed(fig5["estimator"]["vx_kmps"])])
+    agree_each(_read("a_priori_e"), [-v for v in reversed(fig5["estimator"]["vx_kmps"])])
     ours, paper = _read("game_fuel")
     fuel = results("docs/results/fig3/kp_fig3-infoset-game.json")["fuel_mps"]["mean"]
     assert abs(fuel - float(ours)) <= 50.0 and agrees(paper, fig3["reference"]["fuel_game_mps"])
@@ -330,8 +326,8 @@ def test_reference_scenario_table_is_the_scenario_keys():
             values = [np.atleast_1d(lookup(sc, k.lstrip("-"))) * (-1.0 if k[0] == "-" else 1.0)
                       for k in keys.split()]  # fmt: skip
             values = np.concatenate(values) * ([100.0, 1, 1] if row == "range error" else 1)
-            _agree(re.findall(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", cells[row]), values)
-    _agree([cells["Sun's gravitational parameter `K`"].split()[0]], [K_SUN_KM3PS2])
+            agree_each(re.findall(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", cells[row]), values)
+    agree_each([cells["Sun's gravitational parameter `K`"].split()[0]], [K_SUN_KM3PS2])
 
 
 def test_energy_saving_numbers_are_resurs_p_and_the_paper_figures():
@@ -345,36 +341,55 @@ def test_energy_saving_numbers_are_resurs_p_and_the_paper_figures():
     sc = scenario_tables("resurs_p")
     numbers = results(FIGS)["numbers"]
     res, signs = numbers["resurs"], numbers["resurs_inertia_signs"]
-    _agree(_read("dt"), [sc["dt_s"]])
+    agree_each(_read("dt"), [sc["dt_s"]])
     z = signs["Z_energy"]
     assert len(z) == 8  # "all eight"
     std, paper = z["[-,-,-] standard"], res["Z_paper"]["energy"]
-    _agree(_read("signs"), [std, paper, 100.0 * (std / paper - 1.0), z["[+,+,+] entries"],
-                            z["[+,-,-]"], sc["duration_s"], res["angle_at_300s_deg"]])  # fmt: skip
+    agree_each(
+        _read("signs"),
+        [
+            std,
+            paper,
+            100.0 * (std / paper - 1.0),
+            z["[+,+,+] entries"],
+            z["[+,-,-]"],
+            sc["duration_s"],
+            res["angle_at_300s_deg"],
+        ],
+    )
     angles = signs["angle_at_300s_deg"]  # "under all eight": each rounds to the print
     assert set(angles) == set(z)
-    _agree([_read("signs")[-1]] * 8, angles.values())
+    agree_each([_read("signs")[-1]] * 8, angles.values())
     u0, u_paper = signs["first_step_u0_Nm"], signs["paper_u0_Nm"]
     m2, m3, *standard, m1, m1_paper = _read("torques")
-    _agree([m2, m3, m1_paper], [u_paper[1], u_paper[2], u_paper[0]])
+    agree_each([m2, m3, m1_paper], [u_paper[1], u_paper[2], u_paper[0]])
     fits = [k for k, u in u0.items() if all(agrees(p, u[i]) for p, i in ((m2, 1), (m3, 2)))]
     assert fits == ["[+,-,+]"]
-    _agree(standard, u0["[-,-,-] standard"])
+    agree_each(standard, u0["[-,-,-] standard"])
     assert all(agrees(m1, u[0]) for u in u0.values()) and not agrees(m1, u_paper[0])
     *angles, turn = _read("turn")
-    _agree(angles, sc["initial_error_deg"])
-    _agree([turn], [np.linalg.norm(sc["initial_error_deg"])])
+    agree_each(angles, sc["initial_error_deg"])
+    agree_each([turn], [np.linalg.norm(sc["initial_error_deg"])])
     shown = _read("u0")
     ranges = [f(u[i] for u in u0.values()) for i in range(3) for f in (max, min)]
-    _agree(shown, [*u0["[-,-,-] standard"], *ranges, *u_paper])
+    agree_each(shown, [*u0["[-,-,-] standard"], *ranges, *u_paper])
     cmg, euler = sc["cmg"], sc["euler"]
-    _agree(_read("cmg"), [cmg["rotor_momentum_Nms"], *cmg["pair_azimuths_deg"],
-                          cmg["cone_half_angle_deg"]])  # fmt: skip
-    _agree(_read("sr"), [cmg["sr_threshold"]])
-    _agree(_read("euler"), [euler["accel_time_s"], euler["jerk_time_s"], res["Z_paper"]["euler"],
-                            res["Z_ours"]["euler"]])  # fmt: skip
-    _agree(_read("euler_pd"), [euler["natural_freq_radps"], euler["damping"]])
-    _agree(
+    agree_each(
+        _read("cmg"),
+        [cmg["rotor_momentum_Nms"], *cmg["pair_azimuths_deg"], cmg["cone_half_angle_deg"]],
+    )
+    agree_each(_read("sr"), [cmg["sr_threshold"]])
+    agree_each(
+        _read("euler"),
+        [
+            euler["accel_time_s"],
+            euler["jerk_time_s"],
+            res["Z_paper"]["euler"],
+            res["Z_ours"]["euler"],
+        ],
+    )
+    agree_each(_read("euler_pd"), [euler["natural_freq_radps"], euler["damping"]])
+    agree_each(
         _read("accuracy"), [sc["angle_tol_deg"], res["within_tolerance_from_s"], sc["duration_s"]]
     )
 
@@ -390,28 +405,40 @@ def test_pd_lqr_and_gyrostat_numbers_are_their_scenarios_and_the_gain_study():
     rw = scenario_tables("smallsat_rw")
     sim, inertia = rw["simulation"], rw["body"]["inertia_kgm2"]
     assert len(set(inertia)) == 1
-    _agree(_read("settle"), [sim["settle_angle_deg"], sim["settle_rate_degps"]])
+    agree_each(_read("settle"), [sim["settle_angle_deg"], sim["settle_rate_degps"]])
     phi10, _ = regime_boundaries(rw["pd"]["k_q"], rw["pd"]["k_w"], inertia[0],
                                  rw["wheels"]["torque_max_Nm"], rw["wheels"]["momentum_max_Nms"],
                                  rw["pd"]["quaternion_term"])  # fmt: skip
-    _agree(_read("phi10"), [rw["maneuver"]["angle_deg"], inertia[0], math.degrees(phi10)])
-    _agree(_read("inertia"), [rw["maneuver"]["angle_deg"], inertia[0]])
+    agree_each(_read("phi10"), [rw["maneuver"]["angle_deg"], inertia[0], math.degrees(phi10)])
+    agree_each(_read("inertia"), [rw["maneuver"]["angle_deg"], inertia[0]])
     st = StudySettings()
     assert st.initial_turn == "full_angle" and st.quaternion_term == "twice"
-    _agree(_read("study_rate"), [1.0 / st.control_period_s])
+    agree_each(_read("study_rate"), [1.0 / st.control_period_s])
     tol = [st.angle_tol_deg, st.rate_tol_degps]
-    _agree(_read("study"), [*tol, st.grid_lo, st.grid_hi, st.grid_step, st.inertia_kgm2,
-                            *(t / 2 for t in tol)])  # fmt: skip
+    agree_each(
+        _read("study"),
+        [*tol, st.grid_lo, st.grid_hi, st.grid_step, st.inertia_kgm2, *(t / 2 for t in tol)],
+    )
     assert np.isinf(st.torque_max_Nm) and np.isinf(st.momentum_max_Nms)  # "no wheel limits"
-    _agree(_read("lqr"), scenario_tables("lqr_large_angle")["body"]["inertia_kgm2"])
+    agree_each(_read("lqr"), scenario_tables("lqr_large_angle")["body"]["inertia_kgm2"])
     gy = scenario_tables("gyrostat_game")
     body, man, gsim = gy["gyrostat"], gy["manoeuvre"], gy["simulation"]
-    _agree(_read("gyrostat_rate"), [1.0 / gsim["control_period_s"]])
+    agree_each(_read("gyrostat_rate"), [1.0 / gsim["control_period_s"]])
     assert len(set(body["beta_Nm"])) == len(set(body["rho"])) == 1
-    _agree(_read("gyrostat"), [*body["A_kgm2"], *body["rotor_J_kgm2"], *body["alpha_Nm"],
-                               body["beta_Nm"][0], body["rho"][0], man["initial_angle_deg"],
-                               *man["initial_axis"], gsim["settle_angle_deg"],
-                               gsim["settle_rate_degps"]])  # fmt: skip
+    agree_each(
+        _read("gyrostat"),
+        [
+            *body["A_kgm2"],
+            *body["rotor_J_kgm2"],
+            *body["alpha_Nm"],
+            body["beta_Nm"][0],
+            body["rho"][0],
+            man["initial_angle_deg"],
+            *man["initial_axis"],
+            gsim["settle_angle_deg"],
+            gsim["settle_rate_degps"],
+        ],
+    )
 
 
 def test_attitude_estimator_numbers_are_the_codes_and_the_attitude_files():
@@ -422,8 +449,8 @@ def test_attitude_estimator_numbers_are_the_codes_and_the_attitude_files():
     from kalman_vs_infoset.estim.attitude.box.estimator import BCH_MAX
     from kalman_vs_infoset.estim.attitude.ukf.options import DEFAULTS as UKF
 
-    _agree(_read("gate"), [100.0 * UKF.gate_prob])
-    _agree(_read("bch"), [BCH_MAX])
+    agree_each(_read("gate"), [100.0 * UKF.gate_prob])
+    agree_each(_read("bch"), [BCH_MAX])
     (zero,) = _read("unbounded")
     seen = set()
     for path in sorted((ROOT / "docs/results/attitude").glob("*.json")):
@@ -436,7 +463,7 @@ def test_attitude_estimator_numbers_are_the_codes_and_the_attitude_files():
     rows = {r["estimator"]: r for r in results(f"{ATT_RESULTS}smallsat_rw-sets.json")["rows"]
             if r["noise"] == "random"}  # fmt: skip
     bound = {e: rows[e]["mean_knowledge_bound_deg"]["mean"] for e in ("zonotope", "box")}
-    _agree(_read("zono_hull"), [bound["zonotope"] / bound["box"]])
+    agree_each(_read("zono_hull"), [bound["zonotope"] / bound["box"]])
 
 
 def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
@@ -454,10 +481,10 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
 
     parser = argparse.ArgumentParser()
     cmd_attitude.add_arguments(parser)
-    _agree(_read("seed"), [parser.parse_args(["resurs_p"]).seed])
-    _agree(_read("confidence"), [CONFIDENCE])
+    agree_each(_read("seed"), [parser.parse_args(["resurs_p"]).seed])
+    agree_each(_read("confidence"), [CONFIDENCE])
     bench = results("docs/results/bench.json")
-    _agree(_read("bench_steps"), [*bench["cost_steps"], *COST_DT_S])
+    agree_each(_read("bench_steps"), [*bench["cost_steps"], *COST_DT_S])
     assert bench["cost_dt_s"] == list(COST_DT_S)
     one, two, chunked = _read("bench_workers")
     assert list(bench["runs_per_cpu_s"]) == [one, two]
@@ -470,7 +497,7 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
     assert (ctrl_c, term, pipe) == (128 + signal.SIGINT, 128 + signal.SIGTERM, 128 + signal.SIGPIPE)
     assert cli.main(["attitude", str(tmp_path / "none.toml")]) == bad
     assert "error" in capsys.readouterr().err
-    _agree(_read("pd_map"), [results("docs/results/attitude/pd_gains.json")["map"]["phi0_deg"]])
+    agree_each(_read("pd_map"), [results("docs/results/attitude/pd_gains.json")["map"]["phi0_deg"]])
     six, six_, three, q, r = map(int, _read("riccati"))
     p = analytic_riccati(np.ones(three), np.ones(q), np.ones(r))
     assert p.shape == (six, six_) and (three, r) == (3, 3)

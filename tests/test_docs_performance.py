@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import test_docs_study
 import test_docs_tightness
 from docs_checks import CHECKS, PERF
 from docs_numbers import (
     ROOT,
+    agree_each,
     agrees,
     band_widths_pct,
     printed,
@@ -102,9 +104,7 @@ def test_the_exponents_spread_is_the_table_hosts_readings():
     ms = [r["cost_ms"][0] for r in runs]
     exponent = [r["cost_exponent"] for r in runs]
     assert all(r["cost_steps"][0] == 100 for r in runs)
-    got = _read("exponent")
-    for p, v in zip(got, (min(ms), max(ms), min(exponent), max(exponent)), strict=True):
-        assert agrees(p, v), (p, v)
+    agree_each(_read("exponent"), (min(ms), max(ms), min(exponent), max(exponent)))
     peaks = [
         mb
         for path in sorted((ROOT / "docs/results").glob("bench*.json"))
@@ -152,7 +152,6 @@ def test_the_median_exponent_is_its_two_bench_runs():
     median of its passes, the exponent numpy's slope through them, the largest move of
     one pass from its median, and the slope through pass k of each approach (numpy's
     polyfit, computed here); the whole approach and the engagements in UKF steps."""
-    import numpy as np
 
     runs = [results(f"docs/results/bench_median_exponent_{i}.json") for i in (1, 2)]
     got = _read("median")
@@ -168,17 +167,14 @@ def test_the_median_exponent_is_its_two_bench_runs():
         moved = max(moved, float(np.max(np.abs(passes / median[:, None] - 1.0))) * 100)
         one_pass += [np.polyfit(log_steps, np.log(passes[:, k]), 1)[0] for k in range(3)]
     assert len(one_pass) == 6
-    shown += [moved, min(one_pass), max(one_pass)]
-    for p, v in zip(got, shown, strict=True):
-        assert agrees(p, v), (p, v)
+    agree_each(got, [*shown, moved, min(one_pass), max(one_pass)])
     ratio = _read("median_ratio")
     shown = [r["whole_approach_ratio"] for r in runs]
     shown += [r["whole_approach_step_us"]["ukf"] for r in runs]
     shown += [r["whole_approach_step_us"]["infoset"] for r in runs]
     shown += [r[k] for r in runs for k in
               ("engagement_in_ukf_steps", "engagement_random_in_ukf_steps")]  # fmt: skip
-    for p, v in zip(ratio, shown, strict=True):
-        assert agrees(p, v), (p, v)
+    agree_each(ratio, shown)
 
 
 def test_the_interleaved_bench_runs_are_their_files():
@@ -188,8 +184,7 @@ def test_the_interleaved_bench_runs_are_their_files():
     shown = [r["machine"]["load_average"] for r in runs]
     shown += [r["whole_approach_ratio"] for r in runs]
     shown += [r["whole_approach_step_us"]["ukf"] for r in runs]
-    for p, v in zip(_read("interleaved"), shown, strict=True):
-        assert agrees(p, v), (p, v)
+    agree_each(_read("interleaved"), shown)
 
 
 def test_the_make_run_wall_clock_is_the_study_file():
