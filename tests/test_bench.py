@@ -97,7 +97,7 @@ def test_bench_counts_nodes_only_of_a_belief_with_nodes():
 def test_bench_first_run_compiles_on_an_empty_cache(tmp_path):
     """The first-run measurement runs its code in a fresh process on an empty numba
     cache: a tiny kernel's compilation is seen, though it was cached before."""
-    from kalman_vs_infoset.experiments.cmd_bench import first_run_compile
+    from kalman_vs_infoset.experiments.bench_process import first_run_compile
 
     (tmp_path / "tiny_kernel.py").write_text(
         "from numba import njit\n\n@njit(cache=True)\ndef f(x):\n    return x + 1.0\n"
