@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
 from docs_numbers import (
     ROOT,
+    agree_each,
     agrees,
     results,
     speed_base_cpu_s,
@@ -135,6 +137,43 @@ def test_the_dask_run_drew_the_same_table_as_local_processes():
     assert all(v["cpu_s"] is None for v in runs[2])  # a cluster's workers: not counted
     found = _found(r"The (\d+)-run study on a local Dask scheduler")
     assert int(found.group(1)) == results(STUDY + "dask.json")["runs"]
+
+
+def test_the_scaling_with_workers_is_what_the_files_measured():
+    """docs/performance.md's scaling (``docs/results/study/scaling/``): one and two
+    workers, local processes and a local Dask scheduler, two commands each; the wall
+    clocks, their pooled ratios, the CPU time a run with two local workers against one,
+    the variants' wall clock against half their CPU time, the command's own time after the
+    runs; and all eight drew the same table."""
+    scaling = "docs/results/study/scaling/"
+    got = {(kind, w): [results(f"{scaling}{kind}-w{w}-{r}.json") for r in (1, 2)]
+           for kind in ("local", "dask") for w in (1, 2)}  # fmt: skip
+    keys = ("variant", "noise", "runs", "seed", "miss_m", "fuel_mps", "truth_outside", "failures")
+    tables = [[{k: v[k] for k in keys} for v in d["variants"]] for ds in got.values() for d in ds]
+    assert len(tables) == 8 and all(t == tables[0] for t in tables)
+    runs = {d["runs"] for ds in got.values() for d in ds}
+    found = _found(r"measured on the (\d+)-core host with (\d+) runs per variant")
+    assert int(found.group(1)) == results("docs/results/bench.json")["machine"]["cpus"]
+    assert runs == {int(found.group(2))}
+    wall = {k: [d["wall_s"] for d in ds] for k, ds in got.items()}
+    found = _found(r"took ([\d.]+) and ([\d.]+) s of wall clock with one worker and ([\d.]+) "
+                   r"and ([\d.]+) s with two: ([\d.]+) times faster")  # fmt: skip
+    agree_each(found.groups(), [*wall["local", 1], *wall["local", 2],
+                                sum(wall["local", 1]) / sum(wall["local", 2])])  # fmt: skip
+    found = _found(r"the same command took ([\d.]+) and ([\d.]+) s with one worker and ([\d.]+) "
+                   r"and ([\d.]+) s with two: ([\d.]+) times faster, and ([\d.]+) times the local "
+                   r"processes' wall clock with two workers")  # fmt: skip
+    agree_each(found.groups(), [*wall["dask", 1], *wall["dask", 2],
+                                sum(wall["dask", 1]) / sum(wall["dask", 2]),
+                                sum(wall["dask", 2]) / sum(wall["local", 2])])  # fmt: skip
+    cpu = {w: sum(v["cpu_s"] for d in got["local", w] for v in d["variants"]) for w in (1, 2)}
+    variant_wall = sum(v["wall_s"] for d in got["local", 2] for v in d["variants"])
+    rest = [d["wall_s"] - sum(v["wall_s"] for v in d["variants"]) for d in got["local", 2]]
+    found = _found(r"a run cost ([\d.]+) times the CPU time with two workers that it cost with "
+                   r"one; the variants' wall clock was ([\d.]+) times half their CPU time .*\("
+                   r"the tables and the figure\) took ([\d.]+) s")  # fmt: skip
+    agree_each(found.groups(), [cpu[2] / cpu[1], variant_wall / (cpu[2] / 2), np.mean(rest)])
+    assert all(v["cpu_s"] is None for d in got["dask", 2] for v in d["variants"])
 
 
 def test_the_speed_options_defaults_rows_are_the_published_runs():
