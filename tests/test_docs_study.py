@@ -92,6 +92,71 @@ def test_the_1000_run_study_costs_what_the_text_says():
         assert (v["truth_outside"], v["empty_set"], v["diverged"], v["failures"]) == (0,) * 4
 
 
+def test_the_10000_run_variant_costs_and_draws_what_the_text_says():
+    """docs/performance.md's 10 000 runs of the bearing + range variant under random
+    errors: CPU and wall time, the CPU time a run against the 1000-run study's of that
+    variant, the workers' peak memory against it, the statistics beside the 1000- and
+    50-run studies', the runs' prefixes equal to those studies' runs (the kept Parquet of
+    the runs' miss and fuel), every run inside and none failed, and the progress lines
+    its stderr received."""
+    import pandas as pd
+
+    base = "docs/results/study/kp_fig5_range-random-10000"
+    big = results(base + ".json")
+    n = big["runs"]
+
+    def variant(path: str) -> dict:
+        (v,) = [v for v in results(path)["variants"]
+                if (v["scenario"], v["noise"]) == (big["scenario"], big["noise"])]  # fmt: skip
+        return v
+
+    small, mid = variant(STUDY + "w2.json"), variant(STUDY + "w2-1000.json")
+    found = _found(r"Measured at (\d+ \d+) runs for one variant, the cheapest \(bearing \+ "
+                   r"range under random errors: `kvi intercept (\w+) --runs (\d+) --noise (\w+) "
+                   r"--estimators (\w+) --workers 2 --json`")  # fmt: skip
+    assert int(found.group(1).replace(" ", "")) == int(found.group(3)) == n == 10_000
+    assert found.groups()[1:] == (big["scenario"], str(n), big["noise"], big["estimator"])
+    assert mid["variant"] == "bearing + range"
+    # the cheapest variant per run, in the 50-run study
+    assert small["cpu_s"] == min(v["cpu_s"] for v in results(STUDY + "w2.json")["variants"])
+    found = _found(
+        r"kp_fig5_range-random-10000\.json`; a few minutes of other work ran beside "
+        r"it\): (\d+) CPU-s, ([\d.]+) minutes on the host's (\d+) cores\. A run cost "
+        r"([\d.]+) times the CPU time of the (\d+)-run study's runs of that variant, "
+        r"and each worker peaked at (\d+) MB \((\d+) MB in the (\d+)-run study\)"
+    )
+    assert int(found.group(3)) == results("docs/results/bench.json")["machine"]["cpus"]
+    assert int(found.group(5)) == int(found.group(8)) == mid["runs"]
+    agree_each(found.group(1, 2, 4, 6, 7), [
+        big["cpu_s"], big["wall_s"] / 60.0, big["cpu_s"] / n / (mid["cpu_s"] / mid["runs"]),
+        big["worker_peak_rss_mb"], mid["worker_peak_rss_mb"],
+    ])  # fmt: skip
+    runs = pd.read_parquet(ROOT / (base + "-runs.parquet")).sort_values("run")
+    assert runs["run"].tolist() == list(range(n))
+    for ref in (small, mid):  # the first runs are the smaller studies' runs
+        head = runs[runs["run"] < ref["runs"]]
+        for col in ("miss_m", "fuel_mps"):
+            assert head[col].mean() == ref[col]["mean"] and head[col].max() == ref[col]["max"]
+    assert runs["miss_m"].mean() == big["miss_m"]["mean"]
+    found = _found(r"Its first (\d+) and first (\d+) runs are the (\d+)- and (\d+)-run studies'")
+    assert [int(g) for g in found.groups()] == [small["runs"], mid["runs"]] * 2
+    found = _found(r"Over the 10 000 runs the mean miss is ([\d.]+) m and the mean fuel ([\d.]+) "
+                   r"m/s \(1000 runs: ([\d.]+) m and ([\d.]+) m/s; 50 runs: ([\d.]+) m and "
+                   r"([\d.]+) m/s\)")  # fmt: skip
+    agree_each(found.groups(), [x for v in (big, mid, small)
+                                for x in (v["miss_m"]["mean"], v["fuel_mps"]["mean"])])  # fmt: skip
+    assert (big["truth_outside"], big["empty_set"], big["diverged"], big["failures"]) == (0,) * 4
+    assert (runs["truth_outside"] == 0).all() and (runs["status"] == "ok").all()
+    lines = (ROOT / (base + "-stderr.txt")).read_text().splitlines()
+    progress = [line for line in lines if re.search(r"\d+/\d+ runs, ~\d+ s left$", line)]
+    last = re.search(rf"{n}/{n} runs \(([\d.]+) s\)$", lines[-1])  # its own clock
+    assert last and abs(float(last.group(1)) - big["wall_s"]) < 1.0
+    from kalman_vs_infoset.experiments.progress import LOG_EVERY_S
+
+    found = _found(r"the command wrote (\d+) progress lines with the time left, one every (\d+) s")
+    assert int(found.group(1)) == len(progress) and float(found.group(2)) == LOG_EVERY_S
+
+
 def test_the_study_against_5f9e157_on_one_host():
     """The previous study (``*_at_5f9e157``) drew the same bearings-only runs at less CPU
     on another host; run alternately on one host, the two codes cost the same there
