@@ -11,7 +11,7 @@ import tomllib
 import numpy as np
 import pytest
 from docs_checks import ADV5, CHECKS, INT
-from docs_numbers import ROOT, agrees, printed, results
+from docs_numbers import ROOT, agree_each, agrees, printed, results
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -40,6 +40,12 @@ DERIVED = {
     "study_max": r"as maxima do \(bearings-only random ([\d.]+) -> ([\d.]+) m\)",
     "study_fuel": r"Perfect-information fuel ([\d.]+) m/s over the (\d+) runs \(a lower bound of "
     r"the fuel; ([\d.]+)\s+m/s over the first (\d+)\)",
+    "tenk": r"One variant was run to (\d+ \d+) runs, the bearing \+ range variant under random "
+    r"errors \(`kvi intercept kp_fig5_range --runs (\d+) .* its first (\d+) runs are this "
+    r"table's, .*\): miss ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m \(mean / p50 / p90 / "
+    r"max\), fuel ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m/s",
+    "tenk_moves": r"From (\d+) runs to (\d+ \d+) the mean miss moved by ([\d.]+) m and the mean "
+    r"fuel by ([\d.]+) m/s, the miss's p90 by ([\d.]+) m",
 }
 
 #: quoted checks made outside the package (no results file here can hold them)
@@ -174,6 +180,31 @@ def test_the_1000_run_fig5_study_against_the_50_run_table():
     fuel, n, fuel_50, n_50 = _printed("study_fuel")
     assert agrees(fuel, big["fuel_perfect_info_mps"]) and int(n) == big["runs"]
     assert agrees(fuel_50, small["fuel_perfect_info_mps"]) and int(n_50) == small["runs"]
+
+
+def test_the_10000_run_variant_against_the_1000_run_table():
+    """docs/intercept.md's 10 000 runs of the bearing + range variant under random
+    errors: its statistics, that its first runs are the 1000-run table's (the same
+    seeds; the kept run table, docs/performance.md's test, checks them run by run), no
+    truth outside, and how far the 1000-run numbers were."""
+    big = results("docs/results/study/kp_fig5_range-random-10000.json")
+    study = results("docs/results/study/fig5-w2-1000.json")
+    (mid,) = [v for v in study["variants"] if (v["variant"], v["noise"]) == ("bearing + range",
+              "random")]  # fmt: skip
+    assert (big["scenario"], big["noise"], big["estimator"]) == ("kp_fig5_range", "random",
+                                                                 "infoset")  # fmt: skip
+    n, n_cmd, first, *stats = _printed("tenk")
+    assert int(n.replace(" ", "")) == int(n_cmd) == big["runs"] and int(first) == mid["runs"]
+    keys = ("mean", "p50", "p90", "max")
+    for shown, value in zip(stats, [big[m][k] for m in ("miss_m", "fuel_mps") for k in keys],
+                            strict=True):  # fmt: skip
+        assert agrees(shown, value), (shown, value)
+    assert (big["truth_outside"], big["empty_set"], big["diverged"], big["failures"]) == (0,) * 4
+    n_mid, n_big, miss, fuel, p90 = _printed("tenk_moves")
+    assert int(n_mid) == mid["runs"] and int(n_big.replace(" ", "")) == big["runs"]
+    agree_each((miss, fuel, p90), [abs(big["miss_m"]["mean"] - mid["miss_m"]["mean"]),
+                                   abs(big["fuel_mps"]["mean"] - mid["fuel_mps"]["mean"]),
+                                   abs(big["miss_m"]["p90"] - mid["miss_m"]["p90"])])  # fmt: skip
 
 
 def test_the_range_finders_paired_effect_at_1000_runs():
