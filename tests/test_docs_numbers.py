@@ -107,6 +107,10 @@ README_DERIVED = {
     r"and spends a little less energy \(the raw measurement ([\d.]+) N\^2 m\^2 s more, p "
     r"([\d.]+); the UKF ([\d.]+) more, p ([\d.]+)\), but settles ([\d.]+) s later than the "
     r"raw measurement",
+    "ten_thousand": r"(\d+ \d+) runs of Fig\. 5's cheapest variant \(`kvi intercept kp_fig5_range "
+    r"--runs (\d+) --noise random`\) took ([\d.]+) minutes on (\d+) cores, (\d+) CPU-s, with "
+    r"each worker at (\d+) MB; the cost per run is ([\d.]+) times that of (\d+) runs, and the "
+    r"mean miss moved by ([\d.]+) m from (\d+) runs to (\d+ \d+)",
 }
 
 
@@ -138,6 +142,29 @@ def test_the_readmes_range_finder_sentence_is_the_1000_run_study():
     assert agrees(lo, -rnd["miss_m"]["ci"][1]) and agrees(hi, -rnd["miss_m"]["ci"][0])
     assert rnd["fuel_mps"]["ci"][1] < 0.0
     assert agrees(game, rows["game"]["miss_m"]["mean"]) and rows["game"]["miss_m"]["ci"][0] > 0
+
+
+def test_the_readmes_10000_runs_are_the_measured_study():
+    """The README's 10 000 runs of the bearing + range variant under random errors
+    (its results file): runs, wall and CPU time, cores, workers' peak memory, and against
+    the 1000-run study's runs of that variant the CPU time a run and the mean miss."""
+    from docs_numbers import agree_each, printed
+
+    big = results("docs/results/study/kp_fig5_range-random-10000.json")
+    (mid,) = [v for v in results("docs/results/study/fig5-w2-1000.json")["variants"]
+              if (v["scenario"], v["noise"]) == ("kp_fig5_range", "random")]  # fmt: skip
+    (n, n_cmd, minutes, cores, cpu, mb, per_run, n_mid, miss, n_mid2, n_big) = printed(
+        "README.md", README_DERIVED["ten_thousand"]
+    )
+    assert int(n.replace(" ", "")) == int(n_cmd) == int(n_big.replace(" ", "")) == big["runs"]
+    assert int(n_mid) == int(n_mid2) == mid["runs"]
+    assert int(cores) == results("docs/results/bench.json")["machine"]["cpus"]
+    assert big["truth_outside"] == big["failures"] == 0
+    agree_each((minutes, cpu, mb, per_run, miss), [
+        big["wall_s"] / 60.0, big["cpu_s"], big["worker_peak_rss_mb"],
+        big["cpu_s"] / big["runs"] / (mid["cpu_s"] / mid["runs"]),
+        abs(big["miss_m"]["mean"] - mid["miss_m"]["mean"]),
+    ])  # fmt: skip
 
 
 def test_the_readme_attitude_reading_is_the_four_attitude_files():
