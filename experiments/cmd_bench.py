@@ -59,7 +59,8 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
 Step and engagement timings are the median of ``--repeat`` repetitions; throughputs
 are the best of ``--repeat`` interleaved measurements. ``--quick`` (tests, previews)
 times a few steps once and uses short approaches. The machine and library versions
-are reported beside.
+are reported beside. The throughput, start-up and first-run measurements run other
+processes (:mod:`.bench_process`); the steps and approaches are timed here.
 """
 
 from __future__ import annotations
