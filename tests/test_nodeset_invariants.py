@@ -281,7 +281,9 @@ def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, k
     np.savez(path, **arrays)
     env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
     # without LLVM's optimisation passes: a quarter less compile time, and no check is
-    # optimised away (numba emits the bounds checks before LLVM sees the code)
+    # optimised away (numba emits the bounds checks before LLVM sees the code). This
+    # compile cannot be done ahead: numba does not cache a bounds-checked kernel (it
+    # "uses dynamic globals"), so the process compiles it every time
     env["NUMBA_OPT"] = "0"
     proc = subprocess.run(
         [sys.executable, "-c", _REPLAY, str(path)], env=env, cwd=ROOT,
