@@ -33,6 +33,15 @@ def results(path: str) -> dict | list:
     return json.loads((ROOT / path).read_text(encoding="utf-8"))
 
 
+def study_variant(path: str, scenario: str, noise: str) -> dict:
+    """The one variant of a study's results file (``kvi fig5 --json``) run on
+    ``scenario`` under ``noise``."""
+    (row,) = [
+        v for v in results(path)["variants"] if (v["scenario"], v["noise"]) == (scenario, noise)
+    ]
+    return row
+
+
 def scenario_tables(name: str) -> dict:
     """A bundled scenario file's tables (``data/scenarios/NAME.toml``), as written."""
     import tomllib

@@ -11,7 +11,7 @@ import tomllib
 import numpy as np
 import pytest
 from docs_checks import ADV5, CHECKS, INT
-from docs_numbers import ROOT, agree_each, agrees, printed, results
+from docs_numbers import ROOT, agree_each, agrees, printed, results, study_variant
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -188,9 +188,8 @@ def test_the_10000_run_variant_against_the_1000_run_table():
     seeds; the kept run table, docs/performance.md's test, checks them run by run), no
     truth outside, and how far the 1000-run numbers were."""
     big = results("docs/results/study/kp_fig5_range-random-10000.json")
-    study = results("docs/results/study/fig5-w2-1000.json")
-    (mid,) = [v for v in study["variants"] if (v["variant"], v["noise"]) == ("bearing + range",
-              "random")]  # fmt: skip
+    mid = study_variant("docs/results/study/fig5-w2-1000.json", "kp_fig5_range", "random")
+    assert mid["variant"] == "bearing + range"
     assert (big["scenario"], big["noise"], big["estimator"]) == ("kp_fig5_range", "random",
                                                                  "infoset")  # fmt: skip
     n, n_cmd, first, *stats = _printed("tenk")

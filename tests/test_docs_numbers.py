@@ -148,11 +148,10 @@ def test_the_readmes_10000_runs_are_the_measured_study():
     """The README's 10 000 runs of the bearing + range variant under random errors
     (its results file): runs, wall and CPU time, cores, workers' peak memory, and against
     the 1000-run study's runs of that variant the CPU time a run and the mean miss."""
-    from docs_numbers import agree_each, printed
+    from docs_numbers import agree_each, printed, study_variant
 
     big = results("docs/results/study/kp_fig5_range-random-10000.json")
-    (mid,) = [v for v in results("docs/results/study/fig5-w2-1000.json")["variants"]
-              if (v["scenario"], v["noise"]) == ("kp_fig5_range", "random")]  # fmt: skip
+    mid = study_variant("docs/results/study/fig5-w2-1000.json", "kp_fig5_range", "random")
     (n, n_cmd, minutes, cores, cpu, mb, per_run, n_mid, miss, n_mid2, n_big) = printed(
         "README.md", README_DERIVED["ten_thousand"]
     )

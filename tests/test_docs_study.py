@@ -16,6 +16,7 @@ from docs_numbers import (
     speed_base_cpu_s,
     speed_cpu_s,
     speed_rows,
+    study_variant,
 )
 
 STUDY = "docs/results/study/fig5-"
@@ -105,12 +106,8 @@ def test_the_10000_run_variant_costs_and_draws_what_the_text_says():
     big = results(base + ".json")
     n = big["runs"]
 
-    def variant(path: str) -> dict:
-        (v,) = [v for v in results(path)["variants"]
-                if (v["scenario"], v["noise"]) == (big["scenario"], big["noise"])]  # fmt: skip
-        return v
-
-    small, mid = variant(STUDY + "w2.json"), variant(STUDY + "w2-1000.json")
+    small, mid = (study_variant(STUDY + f, big["scenario"], big["noise"])
+                  for f in ("w2.json", "w2-1000.json"))  # fmt: skip
     found = _found(r"Measured at (\d+ \d+) runs for one variant, the cheapest \(bearing \+ "
                    r"range under random errors: `kvi intercept (\w+) --runs (\d+) --noise (\w+) "
                    r"--estimators (\w+) --workers 2 --json`")  # fmt: skip
