@@ -172,19 +172,32 @@ def configure_logging(level: int = logging.INFO) -> None:
 
 
 def compiled_kernels_cached() -> bool | None:
-    """Whether numba's on-disk cache holds the estimators' compiled kernels (``None``:
-    unknown, the cache is not beside the sources)."""
+    """Whether numba's on-disk cache holds the compiled kernels of every kernel source of
+    the package, written after the last edit of any of them (the cache is stamped with
+    all of them: :mod:`kalman_vs_infoset._jit`). ``None``: unknown (the sources' folder
+    is not writable, so numba caches elsewhere, per user). A guess from the files, for
+    the progress bars of library users; the command line sees each compilation."""
     import os
 
-    from kalman_vs_infoset import estim
+    from kalman_vs_infoset._jit import kernel_files
 
-    folder = os.environ.get("NUMBA_CACHE_DIR")
-    if folder:
-        return any(Path(folder).rglob("_kernels.*.nbi"))
-    here = Path(estim.__file__).parent
-    if not os.access(here, os.W_OK):  # numba caches elsewhere (per user)
+    files = kernel_files()
+    if not files:
         return None
-    return any((here / "__pycache__").glob("_kernels.*.nbi"))
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder and not os.access(files[0].parent, os.W_OK):
+        return None
+    newest = max(p.stat().st_mtime for p in files)
+
+    def cached(src: Path) -> bool:
+        # numba names a kernel's index <module>.<function>-<line>.py<version>.nbi, in
+        # __pycache__ beside its source, or under NUMBA_CACHE_DIR
+        pattern = f"{src.stem}.*.nbi"
+        where = Path(folder) if folder else src.parent / "__pycache__"
+        found = where.rglob(pattern) if folder else where.glob(pattern)
+        return any(f.stat().st_mtime >= newest for f in found)
+
+    return all(cached(src) for src in files)
 
 
 _announced = False

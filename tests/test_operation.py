@@ -16,20 +16,40 @@ matplotlib.use("Agg")
 
 def test_cdf_curve_is_the_empirical_cdf_of_the_finite_values():
     """The curve steps from 0 at the smallest value up by 1/n at each value (an
-    independent construction: sorted values, ``k/n``), non-finite values left out."""
+    independent construction: sorted values, ``k/n``)."""
     import matplotlib.pyplot as plt
 
     rng = np.random.default_rng(0)
     v = rng.lognormal(size=37)
-    v[3], v[5] = np.inf, v[6]  # an infinite miss and a tie
+    v[5] = v[6]  # a tie
+    fig, ax = plt.subplots()
+    plots._cdf(ax, v, "a", color="k")
+    (line,) = ax.lines
+    finite = np.sort(v)
+    n = len(finite)
+    assert line.get_drawstyle() == "steps-post"
+    np.testing.assert_array_equal(line.get_xdata(), np.concatenate([[finite[0]], finite]))
+    np.testing.assert_array_equal(line.get_ydata(), np.arange(n + 1) / n)
+    plt.close(fig)
+
+
+def test_cdf_of_runs_that_never_settled_ends_at_the_share_that_did():
+    """``+inf`` (never settled) is larger than every time: with 2 of 37 runs unsettled the
+    curve climbs by 1/37 a settled run and ends at 35/37, not at 1; NaN is left out of
+    both counts (sorted values, ``k/n``, built independently)."""
+    import matplotlib.pyplot as plt
+
+    rng = np.random.default_rng(1)
+    v = rng.lognormal(size=38)
+    v[3], v[8], v[11] = np.inf, np.inf, np.nan
     fig, ax = plt.subplots()
     plots._cdf(ax, v, "a", color="k")
     (line,) = ax.lines
     finite = np.sort(v[np.isfinite(v)])
-    n = len(finite)
-    assert line.get_drawstyle() == "steps-post" and n == 36
+    assert len(finite) == 35 and line.get_drawstyle() == "steps-post"
     np.testing.assert_array_equal(line.get_xdata(), np.concatenate([[finite[0]], finite]))
-    np.testing.assert_array_equal(line.get_ydata(), np.arange(n + 1) / n)
+    np.testing.assert_allclose(line.get_ydata(), np.arange(36) / 37, rtol=0, atol=1e-15)
+    assert line.get_ydata()[-1] < 1.0
     plt.close(fig)
 
 
@@ -99,9 +119,42 @@ def test_a_first_run_compile_is_announced_once(monkeypatch, tmp_path, caplog):
     assert [r.getMessage() for r in caplog.records if "compiling" in r.getMessage()] == [
         "first run: compiling the estimators' kernels (about a minute, once)"
     ]
+    from kalman_vs_infoset._jit import kernel_files
+
     (tmp_path / "x").mkdir()
-    (tmp_path / "x" / "_kernels.dedupe-255.py311.nbi").write_bytes(b"")
+    stems = sorted({f.stem for f in kernel_files()})
+    assert {"_kernels", "_geometry", "_kepler"} <= set(stems)
+    for stem in stems[1:]:
+        (tmp_path / "x" / f"{stem}.f-1.py311.nbi").write_bytes(b"")
+    assert progress.compiled_kernels_cached() is False  # one kernel module missing
+    (tmp_path / "x" / f"{stems[0]}.f-1.py311.nbi").write_bytes(b"")
     assert progress.compiled_kernels_cached() is True
+
+
+def test_the_cache_guess_finds_kernels_beside_their_sources_and_sees_an_edit(monkeypatch, tmp_path):
+    """Without NUMBA_CACHE_DIR numba caches in ``__pycache__`` beside each kernel's own
+    source (sub-packages too): every kernel source needs its index there, written after
+    the last edit of any kernel source (the cache is stamped with all of them). Before,
+    only the ``estim`` folder's own ``__pycache__`` was looked at, so a library user's
+    progress bar announced a first-run compile on every run."""
+    import os
+
+    from kalman_vs_infoset import _jit
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    srcs = [tmp_path / "estim" / "a" / "_kernels.py", tmp_path / "guidance" / "_kepler.py"]
+    for src in srcs:
+        (src.parent / "__pycache__").mkdir(parents=True)
+        src.write_text("@njit\n")
+    monkeypatch.setattr(_jit, "kernel_files", lambda: tuple(srcs))
+    index = [s.parent / "__pycache__" / f"{s.stem}.f-3.py311.nbi" for s in srcs]
+    index[0].write_bytes(b"")
+    assert progress.compiled_kernels_cached() is False
+    index[1].write_bytes(b"")
+    assert progress.compiled_kernels_cached() is True
+    later = index[1].stat().st_mtime + 5.0
+    os.utime(srcs[0], (later, later))  # a kernel edited after the cache was written
+    assert progress.compiled_kernels_cached() is False
 
 
 def test_kvi_version_names_the_installed_package(capsys):
