@@ -9,6 +9,7 @@ with
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -59,13 +60,17 @@ def summarise(
     def col(key: str) -> list:
         return ok[key].tolist() if key in ok else []
 
+    settle = col("settle_time_s")
     result: dict[str, Any] = {
         "scenario": setup.name,
         "controller": controller,
         "noise": noise,
         "runs": runs,
         "seed": seed,
-        "settle_time_s": summary_stats(col("settle_time_s")),
+        # runs that never settled count (inf), as in the other loops: a mean over the
+        # settled runs alone would read shorter than the loop's
+        "settle_time_s": summary_stats(settle, finite_only=False),
+        "not_settled": sum(not math.isfinite(v) for v in settle),
         "energy_N2m2s": summary_stats(col("energy_N2m2s")),
         "final_angle_deg": summary_stats(col("final_angle_deg")),
         "final_rate_degps": summary_stats(col("final_rate_degps")),

@@ -113,6 +113,8 @@ def summarise(
         **estimator_counts(ok),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
+        "not_settled": int(np.sum(~np.isfinite(settle))),
+        # the same count, by the name this loop's earlier results files use
         "unsettled_runs": int(np.sum(~np.isfinite(settle))),
         "max_torque_ratio": float(col("max_torque_ratio").max()) if len(ok) else float("nan"),
         "alpha_Nm": alpha.tolist(),

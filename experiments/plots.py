@@ -23,12 +23,19 @@ CROWDED_CURVES = 10
 
 
 def _cdf(ax, values: np.ndarray, label: str, **style) -> None:
-    """The empirical CDF of the finite ``values`` (``Axes.ecdf``: a step from 0 at the
-    smallest value to 1 at the largest)."""
-    v = values[np.isfinite(values)]
+    """The empirical CDF of ``values`` (``Axes.ecdf``: a step from 0 at the smallest
+    value to 1 at the largest). NaN is left out; ``+inf`` (a run that never settled)
+    counts as larger than every value, so the curve ends at the share of finite runs
+    instead of claiming that every run got there."""
+    values = values[~np.isnan(values)]
+    v = np.sort(values[np.isfinite(values)])
     if len(v) == 0:
         return
-    ax.ecdf(v, label=label, **style)
+    if len(v) == len(values):
+        ax.ecdf(v, label=label, **style)
+        return
+    share = np.arange(1, len(v) + 1) / len(values)
+    ax.step(np.r_[v[0], v], np.r_[0.0, share], where="post", label=label, **style)
 
 
 def group_style(keys: Mapping[str, object], df: pd.DataFrame, variants: Sequence) -> dict:

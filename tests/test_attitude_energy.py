@@ -354,3 +354,23 @@ def test_seed_u0_removes_the_initial_torque_oscillation():
     )
     seeded = simulate_turn(seeded_setup, "energy").initial_oscillation_Nm()
     assert seeded < 0.1 * zero
+
+
+@TURNS
+def test_a_turn_that_never_settles_reads_inf_and_is_counted(energy_turn):
+    """docs/results.md: ``settle_time_s`` is inf for a run that never settles, and the
+    gyrodine loop's summary counts such runs (``not_settled``) and keeps them in its
+    statistics, as the other attitude loops do (it read NaN and dropped them: a mean
+    over the settled runs alone, and "not settled: 0 runs" printed)."""
+    import pandas as pd
+    from kalman_vs_infoset.experiments import attitude_cmg
+
+    setup, res = energy_turn
+    never = dataclasses.replace(res, angle_tol_deg=0.0)  # the error never reaches 0 deg
+    assert never.settle_time_s() == np.inf
+    settled = res.settle_time_s()
+    assert np.isfinite(settled)
+    ok = pd.DataFrame({"settle_time_s": [never.settle_time_s(), settled, settled]})
+    out = attitude_cmg.summarise(setup, "energy", "game", "box", 3, 0, ok, 0)
+    assert out["not_settled"] == 1
+    assert out["settle_time_s"]["max"] == np.inf and out["settle_time_s"]["p50"] == settled

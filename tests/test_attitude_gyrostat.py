@@ -216,7 +216,7 @@ def test_turn_completes_within_tau_and_torques_within_alpha(scenario, noise, dis
     """Issue 7 acceptance: every disturbance kind, including the adversarial one."""
     sc = {**scenario, "simulation": {**scenario["simulation"], "disturbance": disturbance}}
     res = run(str(SCENARIO), sc, "game", noise, runs=3 if disturbance == "constant" else 2, seed=7)
-    assert res["failures"] == 0 and res["unsettled_runs"] == 0
+    assert res["failures"] == 0 and res["unsettled_runs"] == 0 == res["not_settled"]
     assert res["settle_time_s"]["max"] <= res["guaranteed_time_s"]
     assert res["late_runs"] == 0
     assert res["max_torque_ratio"] <= 1.0

@@ -36,7 +36,9 @@ DERIVED = {
     "paired_others": r"the raw measurement's is larger by ([\d.]+) deg and the UKF's by "
     r"([\d.]+) deg, in every run; the raw measurement also spends ([\d.]+) N\^2 m\^2 s more "
     r"energy \(p ([\d.]+)\), but it settles ([\d.]+) s earlier than the box in the (\d+) runs "
-    r"where both settle, and the UKF ([\d.]+) s earlier\. Under random noise Resurs-P shows "
+    r"where both settle, and the UKF ([\d.]+) s earlier; the box's other (\d+) runs never "
+    r"settle within the scenario's (\d+) s \(`not_settled`\), where every raw-measurement "
+    r"and UKF run does\. Under random noise Resurs-P shows "
     r"no difference \(p from ([\d.]+) to ([\d.]+) over",
 }
 
@@ -218,7 +220,14 @@ def test_the_paired_reading_of_the_other_scenarios_is_their_files():
         return {(r["estimator"], r["noise"]): r for r in data["rows"]}
 
     res = pairs("resurs_p")
-    (f_raw, f_ukf, e_raw, p_e, s_raw, n, s_ukf, p_lo, p_hi) = printed(ATT, DERIVED["paired_others"])
+    (f_raw, f_ukf, e_raw, p_e, s_raw, n, s_ukf, n_never, horizon, p_lo, p_hi) = printed(
+        ATT, DERIVED["paired_others"]
+    )
+    rows = {(r["estimator"], r["noise"]): r for r in results(f"{ATTITUDE}resurs_p.json")["rows"]}
+    never = {est: rows[(est, "game")]["not_settled"] for est in ("box", "perfect", "ukf")}
+    assert never == {"box": int(n_never), "perfect": 0, "ukf": 0}
+    assert int(n) + int(n_never) == rows[("box", "game")]["runs"]
+    assert all(r["horizon_s"] == float(horizon) for r in rows.values())
     for shown, est in ((f_raw, "perfect"), (f_ukf, "ukf")):
         final = res[(est, "game")]["final_angle_deg"]
         assert agrees(shown, final["mean"]) and final["larger_share"] == 1.0

@@ -106,7 +106,8 @@ README_DERIVED = {
     r"the adversarial torque on Resurs-P the box ends closest "
     r"and spends a little less energy \(the raw measurement ([\d.]+) N\^2 m\^2 s more, p "
     r"([\d.]+); the UKF ([\d.]+) more, p ([\d.]+)\), but settles ([\d.]+) s later than the "
-    r"raw measurement",
+    r"raw measurement where both settle \((\d+) runs\), and in the other (\d+) it does not "
+    r"settle within the scenario's (\d+) s",
     "ten_thousand": r"(\d+ \d+) runs of Fig\. 5's cheapest variant \(`kvi intercept kp_fig5_range "
     r"--runs (\d+) --noise random`\) took ([\d.]+) minutes on (\d+) cores, (\d+) CPU-s, with "
     r"each worker at (\d+) MB; the cost per run is ([\d.]+) times that of (\d+) runs, and the "
@@ -175,8 +176,8 @@ def test_the_readme_attitude_reading_is_the_four_attitude_files():
     "ends closest": larger share 1 on Resurs-P, game)."""
     from docs_numbers import printed
 
-    (runs, closer_not, closer_of, e_raw, p_raw, e_ukf, p_ukf, settle) = printed(
-        "README.md", README_DERIVED["attitude"]
+    (runs, closer_not, closer_of, e_raw, p_raw, e_ukf, p_ukf, settle, both, never, horizon) = (
+        printed("README.md", README_DERIVED["attitude"])
     )
     names = ("smallsat_rw", "gyrostat_game", "lqr_large_angle", "resurs_p")
     files = {n: results(f"docs/results/attitude/{n}.json") for n in names}
@@ -197,6 +198,11 @@ def test_the_readme_attitude_reading_is_the_four_attitude_files():
         assert agrees(e, energy["mean"]) and agrees(p, energy["wilcoxon_p"]) and energy["mean"] > 0
         assert res[est]["final_angle_deg"]["larger_share"] == 1.0
     assert agrees(settle, -res["perfect"]["settle_time_s"]["mean"])
+    assert res["perfect"]["settle_time_s"]["runs"] == int(both)
+    rows = {(r["estimator"], r["noise"]): r for r in files["resurs_p"]["rows"]}
+    assert rows[("box", "game")]["not_settled"] == int(never) == int(runs) - int(both)
+    assert rows[("perfect", "game")]["not_settled"] == 0
+    assert rows[("box", "game")]["horizon_s"] == float(horizon)
 
 
 def test_a_stale_number_fails():

@@ -92,10 +92,11 @@ class TurnResult:
         return float(np.sum(self.torque_Nm[:n] ** 2) * self.dt_s)
 
     def settle_time_s(self) -> float:
-        """First time after which angle and rate errors stay within tolerance (nan if never)."""
+        """First time after which angle and rate errors stay within tolerance (``inf`` if
+        never, as the other attitude loops report it)."""
         ok = (self.angle_deg <= self.angle_tol_deg) & (self.rate_norm_degps <= self.rate_tol_degps)
         if not ok[-1]:
-            return float("nan")
+            return float("inf")
         bad = np.flatnonzero(~ok)
         return float(0.0 if bad.size == 0 else (bad[-1] + 1) * self.dt_s)
 
