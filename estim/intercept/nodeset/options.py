@@ -22,7 +22,7 @@ class InfosetOptions(SlabOptions):
         Literal["nodes", "slabs", "points"],
         Field(
             description="nodes (exact slices, tight), slabs (guaranteed, coarse) or the "
-            "seed's point sections"
+            "seed's point sections (not guaranteed: silent between sections)"
         ),
     ] = "nodes"
     n_nodes: Annotated[
