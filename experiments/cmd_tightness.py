@@ -302,6 +302,8 @@ def render(result: dict[str, Any]) -> str:
             f"{result['truth_w_m'][i]:10.2f} | {result['ratio'][i]:5.3f} | "
             f"{str(result['exact_inside'][i]):6s} | {result['lp_s'][i]:5.1f}"
         )
-    lines.append(f"  max ratio {result['max_ratio']}; files: " + ", ".join(result["files"]))
+    top = result["max_ratio"]
+    top_text = "-" if top is None or top != top else f"{top:.4f}"  # none: no time compared
+    lines.append(f"  max ratio {top_text}; files: " + ", ".join(result["files"]))
     lines.append(f"  ({result['wall_s']:.1f} s)")
     return "\n".join(lines)

@@ -62,6 +62,13 @@ def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_pat
     assert res["ratio"][1] is None and res["exact_inside"][1] is None
     assert "eps" in res["reason"][1] and res["reason"][0] == ""
     assert res["max_ratio"] == res["ratio"][0]
+    from kalman_vs_infoset.experiments.cmd_tightness import render
+
+    # the text prints the largest ratio as the table does, rounded (not repr's 16 digits),
+    # and "-" when no time was compared
+    assert f"  max ratio {res['max_ratio']:.4f}; files: " in render(res)
+    none = {**res, **{k: [None, None] for k in ("set_lo_m", "ratio")}, "max_ratio": None}
+    assert "  max ratio -; files: " in render(none)
 
 
 @pytest.mark.parametrize(
