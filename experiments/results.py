@@ -31,6 +31,9 @@ METADATA_KEY = b"kalman_vs_infoset"
 META_DIR, TRACE_DIR = "_meta", "_traces"
 #: file-name endings of traces (not results tables)
 TRACE_SUFFIXES = ("-trace.parquet", "-trace-sets.parquet")
+#: the Parquet key marking a command's combined table (compare, fig5, adversaries: the
+#: rows of the runs' own tables, gathered; :func:`report.write_tables`)
+COMBINED_KEY = b"kalman_vs_infoset_combined"
 
 
 def sidecar_path(table: Path) -> Path:
@@ -78,11 +81,24 @@ def read_metadata(path: str | Path) -> dict[str, Any]:
     return json.loads(raw) if raw else {}
 
 
+def _combined(path: Path) -> bool:
+    """Whether ``path`` is a command's combined table (its rows are the runs' own)."""
+    if path.name.endswith("-adversaries.parquet"):  # written before the mark, beside its runs
+        return True
+    try:
+        return COMBINED_KEY in (pq.read_schema(path).metadata or {})
+    except (OSError, pa.ArrowInvalid):
+        return False  # unreadable: load_results says so when it reads it
+
+
 def _tables(folder: Path) -> list[Path]:
-    files = sorted(p for p in folder.glob("*.parquet") if not p.name.endswith(TRACE_SUFFIXES))
+    """The runs' own tables of a results folder: beside the combined table (adversaries,
+    sweep), or in ``runs/`` (compare, fig5); a combined table alone is read as is."""
+    found = sorted(p for p in folder.glob("*.parquet") if not p.name.endswith(TRACE_SUFFIXES))
+    files = [p for p in found if not _combined(p)]
     if not files and (folder / "runs").is_dir():  # compare, fig5: the runs in runs/
-        return _tables(folder / "runs")
-    return files
+        files = _tables(folder / "runs")
+    return files or found
 
 
 def load_results(folder: str | Path) -> pd.DataFrame:

@@ -102,6 +102,32 @@ def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path):
     assert len(meta["code"]["sources_sha256"]) == 64
 
 
+def test_load_results_reads_each_run_once_beside_or_above_a_combined_table(tmp_path):
+    """A command's combined table (``report.write_tables``: compare and fig5 above their
+    ``runs/``, adversaries beside its runs' tables) holds the runs' rows again:
+    ``load_results`` of the folder reads the runs' own tables, each run once (it read an
+    adversaries folder twice over); the combined table given alone is still read."""
+    from kalman_vs_infoset.experiments.report import write_tables
+
+    beside, above = tmp_path / "beside", tmp_path / "above"
+    for est in ("ekf", "ukf"):
+        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=beside)
+        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=above / "runs")
+    combined = pd.concat([pd.read_parquet(p) for p in sorted(beside.glob("*.parquet"))])
+    write_tables(combined, beside / "kp_fig3-adversaries")
+    write_tables(combined, above / "kp_fig3-compare")
+    for folder in (beside, above):
+        loaded = api.load_results(folder)
+        assert len(loaded) == 4 and sorted(loaded.attrs["metadata"]) == [
+            "kp_fig3-ekf-random-s3.parquet",
+            "kp_fig3-ukf-random-s3.parquet",
+        ], folder
+        assert sorted(zip(loaded["estimator"], loaded["run"], strict=True)) == sorted(
+            zip(combined["estimator"], combined["run"], strict=True)
+        )
+    assert len(api.load_results(above / "kp_fig3-compare.parquet")) == 4
+
+
 def test_results_of_an_earlier_release_resume(tmp_path):
     """A table with its description beside it (the earlier layout) is resumed, and its
     description moves to ``_meta/``."""
