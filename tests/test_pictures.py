@@ -407,3 +407,45 @@ def test_paper_figures_writes_every_listed_file(part, tmp_path, capsys, checked)
     assert PAPER_PARTS[part] <= set(numbers)
     for key in PAPER_PARTS[part]:
         assert PAPER_NUMBERS[key](numbers[key]), key
+
+
+def test_a_plug_in_belief_with_the_interface_only_is_described_without_its_box():
+    """A plug-in belief that has only ``Belief``'s methods (here a node set wrapped, its
+    own range methods and sizes not passed on) is traced: the node set refuses a
+    coordinate function (``TypeError``, which the interface allows), so the bounding box
+    is NaN, as are the sizes, and every other field is the unwrapped belief's (it raised
+    before)."""
+    from kalman_vs_infoset.estim.base import Belief
+    from kalman_vs_infoset.estim.intercept.nodeset.estimator import NodeSetEstimator
+
+    class Wrapped(Belief):
+        def __init__(self, inner):
+            self.inner = inner
+
+        status = property(lambda self: self.inner.status)
+        contradictions = property(lambda self: self.inner.contradictions)
+        is_empty = property(lambda self: self.inner.is_empty)
+
+        def centre(self):
+            return self.inner.centre()
+
+        def extremes(self, fn):
+            return self.inner.extremes(fn)
+
+        def attained(self, fn):
+            return self.inner.attained(fn)
+
+        def contains(self, state):
+            return self.inner.contains(state)
+
+    model = ChannelModel()
+    est = NodeSetEstimator(model)
+    inner = est.initial(lateral_m=(-1e3, 1e3), lateral_vel_mps=(-100.0, 100.0), x_m=(7e5, 9e5))
+    plain, wrapped = describe_channel(inner, model), describe_channel(Wrapped(inner), model)
+    box = {f"{q}_{end}_{u}" for q, u in (("alpha", "rad"), ("omega", "radps"), ("x", "m"))
+           for end in ("lo", "hi")}  # fmt: skip
+    assert all(np.isnan(wrapped[k]) for k in box) and all(np.isfinite(plain[k]) for k in box)
+    own = set(inner.trace_fields())  # sizes the wrapper does not pass on either
+    assert all(np.isnan(wrapped[k]) for k in own)
+    for key in set(plain) - box - own:
+        assert wrapped[key] == plain[key] or (np.isnan(plain[key]) and np.isnan(wrapped[key])), key

@@ -72,7 +72,13 @@ def _column(k: int):
 
 
 def _interval(belief: Belief, fn) -> tuple[float, float]:
-    ext = belief.extremes(fn)
+    """The belief's interval of ``fn``; NaN when the belief refuses ``fn`` (the interface
+    lets a belief bound only the functions it knows: ``TypeError``, e.g. a node set
+    wrapped by a plug-in that does not pass on its own range methods)."""
+    try:
+        ext = belief.extremes(fn)
+    except TypeError:
+        return NAN, NAN
     return float(ext.min_value), float(ext.max_value)
 
 
