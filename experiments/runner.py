@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from kalman_vs_infoset.experiments.errors import InputError, check_stop
+from kalman_vs_infoset.experiments.errors import InputError, check_stop, runs_text
 from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exported
     WorkerLost,
     executor_or,
@@ -204,6 +204,9 @@ def run_job(
     if path.exists() and not _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
+            # resumed with nothing left to run: say so (the output is otherwise the same)
+            print(f"{job.desc}: all {runs_text(runs)} already in {path}: none run",
+                  file=sys.stderr)  # fmt: skip
             return _reported(job, path, table, runs)
     made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
     try:
@@ -230,6 +233,10 @@ def run_job(
                 atomic_write(meta_path, lambda tmp: Path(tmp).write_text(text))
             todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
             retried = sum(j in table for j in todo)
+            kept = runs - len(todo)
+            if kept:
+                print(f"{job.desc}: {runs_text(kept)} of {runs} already in {path}: running "
+                      f"the other {len(todo)}", file=sys.stderr)  # fmt: skip
             if retried:
                 print(f"{job.desc}: running {retried} failed runs again", file=sys.stderr)
             if todo:

@@ -178,7 +178,7 @@ def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch, dask
 
 
 def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
-    short, tmp_path, monkeypatch
+    short, tmp_path, monkeypatch, capsys
 ):
     sc = load_scenario(short)
     calls = []
@@ -198,8 +198,17 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
     assert sorted(first["run"]) == [0, 1]  # finished runs were written
     monkeypatch.setattr(intercept_runs, "timed_engagement", real)
     calls.clear()
+    capsys.readouterr()
     done = run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
     assert sorted(done["run"]) == [0, 1, 2, 3]
+    # the resume says what it kept (one line), and again when nothing is left to run
+    assert capsys.readouterr().err == (
+        f"short infoset-random: 2 runs of 4 already in {path}: running the other 2\n"
+    )
+    run_experiment(sc, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+    assert (
+        capsys.readouterr().err == f"short infoset-random: all 4 runs already in {path}: none run\n"
+    )
     # the first two rows are the stored ones (wall times unchanged: not recomputed)
     np.testing.assert_array_equal(done["wall_s"][:2], first.sort_values("run")["wall_s"])
     fresh = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "f", 1, progress=False)
