@@ -132,6 +132,8 @@ def load_results(folder: str | Path) -> pd.DataFrame:
         files = [folder]
     elif folder.is_dir():
         files = _tables(folder)
+        if not files:  # most likely the wrong folder: an empty table would hide that
+            raise InputError(f"{folder}: no results tables (*.parquet) here or in runs/")
     else:
         raise InputError(f"{folder}: no such results folder or table")
     frames, meta = [], {}

@@ -140,7 +140,7 @@ def test_results_of_an_earlier_release_resume(tmp_path):
     assert list(df["run"]) == [0, 1] and side.exists()
 
 
-def test_bad_input_through_the_api_is_one_clear_error():
+def test_bad_input_through_the_api_is_one_clear_error(tmp_path):
     with pytest.raises(InputError, match="kvi scenarios"):
         api.load_scenario("kp_fig33")
     with pytest.raises(InputError, match="model.nu_mps2") as bad:
@@ -149,6 +149,8 @@ def test_bad_input_through_the_api_is_one_clear_error():
     assert "(with keyword overrides)" in str(bad.value) and "--set" not in str(bad.value)
     with pytest.raises(InputError, match="no such results folder"):
         api.load_results("/nonexistent/folder")
+    with pytest.raises(InputError, match="no results tables"):  # it read an empty table
+        api.load_results(tmp_path)
     with pytest.raises(ValueError):
         api.run_engagement("kp_fig3", run=-1)
     # workers=0 ran on every CPU (0 read as "unset"); the command line refuses it
