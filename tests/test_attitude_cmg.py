@@ -167,3 +167,14 @@ def test_run_random_noise_is_seeded_and_paired():
     assert a["energy_N2m2s"]["max"] != pytest.approx(a["energy_N2m2s"]["mean"], rel=1e-12)
     for key in ("settle_time_s", "final_angle_deg", "final_rate_degps", "lower_bound_energy_N2m2s"):
         assert key in a
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_propagate_refuses_a_torque_that_is_not_finite(bad):
+    """A NaN torque made DOP853's step control loop for ever (minutes, no error)."""
+    body = RigidBody.diagonal([1.0, 2.0, 3.0])
+    state = AttitudeState([0.0, 0.0, 0.0, 1.0], [0.1, 0.0, 0.0], [0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="finite"):
+        propagate(body, state, [bad, 0.0, 0.0], 0.1)
+    with pytest.raises(ValueError, match="finite"):
+        propagate(body, state, [0.0, 0.0, 0.0], 0.1, [0.0, bad, 0.0])

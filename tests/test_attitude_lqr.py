@@ -156,3 +156,11 @@ def test_attitude_dispatcher_reports_unavailable_and_bad_input(monkeypatch, caps
     assert refused.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "zzz" in err[0] and "loud" in err[1]
+
+
+@pytest.mark.parametrize("q_target", [(0, 0, 0, 2), (np.nan, 0, 0, 1), (0, 0, 1)])
+def test_lqr_refuses_a_target_that_is_not_a_unit_quaternion(q_target):
+    """As QuaternionPD does: (0, 0, 0, 2) doubled the attitude torque and made the
+    Lyapunov function negative; a NaN target gave NaN torques."""
+    with pytest.raises(ValueError, match="unit quaternion"):
+        LQRController(np.diag([1.0, 2.0, 3.0]), (1.0,) * 6, (1.0,) * 3, q_target=q_target)

@@ -217,3 +217,22 @@ def test_a_nan_bound_or_segment_is_refused_not_an_empty_set():
         with pytest.raises(ValueError, match="NaN|finite"):
             call()
     assert sq.clip_slab(0, [-np.inf], [np.inf]).counts.tolist() == [4]
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6, 1e8])
+def test_small_polygons_far_from_the_origin_keep_their_area_and_interior(offset):
+    """Areas and point containment of polygons 1e-4 to 1 wide at ``offset`` from the
+    origin, against shapely on coordinates taken relative to the polygon (exact there).
+    Shoelace sums on raw coordinates cancelled: a 1e-4 square at 1e6 read an area of
+    -1.2e-4, and its centre was outside it."""
+    rng = np.random.default_rng(int(offset))
+    for size in (1e-4, 1e-2, 1.0):
+        polys = [offset + size * p / 10 for p in _random_convex(rng, 40)]
+        polys = [p for p in polys if len(p) >= 3]
+        cp = ConvexPolygons.from_list(polys)
+        for i, p in enumerate(polys):
+            local = shapely.Polygon(p - p[0])
+            np.testing.assert_allclose(cp.areas()[i], local.area, rtol=1e-6)
+            inner = local.representative_point()
+            point = p[0] + np.array([inner.x, inner.y])
+            assert cp.contains_point([i], point, 0.0), (offset, size, i)

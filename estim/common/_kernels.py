@@ -323,10 +323,14 @@ def polygon_contains(xy, offsets, index, px, py, tol):
         m = offsets[i + 1] - s0
         if m == 0:
             continue
+        # twice the area, about the first vertex: on raw coordinates the shoelace sum of a
+        # small polygon far from the origin cancels to <= 0 and read it as degenerate
+        x0, y0 = xy[s0, 0], xy[s0, 1]
         area2 = 0.0
-        for j in range(m):
-            c = s0 + (j + 1) % m
-            area2 += xy[s0 + j, 0] * xy[c, 1] - xy[c, 0] * xy[s0 + j, 1]
+        for j in range(1, m - 1):
+            area2 += (xy[s0 + j, 0] - x0) * (xy[s0 + j + 1, 1] - y0) - (xy[s0 + j + 1, 0] - x0) * (
+                xy[s0 + j, 1] - y0
+            )
         ok = True
         if m >= 3 and area2 > 0.0:
             for j in range(m):

@@ -377,9 +377,13 @@ class ConvexPolygons:
         return out
 
     def areas(self) -> FloatArray:
-        """Shoelace areas (zero for degenerate and empty polygons)."""
+        """Shoelace areas (zero for degenerate and empty polygons), about each polygon's
+        first vertex (on raw coordinates the sum cancels for a small polygon far from
+        the origin)."""
         nxt = self.next_index()
-        cr = self.xy[:, 0] * self.xy[nxt, 1] - self.xy[nxt, 0] * self.xy[:, 1]
+        owner = self.owner()
+        rel = self.xy - self.xy[self.offsets[:-1][owner]]
+        cr = rel[:, 0] * rel[nxt, 1] - rel[nxt, 0] * rel[:, 1]
         # float64 in, float64 out (numpy's stubs only promise a floating type)
         return cast(FloatArray, 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n))
 

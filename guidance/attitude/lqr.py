@@ -212,7 +212,10 @@ class LQRController:
             object.__setattr__(self, name, value)
         object.__setattr__(self, "q", tuple(float(v) for v in q))
         object.__setattr__(self, "r", tuple(float(v) for v in r))
-        object.__setattr__(self, "q_target", tuple(float(v) for v in self.q_target))
+        qt = np.asarray(self.q_target, dtype=float)
+        if qt.shape != (4,) or not np.isclose(np.linalg.norm(qt), 1.0):  # as QuaternionPD
+            raise ValueError("q_target must be a unit quaternion (scalar last)")
+        object.__setattr__(self, "q_target", tuple(float(v) for v in qt))
 
     @property
     def constraint(self) -> float:

@@ -128,6 +128,9 @@ def propagate(
         raise ValueError(f"dt_s must be positive, got {dt_s}")
     m_u = np.asarray(torque_Nm, dtype=float)
     m_ext = np.asarray(ext_torque_Nm, dtype=float)
+    if not (np.isfinite(m_u).all() and np.isfinite(m_ext).all()):
+        # solve_ivp's step control never ends on a NaN derivative
+        raise ValueError(f"torques must be finite, got {m_u.tolist()} and {m_ext.tolist()}")
     sol = solve_ivp(
         lambda _t, x: attitude_rhs(x, body, m_u, m_ext),
         (0.0, dt_s),
