@@ -325,3 +325,21 @@ def test_validation_and_immutability():
         e.centre[0] = 1.0
     with pytest.raises(AttributeError):
         e.centre = np.ones(2)
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6, 1e8])
+def test_a_small_ball_far_from_the_origin_holds_its_rounded_boundary(offset):
+    """docs/usage.md: ``contains`` allows ``tol`` times the set's size plus a few ulps of
+    the coordinates. Boundary points of a ball, rounded to float coordinates, were
+    refused once the ball was small against its distance from the origin (a 1e-3 ball
+    at 1e6 refused ``1e6 + 1e-3``), where the zonotope and the box of the same set hold
+    them; points 1e-3 of the radius outside stay out."""
+    rng = np.random.default_rng(int(offset))
+    centre = offset * np.array([0.6, -0.8])
+    for radius in (1e-3, 1e-1, 10.0):
+        ball = Ellipsoid.ball(centre, radius)
+        u = rng.normal(size=(200, 2))
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        assert ball.contains(centre + radius * u).all(), (offset, radius)
+        assert not ball.contains(centre + radius * (1 + 1e-3) * u).any(), (offset, radius)
+    assert Ellipsoid.ball([1e6], 1e-3).contains([1e6 + 1e-3])

@@ -212,7 +212,8 @@ class Ellipsoid:
         In the eigenbasis of ``P``, ``sum z_i^2 / l_i <= (1 + tol)^2`` over the nonzero
         ``l_i`` and ``|z_i| <= tol max(sqrt(l_max), 1)`` plus a few ulps of the
         coordinates along the null directions (those under 1e-12 of ``l_max``, rounding
-        for a flat set); or, where those ``l_i`` are
+        for a flat set), the point taken those few ulps closer to the centre (rounding
+        of the coordinates, as the other sets allow); or, where those ``l_i`` are
         positive (a thin set, not a flat one), the same sum over all of them.
         """
         x = np.asarray(x, dtype=float)
@@ -228,9 +229,14 @@ class Ellipsoid:
         bound = (1.0 + tol) ** 2
         # off the hull: tol times the size, and a few ulps of the coordinates (far from
         # the origin they are rounded to more than that)
-        slack = tol * max(scale, 1.0) + ROUND_RTOL * (
-            np.linalg.norm(pts, axis=1) + float(np.linalg.norm(self.centre))
-        )
+        ulps = ROUND_RTOL * (np.linalg.norm(pts, axis=1) + float(np.linalg.norm(self.centre)))
+        slack = tol * max(scale, 1.0) + ulps
+        # on the hull too: the point moved those ulps towards the centre (a boundary point
+        # rounded to the coordinates of a set far from the origin lies that far out)
+        radial = np.sqrt(np.sum(z[:, pos] ** 2, axis=1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            shrink = np.clip(1.0 - ulps / radial, 0.0, 1.0)
+        q = np.where(radial > 0.0, q * shrink**2, q)
         inside = (q <= bound) & (off <= slack)
         if np.all(lam[~pos] > _THIN_RTOL * lam_max):
             # a set thinner than the rank threshold, not flat, holds its own thin points
