@@ -151,3 +151,19 @@ def test_validation_and_immutability():
     assert box.contains([1.5, 2.5]) and not box.contains([1.6, 2.0])
     with pytest.raises(ValueError):
         box.lo[0] = 0.0
+
+
+@pytest.mark.parametrize("family", ["box", "zonotope", "ellipsoid"])
+@pytest.mark.parametrize("point", [[0.5], [0.5, 0.5, 0.5], [[[0.5, 0.5]]]])
+def test_contains_refuses_a_point_of_another_dimension(family, point):
+    """A 1-D point against a 2-D set was broadcast (and read inside); it is an error."""
+    from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
+
+    sets = {
+        "box": Box([0.0, 0.0], [1.0, 1.0]),
+        "zonotope": Zonotope([0.5, 0.5], [[0.5, 0.0], [0.0, 0.5]]),
+        "ellipsoid": Ellipsoid.ball([0.5, 0.5], 0.5),
+    }
+    with pytest.raises(ValueError, match=r"shape \(2,\) or \(k, 2\)"):
+        sets[family].contains(point)
+    assert sets[family].contains([0.5, 0.5]) and not sets[family].contains([np.nan, 0.5])

@@ -29,6 +29,16 @@ def vector(x: ArrayLike, n: int | None = None, name: str = "vector") -> FloatArr
     return v
 
 
+def points(x: ArrayLike, n: int) -> FloatArray:
+    """``x`` as float points of dimension ``n`` (shape (n,) or (k, n)), for a containment
+    test: a point of another dimension is an error, not broadcast against the set. NaN
+    is kept (never inside: every comparison with it is false)."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim not in (1, 2) or a.shape[-1] != n:
+        raise ValueError(f"points must have shape ({n},) or (k, {n}), got {a.shape}")
+    return a
+
+
 def matrix(m: ArrayLike, rows: int | None, cols: int | None, name: str) -> FloatArray:
     """A finite 2-D float copy of ``m`` with the given shape (``None``: any)."""
     a = np.array(m, dtype=float)

@@ -70,6 +70,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     flat_along,
     halfspace_bound,
     matrix,
+    points,
     strip_bounds,
     vector,
 )
@@ -216,7 +217,7 @@ class Ellipsoid:
         of the coordinates, as the other sets allow); or, where those ``l_i`` are
         positive (a thin set, not a flat one), the same sum over all of them.
         """
-        x = np.asarray(x, dtype=float)
+        x = points(x, self.dim)
         pts = np.atleast_2d(x)
         lam, vec = self._eig
         lam_max = lam.max(initial=0.0)

@@ -38,6 +38,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     clip_slab,
     halfspace_bound,
     matrix,
+    points,
     strip_bounds,
     vector,
 )
@@ -124,7 +125,7 @@ class Box:
     def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
         """Whether ``x`` (shape (n,) or (k, n)) lies in the box, up to ``tol`` times the
         largest of 1 and the box's half-width."""
-        x = np.asarray(x, dtype=float)
+        x = points(x, self.dim)
         slack = tol * max(float(self.radius.max(initial=0.0)), 1.0)
         inside = np.all((x >= self.lo - slack) & (x <= self.hi + slack), axis=-1)
         return bool(inside) if x.ndim == 1 else inside

@@ -57,6 +57,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     flat_along,
     halfspace_bound,
     matrix,
+    points,
     strip_bounds,
     vector,
 )
@@ -168,7 +169,7 @@ class Zonotope:
         feasibility tolerances of 1e-10 (its default 1e-7 read vertices of flat zonotopes
         1e-8 outside); points outside the interval hull are rejected without it.
         """
-        x = np.asarray(x, dtype=float)
+        x = points(x, self.dim)
         pts = np.atleast_2d(x)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
         # and a few ulps of the coordinates: far from the origin (1e7) they are rounded
