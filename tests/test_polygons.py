@@ -236,3 +236,22 @@ def test_small_polygons_far_from_the_origin_keep_their_area_and_interior(offset)
             inner = local.representative_point()
             point = p[0] + np.array([inner.x, inner.y])
             assert cp.contains_point([i], point, 0.0), (offset, size, i)
+
+
+def test_a_polygon_is_clipped_and_summed_alike_alone_and_beside_a_huge_one():
+    """Rounding tolerances are each polygon's own: beside a 1e9 square a 1e-6 triangle
+    was clipped to one vertex by a half-plane that does not touch it, and its sum with
+    a segment came out not convex (the batch's largest coordinate set the tolerances)."""
+    big = np.array([[0.0, 0.0], [1e9, 0.0], [1e9, 1e9], [0.0, 1e9]])
+    tiny = np.array([[0.0, 0.0], [1e-6, 0.0], [0.0, 1e-6]])
+    both, alone = ConvexPolygons.from_list([big, tiny]), ConvexPolygons.from_list([tiny])
+    np.testing.assert_array_equal(
+        both.clip_halfplanes([1.0, 1.0], [2e9, 2e9]).polygon(1),
+        alone.clip_halfplanes([1.0], [2e9]).polygon(0),
+    )
+    # one half-segment a polygon: the square +-(1, 0), the triangle +-(0, 1e-11)
+    summed = both.minkowski_segment([[1.0, 0.0], [0.0, 1e-11]]).polygon(1)
+    np.testing.assert_array_equal(summed, alone.minkowski_segment([[0.0, 1e-11]]).polygon(0))
+    exact = shapely.MultiPoint(np.vstack([tiny - [0.0, 1e-11], tiny + [0.0, 1e-11]]))
+    assert _same_set(summed, exact.convex_hull)
+    ConvexPolygons.from_list([summed])  # convex and counter-clockwise: accepted

@@ -17,9 +17,12 @@ from kalman_vs_infoset.numerics.arrays import readonly
 
 
 @njit(cache=True)
-def _scale(xy):
+def _scale_of(xy, s0, m):
+    """The largest coordinate magnitude of one polygon, ``xy[s0:s0 + m]``, and at least
+    1: rounding tolerances are the polygon's own (a batch's largest polygon set them for
+    all before, and dropped a small polygon's area as duplicates)."""
     s = 1.0
-    for i in range(xy.shape[0]):
+    for i in range(s0, s0 + m):
         for j in range(2):
             a = abs(xy[i, j])
             if a > s:
@@ -53,11 +56,11 @@ def clip_halfplanes(xy, offsets, nx, ny, bound):
     # signs that alternate (vertices on the line within rounding, or NaN) get more
     out = np.empty((2 * xy.shape[0] + 1, 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
-    tol = 1e-15 * _scale(xy)
     k = 0
     for i in range(n):
         s0 = offsets[i]
         m = offsets[i + 1] - s0
+        tol = 1e-15 * _scale_of(xy, s0, m)
         start = k
         for j in range(m):
             a = s0 + j
@@ -85,11 +88,11 @@ def minkowski_segment(xy, offsets, gx, gy):
     n = offsets.shape[0] - 1
     out = np.empty((2 * xy.shape[0], 2))
     new_off = np.zeros(n + 1, dtype=np.int64)
-    scale = _scale(xy)
     k = 0
     for i in range(n):
         s0 = offsets[i]
         m = offsets[i + 1] - s0
+        scale = _scale_of(xy, s0, m)
         g0, g1 = gx[i], gy[i]
         if g0 == 0.0 and g1 == 0.0:
             for j in range(m):
