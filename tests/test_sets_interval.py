@@ -167,3 +167,17 @@ def test_contains_refuses_a_point_of_another_dimension(family, point):
     with pytest.raises(ValueError, match=r"shape \(2,\) or \(k, 2\)"):
         sets[family].contains(point)
     assert sets[family].contains([0.5, 0.5]) and not sets[family].contains([np.nan, 0.5])
+
+
+def test_a_box_far_from_the_origin_holds_points_rounded_onto_its_faces():
+    """docs/usage.md: ``contains`` allows a few ulps of the coordinates. The image of a
+    corner under a map, rounded, lay an ulp (7e-9 at 3.4e7) past the face of the box
+    ``affine`` returned and was refused with ``tol=0``; clearly outside stays out."""
+    from kalman_vs_infoset.estim.common.sets import Box
+
+    box = Box([18917110.7, 15851629.4], [18917111.2, 15851630.200000001])
+    image = box.affine([[-2.8, 1.2]])
+    corner = -2.8 * 18917110.7 + 1.2 * 15851630.200000001  # the largest corner
+    assert corner > image.hi[0]  # rounded past the face
+    assert image.contains([corner], tol=0.0)
+    assert not image.contains([image.hi[0] + 1e-6], tol=0.0)

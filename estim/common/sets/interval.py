@@ -124,9 +124,12 @@ class Box:
 
     def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
         """Whether ``x`` (shape (n,) or (k, n)) lies in the box, up to ``tol`` times the
-        largest of 1 and the box's half-width."""
+        largest of 1 and the box's half-width, and a few ulps of the coordinates (as the
+        other sets: far from the origin they are rounded to more than that)."""
         x = points(x, self.dim)
-        slack = tol * max(float(self.radius.max(initial=0.0)), 1.0)
+        slack = tol * max(float(self.radius.max(initial=0.0)), 1.0) + ROUND_RTOL * (
+            np.abs(x) + np.maximum(np.abs(self.lo), np.abs(self.hi))
+        )
         inside = np.all((x >= self.lo - slack) & (x <= self.hi + slack), axis=-1)
         return bool(inside) if x.ndim == 1 else inside
 
