@@ -36,15 +36,11 @@ def write_tables(df: pd.DataFrame, stem: Path) -> list[Path]:
     row each) as Parquet and CSV, atomically. The Parquet file is marked as combined
     (:data:`~kalman_vs_infoset.experiments.results.COMBINED_KEY`), so that
     ``load_results`` of the folder reads the runs' own tables and not both."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq_io
-    from kalman_vs_infoset.experiments.results import COMBINED_KEY
+    from kalman_vs_infoset.experiments.results import write_table
 
     # appended, not with_suffix: names may hold dots (--set suffixes, "fig5.v2")
     pq, csv = (stem.parent / f"{stem.name}.{ext}" for ext in ("parquet", "csv"))
-    table = pa.Table.from_pandas(df, preserve_index=False)
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), COMBINED_KEY: b"1"})
-    atomic_write(pq, lambda tmp: pq_io.write_table(table, tmp))
+    write_table(pq, df, None, combined=True)
     atomic_write(csv, lambda tmp: df.to_csv(tmp, index=False))
     return [pq, csv]
 

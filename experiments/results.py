@@ -50,11 +50,17 @@ def existing_sidecar(table: Path) -> Path:
     return old if not new.exists() and old.exists() else new
 
 
-def write_table(path: Path, df: pd.DataFrame, meta: dict[str, Any]) -> None:
-    """Write ``df`` to ``path`` atomically with ``meta`` as JSON in its metadata."""
+def write_table(
+    path: Path, df: pd.DataFrame, meta: dict[str, Any] | None, combined: bool = False
+) -> None:
+    """Write ``df`` to ``path`` atomically with ``meta`` (if any) as JSON in its metadata,
+    marked as a command's combined table if ``combined`` (:data:`COMBINED_KEY`)."""
     table = pa.Table.from_pandas(df, preserve_index=False)
     kv = dict(table.schema.metadata or {})
-    kv[METADATA_KEY] = json.dumps(meta, default=str).encode()
+    if meta is not None:
+        kv[METADATA_KEY] = json.dumps(meta, default=str).encode()
+    if combined:
+        kv[COMBINED_KEY] = b"1"
     table = table.replace_schema_metadata(kv)
     atomic_write(Path(path), lambda tmp: pq.write_table(table, tmp))
 
