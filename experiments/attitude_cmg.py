@@ -9,7 +9,6 @@ with
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,7 +24,7 @@ from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     lower_bound_energy_N2m2s,
     one_run,
 )
-from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, summary_stats
 
 #: runs per task (each turn is its own loop)
 CHUNK = 1
@@ -70,7 +69,7 @@ def summarise(
         # runs that never settled count (inf), as in the other loops: a mean over the
         # settled runs alone would read shorter than the loop's
         "settle_time_s": summary_stats(settle, finite_only=False),
-        "not_settled": sum(not math.isfinite(v) for v in settle),
+        "not_settled": not_settled(settle),
         "energy_N2m2s": summary_stats(col("energy_N2m2s")),
         "final_angle_deg": summary_stats(col("final_angle_deg")),
         "final_rate_degps": summary_stats(col("final_rate_degps")),

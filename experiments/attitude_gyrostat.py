@@ -35,7 +35,7 @@ from kalman_vs_infoset.experiments.sim.gyrostat_config import (  # noqa: F401 - 
     GyrostatSetup,
     initial_quaternion,
 )
-from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, summary_stats
 
 #: runs per task: the loop is vectorised over the runs of a chunk
 CHUNK = 8
@@ -94,6 +94,7 @@ def summarise(
         return ok[key].to_numpy(dtype=float) if key in ok else np.empty((0,))
 
     settle = col("settle_time_s")
+    never = not_settled(settle)
     design, alpha = setup.design, setup.alpha_Nm
     tau = design.tau_s
     return {
@@ -113,9 +114,8 @@ def summarise(
         **estimator_counts(ok),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
-        "not_settled": int(np.sum(~np.isfinite(settle))),
-        # the same count, by the name this loop's earlier results files use
-        "unsettled_runs": int(np.sum(~np.isfinite(settle))),
+        "not_settled": never,
+        "unsettled_runs": never,  # the same count, by the name of this loop's earlier files
         "max_torque_ratio": float(col("max_torque_ratio").max()) if len(ok) else float("nan"),
         "alpha_Nm": alpha.tolist(),
         "a_star": design.a_star.tolist(),

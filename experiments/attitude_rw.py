@@ -22,7 +22,7 @@ from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
 from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
-from kalman_vs_infoset.experiments.stats import estimator_counts, summary_stats
+from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, summary_stats
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import regime_boundaries
 
@@ -97,7 +97,7 @@ def summarise(
         "failures": failures,
         "estimator": estimator,
         **estimator_counts(ok),
-        "not_settled": int(np.sum(~np.isfinite(settle))),
+        "not_settled": not_settled(settle),
     }
     jd = config.body.inertia_kgm2
     if controller == "pd":

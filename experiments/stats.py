@@ -62,6 +62,12 @@ def percentile(values: np.ndarray, q: float) -> float:
     return float("nan")  # -inf and +inf
 
 
+def not_settled(settle_s: Iterable[float]) -> int:
+    """The runs that never settled (settle time inf), as every attitude summary counts
+    them."""
+    return int(np.sum(~np.isfinite(np.asarray(list(settle_s), dtype=float))))
+
+
 def ok_mean(table, column: str) -> float | None:
     """Mean of ``column`` over a results table's successful runs (finite values), or
     None when no run succeeded (a failed run's row has no such column)."""
