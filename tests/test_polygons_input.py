@@ -108,3 +108,50 @@ def test_the_minkowski_sum_of_a_valid_square_has_shapelys_area():
     assert expected.area == pytest.approx(2.0)
     assert out.areas()[0] == pytest.approx(expected.area, rel=1e-12)
     assert shapely.Polygon(out.polygon(0)).is_valid
+
+
+def _two_squares() -> ConvexPolygons:
+    return ConvexPolygons(np.vstack([SQUARE, SQUARE + 3.0]), np.array([0, 4, 8]))
+
+
+@pytest.mark.parametrize("index", [[2], [-1], [0, 5]])
+def test_contains_point_refuses_a_polygon_index_outside_the_batch(index):
+    """The kernel reads the offsets unchecked: an index past them read other memory."""
+    with pytest.raises(IndexError, match="out of range"):
+        _two_squares().contains_point(index, (0.5, 0.5), 0.0)
+
+
+@pytest.mark.parametrize("point", [(np.nan, 0.5), (0.5, np.inf), (0.5,), (0.5, 0.5, 0.5)])
+def test_contains_point_refuses_a_point_that_is_not_two_finite_numbers(point):
+    """A NaN point compared as inside every polygon (no comparison with NaN is true)."""
+    with pytest.raises(ValueError, match="point must be two finite numbers"):
+        _two_squares().contains_point([0, 1], point, 0.0)
+
+
+@pytest.mark.parametrize("tol", [-1e-9, np.nan, np.inf])
+def test_contains_point_refuses_a_negative_or_non_finite_tolerance(tol):
+    with pytest.raises(ValueError, match="tol must be finite"):
+        _two_squares().contains_point([0], (0.5, 0.5), tol)
+
+
+def test_contains_point_still_answers_for_valid_input():
+    p = _two_squares()
+    assert p.contains_point([0], (0.5, 0.5), 0.0)
+    assert not p.contains_point([0], (3.5, 3.5), 0.0)
+    assert p.contains_point([0, 1], (3.5, 3.5), 0.0)
+    assert p.contains_point(1, (3.5, 3.5), 0.0)
+
+
+@pytest.mark.parametrize(
+    "matrix, offset",
+    [(np.eye(2) * np.nan, (0.0, 0.0)), (np.eye(2), (np.inf, 0.0)), (np.eye(2), (0.0, np.nan))],
+)
+def test_affine_refuses_maps_and_offsets_that_are_not_finite(matrix, offset):
+    """A NaN map passed the determinant check (NaN <= 0 is false) and wrote NaN vertices."""
+    with pytest.raises(ValueError, match="must be finite"):
+        _two_squares().affine(matrix, offset)
+
+
+def test_translate_refuses_an_offset_that_is_not_finite():
+    with pytest.raises(ValueError, match="offset must be finite"):
+        _two_squares().translate((np.nan, 0.0))

@@ -172,12 +172,36 @@ def test_contains_refuses_a_point_of_another_dimension(family, point):
 def test_a_box_far_from_the_origin_holds_points_rounded_onto_its_faces():
     """docs/usage.md: ``contains`` allows a few ulps of the coordinates. The image of a
     corner under a map, rounded, lay an ulp (7e-9 at 3.4e7) past the face of the box
-    ``affine`` returned and was refused with ``tol=0``; clearly outside stays out."""
+    ``affine`` returned when the image was not widened by its own rounding; it now lies
+    inside with no slack at all, and clearly outside stays out."""
     from kalman_vs_infoset.estim.common.sets import Box
 
     box = Box([18917110.7, 15851629.4], [18917111.2, 15851630.200000001])
     image = box.affine([[-2.8, 1.2]])
     corner = -2.8 * 18917110.7 + 1.2 * 15851630.200000001  # the largest corner
-    assert corner > image.hi[0]  # rounded past the face
+    assert image.lo[0] <= corner <= image.hi[0]
     assert image.contains([corner], tol=0.0)
     assert not image.contains([image.hi[0] + 1e-6], tol=0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(SEEDS, DIMS, st.sampled_from([0.0, 1e4, 1e8, 1e12]))
+def test_affine_image_holds_every_mapped_corner_in_exact_arithmetic(seed, n, offset):
+    """An outer bound in floating point: every corner of the box, mapped exactly
+    (rational arithmetic on the stored doubles), lies within ``[lo, hi]`` of the
+    computed image, with no tolerance, near the origin and far from it."""
+    from fractions import Fraction
+    from itertools import product
+
+    rng = np.random.default_rng(seed)
+    centre = offset * rng.uniform(-1, 1, n) + rng.normal(size=n)
+    box = Box.from_centre(centre, rng.uniform(0, 2, n))
+    a = rng.normal(size=(int(rng.integers(1, 5)), n)) * 10.0 ** rng.integers(-3, 4)
+    b = offset * rng.uniform(-1, 1, a.shape[0])
+    image = box.affine(a, b)
+    for pick in product((0, 1), repeat=n):
+        x = [Fraction(float((box.lo, box.hi)[k][i])) for i, k in enumerate(pick)]
+        for row in range(a.shape[0]):
+            exact = sum(Fraction(float(a[row, i])) * x[i] for i in range(n))
+            exact += Fraction(float(b[row]))
+            assert Fraction(float(image.lo[row])) <= exact <= Fraction(float(image.hi[row]))

@@ -286,23 +286,40 @@ class ConvexPolygons:
         return ConvexPolygons._make(*_k.shift_band(self.xy, self.offsets, dy, half_y))
 
     def contains_point(self, index: ArrayLike, point: ArrayLike, tol: float) -> bool:
-        """Whether ``point`` lies within ``tol`` of one of the polygons ``index``."""
-        idx = np.ascontiguousarray(index, dtype=np.int64)
+        """Whether ``point`` lies within ``tol`` of one of the polygons ``index``.
+
+        Raises ``ValueError`` for a point that is not two finite numbers, a negative or
+        non-finite ``tol`` and ``IndexError`` for an index outside ``range(n)`` (the
+        kernel reads the offsets unchecked, and a NaN point compared as inside).
+        """
+        idx = np.ascontiguousarray(np.atleast_1d(index), dtype=np.int64)
+        if idx.ndim != 1:
+            raise ValueError(f"index must be one-dimensional, got shape {idx.shape}")
+        if idx.size and (idx.min() < 0 or idx.max() >= self.n):
+            raise IndexError(f"polygon index out of range(0, {self.n}): {idx.min()}..{idx.max()}")
         p = np.asarray(point, dtype=float)
+        if p.shape != (2,) or not np.isfinite(p).all():
+            raise ValueError(f"point must be two finite numbers, got {point!r}")
+        if not (np.isfinite(tol) and tol >= 0):
+            raise ValueError(f"tol must be finite and >= 0, got {tol!r}")
         return bool(_k.polygon_contains(self.xy, self.offsets, idx, float(p[0]), float(p[1]), tol))
 
     def affine(self, matrix: ArrayLike, offset: ArrayLike = (0.0, 0.0)) -> ConvexPolygons:
         """``p -> matrix[i] @ p + offset[i]``; ``det(matrix[i]) > 0`` keeps the orientation."""
         matrix = np.broadcast_to(np.asarray(matrix, dtype=float), (self.n, 2, 2))
+        offset = np.broadcast_to(np.asarray(offset, dtype=float), (self.n, 2))
+        if not (np.isfinite(matrix).all() and np.isfinite(offset).all()):
+            raise ValueError("affine maps and offsets must be finite")
         if np.any(np.linalg.det(matrix) <= 0):
             raise ValueError("affine maps must have a positive determinant (orientation)")
-        offset = np.broadcast_to(np.asarray(offset, dtype=float), (self.n, 2))
         own = self.owner()
         xy = np.einsum("ijk,ik->ij", matrix[own], self.xy) + offset[own]
         return ConvexPolygons._make(xy, self.offsets)
 
     def translate(self, offset: ArrayLike) -> ConvexPolygons:
         offset = np.broadcast_to(np.asarray(offset, dtype=float), (self.n, 2))
+        if not np.isfinite(offset).all():
+            raise ValueError("offset must be finite")
         return ConvexPolygons._make(self.xy + offset[self.owner()], self.offsets)
 
     def minkowski_segment(self, half: ArrayLike) -> ConvexPolygons:

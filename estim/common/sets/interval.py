@@ -4,7 +4,8 @@ Operations
 ----------
 * :meth:`Box.affine` -- the interval hull of ``A [lo, hi] + b``: with centre ``m`` and
   radius ``h``, ``[A m + b -/+ |A| h]`` (interval arithmetic; the hull is exact, the
-  box is an outer bound of the parallelotope ``A B``).
+  box is an outer bound of the parallelotope ``A B``), widened by a bound on its own
+  rounding.
 * :meth:`Box.minkowski_sum` -- ``[lo1 + lo2, hi1 + hi2]`` (exact).
 * :meth:`Box.intersect_strip` -- interval constraint propagation on
   ``y - s <= a.x <= y + s``. Each coordinate is contracted by the backward step
@@ -16,8 +17,8 @@ Operations
 * :meth:`Box.intersect_halfspace` -- the same with ``a.x <= b``.
 * :meth:`Box.support` -- ``h(d) = m.d + h.|d|``; :meth:`Box.contains`.
 
-Rounding is not directed: results are outer bounds in exact arithmetic, and the
-contraction widens its bounds by a bound on its own rounding (a few ulps of the terms
+Rounding is not directed: results are outer bounds in exact arithmetic; the affine
+image and the contraction widen their bounds by a bound on its own rounding (a few ulps of the terms
 ``a_i x_i``), so that it holds the exact hull at any distance from the origin.
 
 References
@@ -92,10 +93,21 @@ class Box:
         return 0.5 * (self.hi - self.lo)
 
     def affine(self, a: ArrayLike, b: ArrayLike | None = None) -> Box:
-        """The interval hull of ``{A x + b : x in box}``: ``A m + b -/+ |A| h``."""
+        """An outer bound of ``{A x + b : x in box}``: ``A m + b -/+ (|A| h + e)``.
+
+        ``e`` bounds the rounding of the computed centre, radius, the two products and
+        the sums: ``(n + 4) eps (|A| max(|lo|, |hi|) + |b|)`` (a dot product of length
+        ``n`` is within ``n eps`` of its terms' magnitudes; Higham, *Accuracy and
+        Stability of Numerical Algorithms*, 2002, sec. 3.1), so that the bound holds in
+        floating point too, not only in exact arithmetic.
+        """
         a = matrix(a, None, self.dim, "A")
-        m = a @ self.centre + (0.0 if b is None else vector(b, a.shape[0], "b"))
-        h = np.abs(a) @ self.radius
+        b_vec = np.zeros(a.shape[0]) if b is None else vector(b, a.shape[0], "b")
+        abs_a = np.abs(a)
+        m = a @ self.centre + b_vec
+        h = abs_a @ self.radius
+        magnitude = abs_a @ np.maximum(np.abs(self.lo), np.abs(self.hi)) + np.abs(b_vec)
+        h = h + (self.dim + 4) * np.finfo(float).eps * (magnitude + np.abs(m))
         return Box._make(m - h, m + h)
 
     def translate(self, b: ArrayLike) -> Box:
