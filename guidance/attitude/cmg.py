@@ -74,14 +74,16 @@ class CmgCluster:
     _trig: tuple[NDArray[np.float64], ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if not self.rotor_momentum_Nms > 0:
-            raise ValueError("rotor_momentum_Nms must be positive")
+        if not (self.rotor_momentum_Nms > 0 and np.isfinite(self.rotor_momentum_Nms)):
+            raise ValueError("rotor_momentum_Nms must be positive and finite")
         if not 0.0 < self.cone_half_angle_deg < 90.0:
             raise ValueError("cone_half_angle_deg must be in (0, 90)")
         if len(self.pair_azimuths_deg) < 1:
             raise ValueError("pair_azimuths_deg must list at least one pair")
-        if not (0.0 < self.sr_threshold < 1.0 and self.sr_damping > 0.0):
-            raise ValueError("sr_threshold must be in (0, 1) and sr_damping positive")
+        if not (0.0 < self.sr_threshold < 1.0 and 0.0 < self.sr_damping < np.inf):
+            raise ValueError("sr_threshold must be in (0, 1) and sr_damping positive and finite")
+        if not np.isfinite(np.asarray(self.pair_azimuths_deg, dtype=float)).all():
+            raise ValueError("pair_azimuths_deg must be finite")
         psi = np.repeat(np.asarray(self.pair_azimuths_deg, dtype=float), 2)
         angles = np.column_stack([psi, np.full_like(psi, self.cone_half_angle_deg)])
         # intrinsic rotations: about body y by psi, then about the new z by alpha

@@ -134,16 +134,20 @@ class EnergySavingConfig:
     u0_Nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
-        if not self.dt_s > 0:
-            raise ValueError("dt_s must be positive")
+        if not (self.dt_s > 0 and np.isfinite(self.dt_s)):
+            raise ValueError("dt_s must be positive and finite")
+        gains = (self.f1_0, self.f1_growth, self.f2_0, self.f2_growth)
+        if not np.isfinite(gains).all():
+            raise ValueError("f1_0, f1_growth, f2_0 and f2_growth must be finite")
         for name in ("state_var", "aux_var", "meas_var"):
             v = np.asarray(getattr(self, name), dtype=float)
             if v.shape != (6,) or np.any(v < 0) or not np.all(np.isfinite(v)):
                 raise ValueError(f"{name} must be six non-negative numbers")
-        if not self.control_var0_N2m2 > 0:
-            raise ValueError("control_var0_N2m2 must be positive")
-        if np.asarray(self.u0_Nm, dtype=float).shape != (3,):
-            raise ValueError("u0_Nm must have three components")
+        if not (self.control_var0_N2m2 > 0 and np.isfinite(self.control_var0_N2m2)):
+            raise ValueError("control_var0_N2m2 must be positive and finite")
+        u0 = np.asarray(self.u0_Nm, dtype=float)
+        if u0.shape != (3,) or not np.isfinite(u0).all():
+            raise ValueError("u0_Nm must be three finite numbers")
         if self.f1_0 < 0 or self.f2_0 < 0:
             raise ValueError("f1_0 and f2_0 must be non-negative")
 

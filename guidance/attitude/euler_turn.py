@@ -51,8 +51,8 @@ class EulerAxisProfile:
 
     def __post_init__(self) -> None:
         t, ta, tj = self.duration_s, self.accel_time_s, self.jerk_time_s
-        if not (self.angle_rad > 0 and t > 0):
-            raise ValueError("angle_rad and duration_s must be positive")
+        if not (self.angle_rad > 0 and t > 0 and np.isfinite([self.angle_rad, t]).all()):
+            raise ValueError("angle_rad and duration_s must be positive and finite")
         if not 0 < ta <= t / 2:
             raise ValueError("accel_time_s must be in (0, duration_s/2]")
         if not 0 <= tj <= ta / 2:
@@ -116,10 +116,11 @@ class EulerTurnTracker:
     def __post_init__(self) -> None:
         phi0 = np.array(self.error0_rotvec_rad, dtype=float)
         theta0 = float(np.linalg.norm(phi0))
-        if phi0.shape != (3,) or not theta0 > 0:
-            raise ValueError("error0_rotvec_rad must be a non-zero 3-vector")
-        if not (self.natural_freq_radps > 0 and self.damping > 0):
-            raise ValueError("natural_freq_radps and damping must be positive")
+        if phi0.shape != (3,) or not (theta0 > 0 and np.isfinite(theta0)):
+            raise ValueError("error0_rotvec_rad must be a finite non-zero 3-vector")
+        gains = (self.natural_freq_radps, self.damping)
+        if not (min(gains) > 0 and np.isfinite(gains).all()):
+            raise ValueError("natural_freq_radps and damping must be positive and finite")
         object.__setattr__(self, "inertia_kgm2", np.array(self.inertia_kgm2, dtype=float))
         object.__setattr__(self, "axis", phi0 / theta0)
         prof = EulerAxisProfile(theta0, self.duration_s, self.accel_time_s, self.jerk_time_s)

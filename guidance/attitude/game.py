@@ -86,10 +86,10 @@ class GameLaw:
         r = np.array(self.rho, dtype=float)
         if a.shape != (3,) or r.shape != (3,) or np.any(a <= 0) or not np.all(np.isfinite(a)):
             raise ValueError("a_star must be three positive numbers")
-        if np.any(r <= 0) or np.any(r >= 1):
+        if r.shape != (3,) or not np.all((r > 0) & (r < 1)):  # NaN fails both
             raise ValueError("rho must be three numbers in (0, 1)")
-        if not self.period_s > 0:
-            raise ValueError("period_s must be positive")
+        if not (self.period_s > 0 and np.isfinite(self.period_s)):
+            raise ValueError("period_s must be positive and finite")
         if self.mode not in ("discrete", "sign"):
             raise ValueError("mode must be 'discrete' or 'sign'")
         d = (1.0 - r) * a

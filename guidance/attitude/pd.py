@@ -74,8 +74,8 @@ class QuaternionPD:
     q_target: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
-        if not (self.k_q > 0 and self.k_w > 0):
-            raise ValueError(f"k_q and k_w must be positive, got {self.k_q}, {self.k_w}")
+        if not (self.k_q > 0 and self.k_w > 0 and np.isfinite([self.k_q, self.k_w]).all()):
+            raise ValueError(f"k_q and k_w must be positive and finite, got {self.k_q}, {self.k_w}")
         term_scale(self.quaternion_term)
         qt = np.asarray(self.q_target, dtype=float)
         if qt.shape != (4,) or not np.isclose(np.linalg.norm(qt), 1.0):

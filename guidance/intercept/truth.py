@@ -50,8 +50,9 @@ class TwoBodyTruth:
     atol_km: float = 1e-10
 
     def __post_init__(self) -> None:
-        if not (self.mu_km3ps2 > 0 and self.sun_distance_km > 0):
-            raise ValueError("mu_km3ps2 and sun_distance_km must be positive")
+        values = (self.mu_km3ps2, self.sun_distance_km)
+        if not (min(values) > 0 and np.isfinite(values).all()):
+            raise ValueError("mu_km3ps2 and sun_distance_km must be positive and finite")
 
     def initial(self, rel_pos_km: ArrayLike, rel_vel_kmps: ArrayLike) -> FloatArray:
         """Full state ``(R_sc, V_sc, r, v)`` (km, km/s, heliocentric axes) from the
