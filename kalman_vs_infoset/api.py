@@ -140,6 +140,17 @@ def _index(value: Any, name: str, least: int) -> int:
     return int(value)
 
 
+def _seed(value: Any, scenario_seed: int) -> int:
+    """The root seed: the scenario's when ``None``, else an integer in ``[0, MAX_SEED]``
+    (the results tables hold it as int64); named as the argument, not the CLI flag."""
+    if value is None:
+        return scenario_seed
+    seed = _index(value, "seed", 0)
+    if seed > runner.MAX_SEED:
+        raise ValueError(f"seed must be at most {runner.MAX_SEED}, got {seed}")
+    return seed
+
+
 def run_engagement(
     scenario: InterceptScenario | str | Path,
     estimator: str | None = None,
@@ -183,7 +194,7 @@ def run_engagement(
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
     run = _index(run, "run", 0)
-    seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
+    seed = _seed(seed, sc.experiment.seed)
     rng = np.random.default_rng(runner.run_seed(seed, run))
     return _intercept.run_engagement(sc, estimator, noise, rng)
 
@@ -242,12 +253,12 @@ def run_experiment(
     estimator, noise = _choice(sc, estimator, noise)
     runs = sc.experiment.runs if runs is None else _index(runs, "runs", 1)
     workers = None if workers is None else _index(workers, "workers", 1)  # 0 meant all CPUs
-    seed = sc.experiment.seed if seed is None else seed
+    seed = _seed(seed, sc.experiment.seed)
     if out is not None:
         return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
         )
-    job = intercept_runs.intercept_job(sc, estimator, noise, runner.check_seed(seed))
+    job = intercept_runs.intercept_job(sc, estimator, noise, seed)
     chunks = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
     rows = []
@@ -299,7 +310,7 @@ def trace(
     """
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
-    seed = sc.experiment.seed if seed is None else runner.check_seed(seed)
+    seed = _seed(seed, sc.experiment.seed)
     runs = [_index(j, "a run index", 0) for j in runs]
     sets_every = _index(sets_every, "sets_every", 1)
     steps, sets, _ = _traces.intercept_trace(sc, estimator, noise, seed, runs, sets_every)

@@ -84,9 +84,17 @@ def test_estimators_pickle_and_the_copy_updates_alike(name):
 
 
 @pytest.mark.parametrize("seed", [1.5, True, "3"])
-def test_a_seed_must_be_an_integer_not_truncated(seed):
-    """``int(1.5)`` ran seed 1: the runner's seed check takes integers only."""
-    from kalman_vs_infoset.experiments.errors import InputError
+@pytest.mark.parametrize("call", ["run_engagement", "run_experiment", "trace"])
+def test_a_seed_must_be_an_integer_not_truncated(seed, call):
+    """``int(1.5)`` ran seed 1: the seed is an integer, and the error names the
+    argument (``seed``), as for ``runs`` and ``run``, not the command line's flag."""
+    with pytest.raises(TypeError, match=r"^seed must be an integer"):
+        getattr(api, call)("kp_fig3", "ekf", "random", seed=seed)
 
-    with pytest.raises(InputError, match="must be an integer"):
-        api.run_engagement("kp_fig3", "ekf", "random", seed=seed)
+
+@pytest.mark.parametrize("call", ["run_engagement", "run_experiment", "trace"])
+def test_a_seed_outside_the_tables_int64_range_is_refused_naming_the_argument(call):
+    with pytest.raises(ValueError, match=r"^seed must be at least 0, got -1"):
+        getattr(api, call)("kp_fig3", "ekf", "random", seed=-1)
+    with pytest.raises(ValueError, match=r"^seed must be at most 9223372036854775807"):
+        getattr(api, call)("kp_fig3", "ekf", "random", seed=2**63)
