@@ -123,7 +123,7 @@ def run(args) -> dict[str, Any]:
     text = summary_markdown(rows, _LABELS) + paired.section(compared)
     files = [csv, write_text(out / f"{stem}.md", text)]
     title = f"{base.name}: {key} swept, {runs} paired runs per point"
-    files += plots.save(plots.sweep_figure(flat, key, title), out / stem)
+    files += plots.save(plots.sweep_figure(flat, key, title, _xlabel(keys)), out / stem)
     return {
         "scenario": base.name,
         "key": key,
@@ -138,6 +138,15 @@ def run(args) -> dict[str, Any]:
 
 
 _LABELS = ("value", "estimator", "noise")
+
+
+def _xlabel(keys: list[str]) -> str:
+    """The figure's x label: the keys and their field's doc with its unit (one doc when
+    the fields given the same value share it, e.g. both filters' noise inflation)."""
+    from kalman_vs_infoset.experiments.scenario import field_doc
+
+    docs = list(dict.fromkeys(d for d in map(field_doc, keys) if d))
+    return ", ".join(keys) + (f"\n{'; '.join(docs)}" if docs else "")
 
 
 def render(result: dict[str, Any]) -> str:

@@ -94,9 +94,10 @@ def cdf_figure(
     return fig
 
 
-def sweep_figure(table: pd.DataFrame, key: str, title: str):
+def sweep_figure(table: pd.DataFrame, key: str, title: str, xlabel: str | None = None):
     """Mean miss and mean fuel against a swept value: one colour per estimator, one
-    marker and line style per noise.
+    marker and line style per noise; the x axis reads ``xlabel`` (the swept field's doc
+    with its unit), else ``key``.
 
     ``table`` has one row per (value, estimator, noise) with ``value`` as JSON text
     and the summary columns flattened (``miss_m_mean``, ``fuel_mps_mean``, ...).
@@ -125,7 +126,7 @@ def sweep_figure(table: pd.DataFrame, key: str, title: str):
             ax.set_xticks(range(len(labels)), labels, fontsize=7)
         if col == "miss_m" and (table[f"{col}_mean"] > 0).all():
             ax.set_yscale("log")
-        ax.set_xlabel(f"{key}, in the scenario's unit")
+        ax.set_xlabel(xlabel or key)
         ax.set_ylabel(ylabel.replace(",", " (mean over runs),", 1))
     fs.legend(axes[0, 1], fontsize=7, loc="best", ncol=2)
     fig.suptitle(title, fontsize=10)

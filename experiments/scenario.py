@@ -243,3 +243,26 @@ def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> Intercep
     """An intercept scenario from tables already read (name "scenario" unless given)."""
     check_kind(data, "intercept", source)
     return validate(InterceptScenario, {"name": "scenario", **data}, source)
+
+
+def field_doc(key: str) -> str | None:
+    """The one-line doc (with its unit) of an intercept scenario's field ``TABLE.KEY``
+    or ``estimator.NAME.OPTION`` (figure labels); ``None`` when the key names none."""
+    from kalman_vs_infoset.estim import registry
+
+    parts = key.split(".")
+    model: Any = InterceptScenario
+    if len(parts) == 3 and parts[0] == "estimator":
+        try:
+            model = registry.get("intercept", parts[1]).options
+        except (KeyError, ValueError):
+            return None
+        parts = parts[2:]
+    for depth, part in enumerate(parts):
+        info = getattr(model, "model_fields", {}).get(part)
+        if info is None:
+            return None
+        if depth == len(parts) - 1:
+            return info.description or None
+        model = info.annotation
+    return None

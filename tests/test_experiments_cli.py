@@ -502,6 +502,26 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     assert res["rows"][0]["miss_m"] != res["rows"][2]["miss_m"]  # nu changes the set
 
 
+def test_sweep_figure_names_the_swept_field_with_its_unit():
+    """The x axis reads the key and its field's doc with the unit (it read "in the
+    scenario's unit"); keys given the same value share one doc; an undeclared key
+    (a plug-in's) reads as itself."""
+    import pandas as pd
+    from kalman_vs_infoset.experiments import plots
+    from kalman_vs_infoset.experiments.cmd_sweep import _xlabel
+
+    assert _xlabel(["model.nu_mps2"]) == "model.nu_mps2\ndisturbance bound nu, m/s^2"
+    both = _xlabel(["estimator.ekf.noise_inflation", "estimator.ukf.noise_inflation"])
+    assert both.count("\n") == 1 and both.endswith("noise variance, R and Q")
+    assert _xlabel(["estimator.plugin.knob"]) == "estimator.plugin.knob"
+    table = pd.DataFrame(
+        {"value": ["0.002", "0.02"], "estimator": "ekf", "noise": "random",
+         "miss_m_mean": [1.0, 2.0], "fuel_mps_mean": [3.0, 4.0]}
+    )  # fmt: skip
+    fig = plots.sweep_figure(table, "model.nu_mps2", "t", _xlabel(["model.nu_mps2"]))
+    assert [ax.get_xlabel() for ax in fig.axes[:2]] == [_xlabel(["model.nu_mps2"])] * 2
+
+
 def test_sweep_takes_an_estimator_option_as_set_does(short, tmp_path, capsys):
     """A nested key (``estimator.infoset.n_nodes``, the keys ``--set`` takes) is swept:
     one row per value, and the option reaches the estimator (the two rows differ)."""
