@@ -255,3 +255,35 @@ def test_a_polygon_is_clipped_and_summed_alike_alone_and_beside_a_huge_one():
     exact = shapely.MultiPoint(np.vstack([tiny - [0.0, 1e-11], tiny + [0.0, 1e-11]]))
     assert _same_set(summed, exact.convex_hull)
     ConvexPolygons.from_list([summed])  # convex and counter-clockwise: accepted
+
+
+def test_contains_point_means_within_tol_of_the_polygon_even_past_a_sharp_corner():
+    """A point beyond the apex of a 1e-3 rad sliver, 1000 tol from it, lies within tol
+    of both edges' lines; the "every line" test took it for inside, shapely puts it
+    1000 tol away. It is refused now; a point tol/2 past the apex is accepted."""
+    theta, tol = 1e-3, 1e-6
+    sliver = np.array([[0.0, 0.0], [1.0, -np.tan(theta / 2)], [1.0, np.tan(theta / 2)]])
+    cp = ConvexPolygons.from_list([sliver])
+    far = (-1000 * tol, 0.0)
+    assert shapely.Polygon(sliver).distance(shapely.Point(far)) == pytest.approx(1000 * tol)
+    assert not cp.contains_point([0], far, tol)
+    assert cp.contains_point([0], (-tol / 2, 0.0), tol)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seeds, st.sampled_from(["polygon", "segment", "point"]))
+def test_contains_point_agrees_with_shapelys_distance(seed, kind):
+    """Accepted iff shapely's distance to the polygon is at most ``tol``, for points
+    around random polygons, segments and points (outside a band of 1e-9 of ``tol``,
+    where the two roundings may disagree)."""
+    rng = np.random.default_rng(seed)
+    polys = _random_convex(rng, 4, kind)
+    cp = ConvexPolygons.from_list(polys)
+    tol = float(rng.choice([0.0, 1e-3, 0.1, 1.0]))
+    for i, p in enumerate(polys):
+        geom = shapely.MultiPoint(p).convex_hull
+        for q in p.mean(axis=0) + rng.normal(size=(30, 2)) * rng.uniform(0.1, 5):
+            d = geom.distance(shapely.Point(q))
+            if abs(d - tol) <= 1e-9 * max(1.0, tol) or (tol == 0 and d < 1e-9):
+                continue
+            assert cp.contains_point([i], q, tol) == (d <= tol), (i, q, d, tol)

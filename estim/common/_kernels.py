@@ -314,11 +314,30 @@ def predict_sections(xy, offsets, shear, ga, gw, points, rel_tol, max_vertices):
 
 
 @njit(cache=True)
-def polygon_contains(xy, offsets, index, px, py, tol):
-    """Whether the point lies within ``tol`` of one of the polygons ``index``.
+def _boundary_distance(xy, s0, m, px, py):
+    """Distance from the point to the segments between consecutive vertices of the
+    polygon ``xy[s0:s0 + m]`` (its boundary; a point or a segment: itself)."""
+    best = np.inf
+    for j in range(m):
+        a = s0 + j
+        c = s0 + (j + 1) % m
+        ex, ey = xy[c, 0] - xy[a, 0], xy[c, 1] - xy[a, 1]
+        ll = ex * ex + ey * ey
+        t = 0.0 if ll == 0.0 else ((px - xy[a, 0]) * ex + (py - xy[a, 1]) * ey) / ll
+        t = min(max(t, 0.0), 1.0)
+        dx, dy = px - xy[a, 0] - t * ex, py - xy[a, 1] - t * ey
+        best = min(best, np.sqrt(dx * dx + dy * dy))
+    return best
 
-    Convex CCW polygon: inside iff the point is left of (or within ``tol`` of)
-    every edge; a point or a segment: by its distance.
+
+@njit(cache=True)
+def polygon_contains(xy, offsets, index, px, py, tol):
+    """Whether the point lies within distance ``tol`` of one of the polygons ``index``.
+
+    Convex CCW polygon: inside when the point is left of (or on) every edge; else, and
+    for a point or a segment, when its distance to the boundary is at most ``tol``. (A
+    test "within ``tol`` of every edge's line" accepted points far beyond a sharp
+    corner: ``tol / sin(theta / 2)`` away at an angle ``theta``.)
     """
     for ii in range(index.shape[0]):
         i = index[ii]
@@ -334,31 +353,18 @@ def polygon_contains(xy, offsets, index, px, py, tol):
             area2 += (xy[s0 + j, 0] - x0) * (xy[s0 + j + 1, 1] - y0) - (xy[s0 + j + 1, 0] - x0) * (
                 xy[s0 + j, 1] - y0
             )
-        ok = True
         if m >= 3 and area2 > 0.0:
+            inside = True
             for j in range(m):
                 a = s0 + j
                 c = s0 + (j + 1) % m
                 ex, ey = xy[c, 0] - xy[a, 0], xy[c, 1] - xy[a, 1]
-                length = np.sqrt(ex * ex + ey * ey)
-                if length == 0.0:
-                    continue
-                if (ex * (py - xy[a, 1]) - ey * (px - xy[a, 0])) / length < -tol:
-                    ok = False
+                if ex * (py - xy[a, 1]) - ey * (px - xy[a, 0]) < 0.0:
+                    inside = False
                     break
-        else:  # degenerate: distance to the segments between consecutive vertices
-            best = np.inf
-            for j in range(m):
-                a = s0 + j
-                c = s0 + (j + 1) % m
-                ex, ey = xy[c, 0] - xy[a, 0], xy[c, 1] - xy[a, 1]
-                ll = ex * ex + ey * ey
-                t = 0.0 if ll == 0.0 else ((px - xy[a, 0]) * ex + (py - xy[a, 1]) * ey) / ll
-                t = min(max(t, 0.0), 1.0)
-                dx, dy = px - xy[a, 0] - t * ex, py - xy[a, 1] - t * ey
-                best = min(best, np.sqrt(dx * dx + dy * dy))
-            ok = best <= tol
-        if ok:
+            if inside:
+                return True
+        if _boundary_distance(xy, s0, m, px, py) <= tol:
             return True
     return False
 
