@@ -190,6 +190,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (ATT, r"boundary phi10 = ([\d.]+) deg is not consistent with J = 1.5 \(we get ([\d.]+) deg\)",
      FIGS, (N + "akimov_fig8/paper_phi10_deg", N + "akimov_fig8/phi10_deg")),
     (ATT, r"guaranteed time tau = ([\d.]+) s", FIGS, (N + "gyrostat/tau_s",)),
+    (ATT, r"the gyro momentum falls back to ([\d.]+) N m s at 300 s \(the body's remaining "
+     r"rate of ([\d.]+) deg/s", FIGS,
+     (N + "resurs/gyro_momentum_at_300s_Nms", N + "resurs/rate_at_300s_degps")),
     # docs/intercept.md: numbers its prose repeats or adds beside the tables
     (INT, r"the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m\)", INFL,
      ("rows/[value=30,estimator=ekf,noise=game]/miss_m/mean",

@@ -7,9 +7,9 @@ impulse ``k`` (relative velocity) shifts ``omega`` by ``k/x`` and so ``Pi`` by
 
     k = -(Pi_min + Pi_max) e / (x* + x**)
 
-(the seed prints it without the minus sign, its ``k`` being the spacecraft's own
-impulse; ours is the change of the target's velocity relative to the spacecraft,
-which the spacecraft produces by an impulse of ``-k``). Then ``|k| < mu1`` means no
+(the seed prints it without the minus sign; under its own lateral equation, where the
+impulse enters ``omega`` as ``+k/x``, the printed sign would double the offset instead
+of cancelling it, so we take the sign the derivation gives: docs/models.md §1.5). Then ``|k| < mu1`` means no
 impulse, ``|k| > mu2`` is clipped, and the total fuel ``sum |k|`` over both
 channels never exceeds the reserve ``mu``.
 
