@@ -9,9 +9,9 @@ impulse ``k`` (relative velocity) shifts ``omega`` by ``k/x`` and so ``Pi`` by
 
 (the seed prints it without the minus sign; under its own lateral equation, where the
 impulse enters ``omega`` as ``+k/x``, the printed sign would double the offset instead
-of cancelling it, so we take the sign the derivation gives: docs/models.md §1.5). Then ``|k| < mu1`` means no
-impulse, ``|k| > mu2`` is clipped, and the total fuel ``sum |k|`` over both
-channels never exceeds the reserve ``mu``.
+of cancelling it, so we take the sign the derivation gives: docs/models.md §1.5).
+Then ``|k| < mu1`` means no impulse, ``|k| > mu2`` is clipped, and the total fuel
+``sum |k|`` over both channels never exceeds the reserve ``mu``.
 
 The law only asks the belief for the extremes of a function over itself, so it
 runs unchanged on an information set or on a Kalman filter's k-sigma ellipsoid.
