@@ -34,8 +34,7 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     groups = list(df.groupby(["controller", "estimator", "noise"], sort=True))
     for ax, (col, label) in zip(axes, PANELS, strict=True):
         for key, grp in groups:
-            name = " / ".join(key) + f" (n={len(grp)})"
-            plots._cdf(ax, grp[col].to_numpy(dtype=float), name, **fs.line(key[1], key[2]))
+            plots.curve(ax, " / ".join(key), grp, col, **fs.line(key[1], key[2]))
         ax.set_xlabel(label)
         ax.set_ylabel(plots.CDF_LABEL)
         ax.set_ylim(0, 1.02)

@@ -220,11 +220,12 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
     from kalman_vs_infoset.experiments.attitude_est import write_figure
 
     ok = table[table["status"] == "ok"] if len(table) else table
+    # every row to the figure: a curve's label counts the failed runs it leaves out
     # '+' joins several names: a comma is awkward in file names on every shell
     stem = (
         f"{req.name}-{req.controller}-{'+'.join(req.estimators)}-{'+'.join(req.noises)}-s{req.seed}"
     )
-    files = write_figure(req.out, stem, ok) if len(ok) and req.runs > 1 else []
+    files = write_figure(req.out, stem, table) if len(ok) and req.runs > 1 else []
     if histories:
         from kalman_vs_infoset.experiments import figstyle, plots_attitude
 
@@ -234,8 +235,9 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
 
 
 def _stat(value: float | None, fmt: str) -> str:
-    """A statistic as printed: ``-`` when no run gave one (no run settled), ``inf``."""
-    return "-" if value is None else format(value, fmt)
+    """A statistic as printed: ``-`` when no run gave one (``None`` after JSON, NaN
+    before: every run failed), ``inf`` when a run that never settled enters it."""
+    return "-" if value is None or value != value else format(value, fmt)
 
 
 def _summary(r: dict[str, Any]) -> list[str]:

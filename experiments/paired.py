@@ -13,8 +13,13 @@ over the runs both finished. Reported per estimator x noise: the mean of ``d`` w
 Student's t confidence interval :math:`\\bar d \\pm t_{n-1,(1+c)/2}\\, s_d / \\sqrt{n}`
 (from ``scipy.stats.ttest_1samp``), the median of ``d``, the share of runs where the
 estimator's value is the larger, and the two-sided p-value of Wilcoxon's signed-rank
-test (``scipy.stats.wilcoxon``: distribution-free; scipy takes the exact or a
-permutation distribution for small samples, the normal approximation for large ones).
+test (distribution-free; :func:`signed_rank_p`): zero differences are dropped, tied
+ones share their mean rank, and up to :data:`EXACT_MAX` nonzero differences the
+p-value is exact (the share of the ``2^n`` equally likely sign patterns whose rank sum
+is at least as far from its mean), above that the normal approximation with the tie
+correction (``scipy.stats.wilcoxon``). Differences within :data:`TIE_RTOL` of the
+largest are one value: settle times on a control grid differ by exactly equal steps
+that the subtraction rounds apart.
 Heavy tails (a filter that loses the target in a few runs) widen the t interval; the
 median, the share and the signed-rank test do not depend on them.
 """
@@ -45,6 +50,46 @@ CONFIDENCE = 0.95
 RUN_KEYS = ("noise", "seed", "run")
 
 
+#: differences closer than this share of the largest |difference| are tied (and zero)
+TIE_RTOL = 1e-9
+#: up to this many nonzero differences the signed-rank p-value is exact
+EXACT_MAX = 50
+
+
+def signed_rank_p(d: np.ndarray) -> float | None:
+    """Two-sided p-value of Wilcoxon's signed-rank test of the differences ``d``.
+
+    With the ``n`` nonzero differences ranked by magnitude (ties: mean ranks) and
+    ``T+`` the sum of the positive ones' ranks, under the null hypothesis every sign
+    pattern is equally likely; the p-value is the share of the ``2^n`` patterns with
+    ``|T+ - E T+| >= |t+ - E T+|``, counted exactly on doubled (integer) ranks for
+    ``n <= EXACT_MAX`` (Hollander, Wolfe & Chicken, *Nonparametric Statistical
+    Methods*, 3rd ed., 2014, sec. 3.1, conditional on the ties), else the normal
+    approximation with the tie correction (scipy). ``None`` when every difference is
+    zero (within :data:`TIE_RTOL`).
+    """
+    from scipy import stats  # here: kvi --help stays light
+
+    d = np.asarray(d, dtype=float)
+    scale = float(np.max(np.abs(d), initial=0.0))
+    if not scale > 0:
+        return None
+    k = np.round(d / (TIE_RTOL * scale))  # integers: rounding-level gaps are ties
+    k = k[k != 0]
+    n = k.size
+    if n > EXACT_MAX:
+        return float(stats.wilcoxon(k, method="approx").pvalue)
+    ranks2 = np.rint(2.0 * stats.rankdata(np.abs(k))).astype(np.int64)  # mean ranks x 2
+    total = int(ranks2.sum())
+    counts = np.zeros(total + 1)  # patterns by T+ (x2); exact in float64 up to 2^53
+    counts[0] = 1.0
+    for r in ranks2:
+        counts[r:] = counts[r:] + counts[: total + 1 - r]
+    t_obs = int(ranks2[k > 0].sum())
+    far = np.abs(2 * np.arange(total + 1) - total) >= abs(2 * t_obs - total)
+    return float(min(1.0, counts[far].sum() / 2.0**n))
+
+
 def paired_stats(d: np.ndarray, confidence: float = CONFIDENCE) -> dict[str, Any]:
     """Summary of the paired differences ``d`` (module docstring); ``None`` where a
     statistic is undefined (no runs; one run has no interval; all differences zero give
@@ -66,8 +111,7 @@ def paired_stats(d: np.ndarray, confidence: float = CONFIDENCE) -> dict[str, Any
         else:
             ci = stats.ttest_1samp(d, 0.0).confidence_interval(confidence)
             out["ci"] = [float(ci.low), float(ci.high)]
-    if np.any(d != 0.0):
-        out["wilcoxon_p"] = float(stats.wilcoxon(d).pvalue)
+    out["wilcoxon_p"] = signed_rank_p(d)
     return out
 
 

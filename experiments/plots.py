@@ -38,6 +38,26 @@ def _cdf(ax, values: np.ndarray, label: str, **style) -> None:
     ax.step(np.r_[v[0], v], np.r_[0.0, share], where="post", label=label, **style)
 
 
+def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
+    """The CDF curve of the column ``col`` over one group's ``rows`` (every row of the
+    group, failed ones included), labelled with what it is drawn over: ``n`` the runs
+    with a value (``+inf`` is a value: never settled), then the failed runs and the
+    runs without a value (NaN) that it leaves out, when there are any (the curve reached
+    1 over the others while the label counted the whole group)."""
+    failed = int((rows["status"] != "ok").sum()) if "status" in rows else 0
+    values = (rows[rows["status"] == "ok"] if "status" in rows else rows)[col]
+    values = values.to_numpy(dtype=float)
+    missing = int(np.isnan(values).sum())
+    notes = [f"n={len(values) - missing}"]
+    notes += [f"{failed} failed"] if failed else []
+    notes += [f"{missing} without a value"] if missing else []
+    label = f"{name} ({', '.join(notes)})"
+    if len(values) == missing:  # nothing to draw: the legend still says why
+        ax.plot([], [], label=label, **style)
+        return
+    _cdf(ax, values, label, **style)
+
+
 def group_style(keys: Mapping[str, object], df: pd.DataFrame, variants: Sequence) -> dict:
     """Colour from the group's (or the table's) estimator, line style from its noise,
     line width from its variant's position in ``variants``."""
@@ -63,17 +83,17 @@ def cdf_figure(
     black; our lower bounds: grey).
     """
     ok = df[df["status"] == "ok"] if "status" in df else df
-    n_curves = ok.groupby(list(group_cols)).ngroups if len(ok) else 0
+    n_curves = df.groupby(list(group_cols)).ngroups if len(df) else 0
     crowded = n_curves > CROWDED_CURVES
     rows = -(-(n_curves + 2 * len(references or {})) // 4)  # legend rows below, 4 columns
     fig, axes = fs.figure(1, 2, size=(11, 4.4 + (0.17 * rows if crowded else 0.0)))
-    variants = sorted(ok["variant"].unique()) if "variant" in ok else []
+    variants = sorted(df["variant"].unique()) if "variant" in df else []
     for ax, (col, xlabel) in zip(axes[0], PANELS, strict=True):
-        for key, grp in ok.groupby(list(group_cols), sort=True):
+        for key, grp in df.groupby(list(group_cols), sort=True):
             key = key if isinstance(key, tuple) else (key,)
             keys = dict(zip(group_cols, key, strict=True))
-            label = " / ".join(str(k) for k in key) + f" (n={len(grp)})"
-            _cdf(ax, grp[col].to_numpy(dtype=float), label, **group_style(keys, ok, variants))
+            name = " / ".join(str(k) for k in key)
+            curve(ax, name, grp, col, **group_style(keys, df, variants))
         for value, label in (references or {}).get(col, ()):
             paper = label.startswith(("seed", "paper"))
             ax.axvline(value, color=fs.PAPER if paper else fs.REFERENCE, lw=1.0,

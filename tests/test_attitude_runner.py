@@ -117,3 +117,12 @@ def test_the_text_summary_has_one_block_per_estimator_and_noise(scenario, tmp_pa
     assert [row.split(" | ")[1] for row in table] == ["random", "game"]
     assert text.count("truth outside belief: ") == 4 and "CPU-s); files:" in text
     assert "{" not in text and "settle s" in text
+
+
+def test_a_statistic_without_runs_prints_a_dash_and_never_settled_prints_inf():
+    """``-`` when no run gave the statistic (NaN: every run failed; ``None``: after
+    JSON), ``inf`` when a run that never settled enters it (it printed ``nan``)."""
+    from kalman_vs_infoset.experiments.cmd_attitude import _stat
+
+    assert _stat(float("nan"), ".2f") == "-" and _stat(None, ".2f") == "-"
+    assert _stat(float("inf"), ".2f") == "inf" and _stat(12.345, ".2f") == "12.35"

@@ -115,6 +115,8 @@ DERIVED = {
     # §3: the commands' defaults and constants, bench.json, pd_gains.json
     "seed": r"`--noise none`, one run, seed (\d+), and the",
     "confidence": r"`confidence` \(([\d.]+)\)",
+    "signed_rank": r"exact over every sign pattern up to (\d+) nonzero differences, the\s+"
+    r"normal approximation with the tie correction above; differences within 1e-(\d+) of",
     "bench_steps": r"(\d+), (\d+) and (\d+) steps by `dt` = ([\d.]+), ([\d.]+) and ([\d.]+) s",
     "bench_workers": r"for (\d+) and (\d+) workers\), `runs_per_cpu_s_by_chunk` \((\d+) workers",
     "exit": r"Exit status: (\d+) on success; (\d+) with one line on stderr for bad input .*?; "
@@ -476,13 +478,15 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
 
     from kalman_vs_infoset.experiments import cli, cmd_attitude
     from kalman_vs_infoset.experiments.cmd_bench import COST_DT_S
-    from kalman_vs_infoset.experiments.paired import CONFIDENCE
+    from kalman_vs_infoset.experiments.paired import CONFIDENCE, EXACT_MAX, TIE_RTOL
     from kalman_vs_infoset.guidance.attitude.lqr import analytic_riccati
 
     parser = argparse.ArgumentParser()
     cmd_attitude.add_arguments(parser)
     agree_each(_read("seed"), [parser.parse_args(["resurs_p"]).seed])
     agree_each(_read("confidence"), [CONFIDENCE])
+    exact_max, tie_exponent = _read("signed_rank")
+    assert (int(exact_max), 10.0 ** -int(tie_exponent)) == (EXACT_MAX, TIE_RTOL)
     bench = results("docs/results/bench.json")
     agree_each(_read("bench_steps"), [*bench["cost_steps"], *COST_DT_S])
     assert bench["cost_dt_s"] == list(COST_DT_S)

@@ -53,6 +53,48 @@ def test_cdf_of_runs_that_never_settled_ends_at_the_share_that_did():
     plt.close(fig)
 
 
+def test_cdf_figure_labels_say_which_runs_each_curve_leaves_out(monkeypatch, tmp_path):
+    """A curve is drawn over the runs with a value; its label counts those and names the
+    failed runs and the NaN values it leaves out (the label said n=12 over a curve of
+    6 or 9 runs that reached 1). A group whose every run failed keeps its legend
+    entry. The attitude figure labels its curves alike."""
+    import pandas as pd
+    from kalman_vs_infoset.experiments.attitude_est import write_figure
+
+    rng = np.random.default_rng(2)
+    rows = pd.DataFrame(
+        {"estimator": ["ekf"] * 12 + ["ukf"] * 12 + ["pf"] * 3, "noise": "game",
+         "status": "ok", "miss_m": rng.lognormal(size=27), "fuel_mps": rng.uniform(size=27)}
+    )  # fmt: skip
+    rows.loc[:5, "status"] = "failed"  # 6 of ekf's runs
+    rows.loc[rows.index[12:15], "miss_m"] = np.nan  # 3 of ukf's misses
+    rows.loc[rows.index[24:], "status"] = "failed"  # every pf run
+    fig = plots.cdf_figure(rows, ["estimator", "noise"], "t", {})
+    miss = {line.get_label(): line for line in fig.axes[0].lines}
+    assert set(miss) == {
+        "ekf / game (n=6, 6 failed)",
+        "ukf / game (n=9, 3 without a value)",
+        "pf / game (n=0, 3 failed)",
+    }
+    ekf = miss["ekf / game (n=6, 6 failed)"]
+    assert len(ekf.get_xdata()) == 7 and ekf.get_ydata()[1] == 1 / 6  # a step per run
+    assert len(miss["pf / game (n=0, 3 failed)"].get_xdata()) == 0
+    fuel = {line.get_label() for line in fig.axes[1].lines}
+    assert "ukf / game (n=12)" in fuel
+
+    att = pd.DataFrame(
+        {"controller": "pd", "estimator": "box", "noise": "random",
+         "status": ["ok"] * 4 + ["failed"], "settle_time_s": [1.0, 2.0, np.inf, 3.0, np.nan],
+         "energy_N2m2s": 1.0, "final_angle_deg": 0.1}
+    )  # fmt: skip
+    drawn = []
+    monkeypatch.setattr(plots, "save", lambda fig, stem: drawn.append(fig) or [])
+    write_figure(tmp_path, "s", att)
+    (settle, *_) = drawn[0].axes
+    assert [line.get_label() for line in settle.lines] == ["pd / box / random (n=4, 1 failed)"]
+    assert settle.lines[0].get_ydata()[-1] == 0.75  # one of the four never settled
+
+
 class _Pipe(io.StringIO):
     def isatty(self) -> bool:
         return False

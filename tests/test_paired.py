@@ -52,6 +52,62 @@ def test_signed_rank_p_is_the_exact_enumeration(seed):
     assert paired_stats(d)["wilcoxon_p"] == pytest.approx(_exact_signed_rank_p(d), rel=1e-12)
 
 
+def _enumerated_p_with_ties(d: np.ndarray) -> float:
+    """The same enumeration, conditional on ties and zeros: zeros dropped, tied
+    magnitudes given their mean rank (Hollander, Wolfe & Chicken 2014, sec. 3.1)."""
+    return _exact_signed_rank_p(d[d != 0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(-4, 4), min_size=1, max_size=13))
+def test_signed_rank_p_with_zeros_and_ties_is_the_conditional_enumeration(values):
+    """Small integer differences: many zeros and ties. scipy's default switched to the
+    normal approximation for these (0.109 where the exact p is 0.25, 0.18 for 0.5)."""
+    d = np.array(values, dtype=float) * 0.05
+    got = paired_stats(d)["wilcoxon_p"]
+    if not np.any(d):
+        assert got is None
+    else:
+        assert got == pytest.approx(_enumerated_p_with_ties(d), rel=1e-12)
+
+
+def test_signed_rank_p_of_the_reviewed_case():
+    """17 zero differences and three negative ones: the exact two-sided p is 2/8."""
+    d = np.array([0.0] * 17 + [-0.05, -0.10, -0.15])
+    assert paired_stats(d)["wilcoxon_p"] == 0.25
+
+
+def test_differences_rounded_apart_are_one_tie():
+    """Equal steps on a control grid, subtracted: 0.02 arrives as 0.019999999999996 and
+    0.020000000000003. They are one tied value (not two ranks), as the exact ones are."""
+    grid = np.array([0.02, 0.02, -0.02, 0.04, 0.02, -0.04, 0.06])
+    rounded = grid + np.array([-4e-15, 3e-15, 0.0, 2e-15, -1e-15, 0.0, 5e-15])
+    assert paired_stats(rounded)["wilcoxon_p"] == paired_stats(grid)["wilcoxon_p"]
+    assert paired_stats(grid)["wilcoxon_p"] == pytest.approx(_enumerated_p_with_ties(grid))
+
+
+@pytest.mark.parametrize("n", [20, 50])
+def test_signed_rank_p_without_ties_is_scipys_exact_distribution(n):
+    d = np.random.default_rng(n).normal(0.4, 1.0, size=n)
+    want = stats.wilcoxon(d, method="exact").pvalue
+    assert paired_stats(d)["wilcoxon_p"] == pytest.approx(want, rel=1e-10)
+
+
+def test_above_fifty_differences_the_p_value_is_the_normal_approximation():
+    """Scipy's approximation with the tie correction (z from the tie-corrected
+    variance, computed here by hand)."""
+    rng = np.random.default_rng(5)
+    d = np.round(rng.normal(0.2, 1.0, size=300), 1)  # ties and zeros
+    nz = d[d != 0]
+    r = stats.rankdata(np.abs(nz))
+    t = r[nz > 0].sum()
+    n = nz.size
+    _, tie_counts = np.unique(np.abs(nz), return_counts=True)
+    var = n * (n + 1) * (2 * n + 1) / 24 - (tie_counts**3 - tie_counts).sum() / 48
+    z = (t - n * (n + 1) / 4) / np.sqrt(var)
+    assert paired_stats(d)["wilcoxon_p"] == pytest.approx(2 * stats.norm.sf(abs(z)), rel=1e-9)
+
+
 def test_undefined_statistics_are_none():
     assert paired_stats(np.array([]))["mean"] is None
     one = paired_stats(np.array([2.0]))
