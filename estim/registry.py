@@ -2,8 +2,9 @@
 
 A consumer (the intercept engagement, the attitude loops, the command line) never
 names a concrete estimator class: it asks the registry for a name's
-:class:`Registration`, validates the scenario's ``[estimator.<name>]`` table with the
-registration's options model (pydantic, ``extra="forbid"``) and builds the estimator.
+:class:`Registration`, validates the options with the registration's options model
+(pydantic, ``extra="forbid"``: an intercept scenario's ``[estimator.<name>]`` table; the
+attitude loops take the defaults) and builds the estimator.
 
 Where registrations come from:
 
@@ -12,7 +13,8 @@ Where registrations come from:
   in ``REGISTRATIONS`` (:func:`declare`) in its ``__init__``; the folders are found by
   scanning, so adding an estimator is one new folder and touches no other file;
 * a third-party package's: the entry-point group :data:`ENTRY_POINT_GROUP` (each entry
-  point names a callable that calls :func:`register`, or a module whose import does).
+  point names a callable that calls :func:`register`, or a module whose import does);
+  one that fails to load is left out with a warning (:data:`PLUGIN_ERRORS`).
 
 Problems and what their factories receive (besides the validated options):
 
@@ -38,6 +40,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib import metadata
@@ -222,9 +225,36 @@ def _load() -> None:
             for reg in getattr(importlib.import_module(module), "REGISTRATIONS", ()):
                 _add(reg, replace=False)
     for entry in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        _load_plugin(entry)
+
+
+#: the plug-ins that failed to load, ``(entry point, error)``: each is left out with one
+#: warning, so that one broken installation does not stop every command (nor the
+#: plug-ins after it)
+PLUGIN_ERRORS: list[tuple[str, str]] = []
+
+
+def _load_plugin(entry: metadata.EntryPoint) -> None:
+    """Load one entry point (a callable that registers, or a module whose import does);
+    on any error its registrations so far are undone, the error is recorded in
+    :data:`PLUGIN_ERRORS` and warned about in one line (``RuntimeWarning``)."""
+    before = dict(_REGISTRY)
+    try:
         loaded = entry.load()
         if callable(loaded):
             loaded()
+    except Exception as exc:  # a plug-in's failure is its own: the rest still runs
+        _REGISTRY.clear()  # back to before it: also a built-in it replaced
+        _REGISTRY.update(before)
+        dist = getattr(entry, "dist", None)
+        where = f" of {dist.name} {dist.version}" if dist is not None else ""
+        error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+        PLUGIN_ERRORS.append((f"{entry.name} = {entry.value}{where}", error))
+        warnings.warn(
+            f"estimator plug-in {entry.name!r} ({entry.value}{where}) is left out: {error}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
 
 
 def names(problem: str) -> tuple[str, ...]:

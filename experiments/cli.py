@@ -26,6 +26,7 @@ import json
 import math
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
@@ -198,7 +199,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # a stop outside the command's run (which reports its own): while the command's
     # module loads, before the handlers are in place, or while they are put back
     try:
-        return _main(argv)
+        with warnings.catch_warnings():  # restores the default display on the way out
+            warnings.showwarning = _warning_line
+            return _main(argv)
     except Terminated:
         print("kvi: terminated (SIGTERM)", file=sys.stderr)
         return 143
@@ -210,6 +213,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         # stdout goes to /dev/null so that the interpreter's last flush does not fail too
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+
+
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr (e.g. a plug-in left out), not Python's two
+    lines with the file and the source line."""
+    print(f"kvi: warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _main(argv: Sequence[str] | None) -> int:

@@ -33,6 +33,9 @@ INPUTS = (
     r"2-D",
     r"up to 1e8 from the origin",
     r"non-UTF-8",
+    r"exit status [12]\b",
+    r"states `\(R, 7\)`",  # a batch of R runs, 7 state components
+    r"a step of\s+0 or more seconds",
 )
 
 

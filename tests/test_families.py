@@ -114,6 +114,74 @@ def test_a_plug_in_registers_through_the_entry_point_group(fresh, tmp_path):
     assert reg.build({"widen": 2.0}, contract.SETTING).widen == 2.0
 
 
+def _entry_points(root: Path, plugins: dict[str, str]) -> None:
+    """One distribution ``toyep`` under ``root`` whose entry points are ``plugins``
+    (name -> module source defining ``register``)."""
+    dist = root / "toyep-0.1.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: toyep\nVersion: 0.1\n")
+    lines = "".join(f"{name} = {name}:register\n" for name in plugins)
+    (dist / "entry_points.txt").write_text(f"[{registry.ENTRY_POINT_GROUP}]\n{lines}")
+    for name, source in plugins.items():
+        (root / f"{name}.py").write_text(source)
+
+
+PLUGINS = {
+    "toyep_broken": "def register():\n    raise RuntimeError('missing dependency foo')\n",
+    "toyep_clash": (
+        "from kalman_vs_infoset.estim import registry\n"
+        "from toy_estimators import ToyOptions\n\n\n"
+        "def register():\n"
+        "    registry.register('toyep_half', 'intercept', ToyOptions)\n"
+        "    registry.register('ekf', 'intercept', ToyOptions)\n"
+    ),
+    "toyep_good": (
+        "from kalman_vs_infoset.estim import registry\n"
+        "from toy_estimators import ToyOptions\n\n\n"
+        "def register():\n"
+        "    registry.register('toyep_good', 'intercept', ToyOptions)\n"
+    ),
+}
+
+
+def test_a_broken_plug_in_is_left_out_with_one_warning_and_the_others_load(fresh, tmp_path):
+    """A plug-in whose ``register`` raises, or registers a built-in's name, stopped every
+    command with a traceback, and the plug-ins after it were never loaded. Now each is
+    left out (with what it registered before failing), warned about, and recorded."""
+    fresh.setattr(registry, "PLUGIN_ERRORS", [])
+    _entry_points(tmp_path, PLUGINS)
+    fresh.syspath_prepend(str(tmp_path))
+    with pytest.warns(RuntimeWarning) as caught:
+        names = registry.names("intercept")
+    assert "toyep_good" in names and not {"toyep_broken", "toyep_half"} & set(names)
+    assert registry.get("intercept", "ekf").options is not ToyOptions  # the built-in
+    messages = sorted(str(w.message) for w in caught)
+    assert len(messages) == 2 and all("\n" not in m for m in messages)
+    assert "'toyep_broken'" in messages[0] and "RuntimeError: missing dependency foo" in messages[0]
+    assert "'toyep_clash'" in messages[1] and "already registered" in messages[1]
+    assert [e[0].split(" = ")[0] for e in registry.PLUGIN_ERRORS] == ["toyep_broken", "toyep_clash"]
+
+
+def test_the_command_line_says_a_plug_in_is_left_out_in_one_line_and_runs(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    _entry_points(tmp_path, {"toyep_broken": PLUGINS["toyep_broken"]})
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(HERE)])}
+    r = subprocess.run(
+        [sys.executable, "-m", "kalman_vs_infoset", "intercept", "--help"],
+        capture_output=True, text=True, env=env, timeout=120,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    warning = [line for line in r.stderr.splitlines() if "toyep_broken" in line]
+    assert warning == [
+        "kvi: warning: estimator plug-in 'toyep_broken' (toyep_broken:register of toyep 0.1) "
+        "is left out: RuntimeError: missing dependency foo"
+    ]
+    assert "Traceback" not in r.stderr
+
+
 def test_replace_works_before_the_first_lookup(fresh):
     reg = registry.register("ekf", "intercept", ToyOptions, doc="mine", replace=True)
     assert registry.get("intercept", "ekf") is reg

@@ -3,10 +3,12 @@ Writing an estimator plug-in
 ============================
 
 An estimator is registered under a name with a pydantic options model and a factory;
-every command and :func:`kalman_vs_infoset.run_experiment` can then use it. Here a
-"cautious EKF": the package's EKF with its interval widened to 5 standard deviations.
-A package of one's own registers its estimators through the entry-point group
-``kalman_vs_infoset.estimators`` instead of calling ``register_estimator`` by hand.
+every function of the API in this Python process can then use it
+(:func:`kalman_vs_infoset.run_experiment`, ``trace``, ...). Here a "cautious EKF": the
+package's EKF with its interval widened to 5 standard deviations. For the ``kvi``
+commands (other processes), a package of one's own registers its estimators through the
+entry-point group ``kalman_vs_infoset.estimators`` (docs/usage.md, "Writing an estimator
+plug-in"). ``replace=True`` lets this page run twice in one session.
 """
 
 from pydantic import BaseModel, Field
