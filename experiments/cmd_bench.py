@@ -13,7 +13,9 @@ clock does not. Measured on the same problem (seed 003's Fig. 3 boxes, one chann
   same impulses: consistent data), median of the repetitions (the estimators taken in
   turn, pass by pass), each estimator with its default options (``step_us`` gathers
   them by name; ``steps_timed`` says over how many steps: fewer than ``--steps`` when
-  the approach reaches the blind range or a set estimator's belief becomes empty);
+  the approach reaches the blind range or a set estimator's belief becomes empty;
+  ``step_failed``: the estimators left out because a trial step raised, e.g. a broken
+  plug-in, with the error);
 * ``whole_approach_step_us`` (and ``whole_approach_steps``, ``whole_approach_ratio``
   = information set / UKF): the same step for the information set and the UKF, mean
   over the whole approach to the blind range whatever ``--steps`` is;
@@ -278,6 +280,23 @@ def approach_nodes(name: str, sc, dt: float) -> dict[str, float] | None:
     }
 
 
+def _working(names, sc, needed) -> tuple[list[str], dict[str, str]]:
+    """The estimators whose trial steps run, and the error of each other (one line): a
+    plug-in that raises is left out of the timings, not the end of the command. The
+    ``needed`` ones (the ratios' reference and unit) are not caught."""
+    ok, failed = [], {}
+    for name in names:
+        try:
+            _approach_cpu_s(name, sc, 2, sc.model.dt_s)
+        except Exception as exc:
+            if name in needed:
+                raise
+            failed[name] = f"{type(exc).__name__}: {exc}".splitlines()[0]
+        else:
+            ok.append(name)
+    return ok, failed
+
+
 def step_cost_us(names, sc, steps: int, repeat: int) -> dict[str, tuple[float, int]]:
     """Median CPU cost (us) of update + predict (with an impulse) + extremes for one
     channel, and the number of steps timed, by name (the estimators taken in turn:
@@ -364,10 +383,12 @@ def run(args) -> dict[str, Any]:
     # warm-up: imports, compiled kernels, filterpy
     step_cost_us([ref], fig3, 5, 1)
     engagement_ms(fig3, "random", 1)
-    timed = step_cost_us(registry.names("intercept"), fig3, n_steps, repeat)
+    names, failed = _working(registry.names("intercept"), fig3, (ref, unit))
+    timed = step_cost_us(names, fig3, n_steps, repeat)
     steps = {n: us for n, (us, _) in timed.items()}
     result: dict[str, Any] = {f"{n}_step_us": us for n, us in steps.items()}
     result["step_us"] = steps
+    result["step_failed"] = failed
     result["steps_timed"] = {n: k for n, (_, k) in timed.items()}
     result["engagement_ms"] = engagement_ms(fig3, "game", repeat)
     result["engagement_random_ms"] = engagement_ms(fig3, "random", repeat)
@@ -466,7 +487,7 @@ def render(result: dict[str, Any]) -> str:
         + (f"   ({us / yard:.2f} x {registry.get('intercept', unit).words})" if yard else "")
         + (f"   over {timed[name]} steps" if name in timed else "")
         for name, us in result["step_us"].items()
-    ]
+    ] + [f"  {name:15s} failed: {error}" for name, error in result.get("step_failed", {}).items()]
     # the slices' vertices beside each approach's cost (absent: files of older releases)
     verts = result.get("cost_mean_vertices") or [None] * len(result["cost_steps"])
     cost = ", ".join(

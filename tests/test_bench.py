@@ -189,3 +189,31 @@ def test_the_estimators_passes_are_interleaved_and_each_cost_their_median(monkey
     assert order == ["a", "b"] * 3
     assert whole["a"]["step_us"] == pytest.approx(2e5) and whole["b"]["steps"] == 10
     assert whole["b"]["tail_share"] == pytest.approx(0.1)
+
+
+def test_a_plug_in_that_raises_is_left_out_of_the_timings_and_said(monkeypatch):
+    """``kvi bench`` times every registered estimator: one plug-in raising at its first
+    update ended the command with a traceback. It is left out, with its error, and the
+    text says so; the ratios' reference and unit are never caught."""
+    import sys
+
+    from kalman_vs_infoset.experiments import cmd_bench
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from toy_estimators import ToyOptions
+
+    def broken(options, setting):
+        est = ToyOptions().build(setting)
+        monkeypatch.setattr(type(est), "update", lambda self, b, m: 1 / 0)
+        return est
+
+    registry.register("toy_broken", "intercept", ToyOptions, broken)
+    try:
+        fig3 = load_scenario(str(ROOT / "data/scenarios/kp_fig3.toml"))
+        names, failed = cmd_bench._working(["ekf", "toy_broken"], fig3, ("ekf",))
+        assert names == ["ekf"] and failed == {"toy_broken": "ZeroDivisionError: division by zero"}
+        with pytest.raises(ZeroDivisionError):
+            cmd_bench._working(["toy_broken"], fig3, ("toy_broken",))
+    finally:
+        registry.unregister("intercept", "toy_broken")
