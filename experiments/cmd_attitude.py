@@ -177,6 +177,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                     batched_task, partial(loop.task, setups[noise], controller, noise, est), seed
                 ),  # fmt: skip
                 chunk=loop.chunk,
+                problem="attitude",
             )
             df = run_job(
                 job, req.runs, req.out, args.workers, args.scheduler, not args.no_progress,

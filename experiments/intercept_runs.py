@@ -48,6 +48,7 @@ def intercept_job(
         base={"scenario": sc.name, **choice, "seed": seed},
         task=partial(_intercept_chunk, sc, estimator, noise, seed),
         chunk=chunk,
+        problem="intercept",
     )
 
 

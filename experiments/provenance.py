@@ -9,8 +9,10 @@ written by other sources.
 from __future__ import annotations
 
 import hashlib
+import importlib
 import json
 import subprocess
+import sys
 from functools import cache
 from importlib import metadata
 from pathlib import Path
@@ -62,6 +64,45 @@ def code_identity() -> CodeIdentity:
     except metadata.PackageNotFoundError:
         version = None
     return {"version": version, "sources_sha256": h.hexdigest(), "git_commit": _git_commit()}
+
+
+def estimator_identity(problem: str, name: str) -> dict | None:
+    """What identifies a plug-in estimator's code (``None`` for the package's own, which
+    :func:`code_identity` covers): the modules of its factory and options outside the
+    package, a SHA-256 over the sources of their top-level packages (by relative path
+    and content; a script's own file when registered from one), and the versions of
+    the distributions that install them. A resume compares it, so that a table never
+    mixes the runs of two versions of a plug-in."""
+    from kalman_vs_infoset.estim import registry
+
+    try:
+        reg = registry.get(problem, name)
+    except KeyError:  # not a registered estimator: nothing beyond the package's code
+        return None
+    modules = {getattr(reg.factory, "__module__", None), reg.options.__module__}
+    outside = sorted(m for m in modules if m and not m.startswith("kalman_vs_infoset."))
+    if not outside:
+        return None
+    files: dict[str, Path] = {}  # by path relative to its package's folder
+    tops = sorted({m.split(".")[0] for m in outside})
+    for top in tops:
+        mod = sys.modules.get(top) or importlib.import_module(top)
+        for folder in getattr(mod, "__path__", ()):  # a package: all its sources
+            for f in Path(folder).rglob("*.py"):
+                files[f"{top}/{f.relative_to(folder).as_posix()}"] = f
+        source = getattr(mod, "__file__", None)
+        if not hasattr(mod, "__path__") and source:
+            files[Path(source).name] = Path(source)
+    h = hashlib.sha256()
+    for rel in sorted(files):
+        h.update(rel.encode() + b"\0" + files[rel].read_bytes() + b"\0")
+    known = metadata.packages_distributions()
+    dists = sorted({d for top in tops for d in known.get(top, ())})
+    return {
+        "modules": outside,
+        "sources_sha256": h.hexdigest() if files else None,
+        "distributions": {d: metadata.version(d) for d in dists},
+    }
 
 
 def _git_commit() -> str | None:

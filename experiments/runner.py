@@ -46,7 +46,7 @@ from kalman_vs_infoset.experiments.files import atomic_write, exclusive
 from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the parser's bounds
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
-from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.experiments.provenance import code_identity, estimator_identity
 from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
 
 SAVE_EVERY_S = 2.0
@@ -76,6 +76,9 @@ class Job:
     base: dict[str, Any]
     task: Callable[[list[int]], list[tuple[int, dict[str, Any]]]]
     chunk: int = 1
+    #: the estimator's problem ("intercept", "attitude"): a plug-in's code is recorded
+    #: and checked on resume (:func:`experiments.provenance.estimator_identity`)
+    problem: str | None = None
 
     @property
     def desc(self) -> str:
@@ -199,7 +202,7 @@ def run_job(
     check_seed(job.seed)
     check_runs(runs)
     path = job_path(out_dir, job)
-    meta = {**job.meta, "code": code_identity()}
+    meta = {**job.meta, "code": _code(job)}
     meta_path = sidecar_path(path)
     if path.exists() and not _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
         table = _read_table(path)
@@ -311,6 +314,15 @@ def _read_json(path: Path) -> Any:
         return None
 
 
+def _code(job: Job) -> dict[str, Any]:
+    """The code that writes a job's results: the package's, and a plug-in estimator's."""
+    code: dict[str, Any] = dict(code_identity())
+    plugin = estimator_identity(job.problem, job.meta["estimator"]) if job.problem else None
+    if plugin is not None:
+        code["estimator"] = plugin
+    return code
+
+
 def _check_resumable(
     path: Path, meta_path: Path, meta: dict[str, Any], rerun_other_code: bool = False
 ) -> bool:
@@ -334,16 +346,32 @@ def _check_resumable(
             f"{path}: results of a different scenario ({key}: {a!r} in the file, {b!r} now); {fix}"
         )
     before = (old.get("code") or {}).get("sources_sha256")
-    if before == meta["code"]["sources_sha256"]:
+    plugin_then = (old.get("code") or {}).get("estimator")
+    plugin_now = json.loads(json.dumps(meta["code"].get("estimator")))
+    if before == meta["code"]["sources_sha256"] and plugin_then == plugin_now:
         return False
     if rerun_other_code:
         return True
+    if before == meta["code"]["sources_sha256"]:  # the plug-in's code changed
+        raise InputError(
+            f"{path}: results written by another version of the estimator "
+            f"{meta.get('estimator')!r} ({_plugin_text(plugin_then)}, now "
+            f"{_plugin_text(plugin_now)}); {fix}, or run them again with --rerun-other-code"
+        )
     was = f"sources {before[:12]}" if before else "code that recorded no identity"
     raise InputError(
         f"{path}: results written by other code ({was}, now "
         f"{meta['code']['sources_sha256'][:12]}); {fix}, or run them again with "
         "--rerun-other-code"
     )
+
+
+def _plugin_text(identity: dict | None) -> str:
+    if not identity:
+        return "the package's own"
+    sha = identity.get("sources_sha256")
+    versions = ", ".join(f"{d} {v}" for d, v in identity.get("distributions", {}).items())
+    return f"sources {sha[:12] if sha else 'unknown'}" + (f", {versions}" if versions else "")
 
 
 def _first_difference(a: Any, b: Any, key: str = "") -> tuple[str, Any, Any]:

@@ -1,0 +1,74 @@
+"""A resumed results table never mixes two versions of a plug-in estimator: the code of
+a plug-in (its modules outside the package, hashed with their package's sources, and
+its distribution's version) is recorded beside the table and compared on resume, as
+the package's own sources are. Editing a plug-in's source between two runs into one
+folder added runs of the new code to the old table, without a word."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import pytest
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments import intercept_runs
+from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.provenance import estimator_identity
+from kalman_vs_infoset.experiments.scenario import load_scenario
+
+PLUGIN = '''
+from toy_estimators import ToyEstimator, ToyOptions
+
+
+class PlugOptions(ToyOptions):
+    """The toy's options, declared by this plug-in."""
+
+
+def build(options, setting):
+    return ToyEstimator(setting.model, options.widen * WIDEN)
+
+
+WIDEN = {widen}
+'''
+
+
+@pytest.fixture
+def plugin(tmp_path, monkeypatch):
+    """A plug-in module ``toyplug`` in a folder of its own, registered as ``toyplug``."""
+    folder = tmp_path / "plug"
+    folder.mkdir()
+    (folder / "toyplug.py").write_text(PLUGIN.format(widen=1.0))
+    monkeypatch.syspath_prepend(str(folder))
+    module = importlib.import_module("toyplug")
+    registry.register("toyplug", "intercept", module.PlugOptions, module.build)
+    yield folder / "toyplug.py"
+    registry.unregister("intercept", "toyplug")
+    sys.modules.pop("toyplug", None)
+
+
+def test_a_built_in_estimator_has_no_identity_of_its_own():
+    assert estimator_identity("intercept", "ekf") is None
+    assert estimator_identity("attitude", "box") is None
+    assert estimator_identity("intercept", "no_such_estimator") is None
+
+
+def test_a_plug_ins_identity_follows_its_sources(plugin):
+    first = estimator_identity("intercept", "toyplug")
+    assert first is not None and first["modules"] == ["toyplug"]
+    assert estimator_identity("intercept", "toyplug") == first
+    plugin.write_text(PLUGIN.format(widen=2.0))
+    assert estimator_identity("intercept", "toyplug")["sources_sha256"] != first["sources_sha256"]
+
+
+def test_a_resume_refuses_runs_of_an_edited_plug_in(plugin, tmp_path):
+    sc = load_scenario("kp_fig3")
+    out = tmp_path / "out"
+    run = lambda runs, **kw: intercept_runs.run_experiment(  # noqa: E731
+        sc, "toyplug", "random", runs, 3, out, workers=1, progress=False, **kw
+    )
+    assert len(run(1)) == 1
+    assert len(run(2)) == 2  # the same code: resumed
+    plugin.write_text(PLUGIN.format(widen=2.0))
+    with pytest.raises(InputError, match="another version of the estimator 'toyplug'"):
+        run(3)
+    assert len(run(3, rerun_other_code=True)) == 3  # every run again, with the new code
