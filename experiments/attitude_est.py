@@ -34,7 +34,8 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     groups = list(df.groupby(["controller", "estimator", "noise"], sort=True))
     for ax, (col, label) in zip(axes, PANELS, strict=True):
         for key, grp in groups:
-            plots.curve(ax, " / ".join(key), grp, col, **fs.line(key[1], key[2]))
+            name = f"{key[0]} / {fs.words(key[1])} / {key[2]}"
+            plots.curve(ax, name, grp, col, **fs.line(key[1], key[2]))
         ax.set_xlabel(label)
         ax.set_ylabel(plots.CDF_LABEL)
         ax.set_ylim(0, 1.02)

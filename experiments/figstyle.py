@@ -49,7 +49,8 @@ OKABE_ITO = {
     "reddish_purple": "#CC79A7",
 }
 #: for estimators without a fixed colour (yellow is kept for fills only)
-_SPARE = ("#44AA99", "#999933", "#AA4499", "#7F7F7F")
+#: (no grey: the reference marks are grey; Tol's teal, olive, purple and dark red)
+_SPARE = ("#44AA99", "#999933", "#AA4499", "#661100")
 NOISE_STYLES: dict[str, str | tuple[Any, ...]] = {
     "random": "-",
     "game": "--",

@@ -58,6 +58,12 @@ def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
     _cdf(ax, values, label, **style)
 
 
+def _words(column: str, value: object) -> str:
+    """A group key as a legend shows it: an estimator by its registration's label (the
+    information set, UKF, a plug-in's own words), anything else as it is."""
+    return fs.words(str(value)) if column == "estimator" else str(value)
+
+
 def group_style(keys: Mapping[str, object], df: pd.DataFrame, variants: Sequence) -> dict:
     """Colour from the group's (or the table's) estimator, line style from its noise,
     line width from its variant's position in ``variants``."""
@@ -92,7 +98,7 @@ def cdf_figure(
         for key, grp in df.groupby(list(group_cols), sort=True):
             key = key if isinstance(key, tuple) else (key,)
             keys = dict(zip(group_cols, key, strict=True))
-            name = " / ".join(str(k) for k in key)
+            name = " / ".join(_words(c, k) for c, k in keys.items())
             curve(ax, name, grp, col, **group_style(keys, df, variants))
         for value, label in (references or {}).get(col, ()):
             paper = label.startswith(("seed", "paper"))
@@ -139,7 +145,7 @@ def sweep_figure(table: pd.DataFrame, key: str, title: str, xlabel: str | None =
         for (est, noise), grp in groups:
             grp = grp.sort_values("_x")
             ax.plot(grp["_x"], grp[f"{col}_mean"], marker=markers.get(noise, "o"),
-                    **fs.line(est, noise), label=f"{est} / {noise}")  # fmt: skip
+                    **fs.line(est, noise), label=f"{fs.words(est)} / {noise}")  # fmt: skip
         if numeric and (x > 0).all() and x.max() >= 10 * x.min():
             ax.set_xscale("log")
         if not numeric:

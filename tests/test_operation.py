@@ -72,15 +72,15 @@ def test_cdf_figure_labels_say_which_runs_each_curve_leaves_out(monkeypatch, tmp
     fig = plots.cdf_figure(rows, ["estimator", "noise"], "t", {})
     miss = {line.get_label(): line for line in fig.axes[0].lines}
     assert set(miss) == {
-        "ekf / game (n=6, 6 failed)",
-        "ukf / game (n=9, 3 without a value)",
-        "pf / game (n=0, 3 failed)",
+        "EKF / game (n=6, 6 failed)",
+        "UKF / game (n=9, 3 without a value)",
+        "particle filter / game (n=0, 3 failed)",
     }
-    ekf = miss["ekf / game (n=6, 6 failed)"]
+    ekf = miss["EKF / game (n=6, 6 failed)"]
     assert len(ekf.get_xdata()) == 7 and ekf.get_ydata()[1] == 1 / 6  # a step per run
-    assert len(miss["pf / game (n=0, 3 failed)"].get_xdata()) == 0
+    assert len(miss["particle filter / game (n=0, 3 failed)"].get_xdata()) == 0
     fuel = {line.get_label() for line in fig.axes[1].lines}
-    assert "ukf / game (n=12)" in fuel
+    assert "UKF / game (n=12)" in fuel
 
     att = pd.DataFrame(
         {"controller": "pd", "estimator": "box", "noise": "random",
@@ -91,7 +91,7 @@ def test_cdf_figure_labels_say_which_runs_each_curve_leaves_out(monkeypatch, tmp
     monkeypatch.setattr(plots, "save", lambda fig, stem: drawn.append(fig) or [])
     write_figure(tmp_path, "s", att)
     (settle, *_) = drawn[0].axes
-    assert [line.get_label() for line in settle.lines] == ["pd / box / random (n=4, 1 failed)"]
+    assert [line.get_label() for line in settle.lines] == ["pd / guaranteed box / random (n=4, 1 failed)"]
     assert settle.lines[0].get_ydata()[-1] == 0.75  # one of the four never settled
 
 
