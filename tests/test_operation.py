@@ -91,7 +91,8 @@ def test_cdf_figure_labels_say_which_runs_each_curve_leaves_out(monkeypatch, tmp
     monkeypatch.setattr(plots, "save", lambda fig, stem: drawn.append(fig) or [])
     write_figure(tmp_path, "s", att)
     (settle, *_) = drawn[0].axes
-    assert [line.get_label() for line in settle.lines] == ["pd / guaranteed box / random (n=4, 1 failed)"]
+    labels = [line.get_label() for line in settle.lines]
+    assert labels == ["pd / guaranteed box / random (n=4, 1 failed)"]
     assert settle.lines[0].get_ydata()[-1] == 0.75  # one of the four never settled
 
 
