@@ -31,6 +31,7 @@ and carries its ``status`` (:class:`Status`) and the number of ``contradictions`
 from __future__ import annotations
 
 import enum
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -54,6 +55,12 @@ class Extremes:
     argmax: NDArray[np.float64]
 
     def __post_init__(self) -> None:
+        if math.isnan(self.min_value) or math.isnan(self.max_value):
+            # said as the estimator's fault: the harness only asked the belief
+            raise ValueError(
+                f"extremes ({self.min_value}, {self.max_value}) are NaN: the belief is not a "
+                "number (the estimator returned NaN)"
+            )
         if not self.min_value <= self.max_value:
             raise ValueError(f"min_value {self.min_value} exceeds max_value {self.max_value}")
 

@@ -301,6 +301,13 @@ def trace(
     sets : pandas.DataFrame
         One row per vertex of the recorded sets (empty for the Kalman filters).
 
+    Raises
+    ------
+    Exception
+        Whatever the estimator raises: a replay is for looking at a run, so its error
+        comes with its traceback (:func:`run_experiment` records it in the run's row,
+        status ``failed``, and goes on).
+
     Examples
     --------
     >>> from kalman_vs_infoset.api import trace

@@ -40,3 +40,16 @@ def test_plant_conserves_total_momentum_and_matches_euler_torque_free_spin():
     state = propagate(body, state, [0.01, 0.02, -0.03], 2.0)
     h_in1 = state.rotation.apply(total_momentum_Nms(body, state))
     np.testing.assert_allclose(h_in1, h_in0, atol=1e-9)
+
+
+@pytest.mark.parametrize("low, high", [(np.nan, 1.0), (0.0, np.nan), (np.nan, np.nan)])
+def test_extremes_of_nan_say_the_belief_is_not_a_number(low, high):
+    """A plug-in whose belief went NaN failed its run with "min_value nan exceeds
+    max_value nan", which reads as the harness's fault; the error now says the belief
+    is not a number."""
+    from kalman_vs_infoset.estim.base import Extremes
+
+    with pytest.raises(ValueError, match="are NaN: the belief is not a number"):
+        Extremes(low, np.zeros(3), high, np.zeros(3))
+    with pytest.raises(ValueError, match="exceeds max_value"):
+        Extremes(2.0, np.zeros(3), 1.0, np.zeros(3))
