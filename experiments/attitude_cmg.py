@@ -70,9 +70,10 @@ def summarise(
         # settled runs alone would read shorter than the loop's
         "settle_time_s": summary_stats(settle, finite_only=False),
         "not_settled": not_settled(settle),
-        "energy_N2m2s": summary_stats(col("energy_N2m2s")),
-        "final_angle_deg": summary_stats(col("final_angle_deg")),
-        "final_rate_degps": summary_stats(col("final_rate_degps")),
+        # a value that is not finite enters too (as in the other loops), never dropped
+        "energy_N2m2s": summary_stats(col("energy_N2m2s"), finite_only=False),
+        "final_angle_deg": summary_stats(col("final_angle_deg"), finite_only=False),
+        "final_rate_degps": summary_stats(col("final_rate_degps"), finite_only=False),
         "max_torque_Nm": max(col("max_torque_Nm"), default=None),
         "failures": failures,
         "estimator": estimator,

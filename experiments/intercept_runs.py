@@ -120,8 +120,10 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "noise": noise,
         "runs": int(len(df)),
         "seed": int(seed),
-        "miss_m": summary_stats(ok["miss_m"].to_numpy(dtype=float) if len(ok) else []),
-        "fuel_mps": summary_stats(ok["fuel_mps"].to_numpy(dtype=float) if len(ok) else []),
+        # every finished run enters, a value that is not finite too (it would be a fault
+        # to see in the statistics, not one to drop from them)
+        "miss_m": summary_stats(_values(ok, "miss_m"), finite_only=False),
+        "fuel_mps": summary_stats(_values(ok, "fuel_mps"), finite_only=False),
         "truth_outside": int(ok["truth_outside"].sum()) if len(ok) else 0,
         "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
         # beliefs reported Status.DIVERGED: emptied, so guidance stopped early
@@ -129,6 +131,10 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
         "wall_s": float(wall_s),
     }
+
+
+def _values(ok: pd.DataFrame, column: str) -> np.ndarray:
+    return ok[column].to_numpy(dtype=float) if len(ok) else np.empty(0)
 
 
 def run_grid(

@@ -43,11 +43,15 @@ def percentile(values: np.ndarray, q: float) -> float:
     gives 2. Finite samples keep numpy's value to the last digit. With infinite ones
     the position is taken exactly (a rational: rounding must not make a neighbour of
     an exact hit), an exact hit is that sample, and between a finite and an infinite
-    sample the rule gives the infinite one.
+    sample the rule gives the infinite one. A NaN sample has no place in the order:
+    the percentile is NaN (sorted last, it read as a large value: p50 of ``[1, NaN, 3]``
+    was 3).
     """
     x = np.asarray(values, dtype=float).ravel()
     if np.all(np.isfinite(x)):
         return float(np.percentile(x, q))
+    if np.isnan(x).any():
+        return float("nan")
     x = np.sort(x)  # numpy sorts its own copy; only this path needs the order
     h = Fraction(q) * (x.size - 1) / 100
     lo = int(h)  # h >= 0

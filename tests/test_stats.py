@@ -52,3 +52,33 @@ def test_runs_that_never_settled_give_inf_statistics_not_nan():
     s = summary_stats([1.0, 2.0, np.inf], finite_only=False)
     assert s["p50"] == 2.0 and s["p90"] == np.inf and s["max"] == np.inf
     assert summary_stats([1.0, 2.0, np.inf])["p90"] == float(np.percentile([1.0, 2.0], 90))
+
+
+def test_a_nan_sample_makes_every_statistic_nan_when_kept():
+    """``finite_only=False`` keeps what is not finite: a NaN sample has no place in the
+    order, so no statistic (p50 of ``[1, NaN, 3]`` read 3, NaN sorted last)."""
+    import math
+
+    from kalman_vs_infoset.experiments.stats import percentile, summary_stats
+
+    values = np.array([1.0, np.nan, 3.0])
+    assert all(math.isnan(v) for v in summary_stats(values, finite_only=False).values())
+    assert math.isnan(percentile(values, 50.0)) and math.isnan(percentile(values, 0.0))
+    assert summary_stats(values)["p50"] == 2.0  # finite_only (the default) drops it
+
+
+def test_the_intercept_summary_keeps_a_value_that_is_not_finite():
+    """The intercept summary dropped a finished run's NaN miss from its statistics (the
+    mean over the others, "failures 0"); it now shows in them."""
+    import math
+
+    import pandas as pd
+    from kalman_vs_infoset.experiments.intercept_runs import summarise
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    df = pd.DataFrame(
+        {"status": "ok", "miss_m": [1.0, np.nan, 3.0], "fuel_mps": [1.0, 2.0, 3.0],
+         "truth_outside": 0, "contradictions": 0, "diverged": False}
+    )  # fmt: skip
+    out = summarise(df, load_scenario("kp_fig3"), "ekf", "random", 3, 0.0)
+    assert math.isnan(out["miss_m"]["mean"]) and out["fuel_mps"]["mean"] == 2.0
