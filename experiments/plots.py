@@ -45,8 +45,9 @@ def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
     runs without a value (NaN) that it leaves out, when there are any (the curve reached
     1 over the others while the label counted the whole group)."""
     failed = int((rows["status"] != "ok").sum()) if "status" in rows else 0
-    values = (rows[rows["status"] == "ok"] if "status" in rows else rows)[col]
-    values = values.to_numpy(dtype=float)
+    ok = rows[rows["status"] == "ok"] if "status" in rows else rows
+    # (a table whose every run failed has no column of results)
+    values = ok[col].to_numpy(dtype=float) if col in ok else np.empty(0)
     missing = int(np.isnan(values).sum())
     notes = [f"n={len(values) - missing}"]
     notes += [f"{failed} failed"] if failed else []
