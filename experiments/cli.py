@@ -215,6 +215,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 141
 
 
+def _discard_stdout() -> None:
+    """Point stdout at /dev/null: what is still buffered cannot be written either, and
+    the interpreter's last flush would print a second error."""
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
     """A warning as one line on stderr (e.g. a plug-in left out), not Python's two
     lines with the file and the source line."""
@@ -285,11 +291,20 @@ def _run(parser, module, args) -> int:
             raise
         print(f"{where}: {exc}", file=sys.stderr)
         return 1
-    if args.json:
-        print(json.dumps(_jsonable(result)))
-    else:
-        render = getattr(module, "render", None)
-        print(render(result) if render else _render_default(result))
+    try:
+        if args.json:
+            print(json.dumps(_jsonable(result)))
+        else:
+            render = getattr(module, "render", None)
+            print(render(result) if render else _render_default(result))
+        sys.stdout.flush()  # here, not at exit: a full device is said in one line
+    except BrokenPipeError:
+        raise  # the reader went away: main() stops quietly
+    except OSError as exc:  # e.g. stdout on a full disk; the results files are written
+        print(f"{where}: error: cannot write the output: {exc.strerror or exc}",
+              file=sys.stderr)  # fmt: skip
+        _discard_stdout()
+        return 2
     runner = sys.modules.get(_RUNNER)
     failed = runner.failed_runs() if runner is not None else 0
     if failed:

@@ -22,7 +22,7 @@ from typing import Any
 
 from kalman_vs_infoset.experiments import options
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.files import derived_write
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -119,7 +119,7 @@ def run(args) -> dict[str, Any]:
     stem = f"{base.name}-sweep-{key}"
     flat = pd.json_normalize(rows, sep="_")
     csv = out / f"{stem}.csv"
-    atomic_write(csv, lambda tmp: flat.to_csv(tmp, index=False))
+    derived_write(csv, lambda tmp: flat.to_csv(tmp, index=False))
     text = summary_markdown(rows, _LABELS) + paired.section(compared)
     files = [csv, write_text(out / f"{stem}.md", text)]
     title = f"{base.name}: {key} swept, {runs} paired runs per point"

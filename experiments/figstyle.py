@@ -34,7 +34,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
 import matplotlib.pyplot as plt  # noqa: E402
-from kalman_vs_infoset.experiments.files import atomic_write  # noqa: E402
+from kalman_vs_infoset.experiments.files import derived_write  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 #: Okabe & Ito (2008), "Color Universal Design"
@@ -224,7 +224,7 @@ def save(
     try:
         for i, (p, ext) in enumerate(zip(out, formats, strict=True)):
             # the temporary file's name ends in .tmp: the format is given, not guessed
-            atomic_write(p, partial(fig.savefig, format=ext, dpi=dpi))
+            derived_write(p, partial(fig.savefig, format=ext, dpi=dpi))
             if i == 0:  # laid out once: the other formats keep the positions (half the cost)
                 fig.set_layout_engine("none")
     finally:

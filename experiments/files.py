@@ -4,9 +4,11 @@ one writer per results file (an advisory lock beside it)."""
 from __future__ import annotations
 
 import errno
+import glob
 import os
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -25,10 +27,20 @@ def _umask() -> int:
 
 def atomic_write(path: Path, write: Callable[[str], object]) -> None:
     """Call ``write(tmp)`` on a temporary file beside ``path``, then ``os.replace`` it
-    onto ``path`` (atomic on POSIX and Windows); the temporary file never survives and
-    the file gets the permissions the umask gives new files."""
+    onto ``path`` (atomic on POSIX and Windows); the file gets the permissions the umask
+    gives new files.
+
+    The temporary file is hidden (``.<name>.<pid>.<random>.tmp``: Parquet readers of the
+    folder skip names starting with a dot) and removed on any error; one left by a
+    process that was killed meanwhile (``kill -9`` between the write and the rename) is
+    removed by the next write of the same file, once its process is gone (a complete
+    leftover table read as a second copy of its runs).
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name, suffix=".tmp", dir=path.parent)
+    _remove_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent
+    )
     os.close(fd)
     try:
         write(tmp)
@@ -38,6 +50,49 @@ def atomic_write(path: Path, write: Callable[[str], object]) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+#: what a read-only folder (or one without write permission) answers a write with
+_READ_ONLY = (errno.EROFS, errno.EACCES, errno.EPERM)
+
+
+def derived_write(path: Path, write: Callable[[str], object]) -> bool:
+    """:func:`atomic_write` of a file derived from the runs' own tables (a combined
+    table, a summary, a figure): in a folder the system refuses to write (read-only,
+    no permission) it is skipped with one warning, so that a complete, read-only
+    results folder can be summarised again. Returns whether the file was written. (A
+    runs' table is written with :func:`atomic_write`: a run that cannot be saved is an
+    error.)"""
+    try:
+        atomic_write(path, write)
+    except OSError as exc:
+        if exc.errno not in _READ_ONLY:
+            raise
+        warnings.warn(f"{path} not written ({exc.strerror}); the summary is printed",
+                      RuntimeWarning, stacklevel=2)  # fmt: skip
+        return False
+    return True
+
+
+def _remove_stale_temporaries(path: Path) -> None:
+    """Remove the temporary files of ``path`` whose writing process no longer runs."""
+    for tmp in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        pid = tmp.name[len(path.name) + 2 :].split(".", 1)[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            try:
+                tmp.unlink()
+            except OSError:  # removed meanwhile, or not ours to remove: harmless
+                pass
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process: it exists
+        return True
+    return True
 
 
 @contextmanager

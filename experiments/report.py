@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.files import derived_write
 
 
 def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:
@@ -41,10 +41,10 @@ def write_tables(df: pd.DataFrame, stem: Path) -> list[Path]:
     # appended, not with_suffix: names may hold dots (--set suffixes, "fig5.v2")
     pq, csv = (stem.parent / f"{stem.name}.{ext}" for ext in ("parquet", "csv"))
     write_table(pq, df, None, combined=True)
-    atomic_write(csv, lambda tmp: df.to_csv(tmp, index=False))
+    derived_write(csv, lambda tmp: df.to_csv(tmp, index=False))
     return [pq, csv]
 
 
 def write_text(path: Path, text: str) -> Path:
-    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    derived_write(path, lambda tmp: Path(tmp).write_text(text))
     return path

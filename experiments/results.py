@@ -23,7 +23,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 from kalman_vs_infoset.experiments.errors import InputError
-from kalman_vs_infoset.experiments.files import atomic_write
+from kalman_vs_infoset.experiments.files import atomic_write, derived_write
 
 #: the key of the results' description in a table's Parquet key-value metadata
 METADATA_KEY = b"kalman_vs_infoset"
@@ -62,7 +62,9 @@ def write_table(
     if combined:
         kv[COMBINED_KEY] = b"1"
     table = table.replace_schema_metadata(kv)
-    atomic_write(Path(path), lambda tmp: pq.write_table(table, tmp))
+    # a combined table is derived from the runs' tables: not written in a read-only folder
+    writer = derived_write if combined else atomic_write
+    writer(Path(path), lambda tmp: pq.write_table(table, tmp))
 
 
 def read_metadata(path: str | Path) -> dict[str, Any]:

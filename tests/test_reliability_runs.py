@@ -377,3 +377,17 @@ def test_a_reader_that_goes_away_stops_the_command_quietly():
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 141, err
     assert err == ""
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_output_to_a_full_device_is_one_line_not_a_traceback():
+    """``kvi scenarios > /dev/full``: the summary cannot be written. It said nothing and
+    exited 1 (the interpreter's last flush), or printed a traceback for a longer output;
+    it is one line and exit status 2, as an output path the system refuses."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([*KVI, "scenarios"], stdout=full, stderr=subprocess.PIPE, text=True,
+                           timeout=120)  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines() == [
+        "kvi scenarios: error: cannot write the output: No space left on device"
+    ]
