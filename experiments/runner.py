@@ -338,8 +338,8 @@ def _check_resumable(
         ) from None
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
-    here = json.loads(json.dumps({k: v for k, v in meta.items() if k != "code"}))
-    there = {k: v for k, v in old.items() if k != "code"}
+    here = _what_decides_a_run(json.loads(json.dumps(meta)))
+    there = _what_decides_a_run(old)
     if there != here:
         key, a, b = _first_difference(there, here)
         raise InputError(
@@ -364,6 +364,23 @@ def _check_resumable(
         f"{meta['code']['sources_sha256'][:12]}); {fix}, or run them again with "
         "--rerun-other-code"
     )
+
+
+#: scenario fields that decide which runs to make, not what a run gives: the intercept
+#: scenario's [experiment] table (runs, seed, estimator and noise; the table's own seed,
+#: estimator and noise are in its name and description) and the description text. A
+#: study extended through the file (runs = 50 -> 1000) resumes as with --runs.
+NOT_A_RUNS_CONDITION = ("experiment", "description")
+
+
+def _what_decides_a_run(meta: dict[str, Any]) -> dict[str, Any]:
+    """A results description without its code and the scenario fields that do not
+    change a run (:data:`NOT_A_RUNS_CONDITION`): what a resume must find the same."""
+    out = {k: v for k, v in meta.items() if k != "code"}
+    if isinstance(out.get("scenario"), dict):
+        scenario = out["scenario"]
+        out["scenario"] = {k: v for k, v in scenario.items() if k not in NOT_A_RUNS_CONDITION}
+    return out
 
 
 def _plugin_text(identity: dict | None) -> str:

@@ -438,6 +438,27 @@ def test_rerun_other_code_replaces_only_the_runs_of_other_code(short, tmp_path, 
     assert r.returncode == 2 and "different scenario" in r.stderr and path.read_bytes() == stored
 
 
+def test_a_study_extended_through_the_file_resumes(short, tmp_path, capsys):
+    """``[experiment] runs = 4`` edited to 5 (and the description edited) resumes as
+    ``--runs 5`` does: the four runs are kept, one is made. It was refused as "results
+    of a different scenario (scenario.experiment.runs: 4 in the file, 5 now)", and the
+    fix offered, deleting the file, lost the finished runs. A change of what a run
+    gives (here the model) is still refused."""
+    out = tmp_path / "out"
+    text = short.read_text()
+    assert "runs = 4" in text
+    args = ("intercept", short, "--out", out, "--no-progress", "--json")
+    assert cli_inproc(capsys, *args).returncode == 0
+    short.write_text('description = "now longer"\n' + text.replace("runs = 4", "runs = 5"))
+    r = cli_inproc(capsys, *args)
+    assert r.returncode == 0, r.stderr
+    assert "4 runs of 5 already in" in r.stderr
+    assert json.loads(r.stdout.splitlines()[-1])["runs"] == 5
+    short.write_text(text.replace("nominal_range_km = 1000.0", "nominal_range_km = 999.0"))
+    r = cli_inproc(capsys, *args)
+    assert r.returncode == 2 and "different scenario" in r.stderr
+
+
 def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tmp_path, capsys):
     """``--set range_finder.enabled=false`` resolves to the same scenario as the file
     with that line edited (the name aside, which gets a ``+key=value`` suffix), gives

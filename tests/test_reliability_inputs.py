@@ -245,15 +245,19 @@ def test_a_foreign_table_with_a_bad_run_column_is_refused(short, tmp_path, capsy
 
 
 def test_a_resume_refusal_names_the_changed_field(tmp_path, capsys):
+    """A field that changes what a run gives is named with both values. (The
+    description and the [experiment] table do not change a run: a resume takes them,
+    ``test_a_study_extended_through_the_file_resumes``.)"""
     p = tmp_path / "short.toml"
-    p.write_text(SHORT.replace('name = "short"', 'name = "short"\ndescription = "one"'))
+    p.write_text(SHORT)
     out = tmp_path / "out"
     args = ["intercept", p, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
     assert run(capsys, *args).returncode == 0
-    p.write_text(SHORT.replace('name = "short"', 'name = "short"\ndescription = "two"'))
+    p.write_text(SHORT.replace("nominal_range_km = 1000.0", "nominal_range_km = 999.0"))
     r = run(capsys, *args)
     assert one_line_error(r), r.stderr
-    assert "scenario.description" in r.stderr and "'one'" in r.stderr and "'two'" in r.stderr
+    assert "scenario.model.nominal_range_km" in r.stderr
+    assert "1000.0" in r.stderr and "999.0" in r.stderr
 
 
 def test_a_refused_scheduler_leaves_nothing_behind(short, tmp_path, capsys, monkeypatch):
