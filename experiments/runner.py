@@ -47,7 +47,12 @@ from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the parser's bounds
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity, estimator_identity
-from kalman_vs_infoset.experiments.results import existing_sidecar, sidecar_path, write_table
+from kalman_vs_infoset.experiments.results import (
+    existing_sidecar,
+    read_metadata,
+    sidecar_path,
+    write_table,
+)
 
 SAVE_EVERY_S = 2.0
 
@@ -237,7 +242,10 @@ def run_job(
             todo = [j for j in range(runs) if table.get(j, {}).get("status") != "ok"]
             retried = sum(j in table for j in todo)
             kept = runs - len(todo)
-            if kept:
+            if kept and not todo:  # another command finished them while this one waited
+                print(f"{job.desc}: all {runs_text(runs)} already in {path}: none run",
+                      file=sys.stderr)  # fmt: skip
+            elif kept:
                 print(f"{job.desc}: {runs_text(kept)} of {runs} already in {path}: running "
                       f"the other {len(todo)}", file=sys.stderr)  # fmt: skip
             if retried:
@@ -333,9 +341,13 @@ def _check_resumable(
     try:
         old = json.loads(meta_path.read_text())
     except (OSError, ValueError):
-        raise InputError(
-            f"{path}: no readable {meta_path.name} to check it against; {fix}"
-        ) from None
+        # the table carries the same description in its own metadata (lost or damaged
+        # JSON beside it need not cost the runs)
+        old = read_metadata(path) or None
+        if old is None:
+            raise InputError(
+                f"{path}: no readable {meta_path.name} to check it against; {fix}"
+            ) from None
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
     here = _what_decides_a_run(json.loads(json.dumps(meta)))

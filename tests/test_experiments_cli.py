@@ -438,6 +438,30 @@ def test_rerun_other_code_replaces_only_the_runs_of_other_code(short, tmp_path, 
     assert r.returncode == 2 and "different scenario" in r.stderr and path.read_bytes() == stored
 
 
+@pytest.mark.parametrize("damage", ["deleted", "truncated"])
+def test_a_lost_description_is_read_from_the_table_itself(short, tmp_path, damage):
+    """The ``_meta`` JSON deleted or damaged: the resume was refused ("delete the
+    file"), losing the runs, while the table carries the same description in its own
+    metadata. It is checked against that, resumes, and the JSON is written again; a
+    table of another scenario is still refused through it."""
+    sc = load_scenario(short)
+    run_experiment(sc, "infoset", "random", 2, 11, tmp_path, workers=1, progress=False)
+    path = intercept_runs.results_path(tmp_path, sc, "infoset", "random", 11)
+    meta_path = tmp_path / "_meta" / f"{path.stem}.json"
+    meta = meta_path.read_text()
+    if damage == "deleted":
+        meta_path.unlink()
+    else:
+        meta_path.write_text(meta[: len(meta) // 2])
+    done = run_experiment(sc, "infoset", "random", 3, 11, tmp_path, workers=1, progress=False)
+    assert sorted(done["run"]) == [0, 1, 2]
+    assert json.loads(meta_path.read_text()) == json.loads(meta)
+    meta_path.unlink()
+    other = sc.model_copy(update={"model": sc.model.model_copy(update={"dt_s": 0.25})})
+    with pytest.raises(runner.InputError, match="different scenario"):
+        run_experiment(other, "infoset", "random", 4, 11, tmp_path, workers=1, progress=False)
+
+
 def test_a_study_extended_through_the_file_resumes(short, tmp_path, capsys):
     """``[experiment] runs = 4`` edited to 5 (and the description edited) resumes as
     ``--runs 5`` does: the four runs are kept, one is made. It was refused as "results

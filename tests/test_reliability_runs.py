@@ -391,3 +391,31 @@ def test_output_to_a_full_device_is_one_line_not_a_traceback():
     assert r.stderr.strip().splitlines() == [
         "kvi scenarios: error: cannot write the output: No space left on device"
     ]
+
+
+def test_runs_another_command_finished_while_this_one_waited_are_said_once(
+    short, tmp_path, capsys, monkeypatch
+):
+    """A command that waited on the lock while another finished every run said
+    "2 runs of 2 already in ...: running the other 0"; it says "all 2 runs already in
+    ...: none run", as a resume with nothing left does."""
+    import contextlib
+    import shutil
+
+    from kalman_vs_infoset.experiments import runner
+
+    done = tmp_path / "done"
+    assert run(capsys, "intercept", short, "--runs", 2, "--workers", 1, "--no-progress",
+               "--out", done).returncode == 0  # fmt: skip
+    out = tmp_path / "out"
+
+    @contextlib.contextmanager
+    def other_command_finishes_first(path, what):
+        shutil.copytree(done, out, dirs_exist_ok=True)  # what the other command wrote
+        yield
+
+    monkeypatch.setattr(runner, "exclusive", other_command_finishes_first)
+    r = run(capsys, "intercept", short, "--runs", 2, "--workers", 1, "--no-progress",
+            "--out", out)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "all 2 runs already in" in r.stderr and "running the other" not in r.stderr
