@@ -19,6 +19,8 @@ DERIVED = {
     "chunk": r"(\d+) for the vectorised attitude loops",
     "worker": r"without a live worker for (\d+) s",
     "paired": r"with their mean\s+and (\d+) % confidence interval",
+    "save": r"is saved every (\d+) s while runs finish .{1,120}? loses the runs of its "
+    r"last (\d+) s",
 }
 
 INPUTS = (
@@ -54,6 +56,7 @@ def test_the_usage_pages_limits_are_the_codes():
         executors,
         options,
         paired,
+        runner,
     )
     from kalman_vs_infoset.experiments.cli import build_parser
     from kalman_vs_infoset.experiments.sim import intercept_config
@@ -70,3 +73,5 @@ def test_the_usage_pages_limits_are_the_codes():
     assert executors.NO_WORKER_TIMEOUT_S == float(wait)
     (level,) = printed(DOC, DERIVED["paired"])
     assert paired.CONFIDENCE == int(level) / 100
+    every, lost = printed(DOC, DERIVED["save"])
+    assert runner.SAVE_EVERY_S == float(every) == float(lost)
