@@ -128,6 +128,8 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "empty_set": int((ok["contradictions"] > 0).sum()) if len(ok) else 0,
         # beliefs reported Status.DIVERGED: emptied, so guidance stopped early
         "diverged": int(ok["diverged"].sum()) if len(ok) else 0,
+        # steps the law had no bounded forecast to centre (no impulse)
+        "unbounded_steps": int(ok["unbounded_steps"].sum()) if "unbounded_steps" in ok else 0,
         "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
         "wall_s": float(wall_s),
     }

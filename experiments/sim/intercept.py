@@ -145,6 +145,9 @@ class EngagementResult:
     #: node slices outer-simplified past the set's vertex cap (sound; 0 if none or
     #: if the estimator keeps no polygons)
     simplified_slices: int = 0
+    #: channel steps whose belief's forecast interval was unbounded: no impulse for
+    #: want of a centre (the attitude loops count theirs alike)
+    unbounded_steps: int = 0
 
     def as_row(self) -> dict[str, Any]:
         row = {k: v for k, v in self.__dict__.items() if k not in ("truth0", "extras")}
@@ -210,7 +213,7 @@ class Engagement:
         options = hooks(sc.estimator.options_for(estimator_name))
         self.check_floor_m += options.containment_margin_m(sc.estimator.x_km, model.e, self.dt)
         self.fuel = 0.0
-        self.n_imp = self.outside = self.checked = self.step_index = 0
+        self.n_imp = self.outside = self.checked = self.step_index = self.unbounded = 0
         self.issued: list[float] = []
         self.max_steps = int(math.ceil(pos_km[0] * 1e3 / model.e / self.dt * 2)) + 10
         self.result: EngagementResult | None = None
@@ -264,7 +267,8 @@ class Engagement:
             )
         ks = []
         for b in beliefs:
-            k = self.law.impulse_mps(b, self.fuel)
+            k, bounded = self.law.decide(b, self.fuel)
+            self.unbounded += not bounded
             self.fuel += abs(k)
             self.n_imp += k != 0.0
             if k != 0.0:
@@ -348,6 +352,7 @@ class Engagement:
             truth0=tuple(float(v) for v in self.truth0),
             extras=extras,
             simplified_slices=int(sum(getattr(b, "n_simplified", 0) for b in self.beliefs)),
+            unbounded_steps=int(self.unbounded),
         )
 
 

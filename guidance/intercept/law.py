@@ -64,13 +64,24 @@ class ForecastCentringLaw:
         is empty or its forecast interval is unbounded (no centre to move: a sound set
         may be unbounded where it cannot bound a cell, and an impulse computed from inf
         would be nan)."""
+        return self._command(belief)[0]
+
+    def _command(self, belief: Belief) -> tuple[float, bool]:
+        """:meth:`command_mps` and whether the forecast was bounded (an empty belief
+        asks for nothing: bounded)."""
         if belief.is_empty:
-            return 0.0
+            return 0.0, True
         ext = self.forecast(belief)
         x_sum = float(ext.argmin[2] + ext.argmax[2])
         k = -(ext.min_value + ext.max_value) * self.model.e / x_sum
-        return float(k) if np.isfinite(k) else 0.0
+        return (float(k), True) if np.isfinite(k) else (0.0, False)
 
     def impulse_mps(self, belief: Belief, fuel_used_mps: float) -> float:
         """The impulse issued: the command with the limits and the reserve applied."""
-        return self.limits.apply(self.command_mps(belief), fuel_used_mps)
+        return self.decide(belief, fuel_used_mps)[0]
+
+    def decide(self, belief: Belief, fuel_used_mps: float) -> tuple[float, bool]:
+        """:meth:`impulse_mps`, and whether the belief's forecast interval was bounded
+        (False: no impulse, for want of a centre; the engagement counts such steps)."""
+        k, bounded = self._command(belief)
+        return self.limits.apply(k, fuel_used_mps), bounded
