@@ -182,3 +182,16 @@ def test_filterpy_agrees_only_when_f_is_the_identity():
             fp.predict()
         np.testing.assert_allclose(fp.P, ps[-1], rtol=1e-10)  # P always agrees
         assert np.allclose(fp.x.ravel(), xs[-1], rtol=1e-10) == agrees
+
+
+def test_a_filter_that_runs_off_is_reported_diverged_not_a_failed_run():
+    """``estimator.hinf.theta=0.999999`` (accepted: theta < 1) let the mean run off to
+    ~1e308 and every run failed with ``OverflowError`` in the EKF's Jacobian. The
+    Gaussian filters now report such a prediction as ``Status.DIVERGED`` (the belief is
+    emptied and guidance stops on its channel), as the sets do, and the run completes."""
+    import kalman_vs_infoset as kvi
+
+    sc = kvi.load_scenario("kp_fig5", estimator={"hinf": {"theta": 0.999999}})
+    row = kvi.run_engagement(sc, "hinf", "random", run=0).as_row()
+    assert row["diverged"] and row["final_status"] == "diverged"
+    assert kvi.run_engagement("kp_fig5", "hinf", "random", run=0).as_row()["diverged"] is False

@@ -163,7 +163,8 @@ class GaussianBelief(Belief):
     # -- Belief interface ------------------------------------------------------------
     @property
     def is_empty(self) -> bool:
-        return self.status is Status.TERMINAL
+        # terminal (every state under eps) or diverged (emptied: reported, not propagated)
+        return self.status in (Status.TERMINAL, Status.DIVERGED)
 
     def trace_fields(self) -> dict[str, float]:
         """The gate (``n_sigma``) and the innovations outside it so far."""

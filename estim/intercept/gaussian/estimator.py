@@ -278,7 +278,9 @@ class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior
         self, belief: GaussianBelief, dt_s: float, control: float | Impulse | None = None
     ) -> GaussianBelief:
         """The impulse ``control`` at the step's start (:meth:`_impulse`), the threshold
-        (:meth:`threshold`), then the propagation over ``dt_s`` (exact map, ``Q``)."""
+        (:meth:`threshold`), then the propagation over ``dt_s`` (exact map, ``Q``). A
+        propagation that overflows or is not finite (a filter that ran off) gives the
+        belief with status ``Status.DIVERGED``: empty, reported, not propagated."""
         check_step(dt_s)
         self._check(belief)
         if control is not None:
@@ -286,6 +288,23 @@ class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior
         belief = self.threshold(belief, dt_s)
         if belief.is_empty:
             return belief
+        try:
+            mean, cov = self._moments(belief, dt_s)
+        except OverflowError:  # the mean ran off to ~1e308 (an unstable gain, theta near 1)
+            return replace(belief, status=Status.DIVERGED)
+        if not (np.isfinite(mean).all() and np.isfinite(cov).all()):
+            return replace(belief, status=Status.DIVERGED)  # emptied and reported
+        bounds = belief.x_bounds_m
+        if bounds is not None:  # the true range moves at any speed of the interval
+            e_lo, e_hi = self.speed_interval
+            bounds = (bounds[0] - e_hi * dt_s, bounds[1] - e_lo * dt_s)
+        # the map moves x at the nominal e, inside the interval's speeds, but the
+        # threshold's truncation (and an e outside [e_lo, e_hi]) can push the mean out
+        return self.constrain(replace(belief, mean=mean, cov=cov, x_bounds_m=bounds))
+
+    def _moments(self, belief: GaussianBelief, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance propagated over ``dt_s`` (the EKF's Jacobian or the UKF's
+        sigma points through the exact map, plus ``Q``)."""
         x0 = float(belief.mean[2])
         q = self.process_noise(x0, dt_s)
 
@@ -309,13 +328,7 @@ class KalmanChannelEstimator(ChannelMaps, Estimator[GaussianBelief, ChannelPrior
             if known.any():
                 f.P[known, :] = 0.0
                 f.P[:, known] = 0.0
-        bounds = belief.x_bounds_m
-        if bounds is not None:  # the true range moves at any speed of the interval
-            e_lo, e_hi = self.speed_interval
-            bounds = (bounds[0] - e_hi * dt_s, bounds[1] - e_lo * dt_s)
-        # the map moves x at the nominal e, inside the interval's speeds, but the
-        # threshold's truncation (and an e outside [e_lo, e_hi]) can push the mean out
-        return self.constrain(replace(belief, mean=f.x, cov=f.P, x_bounds_m=bounds))
+        return f.x, f.P
 
     def _impulse(self, belief: GaussianBelief, control: float | Impulse) -> GaussianBelief:
         """Impulse ``k`` (m/s, relative velocity): ``omega -> omega + k/x``.
