@@ -17,17 +17,10 @@ on first use, so that ``import kalman_vs_infoset`` stays light)::
     result = kvi.run_engagement(sc, "infoset", "random", run=0)   # = kvi intercept run 0
 """
 
-from importlib import metadata as _metadata
-
 from kalman_vs_infoset import _numba_cache
 
 # before numba is imported: its cache goes to a user folder when the sources are read-only
 _numba_cache.configure()
-
-try:
-    __version__ = _metadata.version("kalman-vs-infoset")
-except _metadata.PackageNotFoundError:  # a source tree that is not installed
-    __version__ = "0+unknown"
 
 #: the front door's names (:mod:`kalman_vs_infoset.api`), re-exported lazily
 _API = (
@@ -50,7 +43,20 @@ _API = (
 __all__ = ["__version__", *_API]
 
 
+def _version() -> str:
+    # read on first use: importlib.metadata is most of this package's import time (and
+    # a Ctrl-C while the command starts lands there before its handlers are in place)
+    from importlib import metadata
+
+    try:
+        return metadata.version("kalman-vs-infoset")
+    except metadata.PackageNotFoundError:  # a source tree that is not installed
+        return "0+unknown"
+
+
 def __getattr__(name: str):
+    if name == "__version__":
+        return _version()
     if name in _API:
         from kalman_vs_infoset import api
 

@@ -102,3 +102,20 @@ def test_a_light_command_runs_without_the_numerical_stack():
     loaded, runner = json.loads(out[-2]), out[-1]
     assert not {"numba", "matplotlib", "filterpy", "pandas"} & set(loaded), loaded
     assert runner == "False"
+
+
+def test_the_command_lines_module_loads_before_the_package_metadata():
+    """``importlib.metadata`` (email, sockets: most of the package's import time) is read
+    when the version is asked for, inside the command's signal handling, not while the
+    command line's module loads: a Ctrl-C in the first tens of milliseconds printed a
+    traceback from there."""
+    code = (
+        "import sys\n"
+        "import kalman_vs_infoset.experiments.cli\n"
+        "print('importlib.metadata' in sys.modules)\n"
+        "import kalman_vs_infoset\n"
+        "print(kalman_vs_infoset.__version__ != '')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120).stdout.split()  # fmt: skip
+    assert out == ["False", "True"]
