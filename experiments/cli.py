@@ -291,6 +291,10 @@ def _run(parser, module, args) -> int:
             raise
         print(f"{where}: {exc}", file=sys.stderr)
         return 1
+    if sys.stdout is None:  # started with stdout closed (`>&-`): the summary has nowhere to go
+        print(f"{where}: error: cannot write the output: standard output is closed",
+              file=sys.stderr)  # fmt: skip
+        return 2
     try:
         if args.json:
             print(json.dumps(_jsonable(result)))

@@ -419,3 +419,14 @@ def test_runs_another_command_finished_while_this_one_waited_are_said_once(
             "--out", out)  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "all 2 runs already in" in r.stderr and "running the other" not in r.stderr
+
+
+def test_a_closed_standard_output_is_one_line_not_a_lost_summary():
+    """``kvi scenarios >&-``: Python starts without ``sys.stdout``; the summary was
+    dropped without a word (exit 0), then a traceback from the flush. One line, exit 2."""
+    r = subprocess.run([*KVI, "scenarios"], stderr=subprocess.PIPE, text=True, timeout=120,
+                       preexec_fn=lambda: os.close(1))  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines() == [
+        "kvi scenarios: error: cannot write the output: standard output is closed"
+    ]
