@@ -9,6 +9,7 @@ code identity).
 from __future__ import annotations
 
 import gc
+import json
 import os
 import signal
 import sys
@@ -169,6 +170,16 @@ def _check_workers_code(client, scheduler: str) -> None:
                 f"Dask worker {worker} runs other code (sources {h[:12]}, here {here[:12]}); "
                 "install the same version on every worker"
             )
+    # a plug-in both sides have must be the same version (one a worker lacks fails its
+    # runs there, by name, as an unknown estimator)
+    mine = provenance.plugins_identity()
+    for worker, plugins in sorted(client.run(provenance.plugins_identity).items()):
+        for key in sorted(set(mine) & set(plugins)):
+            if json.dumps(plugins[key], sort_keys=True) != json.dumps(mine[key], sort_keys=True):
+                raise InputError(
+                    f"Dask worker {worker} runs another version of the estimator plug-in "
+                    f"{key.split('/', 1)[1]!r}; install the same version on every worker"
+                )
 
 
 @contextmanager

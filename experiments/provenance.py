@@ -105,6 +105,21 @@ def estimator_identity(problem: str, name: str) -> dict | None:
     }
 
 
+def plugins_identity() -> dict[str, dict]:
+    """:func:`estimator_identity` of every registered plug-in estimator, by
+    ``problem/name`` (run on each Dask worker, so that a worker with another version of
+    a plug-in is refused as one with other package sources is)."""
+    from kalman_vs_infoset.estim import registry
+
+    out = {}
+    for problem in registry.PROBLEMS:
+        for name in registry.names(problem):
+            identity = estimator_identity(problem, name)
+            if identity is not None:
+                out[f"{problem}/{name}"] = identity
+    return out
+
+
 def _git_commit() -> str | None:
     """The commit of the package's own sources: the git checkout they are the top of
     (an editable install), else the commit pip recorded for an install from a git URL

@@ -72,3 +72,32 @@ def test_a_resume_refuses_runs_of_an_edited_plug_in(plugin, tmp_path):
     with pytest.raises(InputError, match="another version of the estimator 'toyplug'"):
         run(3)
     assert len(run(3, rerun_other_code=True)) == 3  # every run again, with the new code
+
+
+class _Cluster:
+    """What ``_check_workers_code`` asks a Dask client: each worker's answer to a function
+    (here the client's own sources, and the plug-ins the test gives each worker)."""
+
+    def __init__(self, plugins_by_worker):
+        self.plugins_by_worker = plugins_by_worker
+
+    def run(self, fn):
+        from kalman_vs_infoset.experiments import provenance
+
+        if fn is provenance.sources_sha256:
+            return dict.fromkeys(self.plugins_by_worker, provenance.sources_sha256())
+        return dict(self.plugins_by_worker)
+
+
+def test_a_dask_worker_with_another_version_of_a_plug_in_is_refused(plugin):
+    """The workers' package sources were compared, not a plug-in's: a worker with
+    another version of it would have written its runs under this process's identity."""
+    from kalman_vs_infoset.experiments.executors import _check_workers_code
+    from kalman_vs_infoset.experiments.provenance import plugins_identity
+
+    mine = plugins_identity()
+    assert "intercept/toyplug" in mine
+    _check_workers_code(_Cluster({"w1": mine, "w2": {}}), "tcp://x")  # same, or lacking
+    other = {**mine["intercept/toyplug"], "sources_sha256": "0" * 64}
+    with pytest.raises(InputError, match="w2 runs another version of the estimator plug-in"):
+        _check_workers_code(_Cluster({"w1": mine, "w2": {"intercept/toyplug": other}}), "x")
