@@ -211,7 +211,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         # the reader has what it wanted: stop quietly, as shell tools do (128 + SIGPIPE);
         # stdout goes to /dev/null so that the interpreter's last flush does not fail too
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _discard_stdout()
         return 141
 
 

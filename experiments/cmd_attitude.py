@@ -31,7 +31,7 @@ from kalman_vs_infoset.experiments.attitude_loops import (
     loop_of,
     same_loop,
 )
-from kalman_vs_infoset.experiments.errors import InputError, runs_text
+from kalman_vs_infoset.experiments.errors import InputError, runs_text, stat_text
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
 if TYPE_CHECKING:  # the runs' libraries are imported by run(), not to parse
@@ -235,22 +235,17 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
     return files
 
 
-def _stat(value: float | None, fmt: str) -> str:
-    """A statistic as printed: ``-`` when no run gave one (``None`` after JSON, NaN
-    before: every run failed), ``inf`` when a run that never settled enters it."""
-    return "-" if value is None or value != value else format(value, fmt)
-
-
 def _summary(r: dict[str, Any]) -> list[str]:
     """One row's lines, as the intercept command prints its runs."""
     s, e, a = r["settle_time_s"], r["energy_N2m2s"], r["final_angle_deg"]
+    st = stat_text  # the lines below print a dozen statistics
     lines = [
         f"{r['scenario']}: {r['controller']} on {r['estimator']} / {r['noise']} noise, "
         f"{runs_text(r['runs'])}, seed {r['seed']}",
-        f"  settle s            mean {_stat(s['mean'], '.2f')}  p90 {_stat(s['p90'], '.2f')}  "
-        f"max {_stat(s['max'], '.2f')}  (not settled: {runs_text(r.get('not_settled', 0))})",
-        f"  energy N^2 m^2 s    mean {_stat(e['mean'], '.4g')}  max {_stat(e['max'], '.4g')}",
-        f"  final angle deg     mean {_stat(a['mean'], '.3g')}  max {_stat(a['max'], '.3g')}",
+        f"  settle s            mean {st(s['mean'], '.2f')}  p90 {st(s['p90'], '.2f')}  "
+        f"max {st(s['max'], '.2f')}  (not settled: {runs_text(r.get('not_settled', 0))})",
+        f"  energy N^2 m^2 s    mean {st(e['mean'], '.4g')}  max {st(e['max'], '.4g')}",
+        f"  final angle deg     mean {st(a['mean'], '.3g')}  max {st(a['max'], '.3g')}",
         f"  truth outside belief: {r['truth_outside']} steps; empty: {r['empty_steps']} "
         f"steps; unbounded: {r['unbounded_steps']} steps; failures: {r['failures']}",
     ]

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, stat_text
 from kalman_vs_infoset.experiments.files import atomic_write
 from kalman_vs_infoset.experiments.noise import NOISE_KINDS
 from kalman_vs_infoset.experiments.options import (
@@ -302,8 +302,7 @@ def render(result: dict[str, Any]) -> str:
             f"{result['truth_w_m'][i]:10.2f} | {result['ratio'][i]:5.3f} | "
             f"{str(result['exact_inside'][i]):6s} | {result['lp_s'][i]:5.1f}"
         )
-    top = result["max_ratio"]
-    top_text = "-" if top is None or top != top else f"{top:.4f}"  # none: no time compared
-    lines.append(f"  max ratio {top_text}; files: " + ", ".join(result["files"]))
+    top = stat_text(result["max_ratio"], ".4f")  # "-": no time compared
+    lines.append(f"  max ratio {top}; files: " + ", ".join(result["files"]))
     lines.append(f"  ({result['wall_s']:.1f} s)")
     return "\n".join(lines)

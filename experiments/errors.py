@@ -24,6 +24,12 @@ def runs_text(n: int) -> str:
     return f"{n} run" if n == 1 else f"{n} runs"
 
 
+def stat_text(value: float | None, fmt: str) -> str:
+    """A statistic as the summaries print it: ``-`` when no run gave one (``None`` after
+    JSON, NaN before), else formatted (``inf`` for a run that never settled)."""
+    return "-" if value is None or value != value else format(value, fmt)
+
+
 class InputError(Exception):
     """Bad user input: a missing file, bad TOML, an unknown key, a value out of range.
 

@@ -9,7 +9,6 @@ code identity).
 from __future__ import annotations
 
 import gc
-import json
 import os
 import signal
 import sys
@@ -175,7 +174,7 @@ def _check_workers_code(client, scheduler: str) -> None:
     mine = provenance.plugins_identity()
     for worker, plugins in sorted(client.run(provenance.plugins_identity).items()):
         for key in sorted(set(mine) & set(plugins)):
-            if json.dumps(plugins[key], sort_keys=True) != json.dumps(mine[key], sort_keys=True):
+            if plugins[key] != mine[key]:
                 raise InputError(
                     f"Dask worker {worker} runs another version of the estimator plug-in "
                     f"{key.split('/', 1)[1]!r}; install the same version on every worker"

@@ -212,9 +212,7 @@ def run_job(
     if path.exists() and not _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
-            # resumed with nothing left to run: say so (the output is otherwise the same)
-            print(f"{job.desc}: all {runs_text(runs)} already in {path}: none run",
-                  file=sys.stderr)  # fmt: skip
+            _say_all_done(job, runs, path)  # the output is otherwise the same
             return _reported(job, path, table, runs)
     made = [d for d in (path.parent, *path.parent.parents) if not d.exists()]
     try:
@@ -243,8 +241,7 @@ def run_job(
             retried = sum(j in table for j in todo)
             kept = runs - len(todo)
             if kept and not todo:  # another command finished them while this one waited
-                print(f"{job.desc}: all {runs_text(runs)} already in {path}: none run",
-                      file=sys.stderr)  # fmt: skip
+                _say_all_done(job, runs, path)
             elif kept:
                 print(f"{job.desc}: {runs_text(kept)} of {runs} already in {path}: running "
                       f"the other {len(todo)}", file=sys.stderr)  # fmt: skip
@@ -322,6 +319,11 @@ def _read_json(path: Path) -> Any:
         return None
 
 
+def _say_all_done(job: Job, runs: int, path: Path) -> None:
+    """A resume with nothing left to run says so, in one line on stderr."""
+    print(f"{job.desc}: all {runs_text(runs)} already in {path}: none run", file=sys.stderr)
+
+
 def _code(job: Job) -> dict[str, Any]:
     """The code that writes a job's results: the package's, and a plug-in estimator's."""
     code: dict[str, Any] = dict(code_identity())
@@ -350,7 +352,8 @@ def _check_resumable(
             ) from None
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
-    here = _what_decides_a_run(json.loads(json.dumps(meta)))
+    now = json.loads(json.dumps(meta))  # as the file holds it (JSON types)
+    here = _what_decides_a_run(now)
     there = _what_decides_a_run(old)
     if there != here:
         key, a, b = _first_difference(there, here)
@@ -359,7 +362,7 @@ def _check_resumable(
         )
     before = (old.get("code") or {}).get("sources_sha256")
     plugin_then = (old.get("code") or {}).get("estimator")
-    plugin_now = json.loads(json.dumps(meta["code"].get("estimator")))
+    plugin_now = now["code"].get("estimator")
     if before == meta["code"]["sources_sha256"] and plugin_then == plugin_now:
         return False
     if rerun_other_code:

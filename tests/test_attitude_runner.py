@@ -122,7 +122,7 @@ def test_the_text_summary_has_one_block_per_estimator_and_noise(scenario, tmp_pa
 def test_a_statistic_without_runs_prints_a_dash_and_never_settled_prints_inf():
     """``-`` when no run gave the statistic (NaN: every run failed; ``None``: after
     JSON), ``inf`` when a run that never settled enters it (it printed ``nan``)."""
-    from kalman_vs_infoset.experiments.cmd_attitude import _stat
+    from kalman_vs_infoset.experiments.errors import stat_text
 
-    assert _stat(float("nan"), ".2f") == "-" and _stat(None, ".2f") == "-"
-    assert _stat(float("inf"), ".2f") == "inf" and _stat(12.345, ".2f") == "12.35"
+    assert stat_text(float("nan"), ".2f") == "-" and stat_text(None, ".2f") == "-"
+    assert stat_text(float("inf"), ".2f") == "inf" and stat_text(12.345, ".2f") == "12.35"

@@ -402,7 +402,7 @@ class ConvexPolygons:
         rel = self.xy - self.xy[self.offsets[:-1][owner]]
         cr = rel[:, 0] * rel[nxt, 1] - rel[nxt, 0] * rel[:, 1]
         # float64 in, float64 out (numpy's stubs only promise a floating type)
-        return cast(FloatArray, 0.5 * np.bincount(self.owner(), weights=cr, minlength=self.n))
+        return cast(FloatArray, 0.5 * np.bincount(owner, weights=cr, minlength=self.n))
 
     def size_fields(self, scale_radm: float, n_sections: int, n_simplified: int = 0) -> dict:
         """A polygon set's size for a trace (``Belief.trace_fields``): live sections,
