@@ -3,8 +3,8 @@
 A consumer (the intercept engagement, the attitude loops, the command line) never
 names a concrete estimator class: it asks the registry for a name's
 :class:`Registration`, validates the options with the registration's options model
-(pydantic, ``extra="forbid"``: an intercept scenario's ``[estimator.<name>]`` table; the
-attitude loops take the defaults) and builds the estimator.
+(pydantic, ``extra="forbid"``: an intercept scenario's ``[estimator.<name>]`` table, an
+attitude scenario's ``[estimator_options.<name>]``) and builds the estimator.
 
 Where registrations come from:
 

@@ -157,7 +157,7 @@ def simulate_turn(
     j, j_inv = body.inertia_kgm2, body.inertia_inv
     noisy = rng is not None
     model = estimator_model(setup, noise)
-    loop = EstimatorLoop(estimator, model)
+    loop = EstimatorLoop(estimator, model, setup.estimator_options)
     d_bound = model.disturbance_bound_Nm
 
     beta = setup.beta0_rad.copy()

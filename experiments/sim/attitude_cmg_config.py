@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
+from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
 from kalman_vs_infoset.experiments.sim.fields import (
     Table,
     Vector2,
@@ -127,7 +128,7 @@ class NoiseTable(Table):
     )
 
 
-class CmgScenario(Table):
+class CmgScenario(AttitudeEstimatorTables):
     """A validated Resurs-P scenario (every table with its defaults)."""
 
     name: str = field("", "scenario name; names the result files (default resurs_p)")

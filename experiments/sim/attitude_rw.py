@@ -166,7 +166,7 @@ def simulate_runs(
     x0 = initial_states(config, rngs)
     n = len(rngs)
     model = estimator_model(config)
-    loop = EstimatorLoop(estimator, model)
+    loop = EstimatorLoop(estimator, model, config.estimator_options)
     d = config.noise.disturbance_Nm
     const_dist = (
         np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))

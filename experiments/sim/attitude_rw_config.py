@@ -17,6 +17,7 @@ import math
 from typing import Annotated, Literal, overload
 
 import numpy as np
+from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
 from kalman_vs_infoset.experiments.sim.fields import (
     Table,
     Vector3,
@@ -142,7 +143,7 @@ class NoiseTable(Table):
     )
 
 
-class RwScenario(Table):
+class RwScenario(AttitudeEstimatorTables):
     """A validated reaction-wheel scenario (every table with its defaults)."""
 
     name: str = field("", "scenario name; names the result files")

@@ -11,7 +11,9 @@ point is not a set). Any estimator registered for the problem ``"attitude"``
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
@@ -32,10 +34,14 @@ NOISES = ("none", "random", "game")
 class EstimatorLoop:
     """One registered attitude estimator run over a batch of runs (``name`` None: the
     one whose registration declares the role ``exact``, the measurement read as the
-    state, as the seeds' loops assume)."""
+    state, as the seeds' loops assume), built with its table of ``options`` (its
+    registered model's defaults for the fields not given)."""
 
     name: str | None
     model: AttitudeModel
+    #: the scenario's ``[estimator_options.<name>]`` tables (None: every estimator's
+    #: defaults); the loop's estimator takes its own table
+    options: Mapping[str, Mapping[str, Any]] | None = None
     estimator: Estimator = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -45,7 +51,8 @@ class EstimatorLoop:
             reg = registry.get("attitude", str(self.name))
         except KeyError as exc:
             raise ValueError(exc.args[0]) from None
-        object.__setattr__(self, "estimator", reg.build(None, self.model))
+        table = (self.options or {}).get(str(self.name))
+        object.__setattr__(self, "estimator", reg.build(dict(table or {}), self.model))
 
     def start(self, meas: AttitudeMeasurement) -> AttitudeBelief:
         return self.estimator.initial(AttitudePrior(meas))

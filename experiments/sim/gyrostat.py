@@ -31,8 +31,9 @@ errors, uniform within ``meas_angle``, ``meas_rate``, ``meas_rotor`` per axis.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.attitude.model import (
@@ -63,7 +64,8 @@ DISTURBANCES = ("none", "random", "constant", "adversarial")
 
 @dataclass(frozen=True)
 class LoopConfig:
-    """Sampling, integration and settle criterion of the closed loop."""
+    """Sampling, integration and settle criterion of the closed loop, and the
+    estimators' options."""
 
     period_s: float = 0.05
     substeps: int = 1
@@ -73,6 +75,8 @@ class LoopConfig:
     meas_angle_rad: float = 0.0
     meas_rate_radps: float = 0.0
     meas_rotor_radps: float = 0.0
+    #: the scenario's ``[estimator_options.<name>]`` tables (the loop's estimator takes its own)
+    estimator_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.period_s > 0 or not self.horizon_s > self.period_s:
@@ -191,7 +195,7 @@ def simulate_turn(
     n = int(np.ceil(cfg.horizon_s / cfg.period_s))
     h, dt = cfg.period_s, cfg.period_s / cfg.substeps
     model = gyrostat_model(gyro, beta, cfg)
-    loop = EstimatorLoop(estimator, model)
+    loop = EstimatorLoop(estimator, model, cfg.estimator_options)
     noisy = max(cfg.meas_angle_rad, cfg.meas_rate_radps, cfg.meas_rotor_radps) > 0
     a_mom, j_rot, b_mom = gyro.A_kgm2, gyro.rotor_J_kgm2, gyro.body_moments_kgm2
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
 import numpy as np
+from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
 from kalman_vs_infoset.experiments.sim.fields import (
     Table,
     Vector3,
@@ -118,7 +119,7 @@ class SimulationTable(Table):
     )
 
 
-class GyrostatScenario(Table):
+class GyrostatScenario(AttitudeEstimatorTables):
     """A validated gyrostat scenario (every table with its defaults)."""
 
     name: str | None = field(None, "scenario name; names the result files (default: the file)")
@@ -201,6 +202,7 @@ class GyrostatSetup:
             meas_angle_rad=np.radians(sim.meas_angle_deg) if noisy else 0.0,
             meas_rate_radps=np.radians(sim.meas_rate_degps) if noisy else 0.0,
             meas_rotor_radps=sim.meas_rotor_radps if noisy else 0.0,
+            estimator_options=config.estimator_options,
         )
         law = GameLaw(design.a_star, rho, h, mode=sim.switching)
         label = config.name if config.name is not None else name

@@ -30,17 +30,17 @@ from kalman_vs_infoset.estim.intercept.model import (
     ChannelSetting,
 )
 from kalman_vs_infoset.experiments.noise import NOISES, Noise  # noqa: F401 - the intercept's noise kinds
+from kalman_vs_infoset.experiments.sim.estimator_tables import check_option_tables
 from kalman_vs_infoset.experiments.sim.fields import (
     NONNEGATIVE,
     Interval,
     Table,
     field,
-    first_error,
     float_bounds,
     int_bounds,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
-from pydantic import BaseModel, Field, ValidationError, model_validator
+from pydantic import BaseModel, Field, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
@@ -335,8 +335,7 @@ class InterceptScenario(Table):
                     f"field 'truth.{key}' {list(inner)} must lie inside 'estimator.{key}' "
                     f"{list(outer)} (the a-priori box must contain the truth)"
                 )
-        for name, table in e.options.items():
-            _check_options(name, table)
+        check_option_tables("intercept", "estimator", e.options)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
                 "field 'kalman_vs_infoset.guidance.min_impulse_mps' must be <= max_impulse_mps"
@@ -414,15 +413,3 @@ def closing_interval_kmps(given: Any, model_kmps: Any) -> Any:
     the truth's default closing velocity, which is filled in before validation (so
     ``given`` may still be raw, even malformed, data there: its field reports it)."""
     return given if given is not None else (model_kmps, model_kmps)
-
-
-def _check_options(name: str, table: dict[str, Any]) -> None:
-    """An ``[estimator.<name>]`` table, validated by its estimator's options model."""
-    try:
-        reg = registry.get("intercept", name)
-    except KeyError as exc:
-        raise ValueError(f"table 'estimator.{name}': {exc.args[0]}") from None
-    try:
-        reg.options.model_validate(table)
-    except ValidationError as exc:
-        raise ValueError(first_error(exc, f"estimator.{name}.", reg.options)) from None

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
@@ -44,7 +44,8 @@ from kalman_vs_infoset.estim.attitude.model import (
 from kalman_vs_infoset.estim.base import PointBelief
 from kalman_vs_infoset.estim.intercept.model import BearingBound, ChannelModel, Impulse
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
-from kalman_vs_infoset.experiments.sim.fields import Table, Vector3, Vector6, float_bounds
+from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
+from kalman_vs_infoset.experiments.sim.fields import Vector3, Vector6, float_bounds
 from kalman_vs_infoset.experiments.sim.fields import field as declared
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
@@ -59,8 +60,10 @@ _POS = Annotated[float, float_bounds(0.0, open_lo=True)]
 _BOUND = Annotated[float, float_bounds(0.0, 1.0, open_lo=True)]
 
 
-class PointingConfig(Table):
+class PointingConfig(AttitudeEstimatorTables):
     """The ``[attitude]`` table of an intercept scenario: the loop holding the axis."""
+
+    options_prefix: ClassVar[str] = "attitude.estimator_options"
 
     inertia_kgm2: Vector3[_POS] = declared((40.0, 50.0, 60.0), "principal inertia, kg m^2")
     controller: Literal["pd", "lqr"] = declared("pd", "quaternion PD or LQR")
@@ -153,7 +156,7 @@ class PointingLoop:
             body=body,
             law=law,
             wheels=ReactionWheels(t.torque_max_Nm, t.momentum_max_Nms),
-            loop=EstimatorLoop(t.estimator, model),
+            loop=EstimatorLoop(t.estimator, model, t.estimator_options),
             period_s=t.control_period_s,
             disturbance=t.disturbance,
             rng=rng,

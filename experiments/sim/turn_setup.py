@@ -4,7 +4,9 @@ a typed scenario by :meth:`TurnSetup.from_config`."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario, EulerTable
@@ -36,6 +38,8 @@ class TurnSetup:
     rate_tol_degps: float = 0.02
     game_disturbance_Nm: float = 0.0
     name: str = "resurs_p"
+    #: the scenario's ``[estimator_options.<name>]`` tables (the loop's estimator takes its own)
+    estimator_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     body: RigidBody = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -94,6 +98,7 @@ class TurnSetup:
             rate_tol_degps=config.rate_tol_degps,
             game_disturbance_Nm=no.game_disturbance_Nm,
             name=config.name or "resurs_p",
+            estimator_options=config.estimator_options,
         )
 
     @property

@@ -1,0 +1,53 @@
+"""Each estimator's own options in a scenario: one table per estimator name, validated
+by the options model its registration declares (:mod:`kalman_vs_infoset.estim.registry`).
+
+An intercept scenario holds them as ``[estimator.<name>]``
+(:class:`~kalman_vs_infoset.experiments.sim.intercept_config.EstimatorTable`), an attitude
+scenario as ``[estimator_options.<name>]`` (:class:`AttitudeEstimatorTables`: its
+``estimator`` key names the estimator); ``--set`` reaches both.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from kalman_vs_infoset.estim import registry
+from kalman_vs_infoset.experiments.sim.fields import Table, field, first_error
+from pydantic import ValidationError, model_validator
+
+#: the options tables of a scenario, by estimator name
+OptionTables = dict[str, dict[str, Any]]
+
+
+def check_option_tables(problem: str, prefix: str, tables: Mapping[str, Any]) -> None:
+    """Validate every ``[<prefix>.<name>]`` table by estimator ``name``'s options model
+    (``ValueError``: one line naming the table or the field)."""
+    for name, table in tables.items():
+        try:
+            reg = registry.get(problem, name)
+        except KeyError as exc:
+            raise ValueError(f"table '{prefix}.{name}': {exc.args[0]}") from None
+        try:
+            reg.options.model_validate(table)
+        except ValidationError as exc:
+            raise ValueError(first_error(exc, f"{prefix}.{name}.", reg.options)) from None
+
+
+class AttitudeEstimatorTables(Table):
+    """The attitude estimators' own options of an attitude scenario (a base of its
+    table): ``[estimator_options.ukf] gate_prob = 0.99``; the fields each estimator
+    takes are its registered options model's (``kvi attitude --help`` lists the
+    estimators)."""
+
+    #: where the tables sit in the scenario file (for the error lines)
+    options_prefix: ClassVar[str] = "estimator_options"
+
+    estimator_options: OptionTables = field(
+        {}, "[estimator_options.<name>] tables: an attitude estimator's own options"
+    )
+
+    @model_validator(mode="after")
+    def _valid_options(self) -> AttitudeEstimatorTables:
+        check_option_tables("attitude", self.options_prefix, self.estimator_options)
+        return self
