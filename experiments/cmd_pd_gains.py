@@ -46,10 +46,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     settle = (
         ("--angle-tol-deg", d.angle_tol_deg, "settled when |angle| stays under this, deg"),
         ("--rate-tol-degps", d.rate_tol_degps, "... and |rate| under this, deg/s"),
-        ("--grid-step", d.grid_step, f"step of the gain grids, {d.grid_lo:g} to {d.grid_hi:g}"),
+        ("--grid-step", d.grid_step, f"step of the gain grids, which run from {d.grid_lo:g} "
+         f"to {d.grid_hi:g}"),
         ("--control-period-s", d.control_period_s, "control sample period (zero-order hold), s"),
-        ("--horizon-s", d.horizon_s, f"simulated time of a turn, s; a case not settled "
-         f"{d.hold_s:g} s before its end counts as never"),
+        ("--horizon-s", d.horizon_s, f"simulated time of a turn, s, more than {d.hold_s:g}; a "
+         f"case not settled {d.hold_s:g} s before its end counts as never"),
     )  # fmt: skip
     for flag, default, text in settle:
         parser.add_argument(flag, type=float, default=default, help=f"{text} (default %(default)g)")
@@ -106,6 +107,12 @@ def _check_cost(args: argparse.Namespace) -> None:
         if not (np.isfinite(value) and value > 0):
             name = "--" + flag.replace("_", "-")
             raise InputError(f"{name} {value:g}: must be a finite positive number")
+    d = gs.StudySettings()
+    if not args.horizon_s > d.hold_s:
+        raise InputError(
+            f"--horizon-s {args.horizon_s:g}: must be more than {d.hold_s:g} s (a case counts "
+            f"as settled only if it still is {d.hold_s:g} s before the end)"
+        )
     steps = args.horizon_s / args.control_period_s
     if steps < 1:
         raise InputError(
@@ -117,7 +124,6 @@ def _check_cost(args: argparse.Namespace) -> None:
             f"--horizon-s {args.horizon_s:g} / --control-period-s {args.control_period_s:g} "
             f"= {steps:.3g} control steps a case; the limit is {MAX_STEPS}"
         )
-    d = gs.StudySettings()
     grid = (d.grid_hi - d.grid_lo) / args.grid_step + 1
     if grid > MAX_GRID or grid * grid * steps > MAX_WORK:
         raise InputError(
@@ -160,6 +166,15 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     f0_by_angle: dict[float, float] = {}
     for a in tqdm(fit_angles, desc="f0(phi0)", file=sys.stderr, disable=None):
         f0_by_angle[a] = gs.f0_for_angle(a, settings)
+    found = [a for a, f in f0_by_angle.items() if np.isfinite(f)]
+    if len(found) < 4:
+        # an angle has no f0 when its map has no efficient curve to fit (every case
+        # unsettled, or each row's best on the grid's edge): the settings, not a failure
+        raise InputError(
+            f"f0 was found at {len(found)} of {len(fit_angles)} angles; the fit of eq. (28) "
+            f"needs 4 (a finer --grid-step than {settings.grid_step:g} or a longer "
+            f"--horizon-s than {settings.horizon_s:g} gives more)"
+        )
     fit = gs.fit_f0_curve(list(f0_by_angle), list(f0_by_angle.values()), settings.quaternion_term)
     result: dict[str, Any] = {
         "f0": {text: f0_by_angle[v] for text, v in angles},
@@ -187,15 +202,23 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     return result
 
 
+#: the seed's gains of the 150 deg turn (Fig. 12): k_q, k_w
+SEED_GAINS = (1.375, 2.625)
+
+
 def _map_summary(smap: gs.SettleMap) -> dict[str, Any]:
-    i = int(np.argmin(np.abs(smap.k_w - 2.625)))
-    j = int(np.argmin(np.abs(smap.k_q - 1.375)))
+    """The map's numbers: the seed's gains simulated themselves (not the grid point
+    nearest to them, which a coarse ``--grid-step`` moves), the efficient ``k_q`` on
+    the grid row nearest ``k_w = 2.625``, and the grid's best."""
+    kq, kw = SEED_GAINS
+    i = int(np.argmin(np.abs(smap.k_w - kw)))
     jbest = int(np.argmin(smap.time_s[i]))
     ib, jb = np.unravel_index(int(np.argmin(smap.time_s)), smap.time_s.shape)
+    turn = smap.settings.turn_rad(smap.phi0_deg)
     return {
         "phi0_deg": smap.phi0_deg,
         "inertia_kgm2": smap.settings.inertia_kgm2,
-        "seed_gains_settle_s": float(smap.time_s[i, j]),
+        "seed_gains_settle_s": float(gs.settle_times(turn, kq, kw, smap.settings)),
         "efficient_kq_at_kw_2.625": float(smap.k_q[jbest]),
         "efficient_settle_at_kw_2.625_s": float(smap.time_s[i, jbest]),
         "grid_min_settle_s": float(smap.time_s[ib, jb]),

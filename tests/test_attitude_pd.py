@@ -1,5 +1,8 @@
 """Quaternion PD with reaction wheels and its gain study (seed 001, docs/models.md §2.2)."""
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from kalman_vs_infoset.guidance.attitude import gain_study as gs
@@ -19,6 +22,8 @@ from kalman_vs_infoset.guidance.attitude.wheels import (
     simulate_closed_loop,
 )
 from scipy.spatial.transform import Rotation
+
+ROOT = Path(__file__).resolve().parents[1]
 
 J = 1.5
 M_MAX, L_MAX = 0.0275, 0.2
@@ -131,3 +136,18 @@ def test_seed_rule_29_beats_baseline_rule_10():
     t = fig15_times(angles, 1.0, fit, settings)
     assert np.all(np.isfinite(t["fitted"]))
     assert np.all(t["fitted"] < t["baseline"])
+
+
+@pytest.mark.parametrize("grid_step", [1.0, 0.5])
+def test_pd_gains_seed_gains_are_simulated_not_read_off_a_coarse_grid(grid_step):
+    """Seed Fig. 12's gains (k_q 1.375, k_w 2.625) lie on the default grid (step
+    0.025), where the published map reads their settle time; a coarser grid gave its
+    nearest point's time instead (37.83 s at step 1)."""
+    from dataclasses import replace
+
+    from kalman_vs_infoset.experiments.cmd_pd_gains import _map_summary
+
+    published = json.loads((ROOT / "docs/results/attitude/pd_gains.json").read_text())
+    assert published["settings"]["grid_step"] == 0.025
+    smap = gs.settle_time_map(150.0, replace(gs.MANEUVER_150, grid_step=grid_step))
+    assert _map_summary(smap)["seed_gains_settle_s"] == published["map"]["seed_gains_settle_s"]

@@ -309,3 +309,17 @@ def test_attitude_figures_of_two_estimators_do_not_replace_each_other(tiny_rw, t
         assert r.returncode == 0, r.stderr
     names = {p.name for p in out.rglob("*-history.png")}
     assert names == {f"tiny_rw-pd-{e}-random-s0-history.png" for e in ("perfect", "box")}
+
+
+def test_pd_gains_horizon_within_the_hold_is_refused(tmp_path, capsys):
+    """A horizon of at most the 5-s hold named the hidden ``hold_s`` before."""
+    err = _refused(capsys, tmp_path / "out", "pd-gains", "--angles-deg", "1", "--horizon-s", "5")
+    assert "--horizon-s 5" in err and "hold_s" not in err
+
+
+def test_pd_gains_grid_too_coarse_for_the_fit_is_one_line(tmp_path, capsys):
+    """A grid with no efficient curve at any angle leaves eq. (28) nothing to fit: one
+    line naming the options (a traceback from the fit before)."""
+    err = _refused(capsys, tmp_path / "out", "pd-gains", "--angles-deg", "1",
+                   "--grid-step", "2", "--no-figures")  # fmt: skip
+    assert "--grid-step" in err and "eq. (28)" in err
