@@ -173,6 +173,35 @@ class AttitudePrior:
     measurement: AttitudeMeasurement
 
 
+@dataclass(frozen=True)
+class RateComponent:
+    """The body rate about one axis, ``w[axis]`` (rad/s), of states ``(..., 7)``
+    (``q`` then ``w``): the function whose :meth:`AttitudeBelief.extremes` every
+    attitude belief gives. It is linear in the rate coordinates, so a box's vertices
+    hold its extremes; the quaternion's components are not monotone in the attitude
+    error, and a belief refuses them (``TypeError``) rather than return inner values."""
+
+    axis: int
+
+    def __post_init__(self) -> None:
+        if self.axis not in (0, 1, 2):
+            raise ValueError(f"axis must be 0, 1 or 2, got {self.axis!r}")
+
+    def __call__(self, states: ArrayLike) -> FloatArray:
+        return np.asarray(states, dtype=float)[..., 4 + self.axis]
+
+
+def rate_component(fn: object, belief: str) -> RateComponent:
+    """``fn`` if it is a :class:`RateComponent`, else ``TypeError``: a set of attitudes
+    bounds no other function by its vertices (their values are not extremes)."""
+    if not isinstance(fn, RateComponent):
+        raise TypeError(
+            f"{belief} bounds RateComponent only (a function's values at its vertices are "
+            f"not its extremes in general); got {type(fn).__name__}"
+        )
+    return fn
+
+
 class AttitudeBelief(Belief):
     """Beliefs about ``(q, w)`` of a batch of ``R`` runs (one estimator, paired runs):
     what an attitude loop asks besides the :class:`~estim.base.Belief` questions."""

@@ -66,6 +66,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
     check_step,
+    rate_component,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -300,8 +301,10 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         return np.concatenate([q, w], axis=-1)
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the vertices of run 0's box (exact for functions
-        monotone in each error coordinate, e.g. linear ones of ``(e, w)``)."""
+        """Min and max of a :class:`RateComponent` over run 0's box, at its vertices
+        (exact: the rate is a coordinate of the box); any other function is refused
+        with ``TypeError``."""
+        fn = rate_component(fn, "the attitude box")
         pts = self.vertices()
         vals = np.asarray(fn(pts), dtype=float)
         i, j = int(np.argmin(vals)), int(np.argmax(vals))

@@ -51,6 +51,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    rate_component,
 )
 from kalman_vs_infoset.estim.attitude.sets.maps import (
     NoEnclosure,
@@ -170,8 +171,10 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         return np.where(np.all(np.isfinite(hr[:, :3]), axis=-1), bound, np.inf)
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over the 64 vertices of run 0's hull (an outer range of
-        ``S``; exact for functions monotone in each error coordinate over the hull)."""
+        """Min and max of a :class:`RateComponent` over the 64 vertices of run 0's hull
+        (an outer range over ``S``: the hull's rate interval); any other function is
+        refused with ``TypeError``."""
+        fn = rate_component(fn, "an attitude set")
         hc, hr = self.hull()
         signs = np.array(list(product((-1.0, 1.0), repeat=6)))
         x = hc[0] + signs * hr[0]

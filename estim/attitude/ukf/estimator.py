@@ -55,6 +55,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudePrior,
     NeverEmptyBelief,
     check_step,
+    rate_component,
     rk4_attitude,
 )
 from kalman_vs_infoset.estim.attitude.ukf.options import DEFAULTS
@@ -152,20 +153,19 @@ class UkfAttitudeBelief(NeverEmptyBelief):
         return self.gate * np.sqrt(np.linalg.eigvalsh(self.cov[:, 0:3, 0:3])[:, -1])
 
     def extremes(self, fn: StateFunction) -> Extremes:
-        """Min and max of ``fn`` over points of run 0's gate ellipsoid (its 12 axis
-        points and 64 diagonal directions; exact for functions linear in ``(a, w)``
-        only along those directions)."""
-        n = DIM_Z
-        lo = np.linalg.cholesky(self.cov[0, 0:n, 0:n])
-        dirs = [np.eye(n), -np.eye(n)]
-        signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * n)).reshape(n, -1).T / np.sqrt(n)
-        u = np.concatenate([*dirs, signs])
-        pts_err = self.mean[0, 0:n] + self.gate * u @ lo.T
-        q = qmul(np.broadcast_to(self.q_ref[0], (len(u), 4)), qexp(pts_err[:, 0:3]))
+        """Min and max of a :class:`RateComponent` over run 0's gate ellipsoid, in
+        closed form: ``w_i = m_i +- gate sqrt(P_ii)``, attained at ``m +- gate P e_i /
+        sqrt(P_ii)`` (``m``, ``P``: the error state's mean and covariance, rate
+        coordinates ``3..5``); any other function is refused with ``TypeError``."""
+        fn = rate_component(fn, "the UKF's gate ellipsoid")
+        k = 3 + fn.axis
+        cov = self.cov[0, 0:DIM_Z, 0:DIM_Z]
+        step = self.gate * cov[:, k] / np.sqrt(cov[k, k])
+        pts_err = self.mean[0, 0:DIM_Z] + np.stack([-step, step])
+        q = qmul(np.broadcast_to(self.q_ref[0], (2, 4)), qexp(pts_err[:, 0:3]))
         pts = np.concatenate([q, pts_err[:, 3:6]], axis=-1)
-        vals = np.asarray(fn(pts), dtype=float)
-        i, j = int(np.argmin(vals)), int(np.argmax(vals))
-        return Extremes(float(vals[i]), pts[i], float(vals[j]), pts[j])
+        vals = fn(pts)
+        return Extremes(float(vals[0]), pts[0], float(vals[1]), pts[1])
 
 
 def _with(belief: UkfAttitudeBelief, **changes: Any) -> UkfAttitudeBelief:
