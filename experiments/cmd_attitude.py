@@ -43,7 +43,11 @@ COMPILED_KERNELS = True
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", help=options.SCENARIO_HELP)
-    parser.add_argument("--controller", default=None, help="one of " + ", ".join(LOOPS))
+    parser.add_argument(
+        "--controller",
+        default=None,
+        help="one of " + ", ".join(LOOPS) + " (default: the scenario's 'controller')",
+    )
     options.add_noise(parser, NOISES, None, "none")
     parser.add_argument("--runs", type=options.runs_int, default=1,
                         help="number of runs (default 1)")  # fmt: skip
@@ -82,6 +86,10 @@ class AttitudeRequest:
 
 
 def _choice(value: Any, what: str, source: str) -> str | None:
+    if what == "estimator" and isinstance(value, dict):  # the intercept's [estimator.<name>]
+        from kalman_vs_infoset.experiments.sim.estimator_tables import not_a_table
+
+        raise InputError(f"{source}: {not_a_table()}")
     if value is not None and not isinstance(value, str):
         raise InputError(f"{source}: field '{what}' must be a string")
     return value

@@ -103,3 +103,16 @@ def test_a_bad_table_of_the_pointing_loop_names_its_place():
     }
     with pytest.raises(Exception, match=r"attitude\.estimator_options\.box\.abs_inflation_rad"):
         parse_scenario(data)
+
+
+def test_an_intercept_style_estimator_table_points_at_estimator_options(tmp_path, capsys):
+    """``--set estimator.box.x=1`` (the intercept's form) read "field 'estimator' must be
+    a string"; the line now names the table the options go in."""
+    assert main(["attitude", "smallsat_rw", "--set", "estimator.box.abs_inflation_rad=1e-9",
+                 "--out", str(tmp_path / "o")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "its options are the table [estimator_options.<name>]" in err
+    data = _toml("kp_fig3_attitude")
+    data["attitude"] = {**data["attitude"], "estimator": {"box": {}}}
+    with pytest.raises(Exception, match=r"\[attitude\.estimator_options\.<name>\]"):
+        parse_scenario(data)

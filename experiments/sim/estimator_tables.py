@@ -34,6 +34,17 @@ def check_option_tables(problem: str, prefix: str, tables: Mapping[str, Any]) ->
             raise ValueError(first_error(exc, f"{prefix}.{name}.", reg.options)) from None
 
 
+def not_a_table(options_prefix: str = "estimator_options") -> str:
+    """The line for an attitude scenario given ``[estimator.<name>]`` tables (the
+    intercept's form): its ``estimator`` is a name, the options sit at
+    ``options_prefix``."""
+    where = options_prefix.removesuffix("estimator_options")
+    return (
+        f"field '{where}estimator' is the estimator's name; its options are the table "
+        f"[{options_prefix}.<name>]"
+    )
+
+
 class AttitudeEstimatorTables(Table):
     """The attitude estimators' own options of an attitude scenario (a base of its
     table): ``[estimator_options.ukf] gate_prob = 0.99``; the fields each estimator
@@ -46,6 +57,15 @@ class AttitudeEstimatorTables(Table):
     estimator_options: OptionTables = field(
         {}, "[estimator_options.<name>] tables: an attitude estimator's own options"
     )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _estimator_is_a_name(cls, data: Any) -> Any:
+        """``[estimator.<name>]`` is the intercept's form: here ``estimator`` is a name
+        and the options have their own table (said, instead of "must be a string")."""
+        if isinstance(data, dict) and isinstance(data.get("estimator"), dict):
+            raise ValueError(not_a_table(cls.options_prefix))
+        return data
 
     @model_validator(mode="after")
     def _valid_options(self) -> AttitudeEstimatorTables:
