@@ -257,8 +257,17 @@ def _load_plugin(entry: metadata.EntryPoint) -> None:
         )
 
 
+def _known(problem: str) -> str:
+    """``problem`` if it is one of :data:`PROBLEMS`, else ``ValueError`` naming them (a
+    misspelt or swapped argument listed no estimator, or called a name unknown)."""
+    if problem not in PROBLEMS:
+        raise ValueError(f"unknown problem {problem!r} (allowed: {', '.join(PROBLEMS)})")
+    return problem
+
+
 def names(problem: str) -> tuple[str, ...]:
     """Registered names of a problem, by listing rank (then registration order)."""
+    _known(problem)
     _load()
     regs = [r for (p, _), r in _REGISTRY.items() if p == problem]
     return tuple(r.name for r in sorted(regs, key=lambda r: r.rank))
@@ -266,13 +275,16 @@ def names(problem: str) -> tuple[str, ...]:
 
 def registrations(problem: str) -> tuple[Registration, ...]:
     """The registrations of a problem, by listing rank (then registration order)."""
+    _known(problem)
     _load()
     regs = [r for (p, _), r in _REGISTRY.items() if p == problem]
     return tuple(sorted(regs, key=lambda r: r.rank))
 
 
 def get(problem: str, name: str) -> Registration:
-    """The registration of ``name``; KeyError naming the allowed names otherwise."""
+    """The registration of ``name``; KeyError naming the allowed names otherwise
+    (ValueError for a problem not in :data:`PROBLEMS`)."""
+    _known(problem)
     _load()
     try:
         return _REGISTRY[(problem, name)]
@@ -283,6 +295,7 @@ def get(problem: str, name: str) -> Registration:
 
 def reference(problem: str) -> Registration:
     """The problem's reference estimator (the first registered with ``reference=True``)."""
+    _known(problem)
     _load()
     for (p, _), reg in _REGISTRY.items():
         if p == problem and reg.reference:
@@ -294,6 +307,7 @@ def with_role(problem: str, role: str) -> tuple[Registration, ...]:
     """The registrations of ``problem`` that declare ``role``, by listing rank."""
     if role not in ROLES:
         raise ValueError(f"unknown role {role!r}; allowed: {', '.join(ROLES)}")
+    _known(problem)
     _load()
     regs = [r for (p, _), r in _REGISTRY.items() if p == problem and role in r.roles]
     return tuple(sorted(regs, key=lambda r: r.rank))

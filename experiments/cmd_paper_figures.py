@@ -117,7 +117,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--only",
         default=None,
-        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat, lqr)",
+        help="comma-separated figure names or groups (kp, resurs, akimov, gyrostat, lqr); "
+        "a figure's name draws every figure of its group (they share its runs)",
     )
     p.add_argument(
         "--quick",

@@ -249,6 +249,10 @@ def run(args) -> dict[str, Any]:
     return result
 
 
+#: the width ratio the node set keeps with bearings only, drawn as a reference line
+TARGET_RATIO = 1.03
+
+
 def _write(result: dict[str, Any], stem: Path) -> list[Path]:
     from kalman_vs_infoset.experiments import figstyle
     from kalman_vs_infoset.experiments.plots import plt  # Agg backend
@@ -259,13 +263,18 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
     if rows:
         t, slo, shi, elo, ehi, w, ratio = (np.array(c, float) for c in zip(*rows, strict=True))
         dx = 0.012 * (np.ptp(t) + 10.0)  # the two bars side by side
-        ax.vlines(t - dx, slo - w, shi - w, lw=6, color="C0", alpha=0.6, label="estimator's set")
-        ax.vlines(t + dx, elo - w, ehi - w, lw=6, color="C3", alpha=0.8, label="exact set")
-        ax.plot(t, 0 * t, "k_", ms=14, label="truth")
+        colour = figstyle.estimator_colour(result["estimator"])
+        label = figstyle.words(result["estimator"])
+        ax.vlines(t - dx, slo - w, shi - w, lw=6, color=colour, alpha=0.7, label=f"{label}: set")
+        ax.vlines(t + dx, elo - w, ehi - w, lw=6, color=figstyle.REFERENCE, alpha=0.8,
+                  label="exact set (LP)")  # fmt: skip
+        ax.plot(t, 0 * t, "_", color=figstyle.TRUTH, ms=14, label="truth")
         ax.set_yscale("symlog", linthresh=10.0)
-        ax_r.plot(t, ratio, "o-", color="C0", label="estimator / exact width")
-        ax_r.axhline(1.0, color="k", lw=0.8)
-        ax_r.axhline(1.1, color="C2", ls="--", lw=0.8, label="1.10")
+        ax_r.plot(t, ratio, "o-", color=colour, label=f"{label} / exact width")
+        ax_r.axhline(1.0, color=figstyle.TRUTH, lw=0.8)
+        # the node set's bound on unseen seeds with bearings only (docs/infoset.md)
+        ax_r.axhline(TARGET_RATIO, color=figstyle.REFERENCE, ls="--", lw=0.8,
+                     label=f"{TARGET_RATIO:g}: the node set's target")  # fmt: skip
     ax.set_xlabel("time, s")
     ax.set_ylabel("zero-effort miss w minus the truth's, m")
     ax_r.set_xlabel("time, s")

@@ -214,8 +214,9 @@ def add_trace(p: argparse.ArgumentParser) -> None:
         type=parse_runs,
         default=None,
         metavar="RUNS",
-        help="record the per-step history of these runs (e.g. 0,3) as <results>-trace.parquet "
-        "in the _traces folder beside the run tables, and draw their figures",
+        help=f"record the per-step history of these runs (e.g. 0,3; at most {MAX_TRACED}) as "
+        "<results>-trace.parquet in the _traces folder beside the run tables, and draw "
+        "their figures",
     )
 
 

@@ -347,6 +347,11 @@ def get_estimator(name: str, problem: str = "intercept") -> Registration:
     >>> get_estimator("ukf").options.model_fields["n_sigma"].default
     3.0
     """
+    if name in registry.PROBLEMS and problem not in registry.PROBLEMS:
+        raise ValueError(
+            f"get_estimator takes (name, problem): got name {name!r} and problem {problem!r} "
+            f"(registry.get takes (problem, name))"
+        )
     return registry.get(problem, name)
 
 

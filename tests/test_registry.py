@@ -171,3 +171,17 @@ def _attitude_contract(est: Estimator) -> None:
     assert b1.empty_counts.shape == (2,) and b1.attitude_bound_rad().shape == (2,)
     assert np.all(np.isfinite(b1.attitude_bound_rad()))
     np.testing.assert_array_equal(b0.centre(), centre)
+
+
+def test_an_unknown_problem_is_named_not_an_empty_list():
+    """``registry.get("nosuch", "intercept")`` (arguments swapped) read "unknown nosuch
+    estimator 'intercept' (allowed: )"; an unknown problem is now a ValueError naming
+    the problems, and the front door's ``get_estimator(name, problem)`` says its order."""
+    from kalman_vs_infoset.api import get_estimator
+
+    for call in (lambda: registry.get("nosuch", "ukf"), lambda: registry.names("Intercept")):
+        with pytest.raises(ValueError, match="unknown problem .*allowed: intercept, attitude"):
+            call()
+    with pytest.raises(ValueError, match=r"get_estimator takes \(name, problem\)"):
+        get_estimator("intercept", "nosuch")
+    assert get_estimator("ukf", "attitude").name == "ukf"

@@ -106,3 +106,19 @@ def test_set_filters_contain_the_truth_for_50_steps(seed):
     # all three stay bounded (none of them blows up over 50 steps)
     for fam in (ell, zon, box):
         assert np.all(np.diff(np.array(fam.interval_hull()), axis=0) < 2.0)
+
+
+def test_a_sum_of_two_families_is_a_type_error_and_a_bad_method_a_value_error():
+    """``Box.minkowski_sum(Zonotope)`` raised AttributeError ('no attribute lo') and
+    ``Zonotope.contains(method="foo")`` was taken for ``"auto"``."""
+    from kalman_vs_infoset.estim.common.sets import Box, Ellipsoid, Zonotope
+
+    box = Box([0.0, 0.0], [1.0, 1.0])
+    zon, ell = Zonotope.from_box([0.0, 0.0], [1.0, 1.0]), Ellipsoid.ball([0.0, 0.0], 1.0)
+    for a, b in ((box, zon), (zon, ell), (ell, box)):
+        with pytest.raises(TypeError, match="minkowski_sum takes"):
+            a.minkowski_sum(b)
+    with pytest.raises(ValueError, match="method must be"):
+        zon.contains([0.5, 0.5], method="foo")
+    for s in (box, zon, ell):  # plain floats, as annotated
+        assert all(type(v) is float for v in s.extremes([1.0, 2.0]))

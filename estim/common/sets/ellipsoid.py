@@ -127,6 +127,7 @@ class Ellipsoid:
     # -- construction ------------------------------------------------------------
     @classmethod
     def ball(cls, centre: ArrayLike, radius: float) -> Ellipsoid:
+        """The ball ``|x - c| <= radius`` (``P = radius^2 I``; ``radius`` finite, ``>= 0``)."""
         c = vector(centre, name="centre")
         radius = float(radius)
         if not (np.isfinite(radius) and radius >= 0.0):
@@ -146,6 +147,7 @@ class Ellipsoid:
 
     @property
     def dim(self) -> int:
+        """Dimension ``n`` of the space."""
         return self.centre.size
 
     @cached_property
@@ -155,6 +157,8 @@ class Ellipsoid:
 
     @cached_property
     def rank(self) -> int:
+        """Number of eigenvalues of ``P`` above ``1e-12`` of the largest (a flat
+        ellipsoid has rank below ``n``)."""
         lam = self._eig[0]
         return int(np.count_nonzero(lam > _RANK_RTOL * max(lam.max(initial=0.0), 1e-300)))
 
@@ -180,6 +184,7 @@ class Ellipsoid:
         return Ellipsoid._make(c, a @ self.shape @ a.T + delta * np.eye(a.shape[0]))
 
     def translate(self, b: ArrayLike) -> Ellipsoid:
+        """``E(c + b, P)``."""
         return Ellipsoid._make(self.centre + vector(b, self.dim, "b"), self.shape.copy())
 
     def support(self, d: ArrayLike) -> FloatArray | float:
@@ -199,7 +204,7 @@ class Ellipsoid:
     def extremes(self, d: ArrayLike) -> tuple[float, float]:
         """``(min, max)`` of ``d.x`` over ``E``."""
         d = vector(d, self.dim, "d")
-        m, s = float(d @ self.centre), np.sqrt(max(float(d @ self.shape @ d), 0.0))
+        m, s = float(d @ self.centre), float(np.sqrt(max(float(d @ self.shape @ d), 0.0)))
         return m - s, m + s
 
     def interval_hull(self) -> tuple[FloatArray, FloatArray]:
@@ -250,8 +255,10 @@ class Ellipsoid:
 
         ``criterion="trace"``: ``p = sqrt(tr P1 / tr P2)``. ``criterion="volume"``: the
         minimum-volume member (needs ``P1`` or ``P2`` nonsingular, otherwise falls back
-        to the trace choice).
+        to the trace choice). Another family: ``TypeError``.
         """
+        if not isinstance(other, Ellipsoid):
+            raise TypeError(f"minkowski_sum takes an Ellipsoid, got {type(other).__name__}")
         if other.dim != self.dim:
             raise ValueError("ellipsoids of different dimensions")
         c = self.centre + other.centre

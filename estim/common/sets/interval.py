@@ -74,6 +74,7 @@ class Box:
 
     @classmethod
     def from_centre(cls, centre: ArrayLike, radius: ArrayLike) -> Box:
+        """The box ``[c - r, c + r]`` (``radius`` a number or one per axis, ``>= 0``)."""
         c = vector(centre, name="centre")
         r = np.broadcast_to(np.asarray(radius, dtype=float), c.shape)
         if np.any(r < 0):
@@ -82,14 +83,17 @@ class Box:
 
     @property
     def dim(self) -> int:
+        """Dimension ``n`` of the space."""
         return self.lo.size
 
     @property
     def centre(self) -> FloatArray:
+        """Midpoint ``(lo + hi) / 2``."""
         return 0.5 * (self.lo + self.hi)
 
     @property
     def radius(self) -> FloatArray:
+        """Half-widths ``(hi - lo) / 2`` per axis."""
         return 0.5 * (self.hi - self.lo)
 
     def affine(self, a: ArrayLike, b: ArrayLike | None = None) -> Box:
@@ -111,10 +115,15 @@ class Box:
         return Box._make(m - h, m + h)
 
     def translate(self, b: ArrayLike) -> Box:
+        """``{x + b : x in box}`` (``b`` finite, of the box's dimension)."""
         b = vector(b, self.dim, "b")
         return Box._make(self.lo + b, self.hi + b)
 
     def minkowski_sum(self, other: Box) -> Box:
+        """``{x + y : x in self, y in other}`` of two boxes: ``[lo1 + lo2, hi1 + hi2]``
+        (another family: ``TypeError``; convert it with its ``interval_hull``)."""
+        if not isinstance(other, Box):
+            raise TypeError(f"minkowski_sum takes a Box, got {type(other).__name__}")
         if other.dim != self.dim:
             raise ValueError("boxes of different dimensions")
         return Box._make(self.lo + other.lo, self.hi + other.hi)
@@ -126,6 +135,7 @@ class Box:
         return float(out) if np.ndim(out) == 0 else out
 
     def extremes(self, d: ArrayLike) -> tuple[float, float]:
+        """``(min, max)`` of ``d.x`` over the box: ``d.m -/+ |d|.h``."""
         d = vector(d, self.dim, "d")
         m, s = float(d @ self.centre), float(np.abs(d) @ self.radius)
         return m - s, m + s

@@ -114,10 +114,12 @@ class Zonotope:
 
     @property
     def dim(self) -> int:
+        """Dimension ``n`` of the space."""
         return self.centre.size
 
     @property
     def n_generators(self) -> int:
+        """Number of generators (columns of ``G``)."""
         return self.generators.shape[1]
 
     # -- exact operations ----------------------------------------------------------
@@ -128,10 +130,13 @@ class Zonotope:
         return Zonotope._make(c, a @ self.generators)
 
     def translate(self, b: ArrayLike) -> Zonotope:
+        """``Z(c + b, G)``."""
         return Zonotope._make(self.centre + vector(b, self.dim, "b"), self.generators)
 
     def minkowski_sum(self, other: Zonotope) -> Zonotope:
-        """``Z1 + Z2 = Z(c1 + c2, [G1 G2])``."""
+        """``Z1 + Z2 = Z(c1 + c2, [G1 G2])`` (another family: ``TypeError``)."""
+        if not isinstance(other, Zonotope):
+            raise TypeError(f"minkowski_sum takes a Zonotope, got {type(other).__name__}")
         if other.dim != self.dim:
             raise ValueError("zonotopes of different dimensions")
         g = np.hstack([self.generators, other.generators])
@@ -169,6 +174,8 @@ class Zonotope:
         feasibility tolerances of 1e-10 (its default 1e-7 read vertices of flat zonotopes
         1e-8 outside); points outside the interval hull are rejected without it.
         """
+        if method not in ("auto", "lp", "facets"):
+            raise ValueError(f"method must be 'auto', 'lp' or 'facets', got {method!r}")
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
