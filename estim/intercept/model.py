@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -300,6 +300,40 @@ class ChannelPrior:
             if not speed[0] > 0:
                 raise ValueError("closing_speed_mps must be positive")
             object.__setattr__(self, "closing_speed_mps", speed)
+
+    def auxiliary_box(self, closing_speed_hi_mps: float) -> ChannelPrior:
+        """The box of ``(Y, V) = (alpha x, omega x - c alpha)`` that holds the exact
+        image (:meth:`ChannelModel.from_cartesian`) of every Cartesian state of this box
+        closing at a speed ``c <= closing_speed_hi_mps``: the coordinates the set
+        estimators' initial sets take for ``(y, Vy)`` (their small-angle map).
+
+        With ``r = y / x``: ``Y = y atan(r) / r``, between ``y (1 - r^2/3)`` and ``y``,
+        and ``V = (Vy - c f(r)) / (1 + r^2)`` with ``f(r) = (1 + r^2) atan(r) - r``, odd,
+        of the sign of ``r`` and at most ``2 |r|^3 / 3``. Both shrink towards zero
+        except through ``c f(r)``, so a face moves out only when that term beats the
+        shrink: the upper ``V`` face by ``R^2 ((2/3) c R - Vy_hi)`` at most over the
+        negative ``y`` (``R = max(-y_lo, 0) / x_lo``), the lower one symmetrically; a
+        ``y`` face moves only towards zero, for a box that does not hold ``y = 0``.
+        Seed 003's boxes (``|y| <= 10`` km at 5301 km, ``|Vy| <= 100`` m/s, 58 km/s)
+        need no widening (``(2/3) c R = 73 < 100``); a box of +-100 km at that range
+        left Cartesian states 0.5 m/s outside the initial set.
+        """
+        (y0, y1), (v0, v1), (xa, _) = self.lateral_m, self.lateral_vel_mps, self.x_m
+        c = float(closing_speed_hi_mps)
+        r_pos, r_neg = max(y1, 0.0) / xa, max(-y0, 0.0) / xa
+        up = max(r_neg**2 * max(2.0 / 3.0 * c * r_neg - v1, 0.0), r_pos**2 * max(-v1, 0.0))
+        down = max(r_pos**2 * max(2.0 / 3.0 * c * r_pos + v0, 0.0), r_neg**2 * max(v0, 0.0))
+        y_up = max(-y1, 0.0) * (y1 / xa) ** 2 / 3.0
+        y_down = max(y0, 0.0) * (y0 / xa) ** 2 / 3.0
+        if up == down == y_up == y_down == 0.0:
+            return self
+        # and a relative 1e-12 for the rounding of the bounds themselves
+        pad = 1e-12 * max(abs(v0), abs(v1), c * max(r_pos, r_neg))
+        return replace(
+            self,
+            lateral_m=(y0 - y_down, y1 + y_up),
+            lateral_vel_mps=(v0 - down - pad * (down > 0), v1 + up + pad * (up > 0)),
+        )
 
     def centre_state(self, model: ChannelModel) -> NDArray[np.float64]:
         """``(alpha, omega, x)`` of the box's centre (closing at the interval's middle)."""

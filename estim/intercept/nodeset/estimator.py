@@ -240,10 +240,15 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         box, so ``u`` ranges over ``U = [tau0/x_hi, tau0/x_lo] & [u_lo, u_hi]`` and the
         slice is ``{u (y, Vy)}`` over ``U`` and the box: the convex hull of the box's
         corners scaled by both ends of ``U`` (exact; it is the slice of a convex body).
+        The box is first widened where the exact bearing and line-of-sight rate of a
+        Cartesian state leave it (:meth:`ChannelPrior.auxiliary_box`: only for boxes
+        wide against their range).
         """
         prior = ChannelPrior(**box) if prior is None else prior
-        (y0, y1), (v0, v1), (xa, xb) = prior.lateral_m, prior.lateral_vel_mps, prior.x_m
         u_lo, u_hi = self.bands()
+        # the box of the coordinates the slices take, holding every Cartesian state
+        prior = prior.auxiliary_box(1.0 / float(u_lo.min()))
+        (y0, y1), (v0, v1), (xa, xb) = prior.lateral_m, prior.lateral_vel_mps, prior.x_m
         hard_lo, hard_hi = xa * u_lo, xb * u_hi
         # a known range (a point box) is one node
         labels = [

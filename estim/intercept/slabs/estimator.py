@@ -210,9 +210,13 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         speed is not used: the set's propagation takes ``closing_speed_mps``).
 
         ``initial(lateral_m=..., lateral_vel_mps=..., x_m=...)`` is short for
-        ``initial(ChannelPrior(...))``.
+        ``initial(ChannelPrior(...))``. The box is first widened where the exact bearing
+        and line-of-sight rate of a Cartesian state leave it
+        (:meth:`ChannelPrior.auxiliary_box`: only for boxes wide against their range).
         """
         prior = ChannelPrior(**box) if prior is None else prior
+        # the box of the coordinates the sections take, holding every Cartesian state
+        prior = prior.auxiliary_box(self.speed_interval[1])
         return self.from_boxes(prior.lateral_m, prior.lateral_vel_mps, prior.x_m)
 
     def from_boxes(
