@@ -42,6 +42,7 @@ DERIVED = {
     "secant": r"lies within (1e-\d) of the extension's reach",
     "pieces": r"span more than a factor of (\d+) \(each sizes",
     "corners": r"missed the box's corners by up to (\d+) m on Fig\. 5's boxes",
+    "cartesian": r"there `\(2/3\) c R` is (\d+) m/s against a velocity face\s+of (\d+) m/s",
     "off_axis": r"falls back on an assumed ([\d.]+) rad \(`ChannelModel\.max_off_axis_rad`\)",
     "split": r"`x_hi / x_lo > ([\d.]+)` \(`estimator\.infoset\.split_ratio`\) .{1,60} at most "
     r"(\d+) sections in all",
@@ -157,6 +158,25 @@ def _decade(shown: str, value: float) -> bool:
 
 def _defaults(cls) -> dict:
     return {f.name: f.default for f in dataclasses.fields(cls)}
+
+
+def test_the_cartesian_widening_of_seed_003_boxes_is_none():
+    """§1.4, initial set: ``(2/3) c R`` of kp_fig3's and kp_fig5's estimator boxes (``R``
+    the largest ``|y| / x``, ``c`` the largest closing speed of the box) against the
+    velocity face, and the box that ``ChannelPrior.auxiliary_box`` leaves as it is (``c``
+    the largest closing speed the estimators assume, ``closing_speed_kmps``)."""
+    from kalman_vs_infoset.estim.intercept.model import ChannelPrior
+
+    (shown, face) = _read("cartesian")
+    for name in ("kp_fig3", "kp_fig5", "kp_fig5_range"):
+        e = scenario_tables(name)["estimator"]
+        r = max(abs(v) for v in e["y_km"]) / e["x_km"][0]
+        c = 1e3 * max(e["closing_speed_kmps"])
+        v = 1e3 * min(abs(v) for v in e["vy_kmps"])
+        agree_each([shown, face], [2.0 / 3.0 * c * r, v])
+        box = ChannelPrior([1e3 * y for y in e["y_km"]], [1e3 * v for v in e["vy_kmps"]],
+                           [1e3 * x for x in e["x_km"]])  # fmt: skip
+        assert box.auxiliary_box(c) is box
 
 
 def test_every_number_of_the_models_page_is_checked():
