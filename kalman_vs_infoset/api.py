@@ -108,11 +108,11 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenar
     Examples
     --------
     >>> from kalman_vs_infoset.api import load_scenario
-    >>> sc = load_scenario("kp_fig5", experiment={"runs": 4}, model={"nu_mps2": 0.0})
+    >>> sc = load_scenario("kp_fig5", experiment={"runs": 4}, model={"nu_mps2": 0.01})
     >>> sc.experiment.runs, sc.model.nu_mps2
-    (4, 0.0)
+    (4, 0.01)
     >>> sc.name
-    'kp_fig5+experiment.runs=4+model.nu_mps2=0.0'
+    'kp_fig5+experiment.runs=4+model.nu_mps2=0.01'
     """
     sets = [f"{key}={_toml(v)}" for key, v in _flatten("", overrides)]
     return _scenario.load_scenario(name_or_path, sets, via="keyword overrides")

@@ -323,3 +323,25 @@ def test_pd_gains_grid_too_coarse_for_the_fit_is_one_line(tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", "pd-gains", "--angles-deg", "1",
                    "--grid-step", "2", "--no-figures")  # fmt: skip
     assert "--grid-step" in err and "eq. (28)" in err
+
+
+def test_a_sun_whose_differential_gravity_exceeds_nu_is_refused(short, tmp_path, capsys):
+    """``model.sun_distance_km=1e6`` was accepted and left the truth outside the sets for
+    hundreds of steps (its differential gravity, about 1.6 m/s^2, is over ``nu``). The
+    least distance named keeps it under: it runs, and a Sun just nearer is refused."""
+    import numpy as np
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2
+
+    err = _refused(capsys, tmp_path / "out", "intercept", short, "--set",
+                   "model.sun_distance_km=1e6")  # fmt: skip
+    assert "'model.sun_distance_km' 1e+06" in err and "'model.nu_mps2' 0.005" in err
+    least_km = float(err.split("a Sun distance of at least ")[1].split(" km")[0])
+    sc = load_scenario(short)
+    t = sc.truth
+    r = np.sqrt(t.x_km[1] ** 2 + max(map(abs, t.y_km)) ** 2 + max(map(abs, t.z_km)) ** 2)
+    bound = [2e3 * K_SUN_KM3PS2 * r / (d - r) ** 3 for d in (least_km * 1.01, least_km * 0.99)]
+    assert bound[0] < sc.model.nu_mps2 < bound[1]
+    err = _refused(capsys, tmp_path / "out2", "intercept", short, "--set",
+                   "model.nu_mps2=0")  # fmt: skip
+    assert "'model.nu_mps2' of at least" in err

@@ -336,6 +336,7 @@ class InterceptScenario(Table):
                     f"{list(outer)} (the a-priori box must contain the truth)"
                 )
         check_option_tables("intercept", "estimator", e.options)
+        _check_differential_gravity(m, self.truth)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
                 "field 'kalman_vs_infoset.guidance.min_impulse_mps' must be <= max_impulse_mps"
@@ -413,3 +414,31 @@ def closing_interval_kmps(given: Any, model_kmps: Any) -> Any:
     the truth's default closing velocity, which is filled in before validation (so
     ``given`` may still be raw, even malformed, data there: its field reports it)."""
     return given if given is not None else (model_kmps, model_kmps)
+
+
+def _check_differential_gravity(m: ModelTable, truth: TruthTable) -> None:
+    """Refuse a Sun so near that its differential gravity over the engagement exceeds
+    ``nu``: the sets take the truth's acceleration relative to the model (across and
+    along the line of sight) as bounded by ``nu`` (docs/infoset.md). Its bound at a
+    relative position ``r`` from a target ``d`` from the Sun is ``2 K r / (d - r)^3``
+    (the tidal term, with the nonlinear rest); 1 AU gives about 5e-7 m/s^2 at 6300 km,
+    a Sun at 1e6 km 1.6 m/s^2 at kp_fig5's ranges, where runs left the truth outside for
+    hundreds of steps."""
+    from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2  # (numba: here)
+
+    r_km = math.sqrt(
+        truth.x_km[1] ** 2 + max(map(abs, truth.y_km)) ** 2 + max(map(abs, truth.z_km)) ** 2
+    )
+    d_km = m.sun_distance_km
+    a_mps2 = 2e3 * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3
+    if a_mps2 > m.nu_mps2:
+        least_km = r_km + (2e3 * K_SUN_KM3PS2 * r_km / m.nu_mps2) ** (1 / 3) if m.nu_mps2 else None
+        fix = (f"a Sun distance of at least {least_km:.3g} km, or " if least_km else "") + (
+            f"'model.nu_mps2' of at least {a_mps2:.2g}"
+        )
+        raise ValueError(
+            f"field 'model.sun_distance_km' {d_km:g}: the differential gravity reaches "
+            f"{a_mps2:.2g} m/s^2 at the truth's farthest range ({r_km:.0f} km), over "
+            f"'model.nu_mps2' {m.nu_mps2:g}, the bound the sets take for it ({fix} keeps it "
+            "under)"
+        )
