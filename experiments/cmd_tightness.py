@@ -281,7 +281,8 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
     ax_r.set_ylabel("width ratio (estimator / exact)")
     for a in (ax, ax_r):
         a.grid(True, alpha=0.3)
-        a.legend(fontsize=8, loc="best")
+        if rows:  # (no time with a ratio: nothing drawn, no legend to warn about)
+            a.legend(fontsize=8, loc="best")
     fig.suptitle(
         f"{result['scenario']}: {result['estimator']} vs exact set, {result['noise']} "
         f"noise, seed {result['seed']}" + (", guided" if result["guided"] else ""),

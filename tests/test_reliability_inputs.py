@@ -345,3 +345,17 @@ def test_a_sun_whose_differential_gravity_exceeds_nu_is_refused(short, tmp_path,
     err = _refused(capsys, tmp_path / "out2", "intercept", short, "--set",
                    "model.nu_mps2=0")  # fmt: skip
     assert "'model.nu_mps2' of at least" in err
+
+
+def test_tightness_with_no_time_left_draws_without_a_legend_warning(tmp_path, capsys):
+    """Every time after the truth reaches eps (kp_fig5's runs end by 99 s): each is
+    skipped with its reason, and the empty figure is drawn without matplotlib's "No
+    artists with labels" warning on stderr."""
+    import warnings
+
+    with warnings.catch_warnings():  # the warning as an error (a traceback, exit -1)
+        warnings.filterwarnings("error", message="No artists with labels")
+        r = run(capsys, "tightness", "kp_fig5", "--times", "99,100,101,150", "--out",
+                tmp_path / "out")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert list((tmp_path / "out").glob("*.png"))
