@@ -34,6 +34,7 @@ _API = (
     "load_scenario",
     "read_metadata",
     "register_estimator",
+    "run_attitude",
     "run_engagement",
     "run_experiment",
     "scenarios",

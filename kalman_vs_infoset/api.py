@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from kalman_vs_infoset import _API
+from kalman_vs_infoset.api_attitude import run_attitude as run_attitude
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.registry import Registration
 from kalman_vs_infoset.experiments import intercept_runs, runner

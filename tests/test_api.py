@@ -37,7 +37,8 @@ def test_every_public_name_has_a_numpydoc_docstring():
         obj = getattr(api, name)
         if callable(obj) and getattr(obj, "__module__", "").startswith("kalman_vs_infoset"):
             assert obj.__doc__ and obj.__doc__.strip(), name
-    for name in ("load_scenario", "run_engagement", "run_experiment", "trace", "load_results"):
+    for name in ("load_scenario", "run_engagement", "run_experiment", "trace", "load_results",
+                 "run_attitude"):  # fmt: skip
         doc = getattr(api, name).__doc__
         assert "Parameters\n    ----------" in doc and "Examples\n    --------" in doc, name
 
@@ -66,6 +67,30 @@ def test_run_engagement_reproduces_cli_run_0_of_kp_fig3_to_the_last_digit(tmp_pa
     df = api.run_experiment("kp_fig3", "ukf", "random", runs=2, seed=7)
     assert df["miss_m"].iloc[1] == other.miss_m and df["fuel_mps"].iloc[1] == other.fuel_mps
     assert df["miss_m"].iloc[0] != other.miss_m
+
+
+def test_run_attitude_reproduces_the_command_s_rows_and_writes_nothing(tmp_path, capsys,
+                                                                      monkeypatch):  # fmt: skip
+    """``kvi attitude smallsat_rw --noise random --estimators ukf --runs 3 --seed 4`` (a
+    20-s turn) and ``run_attitude`` with the same arguments: every column of every row
+    equal (floats bit for bit), and ``run_attitude`` writes no file; a bad estimator is
+    a ValueError naming the registered ones, a bad noise the command's one-line error."""
+    argv = ["attitude", "smallsat_rw", "--noise", "random", "--estimators", "ukf", "--runs",
+            "3", "--seed", "4", "--set", "simulation.duration_s=20.0", "--no-progress"]  # fmt: skip
+    assert main([*argv, "--out", str(tmp_path / "cli")]) == 0
+    capsys.readouterr()
+    cli = api.load_results(tmp_path / "cli")
+    monkeypatch.chdir(tmp_path)
+    df = api.run_attitude("smallsat_rw", noise="random", estimator="ukf", runs=3, seed=4,
+                          simulation={"duration_s": 20.0})  # fmt: skip
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli"]
+    assert list(df["run"]) == list(cli["run"]) == [0, 1, 2]
+    for key in df.columns.drop("wall_s"):
+        assert df[key].tolist() == cli[key].tolist(), key
+    with pytest.raises(ValueError, match="unknown attitude estimator 'ukk'"):
+        api.run_attitude("smallsat_rw", estimator="ukk")
+    with pytest.raises(InputError, match="--noise must be one of"):
+        api.run_attitude("smallsat_rw", noise="loud")
 
 
 def test_in_memory_run_experiment_equals_the_files_and_writes_nothing(tmp_path, monkeypatch):
