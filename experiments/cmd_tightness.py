@@ -215,7 +215,7 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments.sim.channel import auxiliary_model_options
 
     sc = auxiliary_model_options(
-        load_scenario(args.scenario, args.overrides), args.kinematic_margin,
+        load_scenario(args.scenario, args.overrides, auxiliary_truth=True), args.kinematic_margin,
         names=sorted({registry.reference("intercept").name, args.estimators[0]}),
     )  # fmt: skip
     seed = sc.experiment.seed if args.seed is None else args.seed

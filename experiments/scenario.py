@@ -146,7 +146,8 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
                 "+key=value suffix per override (results of an override never land in "
                 "the original's files)"
             )
-        if not sep or not all(parts) or len(parts) > 3:
+        # (the deepest field: attitude.estimator_options.<name>.<option>)
+        if not sep or not all(parts) or len(parts) > 4:
             raise InputError(f"--set {item!r}: expected TABLE.KEY=VALUE (e.g. model.nu_mps2=0.01)")
         try:
             value = tomllib.loads(f"v = {text.strip()}")["v"]
@@ -196,10 +197,13 @@ def default_name(path: str | Path) -> str:
     return stem if SAFE_NAME.match(stem) else "scenario"
 
 
-def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = "") -> M:
-    """``model`` validated from ``data``; the first problem as one line naming the file."""
+def validate(
+    model: type[M], data: dict[str, Any], source: str, prefix: str = "", context=None
+) -> M:
+    """``model`` validated from ``data`` (``context``: pydantic's validation context);
+    the first problem as one line naming the file."""
     try:
-        return model.model_validate(data)
+        return model.model_validate(data, context=context)
     except ValidationError as exc:
         raise InputError(f"{source}: {first_error(exc, prefix, model)}") from None
     except ValueError as exc:  # a check outside pydantic's own
@@ -230,13 +234,19 @@ def read(
 
 
 def load_scenario(
-    path: str | Path, overrides: Sequence[str] = (), via: str = "--set"
+    path: str | Path,
+    overrides: Sequence[str] = (),
+    via: str = "--set",
+    auxiliary_truth: bool = False,
 ) -> InterceptScenario:
     """Read and validate an intercept scenario file (or a bundled scenario by name),
     with optional ``TABLE.KEY=VALUE`` overrides (:func:`apply_overrides`; the name gets a
-    ``+key=value`` suffix each)."""
+    ``+key=value`` suffix each). ``auxiliary_truth``: for a command whose truth is the
+    auxiliary model itself (``tightness``), whose truth feels no differential gravity
+    to check against ``nu``."""
     data, source = read(path, overrides, kind="intercept", via=via)
-    return validate(InterceptScenario, data, source)
+    context = {"auxiliary_truth": True} if auxiliary_truth else None
+    return validate(InterceptScenario, data, source, context=context)
 
 
 def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> InterceptScenario:

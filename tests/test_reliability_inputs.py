@@ -328,23 +328,27 @@ def test_pd_gains_grid_too_coarse_for_the_fit_is_one_line(tmp_path, capsys):
 def test_a_sun_whose_differential_gravity_exceeds_nu_is_refused(short, tmp_path, capsys):
     """``model.sun_distance_km=1e6`` was accepted and left the truth outside the sets for
     hundreds of steps (its differential gravity, about 1.6 m/s^2, is over ``nu``). The
-    least distance named keeps it under: it runs, and a Sun just nearer is refused."""
-    import numpy as np
+    least distance named is the boundary: 1 % farther is accepted, 1 % nearer refused;
+    ``nu = 0`` is refused (1 AU's gravity exceeds it) but for ``tightness``, whose truth
+    is the auxiliary model; a truth that may reach the Sun is one line, not a
+    ZeroDivisionError."""
+    from kalman_vs_infoset.experiments.errors import InputError
     from kalman_vs_infoset.experiments.scenario import load_scenario
-    from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2
 
     err = _refused(capsys, tmp_path / "out", "intercept", short, "--set",
                    "model.sun_distance_km=1e6")  # fmt: skip
     assert "'model.sun_distance_km' 1e+06" in err and "'model.nu_mps2' 0.005" in err
     least_km = float(err.split("a Sun distance of at least ")[1].split(" km")[0])
-    sc = load_scenario(short)
-    t = sc.truth
-    r = np.sqrt(t.x_km[1] ** 2 + max(map(abs, t.y_km)) ** 2 + max(map(abs, t.z_km)) ** 2)
-    bound = [2e3 * K_SUN_KM3PS2 * r / (d - r) ** 3 for d in (least_km * 1.01, least_km * 0.99)]
-    assert bound[0] < sc.model.nu_mps2 < bound[1]
-    err = _refused(capsys, tmp_path / "out2", "intercept", short, "--set",
-                   "model.nu_mps2=0")  # fmt: skip
+    load_scenario(short, [f"model.sun_distance_km={least_km * 1.01:.6g}"])
+    with pytest.raises(InputError, match="differential gravity"):
+        load_scenario(short, [f"model.sun_distance_km={least_km * 0.99:.6g}"])
+    err = _refused(capsys, tmp_path / "out2", "intercept", short, "--set", "model.nu_mps2=0")
     assert "'model.nu_mps2' of at least" in err
+    assert load_scenario(short, ["model.nu_mps2=0"], auxiliary_truth=True).model.nu_mps2 == 0
+    far = ["model.sun_distance_km=1e6", "estimator.x_km=[5301.3,1e6]", "truth.x_km=[1e6,1e6]",
+           "truth.y_km=[0.0,0.0]", "truth.z_km=[0.0,0.0]"]  # fmt: skip
+    with pytest.raises(InputError, match="not less than the Sun's distance"):
+        load_scenario(short, far)
 
 
 def test_tightness_with_no_time_left_draws_without_a_legend_warning(tmp_path, capsys):

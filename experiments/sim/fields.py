@@ -192,8 +192,8 @@ def first_error(
         what = describe(model, loc)
         return f"missing table '[{dotted}]'" if what == "a table" else f"missing field '{dotted}'"
     msg = msg.removeprefix("Value error, ")
-    if kind == "value_error" and msg.startswith(("field ", "table ")):
-        return msg  # a table's own check: its message names the field
+    if kind == "value_error" and msg.startswith(("field ", "table ", "unknown key ")):
+        return msg  # a table's own check: its message names the field (or the key)
     if kind == "value_error" and not names:
         return f"table '{prefix.rstrip('.')}': {msg}" if prefix else msg
     got = err.get("input")

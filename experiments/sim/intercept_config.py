@@ -40,7 +40,7 @@ from kalman_vs_infoset.experiments.sim.fields import (
     int_bounds,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingConfig
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, ValidationInfo, model_validator
 
 CHANNELS = ("lateral", "vertical")
 BOX_KEYS = ("y_km", "z_km", "x_km", "vy_kmps", "vz_kmps", "vx_kmps")
@@ -325,7 +325,7 @@ class InterceptScenario(Table):
         return data
 
     @model_validator(mode="after")
-    def _consistent(self) -> InterceptScenario:
+    def _consistent(self, info: ValidationInfo) -> InterceptScenario:
         check_name(self.name)
         m, e, g = self.model, self.estimator, self.guidance
         for key in BOX_KEYS:
@@ -336,7 +336,9 @@ class InterceptScenario(Table):
                     f"{list(outer)} (the a-priori box must contain the truth)"
                 )
         check_option_tables("intercept", "estimator", e.options)
-        _check_differential_gravity(m, self.truth)
+        # (a command whose truth is the auxiliary model itself has no gravity to check)
+        if not (info.context or {}).get("auxiliary_truth"):
+            _check_differential_gravity(m, self.truth, g.reserve_mps)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
                 "field 'kalman_vs_infoset.guidance.min_impulse_mps' must be <= max_impulse_mps"
@@ -416,20 +418,31 @@ def closing_interval_kmps(given: Any, model_kmps: Any) -> Any:
     return given if given is not None else (model_kmps, model_kmps)
 
 
-def _check_differential_gravity(m: ModelTable, truth: TruthTable) -> None:
+def _check_differential_gravity(m: ModelTable, truth: TruthTable, reserve_mps: float) -> None:
     """Refuse a Sun so near that its differential gravity over the engagement exceeds
     ``nu``: the sets take the truth's acceleration relative to the model (across and
     along the line of sight) as bounded by ``nu`` (docs/infoset.md). Its bound at a
     relative position ``r`` from a target ``d`` from the Sun is ``2 K r / (d - r)^3``
-    (the tidal term, with the nonlinear rest); 1 AU gives about 5e-7 m/s^2 at 6300 km,
-    a Sun at 1e6 km 1.6 m/s^2 at kp_fig5's ranges, where runs left the truth outside for
-    hundreds of steps."""
+    (the tidal term, with the nonlinear rest), taken at the farthest the truth can be:
+    its box's far corner moved sideways at the box's lateral speed plus the whole fuel
+    reserve for the time the slowest closing takes. 1 AU gives about 5e-7 m/s^2 at
+    6300 km; a Sun at 1e6 km 1.6 m/s^2 at kp_fig5's ranges, where runs left the truth
+    outside for hundreds of steps."""
     from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2  # (numba: here)
 
-    r_km = math.sqrt(
-        truth.x_km[1] ** 2 + max(map(abs, truth.y_km)) ** 2 + max(map(abs, truth.z_km)) ** 2
-    )
+    t_s = truth.x_km[1] / min(abs(v) for v in truth.vx_kmps)
+    dv_kmps = reserve_mps / 1e3
+    reach = [
+        max(map(abs, pos)) + (max(map(abs, vel)) + dv_kmps) * t_s
+        for pos, vel in ((truth.y_km, truth.vy_kmps), (truth.z_km, truth.vz_kmps))
+    ]
+    r_km = math.sqrt(truth.x_km[1] ** 2 + reach[0] ** 2 + reach[1] ** 2)
     d_km = m.sun_distance_km
+    if not r_km < d_km:
+        raise ValueError(
+            f"field 'model.sun_distance_km' {d_km:g}: the truth's range may reach "
+            f"{r_km:.3g} km, not less than the Sun's distance"
+        )
     a_mps2 = 2e3 * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3
     if a_mps2 > m.nu_mps2:
         least_km = r_km + (2e3 * K_SUN_KM3PS2 * r_km / m.nu_mps2) ** (1 / 3) if m.nu_mps2 else None
