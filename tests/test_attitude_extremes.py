@@ -94,3 +94,20 @@ def test_a_function_other_than_a_rate_component_is_refused(name):
 def test_a_rate_component_names_an_axis():
     with pytest.raises(ValueError, match="axis"):
         RateComponent(3)
+
+
+@pytest.mark.parametrize("name", SETS)
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_attained_values_are_at_states_of_the_belief_within_the_extremes(name, axis):
+    """``attained`` gives witnesses: each argument a state the belief holds, its value
+    that state's, and the interval inside :meth:`extremes` (the sets' hull vertices,
+    their extremes' arguments, may lie outside the set)."""
+    b = _belief(name)
+    fn = RateComponent(axis)
+    ext, att = b.extremes(fn), b.attained(fn)
+    for arg, value in ((att.argmin, att.min_value), (att.argmax, att.max_value)):
+        assert b.inside(np.broadcast_to(arg, (b.runs, 7)))[0]
+        assert fn(arg[None, :])[0] == value
+    assert ext.min_value <= att.min_value <= att.max_value <= ext.max_value
+    with pytest.raises(TypeError, match="RateComponent"):
+        b.attained(lambda s: np.asarray(s)[..., 0])

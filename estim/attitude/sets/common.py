@@ -184,6 +184,28 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         i, j = int(np.argmin(vals)), int(np.argmax(vals))
         return Extremes(float(vals[i]), pts[i], float(vals[j]), pts[j])
 
+    def attained(self, fn: StateFunction) -> Extremes:
+        """Min and max of a :class:`RateComponent` over states of run 0's ``S``: the
+        hull's vertices drawn towards ``S``'s own centre (at 1, 1/2, 1/4, 1/8 and 0 of
+        the way), those ``S`` holds (a hull vertex may lie outside ``S``, so
+        :meth:`extremes`' arguments are not witnesses). ``TypeError`` for other
+        functions, ``ValueError`` when no candidate lies in ``S``."""
+        fn = rate_component(fn, "an attitude set")
+        hc, hr = self.hull()
+        signs = np.array(list(product((-1.0, 1.0), repeat=6)))
+        centre = np.where(self.lost[0], hc[0], self.z_c[0])
+        steps = np.array([1.0, 0.5, 0.25, 0.125, 0.0])[:, None, None]
+        x = (centre + steps * (hc[0] + signs * hr[0] - centre)).reshape(-1, 6)
+        q = qmul(np.broadcast_to(self.q_ref[0], (len(x), 4)), qexp(x[:, :3]))
+        pts = np.concatenate([q, x[:, 3:]], axis=-1)
+        held = np.array([self.inside(np.broadcast_to(p, (self.runs, 7)))[0] for p in pts])
+        if not held.any():
+            raise ValueError("no candidate state of the set was found inside it")
+        pts = pts[held]
+        vals = np.asarray(fn(pts), dtype=float)
+        i, j = int(np.argmin(vals)), int(np.argmax(vals))
+        return Extremes(float(vals[i]), pts[i], float(vals[j]), pts[j])
+
 
 @dataclass(frozen=True)
 class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
