@@ -100,7 +100,9 @@ def request(args: argparse.Namespace) -> AttitudeRequest:
     from kalman_vs_infoset.experiments.scenario import read
     from kalman_vs_infoset.experiments.sim.intercept_config import check_name
 
-    data, source = read(args.scenario, args.overrides, kind="attitude")
+    # (how the overrides were given: --set, or run_attitude's keywords)
+    data, source = read(args.scenario, args.overrides, kind="attitude",
+                        via=getattr(args, "via", "--set"))  # fmt: skip
     given = _choice(data.get("controller"), "controller", source)
     default_est = _choice(data.pop("estimator", None), "estimator", source)
     controller = args.controller if args.controller is not None else given

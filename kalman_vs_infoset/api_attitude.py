@@ -40,8 +40,9 @@ def run_attitude(
         Exact measurements, bounded random errors and disturbances, or the adversary.
     estimator : str, optional
         A registered attitude estimator (:func:`kalman_vs_infoset.api.estimators`
-        ``("attitude")``); default: the scenario's, else the one reading the
-        measurement as the state for ``noise="none"`` and the reference set otherwise.
+        ``("attitude")``); default: the scenario's (each of a comma list), else the one
+        reading the measurement as the state for ``noise="none"`` and the reference set
+        otherwise.
     runs : int, default 1
         Number of runs (``>= 1``).
     seed : int, default 0
@@ -53,16 +54,16 @@ def run_attitude(
     Returns
     -------
     pandas.DataFrame
-        One row per run: ``run``, the loop's columns (``docs/results.md``: settle time,
-        energy, final errors, ``truth_outside``, ...) and ``status`` (``ok``, or
-        ``failed`` with its ``error``).
+        One row per estimator and run: ``estimator``, ``run``, the loop's columns
+        (``docs/results.md``: settle time, energy, final errors, ``truth_outside``, ...)
+        and ``status`` (``ok``, or ``failed`` with its ``error``).
 
     Raises
     ------
     ValueError
-        An unknown estimator (naming the registered ones).
+        An unknown estimator or noise (naming the allowed ones).
     kalman_vs_infoset.experiments.errors.InputError
-        An unknown scenario, controller or noise, or a bad field (one line).
+        An unknown scenario or controller, or a bad field (one line).
 
     Examples
     --------
@@ -84,6 +85,10 @@ def run_attitude(
     if estimator is not None and estimator not in registry.names("attitude"):
         allowed = ", ".join(registry.names("attitude"))
         raise ValueError(f"unknown attitude estimator {estimator!r} (allowed: {allowed})")
+    from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
+
+    if noise not in NOISES:
+        raise ValueError(f"noise must be one of {', '.join(NOISES)}, got {noise!r}")
     args = argparse.Namespace(
         scenario=str(scenario),
         overrides=[f"{key}={_toml(v)}" for key, v in _flatten("", overrides)],
@@ -93,16 +98,20 @@ def run_attitude(
         runs=runs,
         seed=seed,
         out=None,
+        via="keyword overrides",
     )
     req = cmd_attitude.request(args)  # the command's rules and one-line errors
-    loop, name = req.loop, req.estimators[0]
+    loop = req.loop
     setup = loop.prepare(req.source, dict(req.scenario), req.controller, noise)
-
-    def simulate(seeds):
-        return loop.task(setup, req.controller, noise, name, seeds)
-
     rows = []
-    for start in range(0, runs, loop.chunk):  # the command's batches (memory)
-        chunk = list(range(start, min(start + loop.chunk, runs)))
-        rows += [{"run": j, **row} for j, row in batched_task(simulate, seed, chunk)]
+    # every estimator the scenario lists (a comma list), as the command runs them
+    for name in req.estimators:
+
+        def simulate(seeds, name=name):
+            return loop.task(setup, req.controller, noise, name, seeds)
+
+        for start in range(0, runs, loop.chunk):  # the command's batches (memory)
+            chunk = list(range(start, min(start + loop.chunk, runs)))
+            rows += [{"estimator": name, "run": j, **row}
+                     for j, row in batched_task(simulate, seed, chunk)]  # fmt: skip
     return pd.DataFrame(rows)

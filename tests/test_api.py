@@ -4,6 +4,7 @@ the command line to the last digit (the same seeding function, the same rows).""
 import doctest
 import importlib
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -89,8 +90,18 @@ def test_run_attitude_reproduces_the_command_s_rows_and_writes_nothing(tmp_path,
         assert df[key].tolist() == cli[key].tolist(), key
     with pytest.raises(ValueError, match="unknown attitude estimator 'ukk'"):
         api.run_attitude("smallsat_rw", estimator="ukk")
-    with pytest.raises(InputError, match="--noise must be one of"):
+    with pytest.raises(ValueError, match="noise must be one of none, random, game, got 'loud'"):
         api.run_attitude("smallsat_rw", noise="loud")
+    with pytest.raises(InputError, match=r"\(with keyword overrides\)"):
+        api.run_attitude("smallsat_rw", simulation={"duration_s": -1.0})
+    # a scenario listing two estimators: both run, as the command runs them, each row
+    # naming its own (only the first ran before)
+    two = tmp_path / "two.toml"
+    source = (Path(__file__).resolve().parents[1] / "data/scenarios/smallsat_rw.toml").read_text()
+    two.write_text('estimator = "ukf,box"\n' + source)
+    df = api.run_attitude(two, noise="random", runs=2, simulation={"duration_s": 5.0})
+    assert df[["estimator", "run"]].values.tolist() == [["ukf", 0], ["ukf", 1], ["box", 0],
+                                                          ["box", 1]]  # fmt: skip
 
 
 def test_in_memory_run_experiment_equals_the_files_and_writes_nothing(tmp_path, monkeypatch):

@@ -343,7 +343,17 @@ def test_a_sun_whose_differential_gravity_exceeds_nu_is_refused(short, tmp_path,
     with pytest.raises(InputError, match="differential gravity"):
         load_scenario(short, [f"model.sun_distance_km={least_km * 0.99:.6g}"])
     err = _refused(capsys, tmp_path / "out2", "intercept", short, "--set", "model.nu_mps2=0")
-    assert "'model.nu_mps2' of at least" in err
+    assert "field 'model.nu_mps2' 0:" in err and "'model.nu_mps2' of at least" in err
+    # the remedies named are accepted as printed (rounded up, not down)
+    err = _refused(capsys, tmp_path / "out3", "intercept", short, "--set", "model.nu_mps2=1e-9")
+    nu = err.split("'model.nu_mps2' of at least ")[1].split(" ")[0]
+    far_km = err.split("a Sun distance of at least ")[1].split(" km")[0]
+    load_scenario(short, [f"model.nu_mps2={nu}"])
+    load_scenario(short, ["model.nu_mps2=1e-9", f"model.sun_distance_km={far_km}"])
+    with pytest.raises(InputError) as info:  # kp_fig5 at 1e6 km: 1.6 m/s^2, over nu's 1
+        load_scenario("kp_fig5", ["model.sun_distance_km=1e6"])
+    assert "of at least 6.8e+06 km keeps it under" in str(info.value)
+    assert "'model.nu_mps2' of at least" not in str(info.value)
     assert load_scenario(short, ["model.nu_mps2=0"], auxiliary_truth=True).model.nu_mps2 == 0
     far = ["model.sun_distance_km=1e6", "estimator.x_km=[5301.3,1e6]", "truth.x_km=[1e6,1e6]",
            "truth.y_km=[0.0,0.0]", "truth.z_km=[0.0,0.0]"]  # fmt: skip

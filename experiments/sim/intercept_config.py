@@ -81,13 +81,19 @@ def check_name(name: str) -> str:
     return name
 
 
+#: the largest disturbance bound a scenario takes, m/s^2
+NU_MAX_MPS2 = 1.0
+
+
 class ModelTable(Table):
     """The auxiliary model of a channel and the simulation step."""
 
     closing_speed_kmps: Annotated[float, float_bounds(1.0, 100.0)] = field(
         58.0, "nominal closing speed e, km/s"
     )
-    nu_mps2: Annotated[float, float_bounds(0.0, 1.0)] = field(0.005, "disturbance bound nu, m/s^2")
+    nu_mps2: Annotated[float, float_bounds(0.0, NU_MAX_MPS2)] = field(
+        0.005, "disturbance bound nu, m/s^2"
+    )
     bearing_bound_start_rad: Annotated[float, float_bounds(1e-7, 0.1)] = field(
         1.5e-4, "bearing bound at nominal range"
     )
@@ -445,13 +451,25 @@ def _check_differential_gravity(m: ModelTable, truth: TruthTable, reserve_mps: f
         )
     a_mps2 = 2e3 * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3
     if a_mps2 > m.nu_mps2:
-        least_km = r_km + (2e3 * K_SUN_KM3PS2 * r_km / m.nu_mps2) ** (1 / 3) if m.nu_mps2 else None
-        fix = (f"a Sun distance of at least {least_km:.3g} km, or " if least_km else "") + (
-            f"'model.nu_mps2' of at least {a_mps2:.2g}"
-        )
+        # the remedies, rounded up (a value printed rounded down would be refused again)
+        fixes = []
+        if m.nu_mps2 > 0:
+            least_km = r_km + (2e3 * K_SUN_KM3PS2 * r_km / m.nu_mps2) ** (1 / 3)
+            fixes.append(f"a Sun distance of at least {_round_up(least_km)} km")
+        if _round_up(a_mps2, float) <= NU_MAX_MPS2:
+            fixes.append(f"'model.nu_mps2' of at least {_round_up(a_mps2)}")
+        fix = f" ({' or '.join(fixes)} keeps it under)" if fixes else ""
+        field_, value = ("nu_mps2", m.nu_mps2) if m.nu_mps2 == 0 else ("sun_distance_km", d_km)
         raise ValueError(
-            f"field 'model.sun_distance_km' {d_km:g}: the differential gravity reaches "
-            f"{a_mps2:.2g} m/s^2 at the truth's farthest range ({r_km:.0f} km), over "
-            f"'model.nu_mps2' {m.nu_mps2:g}, the bound the sets take for it ({fix} keeps it "
-            "under)"
+            f"field 'model.{field_}' {value:g}: the Sun's differential gravity reaches "
+            f"{a_mps2:.3g} m/s^2 at the truth's farthest range ({r_km:.0f} km), over "
+            f"'model.nu_mps2' {m.nu_mps2:g}, the bound the sets take for the truth's "
+            f"acceleration{fix}"
         )
+
+
+def _round_up(value: float, kind: type = str):
+    """``value`` rounded up to 3 significant digits (as text, or as a float)."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    up = math.ceil(value / scale * (1 - 1e-12)) * scale
+    return float(f"{up:.3g}") if kind is float else f"{up:.3g}"
