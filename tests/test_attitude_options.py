@@ -82,7 +82,7 @@ BAD = {
     "estimator 'ukk'",
     "estimator_options.ukf.gate_prob=2": "field 'estimator_options.ukf.gate_prob' must be a "
     "number in (0, 1) (got 2)",
-    "estimator_options.ukf=3": "estimator_options.ukf",
+    "estimator_options.ukf=3": "field 'estimator_options.ukf' must be a table (got 3)",
 }
 
 

@@ -202,6 +202,8 @@ def first_error(
     what = describe(model, loc)
     if what is None:
         what = msg.removeprefix("Input should be ")
+        # a table of tables (an estimator's options) in the words of every other table
+        what = "a table" if what == "a valid dictionary" else what
     elif kind == "value_error":
         what = f"{what}; {msg}"
     return f"field '{dotted}' must be {what}{shown}"
