@@ -103,11 +103,15 @@ def run(args) -> dict[str, Any]:
     # compare's folder by default: the runs' files carry the +key=value suffix and the
     # tables the key, so nothing collides
     base, runs, seed, out = options.resolve(args)
-    # every value is validated before the first run starts
-    scenarios = [
-        load_scenario(args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)])
-        for v in args.values
-    ]
+    # every value is validated before the first run starts (a refusal names the value)
+    scenarios = []
+    for v in args.values:
+        try:
+            scenarios.append(load_scenario(
+                args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)]
+            ))  # fmt: skip
+        except InputError as exc:
+            raise InputError(f"--values: {key} = {json.dumps(v)}: {exc}") from None
     rows, frames = [], []
     for value, sc in zip(args.values, scenarios, strict=True):
         summaries, dfs = run_grid(sc, args, runs, seed, out, args.estimators, args.noise)

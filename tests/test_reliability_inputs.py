@@ -373,3 +373,12 @@ def test_tightness_with_no_time_left_draws_without_a_legend_warning(tmp_path, ca
                 tmp_path / "out")  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert list((tmp_path / "out").glob("*.png"))
+
+
+def test_a_sweep_value_the_scenario_refuses_is_named(short, tmp_path, capsys):
+    """Every value is validated before the first run; the line said why a scenario was
+    refused but not which value of the sweep it was."""
+    err = _refused(capsys, tmp_path / "out", "sweep", short, "--key", "model.nu_mps2",
+                   "--values", "[0.005, 0.0]")  # fmt: skip
+    assert err.startswith("kvi sweep: error: --values: model.nu_mps2 = 0.0: ")
+    assert "field 'model.nu_mps2' 0" in err
