@@ -79,14 +79,15 @@ def run_attitude(
     from kalman_vs_infoset.estim import registry
     from kalman_vs_infoset.experiments import cmd_attitude
     from kalman_vs_infoset.experiments.runner import batched_task
+    from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
     runs = _index(runs, "runs", 1)
     seed = _seed(seed, 0)
-    if estimator is not None and estimator not in registry.names("attitude"):
-        allowed = ", ".join(registry.names("attitude"))
-        raise ValueError(f"unknown attitude estimator {estimator!r} (allowed: {allowed})")
-    from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
-
+    if estimator is not None:
+        try:
+            registry.get("attitude", estimator)
+        except KeyError as exc:  # the registry's line, naming the registered ones
+            raise ValueError(exc.args[0]) from None
     if noise not in NOISES:
         raise ValueError(f"noise must be one of {', '.join(NOISES)}, got {noise!r}")
     args = argparse.Namespace(

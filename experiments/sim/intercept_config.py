@@ -449,15 +449,16 @@ def _check_differential_gravity(m: ModelTable, truth: TruthTable, reserve_mps: f
             f"field 'model.sun_distance_km' {d_km:g}: the truth's range may reach "
             f"{r_km:.3g} km, not less than the Sun's distance"
         )
-    a_mps2 = 2e3 * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3
+    tidal = 2e3 * K_SUN_KM3PS2 * r_km  # m/s^2 times km^3: the bound is tidal / (d - r)^3
+    a_mps2 = tidal / (d_km - r_km) ** 3
     if a_mps2 > m.nu_mps2:
         # the remedies, rounded up (a value printed rounded down would be refused again)
         fixes = []
         if m.nu_mps2 > 0:
-            least_km = r_km + (2e3 * K_SUN_KM3PS2 * r_km / m.nu_mps2) ** (1 / 3)
-            fixes.append(f"a Sun distance of at least {_round_up(least_km)} km")
-        if _round_up(a_mps2, float) <= NU_MAX_MPS2:
-            fixes.append(f"'model.nu_mps2' of at least {_round_up(a_mps2)}")
+            least_km = _round_up(r_km + (tidal / m.nu_mps2) ** (1 / 3))
+            fixes.append(f"a Sun distance of at least {least_km:.3g} km")
+        if _round_up(a_mps2) <= NU_MAX_MPS2:
+            fixes.append(f"'model.nu_mps2' of at least {_round_up(a_mps2):.3g}")
         fix = f" ({' or '.join(fixes)} keeps it under)" if fixes else ""
         field_, value = ("nu_mps2", m.nu_mps2) if m.nu_mps2 == 0 else ("sun_distance_km", d_km)
         raise ValueError(
@@ -468,8 +469,7 @@ def _check_differential_gravity(m: ModelTable, truth: TruthTable, reserve_mps: f
         )
 
 
-def _round_up(value: float, kind: type = str):
-    """``value`` rounded up to 3 significant digits (as text, or as a float)."""
+def _round_up(value: float) -> float:
+    """``value`` rounded up to 3 significant digits."""
     scale = 10.0 ** (math.floor(math.log10(value)) - 2)
-    up = math.ceil(value / scale * (1 - 1e-12)) * scale
-    return float(f"{up:.3g}") if kind is float else f"{up:.3g}"
+    return float(f"{math.ceil(value / scale * (1 - 1e-12)) * scale:.3g}")
