@@ -72,18 +72,18 @@ def test_run_engagement_reproduces_cli_run_0_of_kp_fig3_to_the_last_digit(tmp_pa
 
 def test_run_attitude_reproduces_the_command_s_rows_and_writes_nothing(tmp_path, capsys,
                                                                       monkeypatch):  # fmt: skip
-    """``kvi attitude smallsat_rw --noise random --estimators ukf --runs 3 --seed 4`` (a
-    20-s turn) and ``run_attitude`` with the same arguments: every column of every row
+    """``kvi attitude smallsat_rw --noise random --estimators ukf --runs 3 --seed 4`` (the
+    first 5 s of the turn) and ``run_attitude`` with the same arguments: every column of every row
     equal (floats bit for bit), and ``run_attitude`` writes no file; a bad estimator is
     a ValueError naming the registered ones, a bad noise the command's one-line error."""
     argv = ["attitude", "smallsat_rw", "--noise", "random", "--estimators", "ukf", "--runs",
-            "3", "--seed", "4", "--set", "simulation.duration_s=20.0", "--no-progress"]  # fmt: skip
+            "3", "--seed", "4", "--set", "simulation.duration_s=5.0", "--no-progress"]  # fmt: skip
     assert main([*argv, "--out", str(tmp_path / "cli")]) == 0
     capsys.readouterr()
     cli = api.load_results(tmp_path / "cli")
     monkeypatch.chdir(tmp_path)
     df = api.run_attitude("smallsat_rw", noise="random", estimator="ukf", runs=3, seed=4,
-                          simulation={"duration_s": 20.0})  # fmt: skip
+                          simulation={"duration_s": 5.0})  # fmt: skip
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cli"]
     assert list(df["run"]) == list(cli["run"]) == [0, 1, 2]
     for key in df.columns.drop("wall_s"):
