@@ -57,13 +57,16 @@ def prepare(source: str, scenario: Mapping[str, Any], controller: str, noise: st
 
 def task(
     config: RwScenario, controller: str, noise: str, estimator: str, seeds
-) -> list[dict[str, float]]:
+) -> list[dict[str, float | int]]:
     """The rows of a batch of runs (one per seed), simulated as one loop."""
     metrics = simulate_runs(
         config, controller, noise, [np.random.default_rng(s) for s in seeds], estimator
     )
     keys = [k for k, v in metrics.items() if np.ndim(v) == 1]
-    return [{k: float(metrics[k][i]) for k in keys} for i in range(len(seeds))]
+    # step counts stay integers, as every other loop's rows hold them
+    kind = {k: int if np.issubdtype(np.asarray(metrics[k]).dtype, np.integer) else float
+            for k in keys}  # fmt: skip
+    return [{k: kind[k](metrics[k][i]) for k in keys} for i in range(len(seeds))]
 
 
 def summarise(

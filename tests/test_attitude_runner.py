@@ -126,3 +126,22 @@ def test_a_statistic_without_runs_prints_a_dash_and_never_settled_prints_inf():
 
     assert stat_text(float("nan"), ".2f") == "-" and stat_text(None, ".2f") == "-"
     assert stat_text(float("inf"), ".2f") == "inf" and stat_text(12.345, ".2f") == "12.35"
+
+
+@pytest.mark.parametrize(
+    ("scenario", "overrides"),
+    [
+        ("smallsat_rw", {"simulation": {"duration_s": 2.0}}),  # the reaction-wheel loop
+        ("resurs_p", {"duration_s": 20.0, "horizon_s": 20.0, "euler": {"accel_time_s": 5.0}}),
+    ],
+)
+def test_the_rows_count_steps_in_integers(scenario, overrides, tmp_path, monkeypatch):
+    """``truth_outside``, ``empty_steps`` and ``unbounded_steps`` are integer columns in
+    every attitude loop's results, as in the intercept's (the reaction-wheel loop wrote
+    them as floats: 0.0 steps)."""
+    from kalman_vs_infoset import api
+
+    monkeypatch.chdir(tmp_path)
+    df = api.run_attitude(scenario, noise="random", runs=2, estimator="box", **overrides)
+    for column in ("truth_outside", "empty_steps", "unbounded_steps"):
+        assert pd.api.types.is_integer_dtype(df[column]), (column, df[column].dtype)
