@@ -3,31 +3,22 @@ An attitude loop with an estimator
 ==================================
 
 The reaction-wheel satellite of Akimov's Fig. 3 (quaternion PD law), its attitude known
-through the guaranteed box estimator from bounded measurements under random noise. The
-command line's ``attitude`` command runs it; its results table is read back in one call.
+through the guaranteed box estimator from bounded measurements under random noise, beside
+the same runs with an unscented Kalman filter. ``run_attitude`` runs the ``attitude``
+command's loop in this process and returns its rows (no files); the command line's
+``kvi attitude smallsat_rw --noise random --estimators box,ukf --runs 2`` writes the same
+rows to a results folder.
 """
 
-import tempfile
-
-from kalman_vs_infoset.experiments.cli import main
+import pandas as pd
 
 import kalman_vs_infoset as kvi
 
-out = tempfile.mkdtemp()
-main(
+df = pd.concat(
     [
-        "attitude",
-        "smallsat_rw",
-        "--noise",
-        "random",
-        "--estimators",
-        "box,perfect",
-        "--runs",
-        "2",
-        "--out",
-        out,
-        "--no-progress",
-    ]
+        kvi.run_attitude("smallsat_rw", noise="random", estimator=name, runs=2)
+        for name in ("box", "ukf")
+    ],
+    ignore_index=True,
 )
-df = kvi.load_results(out)
 print(df[["estimator", "run", "settle_time_s", "energy_N2m2s", "final_angle_deg", "truth_outside"]])

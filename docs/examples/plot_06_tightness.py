@@ -15,15 +15,18 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 from kalman_vs_infoset.experiments.cli import main
 
-out = Path(tempfile.mkdtemp())
-main(["tightness", "kp_fig3", "--times", "10,60,90", "--out", str(out)])
-(report,) = out.glob("*.json")
-rows = json.loads(report.read_text())
+# the command writes a report and a figure: into a temporary folder, read back here
+with tempfile.TemporaryDirectory() as tmp:
+    out = Path(tmp)
+    main(["tightness", "kp_fig3", "--times", "10,60,90", "--out", str(out)])
+    (report,) = out.glob("*.json")
+    rows = json.loads(report.read_text())
+    (png,) = out.glob("*.png")
+    image = mpimg.imread(png)
 print(json.dumps(rows, indent=1)[:600])
 
 # %%
 # The figure the command drew:
-(png,) = out.glob("*.png")
 fig, ax = plt.subplots(figsize=(8, 5))
-ax.imshow(mpimg.imread(png))
+ax.imshow(image)
 ax.set_axis_off()
