@@ -155,3 +155,58 @@ def test_affine_refuses_maps_and_offsets_that_are_not_finite(matrix, offset):
 def test_translate_refuses_an_offset_that_is_not_finite():
     with pytest.raises(ValueError, match="offset must be finite"):
         _two_squares().translate((np.nan, 0.0))
+
+
+@pytest.mark.parametrize(
+    ("dy", "half_y", "message"),
+    [
+        (np.array([0.5]), np.array([0.1]), "dy must hold one value per polygon"),
+        (np.zeros(2), np.zeros(3), "half_y must hold one value per polygon"),
+        (np.zeros((2, 1)), np.zeros(2), "dy must hold one value per polygon"),
+        (np.zeros(2), np.array([0.1, np.nan]), "half_y must be finite"),
+        (np.array([np.inf, 0.0]), np.zeros(2), "dy must be finite"),
+        (np.zeros(2), np.array([0.1, -0.1]), "half_y must be >= 0"),
+    ],
+)
+def test_shift_band_refuses_what_its_kernel_would_read_past_or_invert(dy, half_y, message):
+    """One value short read past the arrays in the compiled kernel (2000 squares and
+    one value: a bound of -1.4e306, memory beyond the input); NaN, inf and a negative
+    half-width gave NaN or inverted polygons."""
+    with pytest.raises(ValueError, match=message):
+        _two_squares().shift_band(dy, half_y)
+
+
+def test_shift_band_takes_one_value_for_all_and_moves_as_the_arrays_do():
+    p = _two_squares()
+    one = p.shift_band(0.5, 0.1)
+    per = p.shift_band(np.full(2, 0.5), np.full(2, 0.1))
+    np.testing.assert_array_equal(one.xy, per.xy)
+    # the unit square moved up by 0.5 and swept by +-0.1 along y: the box [0,1]x[0.4,1.6]
+    got = shapely.Polygon(one.polygon(0))
+    assert got.symmetric_difference(shapely.box(0, 0.4, 1, 1.6)).area == pytest.approx(0, abs=1e-12)
+
+
+def test_polygon_index_counts_from_the_end_and_refuses_outside_the_batch():
+    p = _two_squares()
+    np.testing.assert_array_equal(p.polygon(-1), p.polygon(1))
+    for i in (2, -3):
+        with pytest.raises(IndexError, match="out of range for 2 polygons"):
+            p.polygon(i)
+
+
+def test_clip_slab_refuses_an_axis_other_than_x_or_y():
+    """Axis 2 clipped y without a word."""
+    with pytest.raises(ValueError, match="axis must be 0"):
+        _two_squares().clip_slab(2, 0.0, 1.0)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"max_vertices": 0}, "max_vertices must be an integer >= 3"),
+    ({"max_vertices": -5}, "max_vertices must be an integer >= 3"),
+    ({"max_vertices": 3.5}, "max_vertices must be an integer >= 3"),
+    ({"rel_area_tol": -1.0}, "rel_area_tol must be finite"),
+    ({"rel_area_tol": np.nan}, "rel_area_tol must be finite"),
+])  # fmt: skip
+def test_simplify_refuses_a_cap_it_would_ignore(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        _two_squares().simplify(**kwargs)

@@ -205,3 +205,23 @@ def test_affine_image_holds_every_mapped_corner_in_exact_arithmetic(seed, n, off
             exact = sum(Fraction(float(a[row, i])) * x[i] for i in range(n))
             exact += Fraction(float(b[row]))
             assert Fraction(float(image.lo[row])) <= exact <= Fraction(float(image.hi[row]))
+
+
+def test_box_contains_no_point_with_an_infinite_or_nan_coordinate():
+    """``contains([inf, 0.5])`` read True: the rounding slack grows with |x|, and an
+    infinite coordinate made it infinite (the zonotope and the ellipsoid said False)."""
+    box = Box([0.0, 0.0], [1.0, 1.0])
+    assert not box.contains([np.inf, 0.5]) and not box.contains([-np.inf, 0.5])
+    assert not box.contains([np.nan, 0.5])
+    np.testing.assert_array_equal(box.contains([[0.5, 0.5], [np.inf, 0.5]]), [True, False])
+
+
+@pytest.mark.parametrize("tol", [-1.0, np.inf, np.nan])
+def test_every_set_refuses_a_negative_or_non_finite_tolerance(tol):
+    from kalman_vs_infoset.estim.common.sets import Ellipsoid, Zonotope
+
+    sets = [Box([0.0, 0.0], [1.0, 1.0]), Zonotope([0.0, 0.0], np.eye(2)),
+            Ellipsoid([0.0, 0.0], np.eye(2))]  # fmt: skip
+    for s in sets:
+        with pytest.raises(ValueError, match="tol must be finite"):
+            s.contains([0.5, 0.5], tol=tol)

@@ -250,7 +250,13 @@ class ConvexPolygons:
         return self._next
 
     def polygon(self, i: int) -> FloatArray:
-        return self.xy[self.offsets[i] : self.offsets[i + 1]]
+        """The vertices of polygon ``i`` (negative ``i`` counts from the end, as for a
+        list; ``IndexError`` outside ``range(-n, n)``)."""
+        j = int(i)
+        if not -self.n <= j < self.n:
+            raise IndexError(f"polygon index {i} out of range for {self.n} polygons")
+        j %= self.n
+        return self.xy[self.offsets[j] : self.offsets[j + 1]]
 
     # -- kernels ---------------------------------------------------------------------
     def clip_halfplanes(self, normal: ArrayLike, bound: ArrayLike) -> ConvexPolygons:
@@ -271,7 +277,9 @@ class ConvexPolygons:
         return ConvexPolygons._make(xy, off)
 
     def clip_slab(self, axis: int, lo: ArrayLike, hi: ArrayLike) -> ConvexPolygons:
-        """Intersect polygon ``i`` with ``lo[i] <= p[axis] <= hi[i]``."""
+        """Intersect polygon ``i`` with ``lo[i] <= p[axis] <= hi[i]`` (``axis`` 0 or 1)."""
+        if axis not in (0, 1):
+            raise ValueError(f"axis must be 0 (x) or 1 (y), got {axis!r}")
         if len(self.xy) == 0:
             return self
         lo = _no_nan("lo", np.broadcast_to(np.asarray(lo, dtype=float), (self.n,)))
@@ -280,10 +288,31 @@ class ConvexPolygons:
         return ConvexPolygons._make(*_k.clip_slab(self.xy, self.offsets, axis, lo, hi))
 
     def shift_band(self, dy: FloatArray, half_y: FloatArray) -> ConvexPolygons:
-        """Translate polygon ``i`` by ``(0, dy[i])`` and add ``[-(0, h_i), (0, h_i)]``."""
+        """Translate polygon ``i`` by ``(0, dy[i])`` and add ``[-(0, h_i), (0, h_i)]``.
+
+        ``dy`` and ``half_y`` are one value per polygon (or one for all). Raises
+        ``ValueError`` for another length, a value that is not finite, or a negative
+        ``half_y`` (the kernel reads them unchecked, one per polygon)."""
+        dy, half_y = (self._per_polygon(v, name) for v, name in ((dy, "dy"), (half_y, "half_y")))
+        if not (half_y >= 0).all():
+            raise ValueError(f"half_y must be >= 0, got {float(half_y.min())!r}")
         if len(self.xy) == 0:
             return self
         return ConvexPolygons._make(*_k.shift_band(self.xy, self.offsets, dy, half_y))
+
+    def _per_polygon(self, value: ArrayLike, name: str) -> FloatArray:
+        """``value`` as one finite float per polygon (a scalar is taken for all; an
+        array already of that form is passed on as it is: the kernels' types)."""
+        v = np.asarray(value, dtype=float)
+        if v.ndim == 0:
+            v = np.full(self.n, float(v))
+        if v.shape != (self.n,):
+            raise ValueError(
+                f"{name} must hold one value per polygon ({self.n}), got shape {v.shape}"
+            )
+        if not np.isfinite(v).all():
+            raise ValueError(f"{name} must be finite")
+        return np.ascontiguousarray(v)
 
     def contains_point(self, index: ArrayLike, point: ArrayLike, tol: float) -> bool:
         """Whether ``point`` lies within ``tol`` of one of the polygons ``index``.
@@ -353,8 +382,13 @@ class ConvexPolygons:
         ``rel_area_tol`` times the polygon's area -- or unconditionally while the
         polygon has more than ``max_vertices`` vertices (greedy, cheapest edge
         first). The added area is invariant under the affine prediction maps, so
-        the tolerance is too.
+        the tolerance is too. ``ValueError`` for ``max_vertices`` under 3 or a
+        negative or non-finite ``rel_area_tol``.
         """
+        if not (np.isfinite(rel_area_tol) and rel_area_tol >= 0):
+            raise ValueError(f"rel_area_tol must be finite and >= 0, got {rel_area_tol!r}")
+        if int(max_vertices) != max_vertices or max_vertices < 3:
+            raise ValueError(f"max_vertices must be an integer >= 3, got {max_vertices!r}")
         if len(self.xy) == 0:
             return self
         xy, off = _k.simplify(self.xy, self.offsets, float(rel_area_tol), int(max_vertices))

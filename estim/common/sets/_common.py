@@ -29,6 +29,12 @@ def vector(x: ArrayLike, n: int | None = None, name: str = "vector") -> FloatArr
     return v
 
 
+def check_tol(tol: float) -> None:
+    """A containment tolerance must be finite and ``>= 0`` (``ValueError``)."""
+    if not (np.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol must be finite and >= 0, got {tol!r}")
+
+
 def points(x: ArrayLike, n: int) -> FloatArray:
     """``x`` as float points of dimension ``n`` (shape (n,) or (k, n)), for a containment
     test: a point of another dimension is an error, not broadcast against the set. NaN

@@ -66,6 +66,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     ROUND_RTOL,
     EmptyIntersectionError,
     FloatArray,
+    check_tol,
     clip_slab,
     flat_along,
     halfspace_bound,
@@ -222,6 +223,7 @@ class Ellipsoid:
         of the coordinates, as the other sets allow); or, where those ``l_i`` are
         positive (a thin set, not a flat one), the same sum over all of them.
         """
+        check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
         lam, vec = self._eig

@@ -36,6 +36,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     ROUND_RTOL,
     EmptyIntersectionError,
     FloatArray,
+    check_tol,
     clip_slab,
     halfspace_bound,
     matrix,
@@ -147,12 +148,15 @@ class Box:
     def contains(self, x: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
         """Whether ``x`` (shape (n,) or (k, n)) lies in the box, up to ``tol`` times the
         largest of 1 and the box's half-width, and a few ulps of the coordinates (as the
-        other sets: far from the origin they are rounded to more than that)."""
+        other sets: far from the origin they are rounded to more than that). A point
+        with a coordinate that is not finite is not in it (an infinite one was, by
+        its own rounding slack); ``ValueError`` for a negative or non-finite ``tol``."""
+        check_tol(tol)
         x = points(x, self.dim)
         slack = tol * max(float(self.radius.max(initial=0.0)), 1.0) + ROUND_RTOL * (
             np.abs(x) + np.maximum(np.abs(self.lo), np.abs(self.hi))
         )
-        inside = np.all((x >= self.lo - slack) & (x <= self.hi + slack), axis=-1)
+        inside = np.all((x >= self.lo - slack) & (x <= self.hi + slack) & np.isfinite(x), axis=-1)
         return bool(inside) if x.ndim == 1 else inside
 
     def intersect_strip(self, a: ArrayLike, b: float, r: float) -> Box:

@@ -53,6 +53,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     TOUCH_RTOL,
     EmptyIntersectionError,
     FloatArray,
+    check_tol,
     clip_slab,
     flat_along,
     halfspace_bound,
@@ -176,6 +177,7 @@ class Zonotope:
         """
         if method not in ("auto", "lp", "facets"):
             raise ValueError(f"method must be 'auto', 'lp' or 'facets', got {method!r}")
+        check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
