@@ -24,6 +24,7 @@ DERIVED = {
     "swing": r"\(it is ([\d.]+) m/s\^2, a hundred times `nu`, for an unguided (\d+)-km offset "
     r"at (\d+) km\)",
     "fine": r"\(([\d.e-]+) m at `dt = ([\d.]+) s`\)",
+    "drift": r"closing speed by up to ([\d.e-]+) m/s and moves its range up to ([\d.]+) mm",
 }
 
 #: sentences on earlier releases' defects, found and fixed; each of their numbers is in
@@ -92,6 +93,9 @@ INPUTS = (
     r"each of the 29 sections",
     r"outer-simplified to 16 vertices",
     r"an assumed 0\.1 rad",
+    r"approach at 1 AU",
+    r"a Sun 4e6 km away",
+    r"range drift exceeds 1 m",
 )
 
 
@@ -137,3 +141,15 @@ def test_the_disturbance_widens_a_slice_by_nu_dt2_over_two_a_step():
     """'(6e-6 m at dt = 0.05 s)': ``nu dt^2 / 2`` with Fig. 3's ``nu``."""
     width, dt = printed(DOC, DERIVED["fine"])
     assert agrees(width, scenario_tables("kp_fig3")["model"]["nu_mps2"] * float(dt) ** 2 / 2.0)
+
+
+def test_the_along_sight_drift_is_kp_fig5_s_own_at_1_au():
+    """'changes the truth's closing speed by up to 5.5e-5 m/s and moves its range up to
+    3.1 mm': ``along_sight_drift`` of kp_fig5 (``a T`` and ``a T^2 / 2``, ``a`` the tidal
+    bound ``2 K r / (d - r)^3`` over the a-priori box with the fuel reserve)."""
+    from kalman_vs_infoset import api
+
+    speed, range_mm = printed(DOC, DERIVED["drift"])
+    m = api.load_scenario("kp_fig5", model={"along_sight_drift": True}).channel_model()
+    assert agrees(speed, m.closing_drift_mps)
+    assert agrees(range_mm, m.range_drift_m * 1e3)

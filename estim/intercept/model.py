@@ -178,6 +178,14 @@ class ChannelModel:
     #: range measurement that carries none (``Range.off_axis_rad``): the range finder
     #: measures d, the sections are in x = d cos(angle) >= d cos(max_off_axis)
     max_off_axis_rad: float = 0.1
+    #: how far the truth may depart from a constant closing speed over an engagement
+    #: (an acceleration along the line of sight, e.g. differential gravity, ``|de/dt|
+    #: <= a`` for a time ``T``): its closing speed by ``a T``, its range from ``x0 - e
+    #: t`` by ``a T^2 / 2``. The set estimators widen their closing-speed interval, the
+    #: range of their prior box, every range interval and the threshold by these (zero:
+    #: the seed's constant closing speed)
+    closing_drift_mps: float = 0.0
+    range_drift_m: float = 0.0
 
     def __post_init__(self) -> None:
         if not self.closing_speed_mps > 0:
@@ -190,10 +198,26 @@ class ChannelModel:
             raise ValueError("eps_m must be positive")
         if not 0 <= self.max_off_axis_rad < np.pi / 2:
             raise ValueError("max_off_axis_rad must be in [0, pi/2)")
+        if not 0 <= self.closing_drift_mps < 0.5 * self.closing_speed_mps:
+            raise ValueError("closing_drift_mps must be in [0, closing_speed_mps / 2)")
+        if not 0 <= self.range_drift_m < 0.5 * self.eps_m:
+            raise ValueError("range_drift_m must be in [0, eps_m / 2)")
 
     @property
     def e(self) -> float:
         return self.closing_speed_mps
+
+    @property
+    def eps_sets_m(self) -> float:
+        """The least range the set estimators keep: ``eps`` less :attr:`range_drift_m`
+        (a truth at ``eps`` lies up to that below its constant-speed line)."""
+        return self.eps_m - self.range_drift_m
+
+    def drifted_speeds(self, speeds_mps: tuple[float, float] | None) -> tuple[float, float]:
+        """A closing-speed interval (None: ``e`` exactly) widened by
+        :attr:`closing_drift_mps` on both sides: every closing speed the truth reaches."""
+        lo, hi = speeds_mps if speeds_mps is not None else (self.e, self.e)
+        return lo - self.closing_drift_mps, hi + self.closing_drift_mps
 
     def step_coefficients(self, x0_m: ArrayLike, dt_s: float) -> dict[str, NDArray[np.float64]]:
         """Coefficients of the exact one-step map from ``x0`` to ``x1 = x0 - e dt``.
@@ -334,6 +358,15 @@ class ChannelPrior:
             lateral_m=(y0 - y_down, y1 + y_up),
             lateral_vel_mps=(v0 - down - pad * (down > 0), v1 + up + pad * (up > 0)),
         )
+
+    def drifted(self, model: ChannelModel) -> ChannelPrior:
+        """The box with its range widened by ``model.range_drift_m`` on both sides (the
+        set estimators' prior: a truth departing from a constant closing speed is, at
+        any time, on a constant-speed line from a range that far outside the box)."""
+        d = model.range_drift_m
+        if d == 0.0:
+            return self
+        return replace(self, x_m=(self.x_m[0] - d, self.x_m[1] + d))
 
     def centre_state(self, model: ChannelModel) -> NDArray[np.float64]:
         """``(alpha, omega, x)`` of the box's centre (closing at the interval's middle)."""

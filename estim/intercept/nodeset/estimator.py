@@ -218,7 +218,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     # -- construction ----------------------------------------------------------------
     def bands(self) -> tuple[FloatArray, FloatArray]:
         """``u_lo, u_hi`` of each band (``u = 1/e``, equal pieces of the interval)."""
-        e_lo, e_hi = self.closing_speed_mps or (self.model.e, self.model.e)
+        # every closing speed the truth reaches (the interval, widened by its drift)
+        e_lo, e_hi = self.model.drifted_speeds(self.closing_speed_mps)
         # a band relaxes the impulses' and the disturbance's scale by its relative
         # width: bands of 0.1 % by default (Fig. 5's 57.9..58.1 km/s: 4), at most 8
         n = self.n_bands or int(np.clip(np.ceil((e_hi / e_lo - 1.0) / 1e-3), 1, 8))
@@ -247,7 +248,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         prior = ChannelPrior(**box) if prior is None else prior
         u_lo, u_hi = self.bands()
         # the box of the coordinates the slices take, holding every Cartesian state
-        prior = prior.auxiliary_box(1.0 / float(u_lo.min()))
+        prior = prior.auxiliary_box(1.0 / float(u_lo.min())).drifted(self.model)
         (y0, y1), (v0, v1), (xa, xb) = prior.lateral_m, prior.lateral_vel_mps, prior.x_m
         hard_lo, hard_hi = xa * u_lo, xb * u_hi
         # a known range (a point box) is one node
@@ -289,8 +290,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             # the nodes are in x = d cos(off-axis angle), not in the measured range d
             phi = measurement.off_axis_rad
             phi = self.model.max_off_axis_rad if phi is None else phi
-            lo = d / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN)
-            op = OpLog.one(_nk.RANGE, nb_, lo, d / (1.0 - b) * (1.0 + STRIP_MARGIN))
+            lo = d / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN) - self.model.range_drift_m
+            hi = d / (1.0 - b) * (1.0 + STRIP_MARGIN) + self.model.range_drift_m
+            op = OpLog.one(_nk.RANGE, nb_, lo, hi)
         else:
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
         out = self.refine(self._record(belief, op), before=belief)
@@ -389,7 +391,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             polys.xy, polys.offsets, np.ascontiguousarray(label, dtype=float),
             np.ascontiguousarray(piece, dtype=np.int64), s.u_lo, s.u_hi, s.hard_lo_s,
             s.hard_hi_s, float(t), *ops.parts(), self.alpha_scale_rad, s.e_nom,
-            self.model.eps_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
+            self.model.eps_sets_m, bb.end_rad, bb.start_rad, bb.ref_range_m, STRIP_MARGIN,
             NO_CAP if self.max_vertices is None else self.max_vertices, self.impulse_per_piece,
         )  # fmt: skip
         return ConvexPolygons._make(xy, off), t, hard_lo, hard_hi, n_simpl
@@ -402,7 +404,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         # x in [(tau_lo - dt) / u_hi (at least eps), tau_hi / u_lo] over the step;
         # compiled (kinematic_interval per piece: a handful of numbers every step)
         return piece_kinematic(
-            per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_m, s.e_nom, self.model.nu_mps2,
+            per, s.u_lo, s.u_hi, float(dt_s), self.model.eps_sets_m, s.e_nom, self.model.nu_mps2,
             MAX_BEARING_RAD,
         )  # fmt: skip
 

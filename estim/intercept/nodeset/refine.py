@@ -317,7 +317,9 @@ class NodeRefinement:
         # order, as the splits before it change the band's count of pieces
         # counted from eps at least (and from min_split_tau_s: states that arrive
         # within a step or two need no margin of their own)
-        tau_lo = np.maximum(np.maximum(per[:, 4], self.model.eps_m * s.u_lo), self.min_split_tau_s)
+        tau_lo = np.maximum(
+            np.maximum(per[:, 4], self.model.eps_sets_m * s.u_lo), self.min_split_tau_s
+        )
         wide = np.isfinite(per[:, 4]) & (per[:, 5] > self.split_ratio * tau_lo)
         for p in np.flatnonzero(wide).tolist():
             lo, hi = float(tau_lo[p]), float(per[p, 5])
