@@ -45,6 +45,19 @@ from numpy.typing import ArrayLike, NDArray
 StateFunction = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 
+def state_values(fn: StateFunction, states: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``fn`` at the rows of ``states`` ``(k, n)``, one float each; ``TypeError`` for a
+    function that does not map ``k`` states to ``k`` values (an error of the caller's
+    function, not an index error deep in an estimator)."""
+    values = np.asarray(fn(states), dtype=float)
+    if values.shape != (len(states),):
+        raise TypeError(
+            f"a state function must map an array of {len(states)} states (rows) to "
+            f"{len(states)} values, got shape {values.shape} from {fn!r}"
+        )
+    return values
+
+
 @dataclass(frozen=True)
 class Extremes:
     """Minimum and maximum of a function over a belief and their arguments."""

@@ -57,10 +57,43 @@ def test_a_non_finite_measurement_is_refused_where_it_is_made():
     from kalman_vs_infoset.estim.intercept.model import Bearing, Range
 
     for bad in (float("nan"), float("inf")):
-        with pytest.raises(ValueError, match="bearing measurement must be finite"):
+        with pytest.raises(ValueError, match=r"bearing measurement must be in \[-pi, pi\]"):
             Bearing(bad)
-        with pytest.raises(ValueError, match="range measurement must be finite"):
+        with pytest.raises(ValueError, match="range measurement must be a finite positive"):
             Range(bad)
+
+
+def test_a_bearing_beyond_pi_and_a_range_not_positive_are_refused_too():
+    """``Bearing(1e300)`` reached the EKF and overflowed there; ``Range(-5.0)`` was
+    accepted. A bearing is an angle, a range a distance."""
+    from kalman_vs_infoset.estim.intercept.model import Bearing, Range
+
+    for bad in (1e300, -4.0, np.pi + 1e-9):
+        with pytest.raises(ValueError, match=r"in \[-pi, pi\] rad"):
+            Bearing(bad)
+    assert Bearing(np.pi).alpha_rad == np.pi
+    for bad in (-5.0, 0.0):
+        with pytest.raises(ValueError, match="finite positive number"):
+            Range(bad)
+
+
+@pytest.mark.parametrize("name", ["ekf", "infoset_slabs", "zonotope"])
+def test_extremes_of_a_function_that_is_not_per_state_is_a_type_error(name):
+    """A function that does not give one value per state (here the first row) raised
+    IndexError inside the EKF and "only 0-dimensional arrays..." in the section sets;
+    now a TypeError naming what a state function must do. A proper one still works."""
+    from kalman_vs_infoset.estim.intercept.model import Bearing
+
+    sc = api.load_scenario("kp_fig3")
+    if name == "infoset_slabs":
+        sc = api.load_scenario("kp_fig3", estimator={"infoset": {"sections": "slabs"}})
+        name = "infoset"
+    est = api.get_estimator(name).build(sc.estimator.options_for(name), sc.setting())
+    belief = est.update(est.initial(sc.estimator.prior("lateral")), Bearing(-1.3e-3))
+    with pytest.raises(TypeError, match="a state function must map"):
+        belief.extremes(lambda s: s[0])
+    ext = belief.extremes(lambda s: s[:, 2])
+    assert ext.min_value <= ext.max_value
 
 
 @pytest.mark.parametrize("name", ["infoset", "ekf", "ukf", "hinf", "pf"])

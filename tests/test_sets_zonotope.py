@@ -263,3 +263,11 @@ def test_validation_and_immutability():
     assert Zonotope([1.0, 2.0], []).n_generators == 0
     with pytest.raises(ValueError):
         Zonotope.from_box([0, 0], [1, 1]).generators[0, 0] = 2.0
+
+
+def test_reduce_refuses_a_generator_count_that_is_not_an_integer():
+    """``reduce(2.5)`` failed deep in numpy ("slice indices must be integers")."""
+    z = Zonotope([0.0, 0.0], np.eye(2) @ np.ones((2, 5)))
+    with pytest.raises(ValueError, match="max_generators must be an integer"):
+        z.reduce(2.5)
+    assert z.reduce(np.int64(2)).generators.shape == (2, 2)

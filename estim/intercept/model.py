@@ -71,14 +71,17 @@ class BearingBound:
 
 @dataclass(frozen=True)
 class Bearing:
-    """A bearing measurement of one channel (rad); a number (NaN or inf is refused
-    here, so that no estimator mistakes it for a fault of its own belief)."""
+    """A bearing measurement of one channel (rad): an angle in ``[-pi, pi]`` (NaN, inf or
+    a number beyond is refused here, so that no estimator mistakes it for a fault of its
+    own belief: 1e300 overflowed in the EKF)."""
 
     alpha_rad: float
 
     def __post_init__(self) -> None:
-        if not np.isfinite(self.alpha_rad):
-            raise ValueError(f"a bearing measurement must be finite, got {self.alpha_rad}")
+        if not (np.isfinite(self.alpha_rad) and abs(self.alpha_rad) <= np.pi):
+            raise ValueError(
+                f"a bearing measurement must be in [-pi, pi] rad, got {self.alpha_rad}"
+            )
 
 
 @dataclass(frozen=True)
@@ -96,8 +99,10 @@ class Range:
     off_axis_rad: float | None = None
 
     def __post_init__(self) -> None:
-        if not np.isfinite(self.range_m):
-            raise ValueError(f"a range measurement must be finite, got {self.range_m}")
+        if not (np.isfinite(self.range_m) and self.range_m > 0):
+            raise ValueError(
+                f"a range measurement must be a finite positive number, got {self.range_m}"
+            )
         if self.off_axis_rad is not None and not 0 <= self.off_axis_rad <= np.pi / 2:
             raise ValueError("off_axis_rad must be in [0, pi/2] (or None)")
 

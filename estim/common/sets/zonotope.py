@@ -292,6 +292,9 @@ class Zonotope:
         their interval hull.
         """
         n, m = self.generators.shape
+        if isinstance(max_generators, bool) or int(max_generators) != max_generators:
+            raise ValueError(f"max_generators must be an integer, got {max_generators!r}")
+        max_generators = int(max_generators)
         if max_generators < n:
             raise ValueError(f"max_generators must be at least the dimension {n}")
         if m <= max_generators:

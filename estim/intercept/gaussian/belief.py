@@ -29,7 +29,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from numpy.typing import ArrayLike, NDArray
@@ -250,7 +250,7 @@ class GaussianBelief(Belief):
     # -- extremes ------------------------------------------------------------------
     def _generic_extremes(self, fn: StateFunction) -> Extremes:
         pts = self.points(_BALL)
-        vals = np.asarray(fn(pts), dtype=float)
+        vals = state_values(fn, pts)
         i_min, i_max = int(np.argmin(vals)), int(np.argmax(vals))
         best = []
         for sign, i0 in ((-1.0, i_min), (1.0, i_max)):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
@@ -141,7 +141,7 @@ class InformationSet(Belief):
         pts = self.vertices("hi", kind)
         if np.any(self.x_hi_m > self.x_lo_m):
             pts = np.vstack([self.vertices("lo", kind), pts])
-        values = np.asarray(fn(pts), dtype=float)
+        values = state_values(fn, pts)
         i_min, i_max = int(np.argmin(values)), int(np.argmax(values))
         return Extremes(float(values[i_min]), pts[i_min], float(values[i_max]), pts[i_max])
 
