@@ -10,6 +10,7 @@ for the intercept.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -25,6 +26,7 @@ def run_attitude(
     estimator: str | None = None,
     runs: int = 1,
     seed: int = 0,
+    tables: Mapping[str, Any] | None = None,
     **overrides: Any,
 ) -> pd.DataFrame:
     """Closed-loop attitude runs, one row per run, as ``kvi attitude`` records them.
@@ -47,6 +49,10 @@ def run_attitude(
         Number of runs (``>= 1``).
     seed : int, default 0
         The root seed.
+    tables : mapping, optional
+        Tables of fields to change by name, for a table whose name is taken by an
+        argument above: the measurement errors and disturbances of ``[noise]`` are
+        ``tables={"noise": {"meas_angle_deg": 0.01}}`` (``noise=`` chooses the noise).
     **overrides
         Tables of fields to change, e.g. ``simulation={"duration_s": 20.0}`` or
         ``estimator_options={"ukf": {"gate_prob": 0.99}}``; validated like the file.
@@ -92,7 +98,7 @@ def run_attitude(
         raise ValueError(f"noise must be one of {', '.join(NOISES)}, got {noise!r}")
     args = argparse.Namespace(
         scenario=str(scenario),
-        overrides=[f"{key}={_toml(v)}" for key, v in _flatten("", overrides)],
+        overrides=[f"{key}={_toml(v)}" for key, v in _flatten("", {**(tables or {}), **overrides})],
         controller=controller,
         noise=[noise],
         estimators=None if estimator is None else [estimator],
