@@ -42,7 +42,12 @@ from kalman_vs_infoset.experiments.adversary import (
     WhiteBoxNoise,
 )
 from kalman_vs_infoset.experiments.noise import BiasNoise, GameNoise, RandomNoise
-from kalman_vs_infoset.experiments.sim.intercept_config import CHANNELS, NOISES, InterceptScenario
+from kalman_vs_infoset.experiments.sim.intercept_config import (
+    CHANNELS,
+    NOISES,
+    InterceptScenario,
+    longest_approach_s,
+)
 from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling, PointingLoop
 from kalman_vs_infoset.experiments.sim.trace import Recorder, channel_row
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
@@ -189,7 +194,9 @@ class Engagement:
         if sc.attitude is not None:  # end-to-end: an attitude loop holds the axis
             loop = PointingLoop.from_config(sc.attitude, rng.spawn(1)[0])
             self.pointing = PointingCoupling(loop)
-            self.model = self.pointing.widen(sensor)
+            # with the along-sight drift, the rotated impulses' share of it too
+            fuel = sc.guidance.reserve_mps if sc.model.along_sight_drift else None
+            self.model = self.pointing.widen(sensor, fuel, longest_approach_s(sc))
         model = self.model
         self.state = self.truth_model.initial(pos_km, vel_kmps)
         self.channels = sc.channels

@@ -366,7 +366,7 @@ class InterceptScenario(Table):
         if not self._auxiliary_truth:
             # without the option the sets leave RANGE_DRIFT_TOL_M to the drift: the
             # least Sun distance named must keep both checks (each names it)
-            least_km = 0.0 if m.along_sight_drift else _least_sun_for_drift_km(self)
+            least_km = _least_sun_for_drift_km(self)
             _check_differential_gravity(m, self.truth, g.reserve_mps, least_km)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
@@ -411,7 +411,7 @@ class InterceptScenario(Table):
                 f"the limit is {MAX_STEPS} steps"
             )
         if not self._auxiliary_truth:  # (after the steps: a long run drifts far)
-            least_km = 0.0 if m.along_sight_drift else _least_sun_for_drift_km(self)
+            least_km = _least_sun_for_drift_km(self)
             _check_along_sight_drift(m, along_sight_drift(self)[1], least_km)
         return self
 
@@ -494,11 +494,15 @@ def _reach(box: TruthTable | EstimatorTable, reserve_mps: float) -> tuple[float,
 
 def _least_sun_for_drift_km(sc: InterceptScenario) -> float:
     """The least Sun distance (km, rounded up) at which :func:`along_sight_drift`'s range
-    drift is at most :data:`RANGE_DRIFT_TOL_M`: ``d = r + (tidal T^2 / (2 tol))^(1/3)``."""
-    e = sc.estimator
+    drift passes :func:`_check_along_sight_drift`: at most :data:`RANGE_DRIFT_TOL_M`
+    without ``model.along_sight_drift``, under half of ``eps`` with it; ``d = r + (tidal
+    T^2 / (2 tol))^(1/3)``."""
+    e, m = sc.estimator, sc.model
+    # (with the option, a hair under eps/2: the check wants the drift strictly under)
+    tol_m = 0.5 * m.eps_km * 1e3 * (1 - 1e-9) if m.along_sight_drift else RANGE_DRIFT_TOL_M
     r_km, tidal = _reach(e, sc.guidance.reserve_mps)
     t_s = e.x_km[1] / min(abs(v) for v in e.vx_kmps)
-    return _round_up(r_km + (0.5 * tidal * t_s**2 / RANGE_DRIFT_TOL_M) ** (1 / 3))
+    return _round_up(r_km + (0.5 * tidal * t_s**2 / tol_m) ** (1 / 3))
 
 
 def along_sight_drift(sc: InterceptScenario) -> tuple[float, float]:
@@ -509,10 +513,16 @@ def along_sight_drift(sc: InterceptScenario) -> tuple[float, float]:
     ``T`` (the farthest range at the slowest closing). 1 AU: about 5.5e-5 m/s and 3
     mm on kp_fig5, against a truth 0.1 mm outside the sets from a face of the range box
     without them (docs/infoset.md)."""
-    e = sc.estimator
-    a_mps2 = _tidal_bound(sc.model, e, sc.guidance.reserve_mps)[0]
-    t_s = e.x_km[1] / min(abs(v) for v in e.vx_kmps)
+    a_mps2 = _tidal_bound(sc.model, sc.estimator, sc.guidance.reserve_mps)[0]
+    t_s = longest_approach_s(sc)
     return a_mps2 * t_s, 0.5 * a_mps2 * t_s**2
+
+
+def longest_approach_s(sc: InterceptScenario) -> float:
+    """The longest approach of the a-priori box, s: its farthest range at its slowest
+    closing speed."""
+    e = sc.estimator
+    return e.x_km[1] / min(abs(v) for v in e.vx_kmps)
 
 
 def _check_along_sight_drift(m: ModelTable, range_drift_m: float, least_km: float) -> None:
@@ -520,24 +530,22 @@ def _check_along_sight_drift(m: ModelTable, range_drift_m: float, least_km: floa
     (:func:`along_sight_drift`) that the sets do not take: over
     :data:`RANGE_DRIFT_TOL_M` without ``model.along_sight_drift`` (naming the option and
     ``least_km``, the least Sun distance that keeps it under), or, with it, not under
-    half of ``eps`` (the sets' least range must stay positive)."""
+    half of ``eps`` (the sets' least range must stay positive; naming ``least_km``)."""
     where = (
         f"field 'model.sun_distance_km' {m.sun_distance_km:g}: the Sun's differential "
         f"gravity along the line of sight moves the truth's range up to "
         f"{range_drift_m:.3g} m off a constant closing speed over the engagement"
     )
+    farther = f" a Sun distance of at least {least_km:.3g} km" if least_km <= SUN_MAX_KM else ""
     if not m.along_sight_drift and range_drift_m > RANGE_DRIFT_TOL_M:
         raise ValueError(
             f"{where}, more than the {RANGE_DRIFT_TOL_M:g} m the sets leave to it; set "
             "'model.along_sight_drift = true' (the sets widen by it)"
-            + (
-                f" or a Sun distance of at least {least_km:.3g} km"
-                if least_km <= SUN_MAX_KM
-                else ""
-            )
+            + (f" or{farther}" if farther else "")
         )
     if m.along_sight_drift and not range_drift_m < 0.5 * m.eps_km * 1e3:
-        raise ValueError(f"{where}, not under half of 'model.eps_km' {m.eps_km:g}")
+        fix = f" ({farther.strip()} keeps it under)" if farther else ""
+        raise ValueError(f"{where}, not under half of 'model.eps_km' {m.eps_km:g}{fix}")
 
 
 def _check_differential_gravity(

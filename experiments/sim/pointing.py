@@ -254,11 +254,24 @@ class PointingCoupling:
         self.max_residual_rad = 0.0
         self.max_bound_rad = self.kb_rad
 
-    def widen(self, model: ChannelModel) -> ChannelModel:
-        """The intercept model with the bearing bound widened by the knowledge bound."""
+    def widen(
+        self, model: ChannelModel, fuel_mps: float | None = None, approach_s: float = 0.0
+    ) -> ChannelModel:
+        """The intercept model with the bearing bound widened by the knowledge bound;
+        with ``fuel_mps`` (the most the impulses may spend) its drifts widened too: a
+        rotated impulse ``dv`` changes the closing speed by up to ``kb |dv|``, so all of
+        them by ``kb fuel``, and the range by that times the approach ``approach_s``."""
         b = model.bearing_bound
         widened = BearingBound(b.start_rad + self.kb_rad, b.end_rad + self.kb_rad, b.ref_range_m)
-        return replace(model, bearing_bound=widened)
+        model = replace(model, bearing_bound=widened)
+        if fuel_mps is None:
+            return model
+        dv = self.kb_rad * fuel_mps
+        return replace(
+            model,
+            closing_drift_mps=model.closing_drift_mps + dv,
+            range_drift_m=model.range_drift_m + dv * approach_s,
+        )
 
     def bearing_errors(self, r_guidance: np.ndarray, channels: Sequence[str]) -> list[float]:
         """Bearing error (rad) per channel left after correcting the body-axis
