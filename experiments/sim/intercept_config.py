@@ -501,7 +501,7 @@ def _least_sun_for_drift_km(sc: InterceptScenario) -> float:
     # (with the option, a hair under eps/2: the check wants the drift strictly under)
     tol_m = 0.5 * m.eps_km * 1e3 * (1 - 1e-9) if m.along_sight_drift else RANGE_DRIFT_TOL_M
     r_km, tidal = _reach(e, sc.guidance.reserve_mps)
-    t_s = e.x_km[1] / min(abs(v) for v in e.vx_kmps)
+    t_s = longest_approach_s(sc)
     return _round_up(r_km + (0.5 * tidal * t_s**2 / tol_m) ** (1 / 3))
 
 
@@ -510,9 +510,9 @@ def along_sight_drift(sc: InterceptScenario) -> tuple[float, float]:
     truth's differential gravity along the line of sight, bounded by ``a``
     (:func:`_tidal_bound` over the a-priori box), moves its closing speed (``a T``) and
     its range from a constant-speed line (``a T^2 / 2``) over the longest engagement
-    ``T`` (the farthest range at the slowest closing). 1 AU: about 5.5e-5 m/s and 3
-    mm on kp_fig5, against a truth 0.1 mm outside the sets from a face of the range box
-    without them (docs/infoset.md)."""
+    ``T`` (:func:`longest_approach_s`). 1 AU: about 5.5e-5 m/s and 3 mm on kp_fig5;
+    without them a truth on a face of the range box lay under a millimetre outside the
+    sets (docs/infoset.md)."""
     a_mps2 = _tidal_bound(sc.model, sc.estimator, sc.guidance.reserve_mps)[0]
     t_s = longest_approach_s(sc)
     return a_mps2 * t_s, 0.5 * a_mps2 * t_s**2
@@ -552,10 +552,11 @@ def _check_differential_gravity(
     m: ModelTable, truth: TruthTable, reserve_mps: float, least_km: float = 0.0
 ) -> None:
     """Refuse a Sun so near that its differential gravity over the engagement exceeds
-    ``nu``: the sets take the truth's acceleration relative to the model (across and
-    along the line of sight) as bounded by ``nu`` (docs/infoset.md). Its bound at a
-    relative position ``r`` from a target ``d`` from the Sun is ``2 K r / (d - r)^3``
-    (the tidal term, with the nonlinear rest), taken at the farthest the truth can be:
+    ``nu``: the sets take the truth's acceleration relative to the model across the line
+    of sight as bounded by ``nu`` (along it: :func:`along_sight_drift`; docs/infoset.md).
+    Its bound at a relative position ``r`` from a target ``d`` from the Sun is
+    ``2 K r / (d - r)^3`` (the tidal term, with the nonlinear rest), taken at the
+    farthest the truth can be:
     its box's far corner moved sideways at the box's lateral speed plus the whole fuel
     reserve for the time the slowest closing takes. 1 AU gives about 5e-7 m/s^2 at
     6300 km; a Sun at 1e6 km 1.6 m/s^2 at kp_fig5's ranges, where runs left the truth
