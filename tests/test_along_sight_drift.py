@@ -235,3 +235,13 @@ def test_the_changelog_s_before_and_after_are_the_results_files():
         assert abs(rows[key]["miss_m"]["mean"] - old[key]["miss_m"]["mean"]) < 0.03
         assert abs(rows[key]["fuel_mps"]["mean"] - old[key]["fuel_mps"]["mean"]) < 0.1
     assert all(v["truth_outside"] == 0 for v in after["variants"])
+
+
+def test_an_end_to_end_drift_over_half_of_eps_says_which_bound_and_what_to_change():
+    """A 1-deg attitude measurement: the impulses' share of the drift (the knowledge
+    bound times the 2000 m/s reserve, times the approach) passes half of ``eps``; the
+    run's error names the bound and the remedies (it read "range_drift_m must be in
+    [0, eps_m / 2)")."""
+    sc = _scenario("kp_fig3_attitude", {"attitude": {"meas_angle_bound_deg": 1.0}})
+    with pytest.raises(ValueError, match=r"knowledge bound [\d.]+ deg over the fuel reserve"):
+        api.run_engagement(sc, "infoset", "random")

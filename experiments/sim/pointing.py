@@ -267,11 +267,16 @@ class PointingCoupling:
         if fuel_mps is None:
             return model
         dv = self.kb_rad * fuel_mps
-        return replace(
-            model,
-            closing_drift_mps=model.closing_drift_mps + dv,
-            range_drift_m=model.range_drift_m + dv * approach_s,
-        )
+        drift_m = model.range_drift_m + dv * approach_s
+        if not drift_m < 0.5 * model.eps_m:
+            raise ValueError(
+                f"with model.along_sight_drift the impulses, rotated by up to the attitude "
+                f"knowledge bound {np.degrees(self.kb_rad):.3g} deg over the fuel reserve "
+                f"{fuel_mps:g} m/s, move the range up to {drift_m:.3g} m, not under half of "
+                f"eps ({0.5 * model.eps_m:g} m): a finer attitude measurement, a smaller "
+                "guidance.reserve_mps, or the option off"
+            )
+        return replace(model, closing_drift_mps=model.closing_drift_mps + dv, range_drift_m=drift_m)
 
     def bearing_errors(self, r_guidance: np.ndarray, channels: Sequence[str]) -> list[float]:
         """Bearing error (rad) per channel left after correcting the body-axis
