@@ -363,10 +363,10 @@ class InterceptScenario(Table):
         check_option_tables("intercept", "estimator", e.options)
         # (a command whose truth is the auxiliary model itself has no gravity to check)
         self._auxiliary_truth = bool((info.context or {}).get("auxiliary_truth"))
+        # the least Sun distance the drift check takes: the gravity check's remedies keep
+        # it too (each check names it; the drift is checked after the steps, below)
+        least_km = _least_sun_for_drift_km(self)
         if not self._auxiliary_truth:
-            # without the option the sets leave RANGE_DRIFT_TOL_M to the drift: the
-            # least Sun distance named must keep both checks (each names it)
-            least_km = _least_sun_for_drift_km(self)
             _check_differential_gravity(m, self.truth, g.reserve_mps, least_km)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
@@ -411,7 +411,6 @@ class InterceptScenario(Table):
                 f"the limit is {MAX_STEPS} steps"
             )
         if not self._auxiliary_truth:  # (after the steps: a long run drifts far)
-            least_km = _least_sun_for_drift_km(self)
             _check_along_sight_drift(m, along_sight_drift(self)[1], least_km)
         return self
 

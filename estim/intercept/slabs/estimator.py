@@ -85,6 +85,7 @@ A control (an impulse, :class:`~kalman_vs_infoset.estim.intercept.model.Impulse`
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -198,12 +199,21 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
             return PolygonFamily(self.simplify_rel_area, self.max_vertices)
         return self.family
 
+    @cached_property
+    def _drift(self) -> ChannelModel:
+        """The model whose drifts off a constant closing speed the sets take
+        (:attr:`ChannelModel.range_drift_m`): none for the seed's point sections, which
+        assume ``c = e``."""
+        if self.sections != "points":
+            return self.model
+        return replace(self.model, closing_drift_mps=0.0, range_drift_m=0.0)
+
     @property
     def speed_interval(self) -> tuple[float, float]:
         if self.sections == "points":
             return self.model.e, self.model.e
         # every closing speed the truth reaches (the interval, widened by its drift)
-        return self.model.drifted_speeds(self.closing_speed_mps)
+        return self._drift.drifted_speeds(self.closing_speed_mps)
 
     # -- construction ----------------------------------------------------------------
     def initial(self, prior: ChannelPrior | None = None, **box: Any) -> InformationSet:
@@ -217,9 +227,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         """
         prior = ChannelPrior(**box) if prior is None else prior
         # the box of the coordinates the sections take, holding every Cartesian state
-        prior = prior.auxiliary_box(self.speed_interval[1])
-        if self.sections != "points":  # (the seed's point sections assume c = e)
-            prior = prior.drifted(self.model)
+        prior = prior.auxiliary_box(self.speed_interval[1]).drifted(self._drift)
         return self.from_boxes(prior.lateral_m, prior.lateral_vel_mps, prior.x_m)
 
     def from_boxes(
@@ -299,8 +307,8 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         phi = self.model.max_off_axis_rad if phi is None else phi
         lo = range_m / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN)
         hi = range_m / (1.0 - b) * (1.0 + STRIP_MARGIN)
-        if self.sections != "points":  # a truth off its constant-speed line
-            lo, hi = lo - self.model.range_drift_m, hi + self.model.range_drift_m
+        # a truth off its constant-speed line
+        lo, hi = lo - self._drift.range_drift_m, hi + self._drift.range_drift_m
         if self.sections == "points":
             inside = (belief.x_lo_m >= lo) & (belief.x_hi_m <= hi)
             if not inside.any():
@@ -351,7 +359,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         if self.sections != "points":
             belief = self._split(belief)
         e_lo, e_hi = self.speed_interval
-        eps = self.model.eps_m if self.sections == "points" else self.model.eps_sets_m
+        eps = self._drift.eps_sets_m
         x_lo1, x_hi1 = belief.x_lo_m - e_hi * dt_s, belief.x_hi_m - e_lo * dt_s
         keep = x_hi1 >= eps
         if not keep.all():
@@ -399,7 +407,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
     # -- internals -------------------------------------------------------------------
     def _split(self, belief: InformationSet) -> InformationSet:
         """Split wide slabs into geometric pieces (``split_ratio``, ``max_sections``)."""
-        lo_all = np.maximum(belief.x_lo_m, self.model.eps_sets_m)  # no zero range
+        lo_all = np.maximum(belief.x_lo_m, self._drift.eps_sets_m)  # no zero range
         ratio = belief.x_hi_m / lo_all
         wide = ratio > self.split_ratio
         if not wide.any() or belief.n_sections >= self.max_sections:
