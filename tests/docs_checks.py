@@ -401,9 +401,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"mean miss moves between ([\d.]+) and ([\d.]+) m in no clear direction and the fuel between "
      r"([\d.]+) and ([\d.]+) m/s", NODES,
      tuple(f"rows/[value={v},estimator=infoset,noise={n}]/{k}" for n, k, v in (
-         ("random", "miss_m/mean", 8), ("random", "miss_m/mean", 12),
-         ("random", "fuel_mps/mean", 6), ("random", "fuel_mps/mean", 12),
-         ("game", "miss_m/mean", 8), ("game", "miss_m/mean", 6),
+         ("random", "miss_m/mean", 8), ("random", "miss_m/mean", 6),
+         ("random", "fuel_mps/mean", 16), ("random", "fuel_mps/mean", 12),
+         ("game", "miss_m/mean", 16), ("game", "miss_m/mean", 12),
          ("game", "fuel_mps/mean", 12), ("game", "fuel_mps/mean", 8)))),
     # docs/intercept.md: the filters' noise inflated (kvi sweep kp_fig5_kalman_inflated)
     (INT, r"at `s = 30` the EKF's mean miss is ([\d.]+) m, the UKF's ([\d.]+) m", INFL,

@@ -50,12 +50,14 @@ def test_the_model_s_drift_fields_widen_speeds_ranges_and_the_threshold():
             ChannelModel(**bad)
 
 
-def test_published_scenarios_take_no_drift_unless_asked():
-    """The option is off by default: the published results are the constant-speed
-    sets' (the models below carry zero drift)."""
+def test_published_scenarios_take_the_drift_by_default_and_none_when_off():
+    """The option is on by default (the published results are the widened sets'); off,
+    the models carry zero drift (the constant-speed sets of earlier releases)."""
     for name in ("kp_fig3", "kp_fig5", "kp_fig5_range"):
         m = api.load_scenario(name).channel_model()
-        assert (m.closing_drift_mps, m.range_drift_m) == (0.0, 0.0)
+        assert m.closing_drift_mps > 0.0 and m.range_drift_m > 0.0
+        off = _scenario(name, drift=False).channel_model()
+        assert (off.closing_drift_mps, off.range_drift_m) == (0.0, 0.0)
 
 
 def test_the_auxiliary_truth_of_tightness_takes_no_drift_even_when_asked():
@@ -128,7 +130,7 @@ def test_a_drift_the_sets_do_not_take_is_refused_in_one_line():
     with pytest.raises(
         InputError, match=r"along_sight_drift = true.*or a Sun distance of at least"
     ):
-        api.load_scenario("kp_fig3", model={"sun_distance_km": 4.0e6, "nu_mps2": 1.0})
+        _scenario("kp_fig3", {"model": {"sun_distance_km": 4.0e6, "nu_mps2": 1.0}}, drift=False)
     with pytest.raises(InputError, match="not under half of 'model.eps_km'"):
         _scenario("kp_fig3", {"model": {"sun_distance_km": 1.2e6, "nu_mps2": 1.0}})
 
@@ -138,12 +140,12 @@ def test_the_least_sun_distance_named_for_the_drift_is_accepted_as_printed():
     the option, naming a distance (rounded up) that is accepted as printed and keeps
     the drift within the 1 m the sets leave to it; with the option, accepted."""
     with pytest.raises(InputError) as info:
-        api.load_scenario("kp_fig3", model={"sun_distance_km": 1.5e7})
+        _scenario("kp_fig3", {"model": {"sun_distance_km": 1.5e7}}, drift=False)
     least = float(str(info.value).split("a Sun distance of at least ")[1].split(" km")[0])
-    sc = api.load_scenario("kp_fig3", model={"sun_distance_km": least, "along_sight_drift": True})
+    sc = api.load_scenario("kp_fig3", model={"sun_distance_km": least})  # the default: on
     assert 0.9 < sc.channel_model().range_drift_m <= 1.0
-    api.load_scenario("kp_fig3", model={"sun_distance_km": least})
-    _scenario("kp_fig3", {"model": {"sun_distance_km": 1.5e7}})
+    _scenario("kp_fig3", {"model": {"sun_distance_km": least}}, drift=False)
+    api.load_scenario("kp_fig3", model={"sun_distance_km": 1.5e7})
 
 
 def test_a_larger_nu_is_named_only_where_the_drift_allows_it():
@@ -151,7 +153,7 @@ def test_a_larger_nu_is_named_only_where_the_drift_allows_it():
     larger ``nu`` would leave the range drift (about 80 m) refused, so it is named only
     with the option, and then accepted as printed."""
     with pytest.raises(InputError) as info:
-        api.load_scenario("kp_fig3", model={"sun_distance_km": 5e6})
+        _scenario("kp_fig3", {"model": {"sun_distance_km": 5e6}}, drift=False)
     assert "'model.nu_mps2' of at least" not in str(info.value)
     with pytest.raises(InputError) as info:
         _scenario("kp_fig3", {"model": {"sun_distance_km": 5e6}})
@@ -210,17 +212,20 @@ def test_the_end_to_end_impulses_share_of_the_drift_keeps_a_far_face_truth():
 
 
 def test_the_changelog_s_before_and_after_are_the_results_files():
-    """The CHANGELOG's Fig. 5 numbers with the option (docs/results/drift/) against the
-    published ones (docs/results/fig5.json), the same 50 runs a variant: game rows
-    4.01 against 3.54 m and 8.88 against 8.46 m, random rows within 0.03 m and 0.1 m/s,
-    every row 0 steps outside."""
+    """The CHANGELOG's Fig. 5 numbers with the drift (the default: docs/results/fig5.json)
+    against those without it (docs/results/drift/fig5-no_drift.json, the previous
+    default's ``make run``), the same 50 runs a variant: game rows 4.01 against 3.54 m
+    and 8.88 against 8.46 m, random rows within 0.03 m and 0.1 m/s, every row 0 steps
+    outside; the run made with ``--set model.along_sight_drift=true`` before the default
+    changed reads the published one's numbers to the last digit."""
     import json
     import re
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
-    after = json.loads((root / "docs/results/drift/fig5-along_sight_drift.json").read_text())
-    before = json.loads((root / "docs/results/fig5.json").read_text())
+    after = json.loads((root / "docs/results/fig5.json").read_text())
+    before = json.loads((root / "docs/results/drift/fig5-no_drift.json").read_text())
+    asked = json.loads((root / "docs/results/drift/fig5-along_sight_drift.json").read_text())
     log = " ".join((root / "CHANGELOG.md").read_text().split())
     said = re.search(r"mean miss reads ([\d.]+) m against ([\d.]+) m \(bearings only\) and "
                      r"([\d.]+) m against ([\d.]+) m \(with the range finder\)", log)  # fmt: skip
@@ -235,6 +240,9 @@ def test_the_changelog_s_before_and_after_are_the_results_files():
         assert abs(rows[key]["miss_m"]["mean"] - old[key]["miss_m"]["mean"]) < 0.03
         assert abs(rows[key]["fuel_mps"]["mean"] - old[key]["fuel_mps"]["mean"]) < 0.1
     assert all(v["truth_outside"] == 0 for v in after["variants"])
+    numbers = ("miss_m", "fuel_mps", "truth_outside", "empty_set", "runs", "seed")
+    for a, b in zip(after["variants"], asked["variants"], strict=True):
+        assert {k: a[k] for k in numbers} == {k: b[k] for k in numbers}
 
 
 def test_an_end_to_end_drift_over_half_of_eps_says_which_bound_and_what_to_change():

@@ -59,3 +59,54 @@ def test_bad_attitude_table_is_one_line_input_error(tmp_path):
         assert "\n" not in str(exc.value)
     with pytest.raises(ValueError, match=r"attitude\.estimator"):
         PointingConfig(**{"estimator": "ekf"})
+
+
+class _ScriptedLoop:
+    """A pointing loop whose residual and knowledge bound follow a script (rad): the
+    estimate is the identity, the truth a rotation about z by the residual."""
+
+    def __init__(self, script: list[tuple[float, float]]):
+        self.script, self.i = script, 0
+
+    @property
+    def true_error(self):
+        from scipy.spatial.transform import Rotation
+
+        return Rotation.from_rotvec([0.0, 0.0, self.script[self.i][0]])
+
+    @property
+    def estimated_error(self):
+        from scipy.spatial.transform import Rotation
+
+        return Rotation.identity()
+
+    @property
+    def knowledge_bound_rad(self) -> float:
+        return self.script[self.i][1]
+
+    def step(self, dt_s: float) -> None:
+        self.i += 1
+
+    def summary(self) -> dict:
+        return {}
+
+
+def test_the_coupling_counts_bearings_past_the_bound_the_sets_took():
+    """The sets take the knowledge bound at the start for the whole run; a bearing at
+    which the loop's bound (or the true residual) exceeds it is counted, so a run whose
+    premise failed is visible in its table (an outside review saw the bound grow)."""
+    from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling
+
+    # (residual, bound): within; bound grown, residual within; both past; back within
+    script = [(1e-4, 2e-4), (1e-4, 2e-4), (1.5e-4, 3e-4), (2.5e-4, 3e-4), (1e-4, 2e-4)]
+    coupling = PointingCoupling(_ScriptedLoop(script))
+    assert coupling.kb_rad == 2e-4
+    r = np.array([5.8e6, 1e3, 0.0])
+    for _ in script[1:]:
+        coupling.step(0.5)
+        coupling.bearing_errors(r, ["lateral"])
+    s = coupling.summary()
+    assert s["pointing_bound_exceeded_steps"] == 2
+    assert s["pointing_residual_over_bound_steps"] == 1
+    assert s["pointing_bound_max_deg"] == pytest.approx(np.degrees(3e-4))
+    assert s["pointing_residual_max_deg"] == pytest.approx(np.degrees(2.5e-4))

@@ -44,6 +44,8 @@ DERIVED = {
     r"errors \(`kvi intercept kp_fig5_range --runs (\d+) .* its first (\d+) runs are this "
     r"table's, .*\): miss ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m \(mean / p50 / p90 / "
     r"max\), fuel ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m/s",
+    "pointing_counts": r"\(`pointing_residual_over_bound_steps`, the premise of the guarantee "
+    r"failed\); both read (\d+) in the published runs",
     "tenk_moves": r"From (\d+) runs to (\d+ \d+) the mean miss moved by ([\d.]+) m and the mean "
     r"fuel by ([\d.]+) m/s, the miss's p90 by ([\d.]+) m",
 }
@@ -146,7 +148,8 @@ def test_the_1000_run_fig5_study_against_the_50_run_table():
     counted, no truth outside, the range finder's effect both ways, how far the 50-run
     means were (the largest gaps, and that the game rows have the largest miss gaps),
     the maximum's growth and the perfect-information fuel."""
-    big, small = results("docs/results/study/fig5-w2-1000.json"), results("docs/results/fig5.json")
+    big = results("docs/results/study/fig5-w2-1000.json")
+    small = results("docs/results/drift/fig5-no_drift.json")  # made with the same default
     rows = {(v["variant"], v["noise"]): v for v in big["variants"]}
     table = {(v["variant"], v["noise"]): v for v in small["variants"]}
     assert rows.keys() == table.keys()
@@ -274,3 +277,15 @@ def test_every_number_of_the_intercept_page_is_checked():
     a test here, an input, or a quoted outside check."""
     patterns = [c[1] for c in CHECKS if c[0] == INT] + list(DERIVED.values()) + list(OUTSIDE)
     assert unlisted_numbers(INT, patterns, INPUTS) == []
+
+
+def test_the_end_to_end_runs_took_a_bound_that_held():
+    """'both read 0 in the published runs': the end-to-end run tables
+    (docs/results/e2e/) count no bearing at which the attitude loop's bound or the true
+    pointing residual exceeded the bound the sets took."""
+    (printed_count,) = _printed("pointing_counts")
+    for noise in ("random", "game"):
+        (row,) = results(f"docs/results/e2e/kp_fig3_attitude-infoset-{noise}-s3.parquet")
+        assert row["pointing_bound_exceeded_steps"] == int(printed_count)
+        assert row["pointing_residual_over_bound_steps"] == int(printed_count)
+        assert row["pointing_residual_max_deg"] <= row["pointing_knowledge_bound_deg"]

@@ -238,15 +238,21 @@ def test_the_scaling_with_workers_is_what_the_files_measured():
     assert all(v["cpu_s"] is None for d in got["dask", 2] for v in d["variants"])
 
 
+def _before_drift_rows() -> dict[str, dict]:
+    """The published node-set runs of kp_fig5 per noise as they read before
+    ``model.along_sight_drift`` became the default (``docs/results/drift/fig5-no_drift.json``,
+    the ``make run`` of that release): the speed files were made then, and their
+    commands reproduce them with ``--set model.along_sight_drift=false``."""
+    path = "docs/results/drift/fig5-no_drift.json"
+    return {n: study_variant(path, "kp_fig5", n) for n in ("random", "game")}
+
+
 def test_the_speed_options_defaults_rows_are_the_published_runs():
     """docs/performance.md's table of the node set's speed options: its defaults' rows are
-    the runs of the published comparison (the same seeds, the same numbers)."""
+    the runs published before the drift became the default (the same seeds, the same
+    numbers)."""
     keys = ("runs", "seed", "miss_m", "fuel_mps", "truth_outside", "empty_set", "failures")
-    published = {
-        r["noise"]: {k: r[k] for k in keys}
-        for r in results("docs/results/compare_kp_fig5.json")["rows"]
-        if r["estimator"] == "infoset"
-    }
+    published = {n: {k: r[k] for k in keys} for n, r in _before_drift_rows().items()}
     for row in results("docs/results/speed/kp_fig5-default.json")["rows"]:
         assert {k: row[k] for k in keys} == published[row["noise"]], row["noise"]
 
@@ -358,11 +364,7 @@ def test_fewer_nodes_save_what_the_text_says():
         for noise, printed in zip(("random", "game"), found.groups(), strict=True):
             assert agrees(printed, 100.0 * (1.0 - got[noise] / base[noise])), (opt, noise)
     keys = ("runs", "seed", "miss_m", "fuel_mps", "truth_outside", "empty_set", "failures")
-    published = {
-        r["noise"]: {k: r[k] for k in keys}
-        for r in results("docs/results/compare_kp_fig5.json")["rows"]
-        if r["estimator"] == "infoset"
-    }
+    published = {n: {k: r[k] for k in keys} for n, r in _before_drift_rows().items()}
     for name in ("default", "default-repeat"):
         for row in speed_rows(f"kp_fig5-later-{name}").values():
             assert {k: row[k] for k in keys} == published[row["noise"]], (name, row["noise"])
@@ -435,8 +437,7 @@ def test_the_piece_split_floor_saves_what_the_text_says():
         for r in speed_rows(name).values():
             assert (r["truth_outside"], r["empty_set"], r["diverged"], r["failures"]) == (0,) * 4
     # the defaults drew the published runs
-    published = {r["noise"]: r for r in results("docs/results/compare_kp_fig5.json")["rows"]
-                 if r["estimator"] == "infoset"}  # fmt: skip
+    published = _before_drift_rows()
     for r in (first, repeat):
         assert all(r[n][k] == published[n][k] for n in ("random", "game") for k in keys)
 

@@ -360,6 +360,8 @@ def test_end_to_end_with_an_attitude_loop(tmp_path):
         assert (df["status"] == "ok").all(), df.get("error")
         assert df["truth_outside"].sum() == 0
         assert (df["pointing_residual_max_deg"] <= df["pointing_knowledge_bound_deg"]).all()
+        assert (df["pointing_residual_over_bound_steps"] == 0).all()
+        assert (df["pointing_bound_exceeded_steps"] == 0).all()  # the box's bound held
         assert (df["attitude_max_pointing_error_deg"] > 0).all()
 
 

@@ -253,6 +253,12 @@ class PointingCoupling:
         self.kb_rad = float(loop.knowledge_bound_rad)
         self.max_residual_rad = 0.0
         self.max_bound_rad = self.kb_rad
+        # the sets take the bound at the start for the whole run: count the steps where
+        # the loop's bound grew past it (the premise no longer guaranteed) and where the
+        # true residual did (the premise failed: a bearing or an impulse may lie outside
+        # the bounds the sets took)
+        self.bound_exceeded_steps = 0
+        self.residual_over_bound_steps = 0
 
     def widen(
         self, model: ChannelModel, fuel_mps: float | None = None, approach_s: float = 0.0
@@ -283,9 +289,12 @@ class PointingCoupling:
         measurement with the estimated pointing error."""
         r_body = self.loop.true_error.inv().apply(r_guidance)
         r_corr = self.loop.estimated_error.apply(r_body)
-        residual = (self.loop.estimated_error * self.loop.true_error.inv()).magnitude()
-        self.max_residual_rad = max(self.max_residual_rad, float(residual))
-        self.max_bound_rad = max(self.max_bound_rad, float(self.loop.knowledge_bound_rad))
+        residual = float((self.loop.estimated_error * self.loop.true_error.inv()).magnitude())
+        bound = float(self.loop.knowledge_bound_rad)
+        self.max_residual_rad = max(self.max_residual_rad, residual)
+        self.max_bound_rad = max(self.max_bound_rad, bound)
+        self.bound_exceeded_steps += int(bound > self.kb_rad)
+        self.residual_over_bound_steps += int(residual > self.kb_rad)
         return [
             float(
                 np.arctan2(r_corr[AXIS[c]], r_corr[0])
@@ -305,8 +314,8 @@ class PointingCoupling:
     def step(self, dt_s: float) -> None:
         self.loop.step(dt_s)
 
-    def summary(self) -> dict[str, float]:
-        out = {
+    def summary(self) -> dict[str, float | int]:
+        out: dict[str, float | int] = {
             f"attitude_{k}": float(v)
             for k, v in self.loop.summary().items()
             if isinstance(v, int | float | np.number)
@@ -314,4 +323,6 @@ class PointingCoupling:
         out["pointing_residual_max_deg"] = float(np.degrees(self.max_residual_rad))
         out["pointing_knowledge_bound_deg"] = float(np.degrees(self.kb_rad))
         out["pointing_bound_max_deg"] = float(np.degrees(self.max_bound_rad))
+        out["pointing_bound_exceeded_steps"] = self.bound_exceeded_steps
+        out["pointing_residual_over_bound_steps"] = self.residual_over_bound_steps
         return out
