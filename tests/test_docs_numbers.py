@@ -129,8 +129,7 @@ def test_the_readmes_range_finder_sentence_is_the_1000_run_study():
     its 95 % interval, printed as savings) and fuel, and the game's added miss."""
     from docs_numbers import printed
 
-    study = results("docs/results/study/fig5-w2-1000.json")
-    again = results("docs/results/study/fig5-w2-1000-paired.json")
+    study = again = results("docs/results/study/fig5-w2-1000-drift.json")
     (n, n_cmd, total, miss, lo, hi, fuel, game) = printed(
         "README.md", README_DERIVED["range_finder"]
     )

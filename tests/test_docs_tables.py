@@ -52,16 +52,16 @@ TABLES: list[TableCheck] = [
         "| truth outside | empty set | failures |",
         "docs/results/fig5.json",
     ),
-    # kvi fig5 --runs 1000 --workers 2 --json (the large study of docs/performance.md)
+    # kvi fig5 --runs 1000 --workers 2 --json, re-run with the along-sight drift
     _fig5(
         "| variant | noise | 1000 runs: miss mean / p50 / p90 / max, m |",
-        "docs/results/study/fig5-w2-1000.json",
+        "docs/results/study/fig5-w2-1000-drift.json",
     ),
-    # its second run's paired variants (the range finder minus bearings only)
+    # its paired variants (the range finder minus bearings only)
     TableCheck(
         INT,
         "| variant | noise | estimator | paired runs |",
-        "docs/results/study/fig5-w2-1000-paired.json",
+        "docs/results/study/fig5-w2-1000-drift.json",
         "paired/rows",
         {0: "variant", 1: "noise", 2: "estimator"},
         _paired_cells(3),
