@@ -38,6 +38,10 @@ DERIVED = {
     r"a floor of (1e-\d) times",
     "range_finder": r"first at `t = (\d+) s`, then every (\d+) s",
     "e": r"replaced by its nominal value `e` \((\d+) km/s\)",
+    "drift_formula": r"`a T\^2 / 2` off the constant-speed line, with\s+`a = (\d) K r / \(d - r\)"
+    r"\^3`",
+    "drift_kp_fig5": r"On kp_fig5 at 1 AU that is ([\d.]+e-\d) m/s and ([\d.]+) mm",
+    "drift_refused": r"Off, a scenario whose range drift exceeds (\d+) m is refused",
     # §1.4: the information set's constants and options
     "secant": r"lies within (1e-\d) of the extension's reach",
     "pieces": r"span more than a factor of (\d+) \(each sizes",
@@ -525,3 +529,31 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
     six, six_, three, q, r = map(int, _read("riccati"))
     p = analytic_riccati(np.ones(three), np.ones(q), np.ones(r))
     assert p.shape == (six, six_) and (three, r) == (3, 3)
+
+
+def test_the_along_sight_drift_is_the_code_s_on_kp_fig5():
+    """§1.3 'Along the line of sight': the tidal bound ``a = 2 K r / (d - r)^3`` with the
+    code's ``r`` (the farthest reach of the a-priori box with the reserve) and ``T`` (the
+    longest approach) gives the closing-speed and range drifts kp_fig5 takes by default
+    (``a T``, ``a T^2 / 2``); the tolerance without the option is the code's."""
+    from kalman_vs_infoset.experiments.sim.intercept_config import (
+        RANGE_DRIFT_TOL_M,
+        _reach,
+        longest_approach_s,
+    )
+    from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2
+
+    from kalman_vs_infoset import api
+
+    (two,) = printed(MODELS, DERIVED["drift_formula"])
+    sc = api.load_scenario("kp_fig5")
+    r_km = _reach(sc.estimator, sc.guidance.reserve_mps)[0]
+    d_km, t_s = sc.model.sun_distance_km, longest_approach_s(sc)
+    a_mps2 = int(two) * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3 * 1e3  # km/s^2 -> m/s^2
+    m = sc.channel_model()
+    assert math.isclose(m.closing_drift_mps, a_mps2 * t_s, rel_tol=1e-12)
+    assert math.isclose(m.range_drift_m, 0.5 * a_mps2 * t_s**2, rel_tol=1e-12)
+    speed, range_mm = printed(MODELS, DERIVED["drift_kp_fig5"])
+    agree_each((speed, range_mm), [m.closing_drift_mps, m.range_drift_m * 1e3])
+    (tol,) = printed(MODELS, DERIVED["drift_refused"])
+    assert float(tol) == RANGE_DRIFT_TOL_M
