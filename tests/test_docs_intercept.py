@@ -41,8 +41,8 @@ DERIVED = {
     "study_fuel": r"Perfect-information fuel ([\d.]+) m/s over the (\d+) runs \(a lower bound of "
     r"the fuel; ([\d.]+)\s+m/s over the first (\d+)\)",
     "tenk": r"One variant was run to (\d+ \d+) runs, the bearing \+ range variant under random "
-    r"errors \(`kvi intercept kp_fig5_range --runs (\d+) .* its first (\d+) runs are those "
-    r"of the 1000-run study of then, .*\): miss ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m "
+    r"errors \(`kvi intercept kp_fig5_range --runs (\d+) .* its first (\d+) runs\s+are this "
+    r"table's; .*\): miss ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m "
     r"\(mean / p50 / p90 / max\), fuel ([\d.]+) / ([\d.]+) / ([\d.]+) / ([\d.]+) m/s",
     "pointing_counts": r"\(`pointing_residual_over_bound_steps`, the premise of the guarantee "
     r"failed\); both read (\d+) in the published runs",
@@ -190,9 +190,21 @@ def test_the_10000_run_variant_against_the_1000_run_table():
     errors: its statistics, that its first runs are the 1000-run table's (the same
     seeds; the kept run table, docs/performance.md's test, checks them run by run), no
     truth outside, and how far the 1000-run numbers were."""
-    big = results("docs/results/study/kp_fig5_range-random-10000.json")
-    mid = study_variant("docs/results/study/fig5-w2-1000.json", "kp_fig5_range", "random")
+    import pandas as pd
+
+    big = results("docs/results/study/kp_fig5_range-random-10000-drift.json")
+    mid = study_variant("docs/results/study/fig5-w2-1000-drift.json", "kp_fig5_range", "random")
     assert mid["variant"] == "bearing + range"
+    # its first runs are the table's, run by run (the kept run table's miss and fuel)
+    runs = pd.read_parquet(
+        ROOT / "docs/results/study/kp_fig5_range-random-10000-drift-runs.parquet"
+    )
+    runs = runs.sort_values("run")
+    assert runs["run"].tolist() == list(range(big["runs"]))
+    head = runs[runs["run"] < mid["runs"]]
+    for col in ("miss_m", "fuel_mps"):
+        assert head[col].mean() == mid[col]["mean"] and head[col].max() == mid[col]["max"]
+    assert runs["miss_m"].mean() == big["miss_m"]["mean"] and (runs["truth_outside"] == 0).all()
     assert (big["scenario"], big["noise"], big["estimator"]) == ("kp_fig5_range", "random",
                                                                  "infoset")  # fmt: skip
     n, n_cmd, first, *stats = _printed("tenk")

@@ -482,3 +482,14 @@ def test_the_old_commits_cpu_time_on_the_two_hosts_of_the_35e3739_comparison():
     found = _found(r"ran the old commit's command ([\d.]+) times slower than the table's host")
     old = [sum(r["cpu_s_35e3739"]) / len(r["cpu_s_35e3739"]) for r in (now, before)]
     assert agrees(found.group(1), old[0] / old[1])
+
+
+def test_the_drift_s_10000_runs_cost_what_the_text_says():
+    """docs/performance.md: the 10 000-run variant re-run with the along-sight drift (the
+    default) read its CPU time against the previous default's, and no more."""
+    base = "docs/results/study/kp_fig5_range-random-10000"
+    new, old = results(base + "-drift.json"), results(base + ".json")
+    found = _found(r"which read (\d+) CPU-s against the (\d+) below: one reading each, no sign "
+                   r"that the drift adds to the cost")  # fmt: skip
+    agree_each(found.groups(), [new["cpu_s"], old["cpu_s"]])
+    assert new["runs"] == old["runs"] and new["cpu_s"] <= old["cpu_s"]
