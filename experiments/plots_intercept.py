@@ -61,7 +61,7 @@ def control_processes(
                 lw=0.8,
                 label="error bound",
             )
-        ax[1].set_ylabel("bearing error, urad")
+        ax[1].set_ylabel("bearing error, µrad")
         lo, hi = d["forecast_lo_m"].to_numpy(), d["forecast_hi_m"].to_numpy()
         ax[2].fill_between(
             t,

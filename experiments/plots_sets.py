@@ -105,7 +105,7 @@ def _limits_3d(ax, polys: list) -> None:
 def _labels_3d(ax, rate: bool = False) -> None:
     ax.set_xlabel("range x, km")
     ax.set_ylabel("bearing alpha, mrad")
-    ax.set_zlabel("line-of-sight rate omega, urad/s" if rate else "zero-effort miss w, km")
+    ax.set_zlabel("line-of-sight rate omega, µrad/s" if rate else "zero-effort miss w, km")
 
 
 def stacked_3d(
