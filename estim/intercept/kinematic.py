@@ -11,6 +11,7 @@ below are the set estimators' shared numerics.
 from __future__ import annotations
 
 import numpy as np
+from kalman_vs_infoset.estim.intercept.model import ChannelModel, Range
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset._jit import njit
@@ -24,6 +25,20 @@ STRIP_MARGIN = 1.0e-9
 MAX_BEARING_RAD = 1.5
 #: |w| / x above which a slab set is reported ``"diverged"`` (emptied, not propagated)
 DIVERGED_W_PER_X = 1.0e3
+
+
+def range_x_interval(model: ChannelModel, measurement: Range) -> tuple[float, float]:
+    """The axis ranges ``x`` a range measurement ``d`` admits, as the set estimators
+    take them: ``d / (1 + b) cos(phi) <= x <= d / (1 - b)`` (``b`` the relative bound; the
+    sets are in ``x = d cos(phi)``, ``phi`` the off-axis angle, the measurement's or else
+    the model's largest), rounded outward by :data:`STRIP_MARGIN` and widened by the
+    model's ``range_drift_m`` (a truth off its constant-speed line)."""
+    b, d = model.range_rel_bound, measurement.range_m
+    phi = measurement.off_axis_rad
+    phi = model.max_off_axis_rad if phi is None else phi
+    lo = d / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN) - model.range_drift_m
+    hi = d / (1.0 - b) * (1.0 + STRIP_MARGIN) + model.range_drift_m
+    return lo, hi
 
 
 def kinematic_margin_mps2(

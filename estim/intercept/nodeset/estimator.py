@@ -57,6 +57,7 @@ from kalman_vs_infoset.estim.intercept.kinematic import (
     MAX_BEARING_RAD,
     STRIP_MARGIN,
     piece_kinematic,
+    range_x_interval,
 )
 from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
@@ -286,13 +287,7 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         if isinstance(measurement, Bearing):
             op = OpLog.one(_nk.BEARING, nb_, measurement.alpha_rad)
         elif isinstance(measurement, Range):
-            b, d = self.model.range_rel_bound, measurement.range_m
-            # the nodes are in x = d cos(off-axis angle), not in the measured range d
-            phi = measurement.off_axis_rad
-            phi = self.model.max_off_axis_rad if phi is None else phi
-            lo = d / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN) - self.model.range_drift_m
-            hi = d / (1.0 - b) * (1.0 + STRIP_MARGIN) + self.model.range_drift_m
-            op = OpLog.one(_nk.RANGE, nb_, lo, hi)
+            op = OpLog.one(_nk.RANGE, nb_, *range_x_interval(self.model, measurement))
         else:
             raise TypeError(f"unsupported measurement {type(measurement).__name__}")
         out = self.refine(self._record(belief, op), before=belief)

@@ -97,6 +97,7 @@ from kalman_vs_infoset.estim.intercept.kinematic import (
     MAX_BEARING_RAD,
     STRIP_MARGIN,
     kinematic_margin,
+    range_x_interval,
 )
 from kalman_vs_infoset.estim.intercept.model import (
     Bearing,
@@ -301,14 +302,7 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         raise TypeError(f"unsupported measurement {type(measurement).__name__}")
 
     def _update_range(self, belief: InformationSet, measurement: Range) -> InformationSet:
-        b, range_m = self.model.range_rel_bound, measurement.range_m
-        # the sections are in x = d cos(off-axis angle), not in the measured range d
-        phi = measurement.off_axis_rad
-        phi = self.model.max_off_axis_rad if phi is None else phi
-        lo = range_m / (1.0 + b) * np.cos(phi) * (1.0 - STRIP_MARGIN)
-        hi = range_m / (1.0 - b) * (1.0 + STRIP_MARGIN)
-        # a truth off its constant-speed line
-        lo, hi = lo - self._drift.range_drift_m, hi + self._drift.range_drift_m
+        lo, hi = range_x_interval(self._drift, measurement)
         if self.sections == "points":
             inside = (belief.x_lo_m >= lo) & (belief.x_hi_m <= hi)
             if not inside.any():
