@@ -32,6 +32,14 @@ class InterceptOptions(EstimatorOptions):
         truth, m (0: down to ``eps``); ``x_km`` is the a-priori range box."""
         return 0.0
 
+    def terminal_set_lost_truth(self) -> bool:
+        """Whether a belief emptied by the threshold (status ``terminal``) at a step whose
+        truth is above the check floor has lost the truth, counted in ``truth_outside``:
+        a set keeps every state above ``eps`` (the default, ``False``: a filter's
+        terminal status is its forecast that the target has passed, not a claim about
+        the states it holds)."""
+        return False
+
 
 _NEUTRAL = InterceptOptions()
 

@@ -219,6 +219,9 @@ class Engagement:
         # e.g. the seed's point sections hold the truth only above eps + a step + a spacing
         options = hooks(sc.estimator.options_for(estimator_name))
         self.check_floor_m += options.containment_margin_m(sc.estimator.x_km, model.e, self.dt)
+        # a set emptied by the threshold above the check floor lost the truth (a filter's
+        # terminal status is a forecast: not counted)
+        self.terminal_lost = options.terminal_set_lost_truth()
         self.fuel = 0.0
         self.n_imp = self.outside = self.checked = self.step_index = self.unbounded = 0
         self.issued: list[float] = []
@@ -236,7 +239,15 @@ class Engagement:
         # guidance ends when every belief has passed under eps, or when the target
         # itself is inside eps (the seed's blind zone: bearings at a few km carry
         # no usable information for a state set that ends at eps)
-        if x_m < model.eps_m or all(b.is_empty for b in self.beliefs):
+        if x_m < model.eps_m:
+            return False
+        if all(b.is_empty for b in self.beliefs):
+            # every belief has passed under eps (or diverged) while the truth has not: a
+            # set that did so above the check floor lost the truth (a checked step with
+            # the truth outside; otherwise the run ends as it always did)
+            if x_m > self.check_floor_m and any(self._lost_truth(b) for b in self.beliefs):
+                self.checked += 1
+                self.outside += 1
             return False
         truth_ch = [
             model.from_cartesian(r_km[AXIS[c]] * 1e3, v_kmps[AXIS[c]] * 1e3, x_m, v_kmps[0] * 1e3)
@@ -269,7 +280,7 @@ class Engagement:
         if x_m > self.check_floor_m:
             self.checked += 1
             self.outside += any(
-                not b.is_empty and not b.contains(tc)
+                self._lost_truth(b) if b.is_empty else not b.contains(tc)
                 for b, tc in zip(beliefs, truth_ch, strict=True)
             )
         ks = []
@@ -317,6 +328,14 @@ class Engagement:
             if sets:
                 rec.add_sets(b, self.model, step=self.step_index, t_s=t, channel=c,
                              phase="posterior")  # fmt: skip
+
+    def _lost_truth(self, belief: Belief) -> bool:
+        """Whether an empty belief, at a step whose truth is above the check floor, has
+        lost the truth: a set emptied by the threshold (``TERMINAL``: every state it kept
+        had passed under ``eps_sets_m <= eps``) holds no state there. A diverged set was
+        given up on purpose (counted in ``diverged``); a filter's terminal status is not
+        counted (``InterceptOptions.terminal_set_lost_truth``)."""
+        return self.terminal_lost and belief.status == Status.TERMINAL
 
     def _show_pursuer(self, beliefs: list[Belief]) -> None:
         """Hand a white-box adversary, or a game adversary reading the pursuer's set,

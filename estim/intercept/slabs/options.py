@@ -43,6 +43,9 @@ class SlabOptions(InterceptOptions):
     def kinematic_margin_table(self, on: bool) -> dict[str, bool]:
         return {"kinematic_margin": on}
 
+    def terminal_set_lost_truth(self) -> bool:
+        return True  # a set emptied by eps holds no state above it, the truth's included
+
     def slab_estimator(self, setting, sections: str = "slabs", family: Any = None):
         """The slab (or point) information set with these options and a section family
         (None: convex polygons)."""
