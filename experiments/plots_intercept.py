@@ -106,8 +106,14 @@ def control_processes(
         ax[0].set_title(
             f"{noise} errors: miss {miss:.1f} m, fuel {float(d['fuel_mps'].iloc[-1]):.1f} m/s"
         )
-        for a in ax:
-            fs.legend(a, loc="best")
+        # the forecast-miss interval fills its panel: its legend goes in a band of four
+        # decades above the data (symlog), where "best" had put it over the interval
+        y_lo, y_hi = ax[2].get_ylim()
+        ticks = [v for v in ax[2].get_yticks() if y_lo <= v <= y_hi]  # none in the band
+        ax[2].set_ylim(y_lo, max(y_hi, 10.0) * 1e4)
+        ax[2].set_yticks(ticks)
+        for i, a in enumerate(ax):
+            fs.legend(a, **({"loc": "upper center", "ncols": 2} if i == 2 else {"loc": "best"}))
     fig.suptitle(
         f"{steps['scenario'].iloc[0]}: control processes, {fs.words(estimator)}, run {run}"
     )

@@ -25,3 +25,22 @@ def test_the_marks_are_labelled_with_their_source(name, label):
     texts = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().texts]
     plt.close(fig)
     assert f"{label}: miss 4.3 m" in texts and f"{label}: fuel 244.7 m/s" in texts
+
+
+def test_the_forecast_panel_s_legend_leaves_the_interval_uncovered():
+    """The forecast-miss interval fills its panel: its legend sits in a band above the
+    data, its box over no drawn value (where "best" had put it over the interval, and
+    no tick labels the empty band)."""
+    sc = load_scenario("kp_fig3")
+    steps, _ = trace(sc, "infoset", "random")
+    fig = plots_intercept.control_processes(steps, 0, "infoset", ["random"], paper=paper_marks(sc))
+    fig.canvas.draw()
+    ax = fig.axes[2]
+    assert ax.get_ylabel() == "forecast miss Pi, m"
+    legend_box = ax.get_legend().get_window_extent()
+    # every drawn value of the panel (interval ends, truth's forecast, the markers)
+    tops = [max(line.get_ydata()) for line in ax.get_lines() if len(line.get_ydata())]
+    highest = ax.transData.transform((0.0, max(tops)))[1]
+    top_tick = ax.transData.transform((0.0, max(ax.get_yticks())))[1]
+    plt.close(fig)
+    assert legend_box.y0 > highest and top_tick < legend_box.y0
