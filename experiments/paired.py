@@ -74,7 +74,9 @@ def signed_rank_p(d: np.ndarray) -> float | None:
     scale = float(np.max(np.abs(d), initial=0.0))
     if not scale > 0:
         return None
-    k = np.round(d / (TIE_RTOL * scale))  # integers: rounding-level gaps are ties
+    # integers: rounding-level gaps are ties (d / scale first: TIE_RTOL * scale
+    # underflows to 0 for subnormal differences, found by `make fuzz`)
+    k = np.round(d / scale / TIE_RTOL)
     k = k[k != 0]
     n = k.size
     if n > EXACT_MAX:
