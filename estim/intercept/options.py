@@ -34,10 +34,10 @@ class InterceptOptions(EstimatorOptions):
 
     def terminal_set_lost_truth(self) -> bool:
         """Whether a belief emptied by the threshold (status ``terminal``) at a step whose
-        truth is above the check floor has lost the truth, counted in ``truth_outside``:
-        a set keeps every state above ``eps`` (the default, ``False``: a filter's
-        terminal status is its forecast that the target has passed, not a claim about
-        the states it holds)."""
+        truth is above the check floor has lost the truth (counted in ``truth_outside``).
+        ``True`` for a set, which keeps every state above ``eps``; ``False``, the
+        default, for a filter, whose terminal status is its forecast that the target
+        has passed, not a claim about the states it holds."""
         return False
 
 
