@@ -12,30 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from harness_texts import ONE_CHANNEL, SHORT
 from kalman_vs_infoset.estim.base import Status
 from kalman_vs_infoset.estim.intercept.gaussian.options import KalmanOptions
 from kalman_vs_infoset.estim.intercept.nodeset.options import InfosetOptions
 from kalman_vs_infoset.estim.intercept.options import hooks
 from kalman_vs_infoset.estim.intercept.slabs.options import SlabOptions
-
-SCENARIO = """
-name = "terminal_counts"
-[model]
-nominal_range_km = 800.0
-[estimator]
-x_km = [700.0, 900.0]
-closing_speed_kmps = [57.5, 58.5]
-[truth]
-x_km = [780.0, 820.0]
-y_km = [-1.0, 1.0]
-z_km = [-1.0, 1.0]
-vy_kmps = [-0.05, 0.05]
-vz_kmps = [-0.05, 0.05]
-vx_kmps = [-58.5, -57.5]
-[guidance]
-lateral = true
-vertical = {vertical}
-"""
 
 #: the prediction after which the wrapped set reports itself emptied by the threshold
 EMPTY_AFTER = 5
@@ -49,7 +31,7 @@ def _engagement(tmp_path, estimator: str, vertical: bool, empty_channel: str | N
     from kalman_vs_infoset.experiments.sim.intercept import Engagement
 
     p = tmp_path / "sc.toml"
-    p.write_text(SCENARIO.format(vertical=str(vertical).lower()))
+    p.write_text(SHORT if vertical else ONE_CHANNEL)  # both channels guided, or lateral only
     eng = Engagement(load_scenario(p), estimator, "random", np.random.default_rng(3))
     steps = 0
     while eng.step():
