@@ -122,6 +122,8 @@ def test_e_a_failed_attitude_run_reports_its_error(tiny_rw, tmp_path, capsys, mo
 def test_f_intercept_with_too_many_steps_is_refused_at_load(tmp_path, capsys):
     text = (
         SHORT.replace("[model]\n", "[model]\ndt_s = 0.01\n")
+        # the bearing bound's line reaching past the far range: the steps are at fault
+        .replace("nominal_range_km = 1000.0", "nominal_range_km = 1e6")
         .replace("x_km = [900.0, 1100.0]", "x_km = [9e5, 1e6]\nvx_kmps = [-2.0, -0.5]")
         .replace("x_km = [950.0, 1050.0]", "x_km = [9.5e5, 9.6e5]")
         .replace("vx_kmps = [-58.1, -57.9]", "vx_kmps = [-1.0, -1.0]")

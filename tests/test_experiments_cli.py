@@ -73,6 +73,11 @@ BAD = {
         "[model]\nbearing_bound_start_rad = 3e-4\nbearing_bound_end_rad = 2e-4\n",
         "'model.bearing_bound_start_rad' must be <=",
     ),
+    "box past the bound's floor": (  # the line falls to its floor at 2020 km
+        "[model]\nnominal_range_km = 2000.0\nbearing_bound_start_rad = 1e-5\n"
+        "bearing_bound_end_rad = 1e-3\n",
+        "where the bearing bound, linear in the range, falls to its floor",
+    ),
     "margin not bool": (
         "[estimator.infoset]\nkinematic_margin = 1\n",
         "'estimator.infoset.kinematic_margin'",

@@ -63,10 +63,24 @@ class BearingBound:
         slope = (self.end_rad - self.start_rad) / self.ref_range_m
         return np.inf if slope <= 0 else self.end_rad / slope
 
+    @property
+    def floor_rad(self) -> float:
+        """The floor under the line (the bound beyond :attr:`linear_range_m`)."""
+        return 1e-3 * min(self.start_rad, self.end_rad)
+
+    @property
+    def linear_range_m(self) -> float:
+        """Largest range at which the bound is the line, not its floor. The set
+        estimators need every range of their states within it: there the bound times
+        the range is concave, so a bearing's constraint is convex in the states (with
+        the floor it is not, and the node set's bounds between its nodes lost the truth)."""
+        slope = (self.end_rad - self.start_rad) / self.ref_range_m
+        return np.inf if slope <= 0 else (self.end_rad - self.floor_rad) / slope
+
     def __call__(self, range_m: ArrayLike) -> NDArray[np.float64]:
         d = np.asarray(range_m, dtype=float)
         b = self.end_rad + (self.start_rad - self.end_rad) * d / self.ref_range_m
-        return np.maximum(b, 1e-3 * min(self.start_rad, self.end_rad))
+        return np.maximum(b, self.floor_rad)
 
 
 @dataclass(frozen=True)

@@ -122,17 +122,18 @@ class ModelTable(Table):
         "the range box and of the closing-speed interval)",
     )
 
+    def bearing_bound(self) -> BearingBound:
+        return BearingBound(
+            self.bearing_bound_start_rad, self.bearing_bound_end_rad, self.nominal_range_km * 1e3
+        )
+
     def channel_model(
         self, range_rel_bound: float, closing_drift_mps: float = 0.0, range_drift_m: float = 0.0
     ) -> ChannelModel:
         return ChannelModel(
             closing_speed_mps=self.closing_speed_kmps * 1e3,
             nu_mps2=self.nu_mps2,
-            bearing_bound=BearingBound(
-                self.bearing_bound_start_rad,
-                self.bearing_bound_end_rad,
-                self.nominal_range_km * 1e3,
-            ),
+            bearing_bound=self.bearing_bound(),
             range_rel_bound=range_rel_bound,
             eps_m=self.eps_km * 1e3,
             closing_drift_mps=closing_drift_mps,
@@ -383,6 +384,16 @@ class InterceptScenario(Table):
             )
         if e.x_km[0] <= m.eps_km:
             raise ValueError("field 'estimator.x_km' must start above 'model.eps_km'")
+        linear_km = m.bearing_bound().linear_range_m / 1e3
+        if e.x_km[1] > linear_km:
+            # beyond it the bound is its floor, the bearing's constraint is not convex in
+            # the states, and the node set's bounds between nodes lost the truth
+            raise ValueError(
+                f"field 'estimator.x_km' reaches {e.x_km[1]:g} km, beyond "
+                f"{linear_km:.6g} km, where the bearing bound, linear in the range, falls "
+                "to its floor (docs/models.md §1.2): raise 'model.nominal_range_km' or "
+                "'model.bearing_bound_start_rad', or lower 'model.bearing_bound_end_rad'"
+            )
         closing = sorted(-v for v in self.truth.vx_kmps)
         lo, hi = self.closing_speed_kmps
         if closing[0] < lo or closing[1] > hi:

@@ -1,0 +1,76 @@
+"""The bearing bound's floor (docs/models.md §1.2) and the sets' guarantee.
+
+The bound is linear in the range, ``b(d) = b_end + (b_start - b_end) d / d_nom``,
+continued beyond ``d_nom`` down to a floor of ``1e-3 min(b_start, b_end)``. The set
+estimators need the line itself over their states' ranges: there ``b(x) x`` is concave
+in ``x``, so a bearing's constraint is convex in the states, which the node set's
+bounds between its nodes rely on. Random scenarios within the fields' bounds (a
+search of 150 scenarios x 4 set families) found three whose a-priori range box reached
+past the floor's start: the node set lost the truth there (23, 8 and 3 checked steps),
+the other families did not. The scenario validation now refuses such a box
+(``test_experiments_cli.BAD``); here, a box that ends exactly where the floor starts
+keeps the truth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from kalman_vs_infoset.estim.intercept.model import BearingBound
+
+
+def test_the_linear_range_is_where_the_line_meets_its_floor():
+    b = BearingBound(1.0e-4, 1.5e-3, 1633.45e3)
+    far = b.linear_range_m
+    line = b.end_rad + (b.start_rad - b.end_rad) * far / b.ref_range_m
+    assert line == pytest.approx(b.floor_rad, rel=1e-9) and far < b.max_range_m
+    assert float(b(0.999 * far)) > b.floor_rad and float(b(1.001 * far)) == b.floor_rad
+    # below it, the bound is the line: b(x) x is then concave (a second difference < 0)
+    x = np.linspace(0.0, far, 7)
+    bx = b(x) * x
+    assert (np.diff(bx, 2) < 0).all()
+    # past it, not: the floor's b x is linear, so b x bends upward where they meet
+    x = far * np.array([0.9, 1.0, 1.1])
+    assert np.diff(b(x) * x, 2)[0] > 0
+    assert BearingBound(2e-4, 2e-4, 1e6).linear_range_m == np.inf  # a constant bound
+
+
+#: a search case (a corner truth, both channels guided, the bound growing 15-fold) with
+#: the reference range chosen so that the box's far edge, 1750 km, is where the line
+#: meets its floor (1750.01 km); with 1565 km, as found, the node set lost the truth
+AT_THE_FLOOR = """
+name = "at_the_floor"
+[model]
+nu_mps2 = 1e-4
+bearing_bound_start_rad = 1.0e-4
+bearing_bound_end_rad = 1.5e-3
+nominal_range_km = 1633.45
+eps_km = 22.0
+dt_s = 1.0
+[estimator]
+y_km = [-7.5, 7.5]
+vy_kmps = [-0.26, 0.26]
+x_km = [1380.0, 1750.0]
+[truth]
+y_km = [-7.5, -7.5]
+vy_kmps = [-0.26, -0.26]
+x_km = [1750.0, 1750.0]
+z_km = [-3.75, -3.75]
+[guidance]
+vertical = true
+"""
+
+
+@pytest.mark.parametrize("noise", ["random", "game", "bias", "targeted"])
+def test_a_box_ending_where_the_floor_starts_keeps_the_truth(tmp_path, noise):
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import run_engagement
+
+    p = tmp_path / "at_the_floor.toml"
+    p.write_text(AT_THE_FLOOR)
+    sc = load_scenario(p)
+    far_m = sc.model.bearing_bound().linear_range_m
+    assert 1750e3 <= far_m < 1750.1e3
+    res = run_engagement(sc, "infoset", noise, np.random.default_rng(2050))
+    assert res.checked_steps >= 20
+    assert res.truth_outside == 0 and res.contradictions == 0 and not res.diverged
