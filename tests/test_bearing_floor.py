@@ -74,3 +74,27 @@ def test_a_box_ending_where_the_floor_starts_keeps_the_truth(tmp_path, noise):
     res = run_engagement(sc, "infoset", noise, np.random.default_rng(2050))
     assert res.checked_steps >= 20
     assert res.truth_outside == 0 and res.contradictions == 0 and not res.diverged
+
+
+def test_the_exact_reference_refuses_a_box_past_the_line():
+    """The exact set's linear programme takes ``b(x) x`` as the concave quadratic of the
+    line: a box reaching the floor would make it a set smaller than the exact one."""
+    from dataclasses import replace
+
+    from kalman_vs_infoset.estim.intercept.exact_reference import (
+        ExactChannelSet,
+        History,
+        PriorBox,
+    )
+    from kalman_vs_infoset.estim.intercept.model import ChannelModel
+
+    bound = BearingBound(1.0e-4, 1.5e-3, 1633.45e3)
+    model = replace(ChannelModel(), bearing_bound=bound)
+    far = bound.linear_range_m
+    hist = History(np.array([0.0, 1.0]), np.zeros(2))
+    box = PriorBox((-7.5e3, 7.5e3), (-260.0, 260.0), (1380e3, far), (58e3, 58e3))
+    ExactChannelSet(model, box, hist)  # ends at the line's end: accepted
+    # between the line's end and its zero, where the floor holds the bound up
+    beyond = 0.5 * (far + bound.max_range_m)
+    with pytest.raises(ValueError, match="linear"):
+        ExactChannelSet(model, replace(box, x_m=(1380e3, beyond)), hist)

@@ -210,8 +210,8 @@ class ExactChannelSet:
     Parameters
     ----------
     model : ChannelModel
-        ``nu``, the bearing bound ``a(x)`` (linear: the box's ranges must lie below
-        ``bearing_bound.max_range_m``), the range bound ``b``, ``eps``, ``e_nom``.
+        ``nu``, the bearing bound ``a(x)`` (linear: the box's ranges must lie within
+        ``bearing_bound.linear_range_m``), the range bound ``b``, ``eps``, ``e_nom``.
     box : PriorBox
     history : History
     """
@@ -222,7 +222,7 @@ class ExactChannelSet:
     _lp: ChannelLP = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        if self.box.x_m[1] >= self.model.bearing_bound.max_range_m:
+        if self.box.x_m[1] > self.model.bearing_bound.linear_range_m:
             raise ValueError("the bearing bound must be linear over the box's ranges")
         h, b = self.history, self.box
         assert h.impulses_mps is not None and h.ranges_m is not None  # History fills both
