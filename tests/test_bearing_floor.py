@@ -98,3 +98,19 @@ def test_the_exact_reference_refuses_a_box_past_the_line():
     beyond = 0.5 * (far + bound.max_range_m)
     with pytest.raises(ValueError, match="linear"):
         ExactChannelSet(model, replace(box, x_m=(1380e3, beyond)), hist)
+
+
+def test_the_scenario_search_runs_and_keeps_its_boxes_inside_the_line(capsys):
+    """``tests/fuzz_scenarios.py`` (the search that found the floor): a few cases run
+    clean, and every case it draws keeps the range box within the bound's line."""
+    import fuzz_scenarios as fz
+
+    for seed in range(40):
+        fields = dict(o.split("=", 1) for o in fz.draw_case(np.random.default_rng(seed))[0])
+        bound = BearingBound(float(fields["model.bearing_bound_start_rad"]),
+                             float(fields["model.bearing_bound_end_rad"]),
+                             float(fields["model.nominal_range_km"]) * 1e3)  # fmt: skip
+        far_km = float(fields["estimator.x_km"].strip("[]").split(",")[1])
+        assert far_km * 1e3 <= bound.linear_range_m
+    assert fz._fuzz(120.0, 20000, ["infoset", "box"], cases=3) == 0
+    assert "3 cases" in capsys.readouterr().out
