@@ -117,7 +117,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--kinematic-margin", action="store_true",
         help="keep the set's kinematic margin (off by default: the truth here is the "
         "auxiliary model, which has no kinematic term; with it on, the set models the "
-        "nonlinear motion and may leave out auxiliary-model states)")  # fmt: skip
+        "nonlinear motion, widens a prior box wide against its range by the Cartesian "
+        "states' exact map, and may leave out auxiliary-model states)")  # fmt: skip
     add("--out", help="output directory (default: results/tightness)")
     add("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", dest="overrides",
         help="override a scenario field (as for intercept)")  # fmt: skip

@@ -99,3 +99,27 @@ def test_a_wide_box_is_held_by_the_initial_set_at_its_corners_and_faces(name, ha
     missing = [tuple(p) for p, st_ in zip(zip(y, vy, x, c, strict=True), states, strict=True)
                if not s0.contains(st_)]  # fmt: skip
     assert missing == []
+
+
+@pytest.mark.parametrize("name", FACTORIES)
+def test_the_auxiliary_model_s_set_takes_a_wide_box_as_it_is(name):
+    """Without the kinematic margin a set is the auxiliary model's (``kvi tightness``):
+    it holds the box's auxiliary-model states, corners included, and no more than the
+    box in ``V``: its zero-effort-miss interval is the raw box's, narrower than the
+    widened one of the two-body set (their boxes differ by 0.4 m/s here)."""
+    from dataclasses import replace
+
+    from kalman_vs_infoset.estim.intercept.costs import ZeroEffortMiss
+
+    box = ChannelPrior((-100e3, 100e3), (-100.0, 100.0), (5301.3e3, 6301.3e3))
+    two_body = FACTORIES[name]()
+    auxiliary = replace(two_body, kinematic_margin=False)
+    assert box.auxiliary_box(SPEED[1]) != box  # a box the two-body set widens
+    s_aux, s_two = auxiliary.initial(box), two_body.initial(box)
+    y, vy, x, c = _grid(box, 5)
+    states = np.stack([y / x, (vy * x + c * y) / x**2, x], axis=-1)  # the auxiliary map
+    assert all(s_aux.contains(s) for s in states)
+    zem = ZeroEffortMiss(MODEL)
+    (lo_a, hi_a), (lo_t, hi_t) = ((b.extremes(zem).min_value, b.extremes(zem).max_value)
+                                  for b in (s_aux, s_two))  # fmt: skip
+    assert lo_t < lo_a < hi_a < hi_t

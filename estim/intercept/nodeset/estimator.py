@@ -127,7 +127,10 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     alpha_scale_rad : float
         ``a = alpha / alpha_scale_rad`` in the stored polygons.
     kinematic_margin : bool
-        Add the bound of the neglected kinematic term to ``nu`` (module docstring).
+        The set of the two-body motion: add the bound of the neglected kinematic term
+        to ``nu`` (module docstring) and widen a wide prior box by the exact bearing
+        and rate of its Cartesian states (:meth:`initial`). Off: the set of the
+        auxiliary model alone (``kvi tightness``).
     max_vertices : int or None
         ``None`` (the default): slices are never simplified. Each prediction adds up
         to four vertices to a slice that no bearing clips, so a slice grows with the
@@ -242,14 +245,17 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
         box, so ``u`` ranges over ``U = [tau0/x_hi, tau0/x_lo] & [u_lo, u_hi]`` and the
         slice is ``{u (y, Vy)}`` over ``U`` and the box: the convex hull of the box's
         corners scaled by both ends of ``U`` (exact; it is the slice of a convex body).
-        The box is first widened where the exact bearing and line-of-sight rate of a
-        Cartesian state leave it (:meth:`ChannelPrior.auxiliary_box`: only for boxes
-        wide against their range).
+        With ``kinematic_margin`` (the set of the two-body motion) the box is first
+        widened where the exact bearing and line-of-sight rate of a Cartesian state
+        leave it (:meth:`ChannelPrior.auxiliary_box`: only for boxes wide against their
+        range); a set of the auxiliary model takes the box as it is.
         """
         prior = ChannelPrior(**box) if prior is None else prior
         u_lo, u_hi = self.bands()
-        # the box of the coordinates the slices take, holding every Cartesian state
-        prior = prior.auxiliary_box(1.0 / float(u_lo.min())).drifted(self.model)
+        if self.kinematic_margin:
+            # the box of the coordinates the slices take, holding every Cartesian state
+            prior = prior.auxiliary_box(1.0 / float(u_lo.min()))
+        prior = prior.drifted(self.model)
         (y0, y1), (v0, v1), (xa, xb) = prior.lateral_m, prior.lateral_vel_mps, prior.x_m
         hard_lo, hard_hi = xa * u_lo, xb * u_hi
         # a known range (a point box) is one node

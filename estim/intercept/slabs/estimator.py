@@ -141,9 +141,11 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         than ``simplify_rel_area`` of a section's area are removed, and sections are
         kept to ``max_vertices`` vertices (conservatively: the set only grows).
     kinematic_margin : bool
-        Add the bound of the neglected kinematic term to ``nu`` (module docstring;
-        ``"slabs"`` only). Off reproduces the set with the model's ``nu`` alone,
-        which holds the truth only while that term stays under ``nu``.
+        The set of the two-body motion: add the bound of the neglected kinematic term
+        to ``nu`` (module docstring; ``"slabs"`` only) and widen a wide prior box by
+        the exact bearing and rate of its Cartesian states (:meth:`initial`). Off
+        reproduces the set of the auxiliary model, with the model's ``nu`` alone,
+        which holds a two-body truth only while that term stays under ``nu``.
     split_ratio, max_sections : float, int
         ``"slabs"`` only: before each prediction a slab with ``x_hi / x_lo`` above
         ``split_ratio`` is split into copies over geometric sub-intervals of at most
@@ -222,13 +224,17 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         speed is not used: the set's propagation takes ``closing_speed_mps``).
 
         ``initial(lateral_m=..., lateral_vel_mps=..., x_m=...)`` is short for
-        ``initial(ChannelPrior(...))``. The box is first widened where the exact bearing
-        and line-of-sight rate of a Cartesian state leave it
-        (:meth:`ChannelPrior.auxiliary_box`: only for boxes wide against their range).
+        ``initial(ChannelPrior(...))``. With ``kinematic_margin`` (the set of the
+        two-body motion) the box is first widened where the exact bearing and
+        line-of-sight rate of a Cartesian state leave it
+        (:meth:`ChannelPrior.auxiliary_box`: only for boxes wide against their range);
+        a set of the auxiliary model takes the box as it is.
         """
         prior = ChannelPrior(**box) if prior is None else prior
-        # the box of the coordinates the sections take, holding every Cartesian state
-        prior = prior.auxiliary_box(self.speed_interval[1]).drifted(self._drift)
+        if self.kinematic_margin:
+            # the box of the coordinates the sections take, holding every Cartesian state
+            prior = prior.auxiliary_box(self.speed_interval[1])
+        prior = prior.drifted(self._drift)
         return self.from_boxes(prior.lateral_m, prior.lateral_vel_mps, prior.x_m)
 
     def from_boxes(

@@ -23,7 +23,11 @@ class SlabOptions(InterceptOptions):
         int, Field(ge=2, le=400, description="sections (slabs) of the initial set")
     ] = 29
     kinematic_margin: Annotated[
-        bool, Field(description="bound the kinematic term the linear model neglects")
+        bool,
+        Field(
+            description="the two-body motion: bound the kinematic term the linear model "
+            "neglects, and widen a wide prior box by its Cartesian states' exact map"
+        ),
     ] = True
     split_ratio: Annotated[
         float, Field(gt=1.0, le=1e6, description="split a slab wider than x_hi/x_lo")
