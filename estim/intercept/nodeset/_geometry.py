@@ -168,8 +168,20 @@ def _max_on_segment(coef, p, q, best, arg, cand):
             disc = eb * eb - 4.0 * ea * ec
             if disc >= 0.0:
                 r = np.sqrt(disc)
+                near = (-eb + r) / (2.0 * ea) if eb >= 0.0 else (-eb - r) / (2.0 * ea)
                 for root in ((-eb + r) / (2.0 * ea), (-eb - r) / (2.0 * ea)):
                     if p < root < q:
+                        cand[nc] = root
+                        nc += 1
+                # With sides of almost equal curvature (ea near 0) the form above loses
+                # the root near -ec/eb to cancellation, and the crossing it misses can
+                # be where the bound is attained (a 0.4 m too tight lower bound of zs,
+                # the truth outside it, was found so). Its stable twin, ec over the
+                # other root's numerator, is tried too where the two differ.
+                far = -0.5 * (eb + r) if eb >= 0.0 else -0.5 * (eb - r)
+                if far != 0.0:
+                    root = ec / far
+                    if p < root < q and abs(root - near) > 1e-9 * abs(root):
                         cand[nc] = root
                         nc += 1
         elif eb != 0.0:
