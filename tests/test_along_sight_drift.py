@@ -217,7 +217,9 @@ def test_the_changelog_s_before_and_after_are_the_results_files():
     default's ``make run``), the same 50 runs a variant: game rows 4.01 against 3.54 m
     and 8.88 against 8.46 m, random rows within 0.03 m and 0.1 m/s, every row 0 steps
     outside; the run made with ``--set model.along_sight_drift=true`` before the default
-    changed reads the published one's numbers to the last digit."""
+    changed reads the published one's numbers to the last digit, but for the row the
+    later fix of the bound's crossing (``_geometry._max_on_segment``) moved: one run of
+    the bearings-only game, by under a millimetre."""
     import json
     import re
     from pathlib import Path
@@ -242,7 +244,12 @@ def test_the_changelog_s_before_and_after_are_the_results_files():
     assert all(v["truth_outside"] == 0 for v in after["variants"])
     numbers = ("miss_m", "fuel_mps", "truth_outside", "empty_set", "runs", "seed")
     for a, b in zip(after["variants"], asked["variants"], strict=True):
-        assert {k: a[k] for k in numbers} == {k: b[k] for k in numbers}
+        if (a["variant"], a["noise"]) != ("bearing only", "game"):
+            assert {k: a[k] for k in numbers} == {k: b[k] for k in numbers}
+            continue
+        assert {k: a[k] for k in numbers[2:]} == {k: b[k] for k in numbers[2:]}
+        for k in ("miss_m", "fuel_mps"):
+            assert all(abs(a[k][q] - b[k][q]) < 1e-3 for q in a[k]), k
 
 
 def test_an_end_to_end_drift_over_half_of_eps_says_which_bound_and_what_to_change():
