@@ -58,9 +58,14 @@ class BearingBound:
             raise ValueError("start_rad must be <= end_rad (the bound grows as the range closes)")
 
     @property
+    def _slope_radpm(self) -> float:
+        """How fast the line falls with the range (rad/m; 0 for a constant bound)."""
+        return (self.end_rad - self.start_rad) / self.ref_range_m
+
+    @property
     def max_range_m(self) -> float:
         """Largest range at which the bound is still positive."""
-        slope = (self.end_rad - self.start_rad) / self.ref_range_m
+        slope = self._slope_radpm
         return np.inf if slope <= 0 else self.end_rad / slope
 
     @property
@@ -74,7 +79,7 @@ class BearingBound:
         estimators need every range of their states within it: there the bound times
         the range is concave, so a bearing's constraint is convex in the states (with
         the floor it is not, and the node set's bounds between its nodes lost the truth)."""
-        slope = (self.end_rad - self.start_rad) / self.ref_range_m
+        slope = self._slope_radpm
         return np.inf if slope <= 0 else (self.end_rad - self.floor_rad) / slope
 
     def __call__(self, range_m: ArrayLike) -> NDArray[np.float64]:
