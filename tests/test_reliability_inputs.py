@@ -122,6 +122,23 @@ def test_a_flat_option_key_is_refused_naming_its_table_key(short, tmp_path, caps
     assert f"'estimator.{flat.split('=')[0]}'" in err and all(t in err for t in tables)
 
 
+@pytest.mark.parametrize("value", ["7", "{ekf = 5}", '"x"'])
+def test_estimator_options_that_are_not_tables_are_refused(short, tmp_path, capsys, value):
+    """``estimator.options`` holds the ``[estimator.<name>]`` tables; any other value
+    raised an AttributeError or TypeError out of the command (found by random
+    ``--set`` overrides)."""
+    err = _refused(capsys, tmp_path / "out", "intercept", short, "--runs", "1",
+                   "--set", f"estimator.options={value}")  # fmt: skip
+    assert "'estimator.options'" in err and "[estimator.<name>]" in err
+
+
+def test_estimator_options_given_as_tables_still_reach_their_estimator(short):
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    sc = load_scenario(short, ["estimator.options={ekf = {noise_inflation = 3.0}}"])
+    assert sc.estimator.options_for("ekf").noise_inflation == 3.0
+
+
 def test_shipped_scenarios_use_only_table_keys():
     from kalman_vs_infoset.experiments.scenario import load_toml
     from kalman_vs_infoset.experiments.sim.intercept_config import legacy_options

@@ -169,7 +169,14 @@ class EstimatorTable(Table):
         if not isinstance(data, dict):
             return data
         data = dict(data)
-        options = {k: dict(v) for k, v in data.pop("options", {}).items()}
+        given = data.pop("options", {})
+        # the field's own form ({name: table}); anything else is a user's typo
+        if not isinstance(given, dict) or not all(isinstance(v, dict) for v in given.values()):
+            raise ValueError(
+                "field 'estimator.options' must hold tables [estimator.options.<name>]; an "
+                "estimator's options are usually written [estimator.<name>]"
+            )
+        options = {k: dict(v) for k, v in given.items()}
         for key in [k for k, v in data.items() if isinstance(v, dict)]:
             options.setdefault(key, {}).update(data.pop(key))
         for key, targets in legacy_options().items():
