@@ -1,0 +1,255 @@
+"""Random command lines: every one must end in exit status 0, or 2 with one line on
+stderr, never a traceback (not collected by pytest: a tool, like ``fuzz_scenarios.py``).
+
+Three kinds of case, drawn in turn:
+
+- ``set``: ``kvi intercept`` on a short scenario with one to three ``--set`` overrides of
+  any field of the intercept scenario or of an estimator's options table;
+- ``attitude``: ``kvi attitude`` on a short turn or a bundled scenario, overriding any
+  field of its simulation's tables or of an attitude estimator's options;
+- ``flags``: a command's own options (``--runs``, ``--times``, ``--values``, ...) given
+  edge values (0, -1, nan, inf, empty, lists, words).
+
+A value is near the field's default half the time (scaled, negated, its interval
+reversed, one end moved), else from a list of edge values of every type, so that some
+commands run and most are refused. Each command runs in this process with a time
+limit; a command over it is counted, not failed. This search found
+``estimator.options=7`` raising an ``AttributeError``. Exit status 1 if a command
+raised or failed otherwise than in one line.
+
+    python tests/fuzz_inputs.py --cases 300 --seed 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import math
+import random
+import signal
+import sys
+import tempfile
+import traceback
+import typing
+from collections import Counter
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from harness_texts import SHORT, TINY_RW  # noqa: E402
+
+EDGE_VALUES = (
+    "0", "-1", "1", "1e-300", "1e300", "nan", "inf", "-inf", "0.5", "2", "100", '"x"', "true",
+    "[]", "[1.0]", "[1.0, 2.0]", "[2.0, 1.0]", "[0.0, 0.0]", "[-1e9, 1e9]", "[nan, 1.0]",
+    "[1.0, 2.0, 3.0]", "1e-9", "-0.0", "12345678901234567890", '"auto"', '"nodes"', "{}",
+    "[1, 2]", "[0.0, 0.0, 1.0]", "[1.0, 0.0, 0.0, 0.0]", '"pd"', '"game"',
+)  # fmt: skip
+EDGE_FLAGS = (
+    "0", "-1", "1", "nan", "inf", "-inf", "1e9", "abc", "", "0.5", "2", ",", "1,2", "-0",
+    "1e-9", "3", "100", "5,4", "0,0", "1,,2", "random", "game", "x,y", " ", "1e308", "0x10",
+)  # fmt: skip
+COMMON = ("--runs", "--seed", "--workers", "--run-cpu-limit-s", "--run-memory-limit-mb")
+#: command -> (its arguments, the options a case varies)
+COMMANDS = {
+    "intercept": (["{short}"], (*COMMON, "--trace", "--estimators", "--noise")),
+    "compare": (["{short}"], (*COMMON, "--trace", "--estimators", "--noise")),
+    "adversaries": (["{short}"], (*COMMON, "--estimators", "--lookahead")),
+    "sweep": (["{short}", "--key", "model.nu_mps2", "--values", "[0.005, 0.01]"],
+              (*COMMON, "--estimators", "--noise", "--key", "--values")),
+    "tightness": (["{short}"], ("--noise", "--seed", "--times", "--estimators", "--switch-s")),
+    "attitude": (["{tiny}"], (*COMMON, "--trace", "--controller", "--noise", "--estimators")),
+    "pd-gains": (["--no-figures"], (
+        "--angles-deg", "--quaternion-term", "--initial-turn", "--angle-tol-deg",
+        "--rate-tol-degps", "--grid-step", "--control-period-s", "--horizon-s",
+        "--fit-loss", "--map-angle-deg", "--fig15-kw")),
+    "fig5": ([], ("--runs", "--seed", "--estimators", "--scenarios", "--workers")),
+    "paper-figures": (["--quick"], ("--runs", "--only", "--scenarios")),
+}  # fmt: skip
+#: more values for some options
+FLAG_VALUES = {
+    "--values": ("[]", "[1]", "[nan]", "[1, 1]", "[0.005, -1]", "x", "[[1]]", '["a"]'),
+    "--key": ("model.nope", "estimator.infoset.n_nodes", "name", "", "model"),
+}
+RUNS_ONE = ("intercept", "compare", "adversaries", "sweep", "fig5", "attitude")
+
+
+def leaves(model, prefix: str = "") -> list[tuple[str, typing.Any]]:
+    """``(TABLE.KEY, default)`` of every field of a pydantic model, nested tables
+    flattened."""
+    import pydantic
+
+    out = []
+    for name, info in model.model_fields.items():
+        kinds = (info.annotation, *typing.get_args(info.annotation))
+        tables = [k for k in kinds if isinstance(k, type) and issubclass(k, pydantic.BaseModel)]
+        if tables:
+            out += leaves(tables[0], f"{prefix}{name}.")
+        else:
+            out.append((prefix + name, info.default))
+    return out
+
+
+def field_keys(kind: str) -> dict[str, list[tuple[str, typing.Any]]]:
+    """The fields of each scenario of ``kind`` (a bundled name or ``{tiny}``/``{short}``),
+    with every estimator's options table."""
+    from kalman_vs_infoset.estim import registry
+
+    def options(problem: str, prefix: str) -> list[tuple[str, typing.Any]]:
+        fields = {name: registry.get(problem, name).options.model_fields
+                  for name in registry.names(problem)}  # fmt: skip
+        return [(f"{prefix}.{name}.{key}", info.default)
+                for name, table in fields.items() for key, info in table.items()]  # fmt: skip
+
+    if kind == "set":
+        from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
+
+        own = [(k, d) for k, d in leaves(InterceptScenario) if k != "estimator.options"]
+        return {"{short}": own + [("estimator.options", {})] + options("intercept", "estimator")}
+    from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario
+    from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
+    from kalman_vs_infoset.experiments.sim.gyrostat_config import GyrostatScenario
+
+    est = options("attitude", "estimator_options")
+    models = {"{tiny}": RwScenario, "smallsat_rw": RwScenario, "lqr_large_angle": RwScenario,
+              "resurs_p": CmgScenario, "gyrostat_game": GyrostatScenario}  # fmt: skip
+    return {scenario: leaves(model) + est for scenario, model in models.items()}
+
+
+def _toml(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(value)
+
+
+def near_default(default, rng: random.Random) -> str | None:
+    """A value near a numeric (or boolean) default, or ``None`` for other fields."""
+    f = rng.choice((0.0, 0.1, 0.5, 0.9, 1.1, 2.0, 10.0, 1e3, -1.0, 1e-6))
+    if isinstance(default, bool):
+        return _toml(not default)
+    if isinstance(default, int | float):
+        value = default * f if default else rng.choice((1e-6, 0.1, 1.0, 10.0, -1.0))
+        return _toml(int(value) if isinstance(default, int) else float(value))
+    if (
+        isinstance(default, list | tuple)
+        and default
+        and all(isinstance(v, int | float) for v in default)
+    ):
+        values = [float(v) for v in default]
+        how = rng.randrange(4)
+        if how == 0:
+            values = [v * f for v in values]
+        elif how == 1:
+            values.reverse()
+        elif how == 2:
+            values = [v * rng.choice((0.9, 1.0, 1.1, 1.5)) for v in values]
+        else:
+            values[rng.randrange(len(values))] *= f
+        return _toml(values)
+    return None
+
+
+def draw(kind: str, rng: random.Random, keys, files: dict[str, Path], out: Path) -> list[str]:
+    """One command line of ``kind``."""
+    if kind == "flags":
+        command = rng.choice(list(COMMANDS))
+        base, flags = COMMANDS[command]
+        args = [command, *(a.format(**files) for a in base)]
+        args += ["--runs", "1", "--workers", "1", "--no-progress"] if command in RUNS_ONE else []
+        for _ in range(rng.choice((1, 1, 2))):
+            flag = rng.choice(flags)
+            args += [flag, rng.choice(FLAG_VALUES.get(flag, ()) + EDGE_FLAGS)]
+        return [*args, "--out", str(out)]
+    scenario = rng.choice(list(keys))
+    sets = []
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        key, default = rng.choice(keys[scenario])
+        value = near_default(default, rng) if rng.random() < 0.6 else None
+        sets += ["--set", f"{key}={value if value is not None else rng.choice(EDGE_VALUES)}"]
+    if kind == "set":
+        est = rng.choice(("infoset", "ekf", "ukf", "box", "zonotope", "ellipsoid", "hinf", "pf"))
+        noise = rng.choice(("random", "game", "bias", "targeted"))
+    else:
+        est = rng.choice(("perfect", "ukf", "box", "zonotope", "ellipsoid"))
+        noise = rng.choice(("none", "random", "game"))
+    command = "attitude" if kind == "attitude" else "intercept"
+    args = [command, scenario.format(**files), "--runs", "1", "--workers", "1",
+            "--no-progress", "--estimators", est, "--noise", noise]  # fmt: skip
+    return [*args, "--out", str(out), *sets]
+
+
+class _TimeUp(Exception):
+    pass
+
+
+def _time_up(signum, frame):
+    raise _TimeUp
+
+
+def run(args: list[str], limit_s: int) -> tuple[str, str]:
+    """``(outcome, detail)``: ``ok``, ``refused`` (one line, status 2), ``slow`` (over the
+    limit) or ``FAILED`` (raised, or another status or more lines)."""
+    from kalman_vs_infoset.experiments.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    previous = signal.signal(signal.SIGALRM, _time_up)
+    signal.alarm(limit_s)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main(args)
+            except SystemExit as exc:  # argparse
+                code = exc.code
+    except _TimeUp:
+        return "slow", ""
+    except Exception:  # noqa: BLE001 - what a user would see
+        return "FAILED", traceback.format_exc()
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    text = err.getvalue()
+    lines = [ln for ln in text.strip().splitlines() if ln.strip() and not ln.startswith(" ")]
+    lines = [ln for ln in lines if not ln.startswith("usage:")]  # argparse's usage, then one
+    if code == 0:
+        return "ok", ""
+    if code == 2 and len(lines) == 1 and "Traceback" not in text:
+        return "refused", lines[0]
+    return "FAILED", f"exit status {code}, {len(lines)} lines:\n{text[-3000:]}"
+
+
+def search(cases: int, seed: int, kinds: tuple[str, ...], limit_s: int) -> Counter:
+    """Run ``cases`` command lines; print each failure with its command line."""
+    rng = random.Random(seed)
+    tmp = Path(tempfile.mkdtemp(prefix="fuzz_inputs-"))
+    files = {"short": tmp / "short.toml", "tiny": tmp / "tiny_rw.toml"}
+    files["short"].write_text(SHORT, encoding="utf-8")
+    files["tiny"].write_text(TINY_RW, encoding="utf-8")
+    keys = {kind: field_keys(kind) for kind in kinds if kind != "flags"}
+    counts: Counter = Counter()
+    for case in range(cases):
+        kind = kinds[case % len(kinds)]
+        args = draw(kind, rng, keys.get(kind), files, tmp / f"out{case}")
+        outcome, detail = run(args, limit_s)
+        counts[outcome] += 1
+        if outcome == "FAILED":
+            print(f"FAILED: kvi {' '.join(repr(a) if ' ' in a else a for a in args)}\n{detail}")
+    return counts
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--cases", type=int, default=300, help="command lines to run")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the draws")
+    parser.add_argument("--kinds", default="set,attitude,flags", help="set, attitude, flags")
+    parser.add_argument("--limit-s", type=int, default=60, help="a command's time limit, s")
+    args = parser.parse_args()
+    counts = search(args.cases, args.seed, tuple(args.kinds.split(",")), args.limit_s)
+    print(dict(counts))
+    return 1 if counts["FAILED"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
