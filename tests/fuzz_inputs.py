@@ -13,7 +13,8 @@ Three kinds of case, drawn in turn:
 A value is near the field's default half the time (scaled, negated, its interval
 reversed, one end moved), else from a list of edge values of every type, so that some
 commands run and most are refused. Each command runs in this process with a time
-limit; a command over it is counted, not failed. This search found
+limit; a command over it is counted, not failed, as are runs reported failed (exit
+status 1, e.g. over ``--run-cpu-limit-s``). This search found
 ``estimator.options=7`` raising an ``AttributeError``. Exit status 1 if a command
 raised or failed otherwise than in one line.
 
@@ -27,6 +28,7 @@ import contextlib
 import io
 import math
 import random
+import re
 import signal
 import sys
 import tempfile
@@ -70,6 +72,8 @@ FLAG_VALUES = {
     "--values": ("[]", "[1]", "[nan]", "[1, 1]", "[0.005, -1]", "x", "[[1]]", '["a"]'),
     "--key": ("model.nope", "estimator.infoset.n_nodes", "name", "", "model"),
 }
+#: the errors of a run stopped by its limits (a run that raised anything else is a fault)
+LIMITS = {"RunTimeout", "MemoryError"}
 RUNS_ONE = ("intercept", "compare", "adversaries", "sweep", "fig5", "attitude")
 
 
@@ -190,8 +194,9 @@ def _time_up(signum, frame):
 
 
 def run(args: list[str], limit_s: int) -> tuple[str, str]:
-    """``(outcome, detail)``: ``ok``, ``refused`` (one line, status 2), ``slow`` (over the
-    limit) or ``FAILED`` (raised, or another status or more lines)."""
+    """``(outcome, detail)``: ``ok``, ``refused`` (one line, status 2), ``runs failed``
+    (status 1, reported: a run over ``--run-cpu-limit-s``), ``slow`` (over the limit) or
+    ``FAILED`` (raised, or another status or more lines)."""
     from kalman_vs_infoset.experiments.cli import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -217,6 +222,9 @@ def run(args: list[str], limit_s: int) -> tuple[str, str]:
         return "ok", ""
     if code == 2 and len(lines) == 1 and "Traceback" not in text:
         return "refused", lines[0]
+    reasons = re.findall(r"run \d+ failed: (\w+)", text)
+    if code == 1 and "Traceback" not in text and reasons and set(reasons) <= LIMITS:
+        return "runs failed", lines[-1]  # reported: over --run-cpu-limit-s or -memory-
     return "FAILED", f"exit status {code}, {len(lines)} lines:\n{text[-3000:]}"
 
 
