@@ -89,6 +89,54 @@ def test_singular_configuration_is_detected_and_sr_inverse_stays_bounded():
     assert np.linalg.norm(produced[1:] - torque[1:]) < 0.1 * np.linalg.norm(torque[1:])
 
 
+def _sr_steering_as_written(cluster: CmgCluster, beta, torque):
+    """Seed eq. (4.5) with the SR inverse as written: ``S^T (S S^T + lam I)^-1 M``, lam =
+    d H^2 (1 - m / m_sr)^2 below the threshold, m = sqrt(det(S S^T)) / H^3."""
+    s = cluster.torque_matrix(beta)
+    h = cluster.rotor_momentum_Nms
+    m = np.sqrt(max(np.linalg.det(s @ s.T), 0.0)) / h**3
+    lam = cluster.sr_damping * h**2 * (1 - m / cluster.sr_threshold) ** 2
+    lam = lam if m < cluster.sr_threshold else 0.0
+    return s.T @ np.linalg.solve(s @ s.T + lam * np.eye(3), torque), m
+
+
+@pytest.mark.parametrize("h_Nms", [250.0, 1e-3, 1e4])
+def test_steering_equals_the_sr_inverse_as_written_singular_or_not(h_Nms):
+    """The steering works with S / H (scale-free); at rotor momenta where the formula as
+    written neither under- nor overflows it gives the same rates, near singular states
+    too (beta drawn towards the singular one of the test above)."""
+    cluster = CmgCluster(rotor_momentum_Nms=h_Nms)
+    rng = np.random.default_rng(7)
+    u = np.array([1.0, 0.0, 0.0])
+    singular_beta = np.arctan2(-(cluster.z_axes @ u), cluster.x_axes @ u)
+    seen = set()
+    for spread in (3.0, 0.3, 0.03, 0.003, 0.0):
+        beta = singular_beta + rng.normal(0.0, spread, 6)
+        torque = rng.normal(0.0, 10.0, 3)
+        rates, singular = cluster.steering_rates(beta, torque)
+        expected, m = _sr_steering_as_written(cluster, beta, torque)
+        assert singular == (m < cluster.sr_threshold)
+        np.testing.assert_allclose(cluster.manipulability(beta), m, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(rates, expected, rtol=1e-7, atol=1e-12 / h_Nms)
+        seen.add(singular)
+    assert seen == {True, False}
+
+
+def test_steering_of_a_rotor_of_1e_300_Nms_scales_instead_of_dividing_by_zero():
+    """A rotor momentum the scenario admits (any positive value) once raised
+    ZeroDivisionError in the steering: H^3 underflowed to 0 (random ``--set`` overrides
+    found it). The rates scale as 1 / H, the manipulability not at all."""
+    tiny = CmgCluster(rotor_momentum_Nms=1e-300)
+    unit = CmgCluster(rotor_momentum_Nms=1.0)
+    torque = np.array([1e-300, -2e-300, 5e-301])
+    for beta in (BETA0, BETA0 + 0.4):
+        rates, singular = tiny.steering_rates(beta, torque)
+        unit_rates, unit_singular = unit.steering_rates(beta, torque * 1e300)
+        assert singular == unit_singular
+        np.testing.assert_allclose(rates, unit_rates, rtol=1e-12)
+        assert tiny.manipulability(beta) == unit.manipulability(beta)
+
+
 def test_cluster_step_delivers_the_requested_torque_as_momentum_exchange():
     beta, torque, dt = BETA0.copy(), np.array([-5.4, -1.1, -2.4]), 0.1
     h_before = CLUSTER.momentum_Nms(beta)

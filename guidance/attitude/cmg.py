@@ -119,40 +119,47 @@ class CmgCluster:
 
     def torque_matrix(self, beta_rad: ArrayLike) -> NDArray[np.float64]:
         """S(beta), 3 x n, seed eqs. (4.1), (4.4), written out component by component."""
-        b = self._check(beta_rad)
+        return self.rotor_momentum_Nms * self._unit_torque_matrix(self._check(beta_rad))
+
+    def _unit_torque_matrix(self, b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """S(beta) / H: the steering below works with it, so that no power of H under- or
+        overflows (a rotor of 1e-300 N m s divided by zero)."""
         cpsi_ca, spsi, spsi_ca, cpsi, sa = self._trig
-        h = self.rotor_momentum_Nms
         sb, cb = np.sin(b), np.cos(b)
         out = np.empty((3, b.size))
-        out[0] = -h * (sb * cpsi_ca + cb * spsi)
-        out[1] = -h * sb * sa
-        out[2] = h * (sb * spsi_ca - cb * cpsi)
+        out[0] = -(sb * cpsi_ca + cb * spsi)
+        out[1] = -sb * sa
+        out[2] = sb * spsi_ca - cb * cpsi
         return out
+
+    @staticmethod
+    def _unit_manipulability(u: NDArray[np.float64]) -> float:
+        """``sqrt(det(U U^T))`` of the unit matrix U = S / H (= sqrt(det(S S^T)) / H^3)."""
+        return float(np.sqrt(max(float(np.linalg.det(u @ u.T)), 0.0)))
 
     def manipulability(self, beta_rad: ArrayLike) -> float:
         """Normalised manipulability ``sqrt(det(S S^T)) / H^3`` (0 at a singular state)."""
-        s = self.torque_matrix(beta_rad)
-        det = max(float(np.linalg.det(s @ s.T)), 0.0)
-        return float(np.sqrt(det)) / self.rotor_momentum_Nms**3
+        return self._unit_manipulability(self._unit_torque_matrix(self._check(beta_rad)))
 
     def steering_rates(
         self, beta_rad: ArrayLike, torque_Nm: ArrayLike
     ) -> tuple[NDArray[np.float64], bool]:
         """Precession rates for a torque: seed eq. (4.5), SR inverse near singularity.
 
-        Returns ``(beta_dot_radps, singular)`` where ``singular`` says the SR inverse
-        was used (manipulability below ``sr_threshold``).
+        ``S^T (S S^T + lambda I)^-1 torque`` with ``lambda = d H^2 (1 - m / m_sr)^2``
+        below the threshold ``m_sr`` (0 above), computed as ``U^T (U U^T + lambda / H^2
+        I)^-1 torque / H`` with ``U = S / H``. Returns ``(beta_dot_radps, singular)``
+        where ``singular`` says the SR inverse was used (manipulability below
+        ``sr_threshold``).
         """
-        s = self.torque_matrix(beta_rad)
-        sst = s @ s.T
-        h2 = self.rotor_momentum_Nms**2
-        m = np.sqrt(max(float(np.linalg.det(sst)), 0.0)) / self.rotor_momentum_Nms**3
+        u = self._unit_torque_matrix(self._check(beta_rad))
+        uut = u @ u.T
+        m = self._unit_manipulability(u)
         singular = m < self.sr_threshold
         if singular:
-            lam = self.sr_damping * h2 * (1.0 - m / self.sr_threshold) ** 2
-            sst = sst + lam * np.eye(3)
-        rates = s.T @ np.linalg.solve(sst, np.asarray(torque_Nm, dtype=float))
-        return rates, bool(singular)
+            uut = uut + self.sr_damping * (1.0 - m / self.sr_threshold) ** 2 * np.eye(3)
+        rates = u.T @ np.linalg.solve(uut, np.asarray(torque_Nm, dtype=float))
+        return rates / self.rotor_momentum_Nms, bool(singular)
 
     def step(
         self, beta_rad: ArrayLike, torque_Nm: ArrayLike, dt_s: float
