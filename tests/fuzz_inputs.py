@@ -15,8 +15,10 @@ reversed, one end moved), else from a list of edge values of every type, so that
 commands run and most are refused. Each command runs in this process with a time
 limit; a command over it is counted, not failed, as are runs reported failed (exit
 status 1, e.g. over ``--run-cpu-limit-s``). This search found
-``estimator.options=7`` raising an ``AttributeError``. Exit status 1 if a command
-raised or failed otherwise than in one line.
+``estimator.options=7`` raising an ``AttributeError``, and every Resurs-P run failing
+with a rotor momentum of 1e-300 N m s (``ZeroDivisionError`` in the gyrodines'
+steering). Exit status 1 if a command raised, a run failed otherwise than by its limits,
+or a refusal took more than one line.
 
     python tests/fuzz_inputs.py --cases 300 --seed 1
 """
