@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario
 from kalman_vs_infoset.experiments.sim.turn_setup import SQRT3, TurnSetup  # noqa: F401 - re-exported
@@ -19,4 +20,15 @@ def parse_scenario(source: str, scenario: Mapping[str, Any]) -> CmgScenario:
 
 def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
     """The turn of a scenario's tables (unknown keys and bad values raise ``InputError``)."""
-    return TurnSetup.from_config(parse_scenario(source, scenario))
+    config = parse_scenario(source, scenario)
+    # the law's variance is the square of the table's standard deviation: one within the
+    # field's bounds can still square to 0 (1e-300 N m), which the law rightly refuses
+    if config.energy.control_std0_Nm**2 <= 0.0:
+        raise InputError(
+            f"{source}: field 'energy.control_std0_Nm' = {config.energy.control_std0_Nm:g} "
+            "N m squares to 0; give at least 1e-150"
+        )
+    try:
+        return TurnSetup.from_config(config)
+    except ValueError as exc:  # the library's own checks, as the other loops report them
+        raise InputError(f"{source}: {exc}") from None

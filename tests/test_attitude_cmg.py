@@ -226,3 +226,30 @@ def test_propagate_refuses_a_torque_that_is_not_finite(bad):
         propagate(body, state, [bad, 0.0, 0.0], 0.1)
     with pytest.raises(ValueError, match="finite"):
         propagate(body, state, [0.0, 0.0, 0.0], 0.1, [0.0, bad, 0.0])
+
+
+def test_a_control_std_that_squares_to_zero_is_refused_in_one_line(tmp_path, capsys):
+    """``energy.control_std0_Nm`` = 1e-300 is within the field's bounds, but the law's
+    variance, its square, underflows to 0: the law's own check then raised out of the
+    command with a traceback (random command lines found it). Refused in one line now,
+    naming the field."""
+    from harness_texts import one_line_error, run_cli
+
+    r = run_cli(capsys, "attitude", "resurs_p", "--runs", "1", "--out", tmp_path / "out",
+                "--set", "energy.control_std0_Nm=1e-300")  # fmt: skip
+    assert one_line_error(r), r.stderr
+    assert "'energy.control_std0_Nm'" in r.stderr and not (tmp_path / "out").exists()
+
+
+def test_the_gyrodine_loop_s_library_checks_come_back_as_one_line(monkeypatch):
+    """Any check of the library objects the turn is built from reads as an ``InputError``
+    naming the file, as the reaction-wheel and gyrostat loops report theirs."""
+    from kalman_vs_infoset.experiments import attitude_cmg_setup
+
+    def refuse(config):
+        raise ValueError("sr_damping must be positive")
+
+    monkeypatch.setattr(attitude_cmg_setup.TurnSetup, "from_config", refuse)
+    scenario = load_toml(ROOT / "data/scenarios/resurs_p.toml")
+    with pytest.raises(InputError, match=r"^resurs_p.toml: sr_damping must be positive$"):
+        setup_from_scenario("resurs_p.toml", scenario)
