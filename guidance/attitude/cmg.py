@@ -133,13 +133,14 @@ class CmgCluster:
         return out
 
     @staticmethod
-    def _unit_manipulability(u: NDArray[np.float64]) -> float:
-        """``sqrt(det(U U^T))`` of the unit matrix U = S / H (= sqrt(det(S S^T)) / H^3)."""
-        return float(np.sqrt(max(float(np.linalg.det(u @ u.T)), 0.0)))
+    def _unit_manipulability(uut: NDArray[np.float64]) -> float:
+        """``sqrt(det(U U^T))`` from ``U U^T``, U = S / H (= sqrt(det(S S^T)) / H^3)."""
+        return float(np.sqrt(max(float(np.linalg.det(uut)), 0.0)))
 
     def manipulability(self, beta_rad: ArrayLike) -> float:
         """Normalised manipulability ``sqrt(det(S S^T)) / H^3`` (0 at a singular state)."""
-        return self._unit_manipulability(self._unit_torque_matrix(self._check(beta_rad)))
+        u = self._unit_torque_matrix(self._check(beta_rad))
+        return self._unit_manipulability(u @ u.T)
 
     def steering_rates(
         self, beta_rad: ArrayLike, torque_Nm: ArrayLike
@@ -154,7 +155,7 @@ class CmgCluster:
         """
         u = self._unit_torque_matrix(self._check(beta_rad))
         uut = u @ u.T
-        m = self._unit_manipulability(u)
+        m = self._unit_manipulability(uut)
         singular = m < self.sr_threshold
         if singular:
             uut = uut + self.sr_damping * (1.0 - m / self.sr_threshold) ** 2 * np.eye(3)
