@@ -21,13 +21,6 @@ def parse_scenario(source: str, scenario: Mapping[str, Any]) -> CmgScenario:
 def setup_from_scenario(source: str, scenario: Mapping[str, Any]) -> TurnSetup:
     """The turn of a scenario's tables (unknown keys and bad values raise ``InputError``)."""
     config = parse_scenario(source, scenario)
-    # the law's variance is the square of the table's standard deviation: one within the
-    # field's bounds can still square to 0 (1e-300 N m), which the law rightly refuses
-    if config.energy.control_std0_Nm**2 <= 0.0:
-        raise InputError(
-            f"{source}: field 'energy.control_std0_Nm' = {config.energy.control_std0_Nm:g} "
-            "N m squares to 0; give at least 1e-150"
-        )
     try:
         return TurnSetup.from_config(config)
     except ValueError as exc:  # the library's own checks, as the other loops report them

@@ -170,6 +170,12 @@ class CmgScenario(AttitudeEstimatorTables):
             raise ValueError("field 'euler.accel_time_s' must be in (0, duration_s/2]")
         if not eu.jerk_time_s <= eu.accel_time_s / 2:
             raise ValueError("field 'euler.jerk_time_s' must be in [0, accel_time_s/2]")
+        # the law takes its square (a variance), which a positive value can underflow
+        if self.energy.control_std0_Nm**2 <= 0.0:
+            raise ValueError(
+                f"field 'energy.control_std0_Nm' = {self.energy.control_std0_Nm:g} N m "
+                "squares to 0; give at least 1e-150"
+            )
         if self.n_steps > MAX_STEPS:
             raise ValueError(
                 f"field 'horizon_s' {self.horizon_s} s at 'dt_s' {self.dt_s} s is "
