@@ -12,7 +12,7 @@ Three kinds of case, drawn in turn:
 
 A value is near the field's default half the time (scaled, negated, its interval
 reversed, one end moved), else from a list of edge values of every type, so that some
-commands run and most are refused. Each command runs in this process with a time
+commands run and most are refused. Each command runs in this process with a CPU-time
 limit; a command over it is counted, not failed, as are runs reported failed (exit
 status 1, e.g. over ``--run-cpu-limit-s``). This search found
 ``estimator.options=7`` raising an ``AttributeError``, and every Resurs-P run failing
@@ -31,7 +31,6 @@ import io
 import math
 import random
 import re
-import signal
 import sys
 import tempfile
 import traceback
@@ -41,6 +40,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from harness_texts import SHORT, TINY_RW  # noqa: E402
+from time_limit import TimeLimit  # noqa: E402
 
 EDGE_VALUES = (
     "0", "-1", "1", "1e-300", "1e300", "nan", "inf", "-inf", "0.5", "2", "100", '"x"', "true",
@@ -187,14 +187,6 @@ def draw(kind: str, rng: random.Random, keys, files: dict[str, Path], out: Path)
     return [*args, "--out", str(out), *sets]
 
 
-class _TimeUp(Exception):
-    pass
-
-
-def _time_up(signum, frame):
-    raise _TimeUp
-
-
 def run(args: list[str], limit_s: int) -> tuple[str, str]:
     """``(outcome, detail)``: ``ok``, ``refused`` (one line, status 2), ``runs failed``
     (status 1, reported: a run over ``--run-cpu-limit-s``), ``slow`` (over the limit) or
@@ -202,21 +194,17 @@ def run(args: list[str], limit_s: int) -> tuple[str, str]:
     from kalman_vs_infoset.experiments.cli import main
 
     out, err = io.StringIO(), io.StringIO()
-    previous = signal.signal(signal.SIGALRM, _time_up)
-    signal.alarm(limit_s)
+    limit = TimeLimit(limit_s)
     try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        with limit, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             try:
                 code = main(args)
             except SystemExit as exc:  # argparse
                 code = exc.code
-    except _TimeUp:
-        return "slow", ""
     except Exception:  # noqa: BLE001 - what a user would see
         return "FAILED", traceback.format_exc()
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
+    if limit.fired:  # whatever the cut became (a failed run, numba's SystemError)
+        return "slow", ""
     text = err.getvalue()
     lines = [ln for ln in text.strip().splitlines() if ln.strip() and not ln.startswith(" ")]
     lines = [ln for ln in lines if not ln.startswith("usage:")]  # argparse's usage, then one
@@ -254,7 +242,7 @@ def main() -> int:
     parser.add_argument("--cases", type=int, default=300, help="command lines to run")
     parser.add_argument("--seed", type=int, default=1, help="seed of the draws")
     parser.add_argument("--kinds", default="set,attitude,flags", help="set, attitude, flags")
-    parser.add_argument("--limit-s", type=int, default=60, help="a command's time limit, s")
+    parser.add_argument("--limit-s", type=int, default=60, help="a command's CPU-time limit, s")
     args = parser.parse_args()
     counts = search(args.cases, args.seed, tuple(args.kinds.split(",")), args.limit_s)
     print(dict(counts))

@@ -22,12 +22,12 @@ raised.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 import time
 from collections import Counter
 
 import numpy as np
+from time_limit import TimeLimit
 
 SETS = ("infoset", "ellipsoid", "zonotope", "box")
 NOISES = ("random", "game", "bias", "targeted")
@@ -121,20 +121,6 @@ def _run(sc, name: str, noise: str, seed: int) -> tuple[int, int, int]:
     return res.checked_steps, res.truth_outside, beyond
 
 
-class _Slow(Exception):
-    """A run past its wall-clock limit (``--run-limit-s``)."""
-
-
-#: set when the limit fired: raised inside a compiled kernel, ``_Slow`` reaches the
-#: caller as numba's ``SystemError``
-_FIRED = [False]
-
-
-def _too_slow(*_) -> None:
-    _FIRED[0] = True
-    raise _Slow
-
-
 def _fuzz(
     seconds: float, seed: int, names: list[str], cases: int | None = None, limit_s: int = 60
 ) -> int:
@@ -145,8 +131,6 @@ def _fuzz(
     outside: Counter = Counter()
     errors: Counter = Counter()
     runs = refused = checked = slow = 0
-    # a targeted run with the range finder can take minutes: it is cut and counted
-    signal.signal(signal.SIGALRM, _too_slow)
     end, i = time.monotonic() + seconds, 0
     while time.monotonic() < end and (cases is None or i < cases):
         overrides, noise = draw_case(np.random.default_rng(seed + i))
@@ -157,19 +141,18 @@ def _fuzz(
             i += 1
             continue
         for name in names:
-            _FIRED[0] = False
+            # a targeted run with the range finder can take minutes: it is cut and counted
+            limit = TimeLimit(limit_s)
             try:
-                signal.alarm(limit_s)
-                steps, out, beyond = _run(sc, name, noise, seed + i)
+                with limit:
+                    steps, out, beyond = _run(sc, name, noise, seed + i)
             except Exception as exc:  # noqa: BLE001 - counted and shown, the search goes on
-                if _FIRED[0]:
-                    slow += 1
-                    continue
                 errors[(name, type(exc).__name__)] += 1
                 print(f"error: {name} {noise} case {seed + i}: {type(exc).__name__}: {exc}")
                 continue
-            finally:
-                signal.alarm(0)
+            if limit.fired:
+                slow += 1
+                continue
             runs += 1
             checked += steps
             if out or beyond:
@@ -180,7 +163,7 @@ def _fuzz(
         sys.stdout.flush()
         i += 1
     print(f"{i} cases ({refused} refused by the validation), {runs} runs ({slow} more cut at "
-          f"{limit_s} s), {checked} checked "
+          f"{limit_s} CPU-s), {checked} checked "
           f"steps: {sum(outside.values())} runs lost the truth, {sum(errors.values())} "
           "raised")  # fmt: skip
     for (name, kind), count in sorted(errors.items()):
@@ -193,7 +176,7 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=600.0, help="how long to search (s)")
     p.add_argument("--seed", type=int, default=20000, help="first case's seed")
     p.add_argument("--estimators", default=",".join(SETS))
-    p.add_argument("--run-limit-s", type=int, default=60, help="a run's wall-clock limit (s)")
+    p.add_argument("--run-limit-s", type=int, default=60, help="a run's CPU-time limit (s)")
     args = p.parse_args()
     return _fuzz(args.seconds, args.seed, args.estimators.split(","), None, args.run_limit_s)
 
