@@ -24,6 +24,7 @@ from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     lower_bound_energy_N2m2s,
     one_run,
 )
+from kalman_vs_infoset.experiments.sim.divergence import diverged_runs, resolved
 from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, summary_stats
 
 #: runs per task (each turn is its own loop)
@@ -56,8 +57,10 @@ def summarise(
 ) -> dict[str, Any]:  # fmt: skip
     """docs/models.md §3.1 ``attitude`` for the controllers ``energy`` and ``euler`` (seed 000)."""
 
+    done = resolved(ok)  # a diverged run has no turn to measure: counted apart
+
     def col(key: str) -> list:
-        return ok[key].tolist() if key in ok else []
+        return done[key].tolist() if key in done else []
 
     settle = col("settle_time_s")
     result: dict[str, Any] = {
@@ -76,6 +79,7 @@ def summarise(
         "final_rate_degps": summary_stats(col("final_rate_degps"), finite_only=False),
         "max_torque_Nm": max(col("max_torque_Nm"), default=None),
         "failures": failures,
+        "diverged": diverged_runs(ok),
         "estimator": estimator,
         **estimator_counts(ok),
         "lower_bound_energy_N2m2s": lower_bound_energy_N2m2s(setup),
@@ -91,7 +95,7 @@ def summarise(
         "singular_steps": int(sum(col("singular"))),
     }
     if controller == "energy":
-        result["trace_k_u_decreasing"] = bool(all(col("tr_dec"))) if len(ok) else None
+        result["trace_k_u_decreasing"] = bool(all(col("tr_dec"))) if len(done) else None
         result["max_trace_increment"] = max(col("tr_inc"), default=None)
     return result
 

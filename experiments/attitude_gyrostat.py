@@ -28,6 +28,7 @@ from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
 from kalman_vs_infoset.experiments.attitude_traces import trace_gyrostat
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
+from kalman_vs_infoset.experiments.sim.divergence import diverged_rows, diverged_runs, resolved
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 from kalman_vs_infoset.experiments.sim.gyrostat import simulate_turn
 from kalman_vs_infoset.experiments.sim.gyrostat_config import (  # noqa: F401 - initial_quaternion re-exported
@@ -66,7 +67,9 @@ def task(setup: GyrostatSetup, controller: str, noise: str, estimator: str, seed
     r = simulate_turn(
         s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, rngs, s.cfg, estimator
     )
-    return [
+    keys = ("settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps",
+            "max_torque_Nm", "max_torque_ratio", "max_rotor_rate_radps")  # fmt: skip
+    rows = [
         {
             "settle_time_s": float(r.settle_time_s[i]),
             "energy_N2m2s": float(r.energy_N2m2s[i]),
@@ -82,6 +85,11 @@ def task(setup: GyrostatSetup, controller: str, noise: str, estimator: str, seed
         }
         for i in range(len(seeds))
     ]
+    # a run whose loop diverged: no value for its turn's end (experiments.sim.divergence)
+    cols = {k: np.array([row[k] for row in rows]) for k in rows[0]}
+    marked = diverged_rows(cols, r.diverged_time_s, keys)
+    kind = {k: type(rows[0].get(k, 0.0)) for k in marked}
+    return [{k: kind[k](v[i]) for k, v in marked.items()} for i in range(len(seeds))]
 
 
 def summarise(
@@ -90,8 +98,10 @@ def summarise(
 ) -> dict[str, Any]:  # fmt: skip
     """Monte Carlo of the gyrostat game turn: the JSON object of docs/models.md §3.1."""
 
+    done = resolved(ok)  # a diverged run has no turn to measure: counted apart
+
     def col(key: str) -> np.ndarray:
-        return ok[key].to_numpy(dtype=float) if key in ok else np.empty((0,))
+        return done[key].to_numpy(dtype=float) if key in done else np.empty((0,))
 
     settle = col("settle_time_s")
     never = not_settled(settle)
@@ -108,21 +118,22 @@ def summarise(
         "energy_N2m2s": summary_stats(col("energy_N2m2s"), finite_only=False),
         "final_angle_deg": summary_stats(col("final_angle_deg"), finite_only=False),
         "final_rate_degps": summary_stats(col("final_rate_degps"), finite_only=False),
-        "max_torque_Nm": float(col("max_torque_Nm").max()) if len(ok) else float("nan"),
+        "max_torque_Nm": float(col("max_torque_Nm").max()) if len(done) else float("nan"),
         "failures": failures,
+        "diverged": diverged_runs(ok),
         "estimator": estimator,
         **estimator_counts(ok),
         "guaranteed_time_s": tau,
         "late_runs": int(np.sum(settle > tau)),
         "not_settled": never,
         "unsettled_runs": never,  # the same count, by the name of this loop's earlier files
-        "max_torque_ratio": float(col("max_torque_ratio").max()) if len(ok) else float("nan"),
+        "max_torque_ratio": float(col("max_torque_ratio").max()) if len(done) else float("nan"),
         "alpha_Nm": alpha.tolist(),
         "a_star": design.a_star.tolist(),
         "beta_star": design.beta_star,
         "torque_bound_Nm": design.torque_bound_Nm.tolist(),
         "a_star_iterations": len(design.iterations),
-        "max_rotor_rate_radps": float(col("max_rotor_rate_radps").max()) if len(ok) else 0.0,
+        "max_rotor_rate_radps": float(col("max_rotor_rate_radps").max()) if len(done) else 0.0,
         "switching": setup.switching,
         "control_period_s": setup.cfg.period_s,
     }

@@ -21,6 +21,7 @@ from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
 from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
+from kalman_vs_infoset.experiments.sim.divergence import diverged_runs, resolved
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, summary_stats
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
@@ -81,8 +82,10 @@ def summarise(
 ) -> dict[str, Any]:
     """The ``attitude`` JSON of docs/models.md §3.1 for ``pd`` and ``lqr`` from the runs' rows."""
 
+    done = resolved(ok)  # a diverged run has no turn to measure: counted apart
+
     def col(key: str):
-        return ok[key].to_numpy(dtype=float) if key in ok else np.zeros(0)
+        return done[key].to_numpy(dtype=float) if key in done else np.zeros(0)
 
     settle = col("settle_time_s")
 
@@ -96,8 +99,9 @@ def summarise(
         "energy_N2m2s": summary_stats(col("energy_N2m2s"), finite_only=False),
         "final_angle_deg": summary_stats(col("final_angle_deg"), finite_only=False),
         "final_rate_degps": summary_stats(col("final_rate_degps"), finite_only=False),
-        "max_torque_Nm": float(np.max(col("max_torque_Nm"))) if len(ok) else None,
+        "max_torque_Nm": float(np.max(col("max_torque_Nm"))) if len(done) else None,
         "failures": failures,
+        "diverged": diverged_runs(ok),
         "estimator": estimator,
         **estimator_counts(ok),
         "not_settled": not_settled(settle),
@@ -124,7 +128,7 @@ def summarise(
         assert isinstance(law, LQRController)
         result["constraint_residual"] = law.constraint
         result["gains"] = {"k_w": law.k_w.tolist(), "y": law.y.tolist(), "q_used": list(law.q)}
-        if "lyapunov_max_increase" in ok:
+        if "lyapunov_max_increase" in done and len(done):
             result["lyapunov_max_increase"] = float(np.max(col("lyapunov_max_increase")))
     return result
 

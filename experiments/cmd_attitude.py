@@ -259,6 +259,11 @@ def _summary(r: dict[str, Any]) -> list[str]:
         f"  truth outside belief: {r['truth_outside']} steps; empty: {r['empty_steps']} "
         f"steps; unbounded: {r['unbounded_steps']} steps; failures: {r['failures']}",
     ]
+    if r.get("diverged"):
+        lines.append(
+            f"  diverged: {runs_text(r['diverged'])} (the closed loop left what its integration "
+            "resolves; left out of the statistics above, counted in the estimator's steps)"
+        )
     if r.get("guaranteed_time_s") is not None:
         lines.append(f"  guaranteed settle time tau: {r['guaranteed_time_s']:.1f} s")
     ref = r.get("seed_reference")

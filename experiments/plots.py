@@ -43,17 +43,23 @@ def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
     group, failed ones included), labelled with what it is drawn over: ``n`` the runs
     with a value (``+inf`` is a value: never settled), then the failed runs and the
     runs without a value (NaN) that it leaves out, when there are any (the curve reached
-    1 over the others while the label counted the whole group)."""
+    1 over the others while the label counted the whole group), of which those of runs
+    whose closed loop diverged (an attitude table's ``diverged``) by that name."""
     failed = int((rows["status"] != "ok").sum()) if "status" in rows else 0
     ok = rows[rows["status"] == "ok"] if "status" in rows else rows
     # (a table whose every run failed has no column of results)
     values = ok[col].to_numpy(dtype=float) if col in ok else np.empty(0)
-    missing = int(np.isnan(values).sum())
-    notes = [f"n={len(values) - missing}"]
+    nan = np.isnan(values)
+    # an attitude run whose loop diverged has no value for its turn's end: said so
+    known = "diverged" in ok and col in ok
+    diverged = ok["diverged"].to_numpy(dtype=float) > 0 if known else np.zeros_like(nan)
+    missing, gone = int(np.sum(nan & ~diverged)), int(np.sum(nan & diverged))
+    notes = [f"n={len(values) - missing - gone}"]
     notes += [f"{failed} failed"] if failed else []
+    notes += [f"{gone} diverged"] if gone else []
     notes += [f"{missing} without a value"] if missing else []
     label = f"{name} ({', '.join(notes)})"
-    if len(values) == missing:  # nothing to draw: the legend still says why
+    if len(values) == missing + gone:  # nothing to draw: the legend still says why
         ax.plot([], [], label=label, **style)
         return
     _cdf(ax, values, label, **style)

@@ -127,6 +127,7 @@ DERIVED = {
     "exit": r"Exit status: (\d+) on success; (\d+) with one line on stderr for bad input .*?; "
     r"(\d+) on Ctrl-C and (\d+) on SIGTERM .*?; (\d+) when runs failed .*? (\d+), quietly,",
     "pd_map": r"a summary of the (\d+)-deg settle-time map",
+    "loop_diverged": r"a body rate turning the body more\s+than (\d+) rad in one integration step",
     "riccati": r"the (\d)x(\d) stabilising Riccati solution of §2\.3 \(`J_diag` (\d) principal "
     r"moments, `q` the (\d) diagonal weights of `Q`, `r` the (\d) of `R`",
 }
@@ -496,7 +497,8 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
     """§3 Experiment harness: ``attitude``'s default seed, the paired comparison's
     confidence, the bench's approaches (``COST_DT_S``, ``bench.json``'s steps) and
     workers, the exit statuses (every ``return`` of ``experiments/cli.py``; 128 plus the
-    signal for a signal's; 2 for a missing scenario), the pd-gains map's angle
+    signal for a signal's; 2 for a missing scenario), an attitude loop's divergence bound
+    (``plant.MAX_TURN_PER_STEP_RAD``), the pd-gains map's angle
     (``pd_gains.json``) and the shape of ``analytic_riccati``'s arguments and result."""
     import argparse
 
@@ -517,6 +519,9 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
     one, two, chunked = _read("bench_workers")
     assert list(bench["runs_per_cpu_s"]) == [one, two]
     assert bench["runs_per_cpu_s_by_chunk"]["1"] == bench["runs_per_cpu_s"][chunked]
+    from kalman_vs_infoset.guidance.attitude.plant import MAX_TURN_PER_STEP_RAD
+
+    agree_each(_read("loop_diverged"), [MAX_TURN_PER_STEP_RAD])
     ok, bad, ctrl_c, term, failed, pipe = map(int, _read("exit"))
     source = ast.parse((ROOT / "experiments" / "cli.py").read_text(encoding="utf-8"))
     returns = [n.value for n in ast.walk(source) if isinstance(n, ast.Return)]

@@ -43,6 +43,7 @@ from kalman_vs_infoset.guidance.attitude.energy import (
 )
 from kalman_vs_infoset.guidance.attitude.euler_turn import EulerTurnTracker
 from kalman_vs_infoset.guidance.attitude.min_energy import min_energy_turn
+from kalman_vs_infoset.guidance.attitude.plant import unresolved
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
@@ -52,6 +53,12 @@ CONTROLLERS = ("energy", "euler")
 #: Seed 000, section 5: accumulated index Z (N^2 m^2 s) of the two turns.
 SEED_ENERGY_N2M2S = {"energy": 2150.0, "euler": 11200.0}
 OSCILLATION_WINDOW_S = 30.0
+#: a row's values of the turn's end (NaN for a turn whose loop diverged)
+PERFORMANCE = (
+    "settle_time_s", "energy_N2m2s", "energy_horizon", "final_angle_deg", "axis",
+    "final_rate_degps", "max_torque_Nm", "h_end", "h_peak", "osc", "tr_inc", "tr_dec", "manip",
+    "singular",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -76,6 +83,9 @@ class TurnResult:
     empty_steps: int = 0
     unbounded_steps: int = 0  # predictions whose set was the whole space
     mean_knowledge_bound_deg: float = 0.0
+    #: when the loop diverged (:mod:`experiments.sim.divergence`; the histories are NaN
+    #: after it), inf if it did not (as a settle time: never)
+    diverged_time_s: float = np.inf
 
     @property
     def angle_deg(self) -> NDArray[np.float64]:
@@ -178,13 +188,12 @@ def simulate_turn(
     outside = int(np.sum(~loop.inside(belief, x[None])))
     bound_sum = 0.0
 
-    err = np.empty((n + 1, 3))
-    rate = np.empty((n + 1, 3))
-    hist_h = np.empty((n + 1, 3))
-    cmd = np.empty((n, 3))
-    delivered = np.empty((n, 3))
-    trace_k_u = np.empty(n + 1) if controller == "energy" else np.empty(0)
-    trace_inc = np.empty(n) if controller == "energy" else np.empty(0)
+    # NaN after a turn that diverged (no instant is left unwritten otherwise)
+    err, rate, hist_h = (np.full((n + 1, 3), np.nan) for _ in range(3))
+    cmd, delivered = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    trace_k_u = np.full(n + 1, np.nan) if controller == "energy" else np.empty(0)
+    trace_inc = np.full(n, np.nan) if controller == "energy" else np.empty(0)
+    diverged_s, n_done = np.inf, n  # n_done: the steps the belief was updated
     min_manip, n_singular = np.inf, 0
 
     if controller == "energy":
@@ -230,7 +239,13 @@ def simulate_turn(
             ext = -d_bound * np.sign(torque)
         elif rng is not None:  # noisy
             ext = rng.uniform(-1.0, 1.0, 3) * d_bound
-        x = rk4_step(body, x, torque, dt, ext)
+        with np.errstate(over="ignore", invalid="ignore"):  # reported by the check below
+            x_next = rk4_step(body, x, torque, dt, ext)
+        if unresolved(x_next[4:7], x_next, dt):
+            # the turn ends here (experiments.sim.divergence); x stays the last resolved
+            diverged_s, n_done = (i + 1) * dt, i
+            break
+        x = x_next
         truth = _measure(x)
         known = AttitudeControl.held(torque, h_before, dt)
         belief = loop.step(belief, known, dt, measured(x))
@@ -248,7 +263,8 @@ def simulate_turn(
                 rec["xi"].append(ctrl.xi)
     if rec is not None and record is not None:  # rec exists only when record was given
         record.update({k: np.array(v) for k, v in rec.items()})
-    err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
+    if n_done == n:
+        err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
     return TurnResult(
         controller=controller,
         dt_s=dt,
@@ -267,7 +283,8 @@ def simulate_turn(
         truth_outside=outside,
         empty_steps=int(np.sum(loop.empty_steps(belief))),
         unbounded_steps=int(np.sum(loop.unbounded_steps(belief))),
-        mean_knowledge_bound_deg=float(np.degrees(bound_sum / max(n, 1))),
+        mean_knowledge_bound_deg=float(np.degrees(bound_sum / n_done)) if n_done else np.nan,
+        diverged_time_s=diverged_s,
     )
 
 
@@ -284,6 +301,16 @@ def one_run(setup: TurnSetup, controller: str, noise: str, child, estimator: str
     rng = np.random.default_rng(child) if noise != "none" else None
     res = simulate_turn(setup, controller, rng, estimator, noise)
     k = setup.n_turn_steps
+    counts = {
+        "truth_outside": res.truth_outside,
+        "empty_steps": res.empty_steps,
+        "unbounded_steps": res.unbounded_steps,
+        "mean_knowledge_bound_deg": res.mean_knowledge_bound_deg,
+        "diverged": int(np.isfinite(res.diverged_time_s)),
+        "diverged_time_s": res.diverged_time_s,
+    }
+    if counts["diverged"]:  # no value for the turn's end (experiments.sim.divergence)
+        return dict.fromkeys(PERFORMANCE, np.nan) | {"tr_dec": None} | counts
     return {
         "settle_time_s": res.settle_time_s(),
         "energy_N2m2s": res.energy_N2m2s(),
@@ -299,8 +326,5 @@ def one_run(setup: TurnSetup, controller: str, noise: str, child, estimator: str
         "tr_dec": bool(np.all(np.diff(res.trace_k_u) < 0)) if res.trace_k_u.size else None,
         "manip": res.min_manipulability,
         "singular": res.singular_steps,
-        "truth_outside": res.truth_outside,
-        "empty_steps": res.empty_steps,
-        "unbounded_steps": res.unbounded_steps,
-        "mean_knowledge_bound_deg": res.mean_knowledge_bound_deg,
+        **counts,
     }

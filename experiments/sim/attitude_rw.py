@@ -31,12 +31,22 @@ from kalman_vs_infoset.estim.attitude.model import (
 )
 from kalman_vs_infoset.estim.base import PointBelief
 from kalman_vs_infoset.experiments.sim.attitude_rw_config import LqrTable, RwScenario
+from kalman_vs_infoset.experiments.sim.divergence import diverged_rows
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD, angle_and_rate_deg, settle_time
-from kalman_vs_infoset.guidance.attitude.plant import RigidBody
-from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, simulate_closed_loop
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody
+from kalman_vs_infoset.guidance.attitude.wheels import (
+    ReactionWheels,
+    Trajectory,
+    simulate_closed_loop,
+)
 from scipy.spatial.transform import Rotation
+
+#: the metrics of a turn's end: no value for a run whose loop diverged before it
+PERFORMANCE = (
+    "settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps", "max_torque_Nm",
+)  # fmt: skip
 
 
 def body_of(config: RwScenario) -> tuple[RigidBody, np.ndarray, np.ndarray]:
@@ -142,7 +152,10 @@ def simulate_runs(
         Per-run metrics ``(runs,)``: ``settle_time_s`` (inf if not settled),
         ``energy_N2m2s``, ``final_angle_deg``, ``final_rate_degps``, ``max_torque_Nm``,
         ``truth_outside``, ``empty_steps``, ``unbounded_steps``,
-        ``mean_knowledge_bound_deg`` and, for the LQR, ``lyapunov_max_increase``.
+        ``mean_knowledge_bound_deg``, for the LQR ``lyapunov_max_increase``, and
+        ``diverged`` / ``diverged_time_s`` (:mod:`experiments.sim.divergence`: one run
+        whose loop diverges ends there, its turn's metrics NaN; in a batch of runs
+        :class:`~kalman_vs_infoset.guidance.attitude.plant.LoopDiverged` is raised).
 
     Notes
     -----
@@ -201,15 +214,32 @@ def simulate_runs(
             return -d * np.sign(u)
         return const_dist
 
-    traj = simulate_closed_loop(
-        body, wheels, control, x0, sim.duration_s, period, sim.substeps, disturbance
-    )
+    try:
+        traj = simulate_closed_loop(
+            body, wheels, control, x0, sim.duration_s, period, sim.substeps, disturbance
+        )
+        diverged_s = np.full(n, np.inf)  # never
+    except LoopDiverged as exc:
+        if n > 1:
+            raise  # the runner simulates each run of the batch alone
+        assert isinstance(exc.trajectory, Trajectory)  # simulate_closed_loop keeps it
+        traj, diverged_s = exc.trajectory, np.array([exc.time_s])
     if record is not None:
         record.update(
             time_s=traj.time_s, states=traj.x, torque_Nm=traj.torque_Nm,
             q_target=np.asarray(law.q_target, dtype=float), estimate=np.array(centres),
             knowledge_bound_rad=np.array(bounds), truth_inside=np.array(insides),
         )  # fmt: skip
+    out = {
+        "truth_outside": state.outside,
+        "empty_steps": loop.empty_steps(state.belief),
+        "unbounded_steps": loop.unbounded_steps(state.belief),
+        "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
+    }
+    lqr = isinstance(law, LQRController)
+    keys = (*PERFORMANCE, "lyapunov_max_increase") if lqr else PERFORMANCE
+    if np.isfinite(diverged_s).any():  # one run, ended before the turn did
+        return diverged_rows({**out, **dict.fromkeys(keys, np.full(n, np.nan))}, diverged_s, keys)
     angle, rate = angle_and_rate_deg(traj.x, law.q_target)
     settle = np.array(
         [
@@ -224,18 +254,14 @@ def simulate_runs(
         ]
     )
     u = traj.torque_Nm[:-1]
-    out = {
+    out |= {
         "settle_time_s": settle,
         "energy_N2m2s": np.sum(u**2, axis=(0, 2)) * period,
         "final_angle_deg": angle[-1],
         "final_rate_degps": rate[-1],
         "max_torque_Nm": np.max(np.abs(u), axis=(0, 2)),
-        "truth_outside": state.outside,
-        "empty_steps": loop.empty_steps(state.belief),
-        "unbounded_steps": loop.unbounded_steps(state.belief),
-        "mean_knowledge_bound_deg": np.degrees(np.mean(bounds, axis=0)),
     }
     if isinstance(law, LQRController):
         v = law.lyapunov(traj.x)
         out["lyapunov_max_increase"] = np.max(np.diff(v, axis=0), axis=0)
-    return out
+    return diverged_rows(out, diverged_s, keys)

@@ -54,6 +54,7 @@ from kalman_vs_infoset.guidance.attitude.gyrostat import (
     linearising_torque,
     rk4_step,
 )
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, unresolved
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics.rotations import error_angle_rad, error_quaternion
@@ -103,6 +104,9 @@ class LoopResult:
     empty_steps: Array  # updates that contradicted the model
     unbounded_steps: Array  # predictions whose set was the whole space
     mean_knowledge_bound_deg: Array
+    #: when the loop diverged (:mod:`experiments.sim.divergence`), inf if it did not;
+    #: the other values of such a run are as of then (its turn's end is not reached)
+    diverged_time_s: Array
     time_s: Array | None = None
     states: Array | None = None  # (R, n+1, 10) true states
     torques_Nm: Array | None = None  # (R, n, 3)
@@ -219,12 +223,14 @@ def simulate_turn(
     last_out, energy = np.zeros(runs), np.zeros(runs)
     max_u, max_rotor = np.zeros((runs, 3)), np.zeros(runs)
     if record:
-        states = np.empty((runs, n + 1, STATE_DIM))
+        # NaN after a run that diverged (no instant is left unwritten otherwise)
+        states = np.full((runs, n + 1, STATE_DIM), np.nan)
         states[:, 0] = state
-        rec_u, rec_us, rec_v = (np.empty((runs, n, 3)) for _ in range(3))
-        rec_b, rec_in = np.empty((runs, n + 1)), np.empty((runs, n + 1), dtype=bool)
+        rec_u, rec_us, rec_v = (np.full((runs, n, 3), np.nan) for _ in range(3))
+        rec_b, rec_in = np.full((runs, n + 1), np.nan), np.zeros((runs, n + 1), dtype=bool)
         rec_b[:, 0], rec_in[:, 0] = loop.attitude_bound_rad(belief), inside
 
+    diverged_s, taken = np.full(runs, np.inf), n  # taken: the steps the belief was updated
     for k in range(n):
         est = loop.centre(belief)
         u_star, u = game_torques(gyro, law, est[:, 0:4], est[:, 4:7], phid, q_t)
@@ -236,10 +242,20 @@ def simulate_turn(
         h_err = j_rot * cfg.meas_rotor_radps + h * (np.abs(u) + jxd / b_mom + 1e-12)
         h_mid = j_rot * phid
         known = AttitudeControl(-u, h_mid - h_err, h_mid + h_err)
-        for _ in range(cfg.substeps):
-            state = rk4_step(gyro, state, u, v, dt)
-        if not np.all(np.isfinite(state)):
-            raise FloatingPointError("gyrostat state became non-finite")
+        t_bad = np.nan
+        for j in range(cfg.substeps):
+            # the check below reports an overflowing state (numpy's warnings would not)
+            with np.errstate(over="ignore", invalid="ignore"):
+                state = rk4_step(gyro, state, u, v, dt)
+            bad = unresolved(state[:, X], state, dt)
+            if np.any(bad):
+                t_bad = k * h + (j + 1) * dt
+                break
+        if np.isfinite(t_bad):
+            if runs > 1:  # the runner simulates each run of the batch alone
+                raise LoopDiverged.of(bad, state[:, X], t_bad, dt)
+            diverged_s[:], taken = t_bad, k
+            break
         meas, phid = measure(state)
         belief = loop.step(belief, known, h, meas)
         inside = loop.inside(belief, state)
@@ -269,6 +285,7 @@ def simulate_turn(
             truth_inside=rec_in,
         )
     return LoopResult(
+        diverged_time_s=diverged_s,
         settle_time_s=np.where(settled, last_out + h, np.inf),
         energy_N2m2s=energy,
         final_angle_rad=error_angle_rad(eta),
@@ -278,6 +295,6 @@ def simulate_turn(
         truth_outside=outside,
         empty_steps=loop.empty_steps(belief),
         unbounded_steps=loop.unbounded_steps(belief),
-        mean_knowledge_bound_deg=np.degrees(bound_sum / n),
+        mean_knowledge_bound_deg=np.degrees(bound_sum / taken) if taken else bound_sum + np.nan,
         **extra,
     )

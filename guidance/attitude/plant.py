@@ -144,6 +144,81 @@ def propagate(
     return AttitudeState.from_vector(sol.y[:, -1])
 
 
+#: most one fixed integration step of a closed loop may turn the body, rad. The loops'
+#: RK4 turns the quaternion by ``|w| dt`` a step with an error of about
+#: ``2 (|w| dt / 2)^5 / 5!`` (5e-4 rad at 1 rad a step, 1e-2 at 2 rad): the loops' own
+#: rates stay orders below it, and an unstable loop's grow past it within a few steps of
+#: overflowing. A state past it (or not finite) no longer simulates the plant: the loop
+#: has diverged (:class:`LoopDiverged`).
+MAX_TURN_PER_STEP_RAD = 1.0
+
+
+def unresolved(w_radps: ArrayLike, x: ArrayLike, dt_s: float) -> NDArray[np.bool_]:
+    """Per state of a batch: whether the closed loop has left what its integration
+    resolves, ``not all(isfinite(x))`` or ``|w| dt_s > MAX_TURN_PER_STEP_RAD``.
+
+    Parameters
+    ----------
+    w_radps : array_like (..., 3)
+        Body rates.
+    x : array_like (..., n)
+        The whole states (every component must be finite).
+    dt_s : float
+        The integration step.
+    """
+    finite = np.all(np.isfinite(x), axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflowed rate is unresolved
+        fast = np.linalg.norm(w_radps, axis=-1) * dt_s > MAX_TURN_PER_STEP_RAD
+    return ~finite | fast
+
+
+class LoopDiverged(ArithmeticError):
+    """A closed attitude loop left what its fixed-step integration resolves
+    (:func:`unresolved`): the sampled-data loop is unstable for its scenario (or its
+    step too coarse for the rates it reached). The loops report such a run as
+    ``diverged`` (a counted outcome, docs/models.md §3.1); a batch of runs raises this
+    so that each run can be simulated alone.
+
+    Parameters
+    ----------
+    runs : sequence of int
+        The diverged runs' indices in the batch.
+    time_s : float
+        When the first unresolved state was reached.
+    rate_radps : float
+        The largest body rate there (inf or NaN for a state that overflowed).
+    dt_s : float
+        The integration step.
+    """
+
+    #: what the loop resolved before it diverged, if the loop keeps it (its own type)
+    trajectory: object = None
+
+    def __init__(self, runs, time_s: float, rate_radps: float, dt_s: float) -> None:
+        self.runs = tuple(int(r) for r in runs)
+        self.time_s, self.rate_radps, self.dt_s = float(time_s), float(rate_radps), float(dt_s)
+        what = (
+            f"body rate {np.degrees(self.rate_radps):.3g} deg/s, more than "
+            f"{MAX_TURN_PER_STEP_RAD:g} rad in an integration step of {self.dt_s:.3g} s"
+            if np.isfinite(self.rate_radps) and self.rate_radps * self.dt_s > MAX_TURN_PER_STEP_RAD
+            else "the state became non-finite"
+        )
+        super().__init__(
+            f"the closed loop diverged at t = {self.time_s:.6g} s ({what}; "
+            f"runs {list(self.runs)} of the batch)"
+        )
+
+    @classmethod
+    def of(cls, bad, w_radps, time_s: float, dt_s: float) -> LoopDiverged:
+        """The error of the runs ``bad`` (a mask over the batch) at ``time_s``."""
+        bad = np.atleast_1d(bad)
+        w = np.atleast_2d(np.asarray(w_radps, dtype=float))[bad]
+        with np.errstate(over="ignore", invalid="ignore"):
+            rates = np.linalg.norm(w, axis=-1)
+        rate = float(np.max(rates)) if rates.size else np.nan
+        return cls(np.flatnonzero(bad), time_s, rate, dt_s)
+
+
 def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.float64]:
     """Total angular momentum ``J w + h`` in body axes (conserved when M_ext = 0)."""
     return body.inertia_kgm2 @ state.w_radps + state.h_Nms

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
-from kalman_vs_infoset.guidance.attitude.plant import RigidBody
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, unresolved
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics import integrate
@@ -130,6 +130,10 @@ def simulate_closed_loop(
 ) -> Trajectory:
     """Sampled-data closed loop: ``control(t, x)`` every ``control_period_s``, torque held.
 
+    Raises :class:`~kalman_vs_infoset.guidance.attitude.plant.LoopDiverged` when a state
+    leaves what the integration resolves (``plant.unresolved``); its ``trajectory`` holds
+    the instants before (the torque of the period that diverged last).
+
     ``x`` is the plant state ``(q[4], w[3], h[3])`` (one system or a batch); the
     commanded torque passes through :meth:`ReactionWheels.limit` and is held while
     ``substeps`` RK4 steps integrate the plant. ``ext_torque(t, x, torque)`` gives an
@@ -147,9 +151,18 @@ def simulate_closed_loop(
         t = k * control_period_s
         u = wheels.limit(control(t, x), x[..., 7:10], control_period_s)
         m_ext = 0.0 if ext_torque is None else ext_torque(t, x, u)
-        for _ in range(substeps):
-            x = rk4_step(body, x, u, dt, m_ext)
         us[k] = u
+        for j in range(substeps):
+            # the check below reports an overflowing state (numpy's warnings would not)
+            with np.errstate(over="ignore", invalid="ignore"):
+                x = rk4_step(body, x, u, dt, m_ext)
+            bad = unresolved(x[..., 4:7], x, dt)
+            if np.any(bad):
+                exc = LoopDiverged.of(bad, x[..., 4:7], t + (j + 1) * dt, dt)
+                exc.trajectory = Trajectory(  # the states resolved, at k + 1 instants
+                    cast(FloatArray, np.arange(k + 1) * control_period_s), xs[: k + 1], us[: k + 1]
+                )
+                raise exc
         xs[k + 1] = x
     us[n] = us[n - 1] if n else 0.0
     time_s = cast(FloatArray, np.arange(n + 1) * control_period_s)  # float64 (stubs: floating)
