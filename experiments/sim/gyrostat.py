@@ -242,19 +242,15 @@ def simulate_turn(
         h_err = j_rot * cfg.meas_rotor_radps + h * (np.abs(u) + jxd / b_mom + 1e-12)
         h_mid = j_rot * phid
         known = AttitudeControl(-u, h_mid - h_err, h_mid + h_err)
-        t_bad = np.nan
-        for j in range(cfg.substeps):
-            # the check below reports an overflowing state (numpy's warnings would not)
-            with np.errstate(over="ignore", invalid="ignore"):
+        # the check below reports an overflowing state (numpy's warnings would not)
+        with np.errstate(over="ignore", invalid="ignore"):
+            for _ in range(cfg.substeps):
                 state = rk4_step(gyro, state, u, v, dt)
-            bad = unresolved(state[:, X], state, dt)
-            if np.any(bad):
-                t_bad = k * h + (j + 1) * dt
-                break
-        if np.isfinite(t_bad):
+        bad = unresolved(state[:, X], state, dt)  # at the sampling instants
+        if np.any(bad):
             if runs > 1:  # the runner simulates each run of the batch alone
-                raise LoopDiverged.of(bad, state[:, X], t_bad, dt)
-            diverged_s[:], taken = t_bad, k
+                raise LoopDiverged.of(bad, state[:, X], (k + 1) * h, dt)
+            diverged_s[:], taken = (k + 1) * h, k
             break
         meas, phid = measure(state)
         belief = loop.step(belief, known, h, meas)

@@ -184,7 +184,8 @@ class LoopDiverged(ArithmeticError):
     runs : sequence of int
         The diverged runs' indices in the batch.
     time_s : float
-        When the first unresolved state was reached.
+        The first instant the loop checked at which a state was unresolved (the loops
+        check where the controller samples).
     rate_radps : float
         The largest body rate there (inf or NaN for a state that overflowed).
     dt_s : float

@@ -152,17 +152,17 @@ def simulate_closed_loop(
         u = wheels.limit(control(t, x), x[..., 7:10], control_period_s)
         m_ext = 0.0 if ext_torque is None else ext_torque(t, x, u)
         us[k] = u
-        for j in range(substeps):
-            # the check below reports an overflowing state (numpy's warnings would not)
-            with np.errstate(over="ignore", invalid="ignore"):
+        # the check below reports an overflowing state (numpy's warnings would not)
+        with np.errstate(over="ignore", invalid="ignore"):
+            for _ in range(substeps):
                 x = rk4_step(body, x, u, dt, m_ext)
-            bad = unresolved(x[..., 4:7], x, dt)
-            if np.any(bad):
-                exc = LoopDiverged.of(bad, x[..., 4:7], t + (j + 1) * dt, dt)
-                exc.trajectory = Trajectory(  # the states resolved, at k + 1 instants
-                    cast(FloatArray, np.arange(k + 1) * control_period_s), xs[: k + 1], us[: k + 1]
-                )
-                raise exc
+        bad = unresolved(x[..., 4:7], x, dt)  # at the sampling instants
+        if np.any(bad):
+            exc = LoopDiverged.of(bad, x[..., 4:7], t + control_period_s, dt)
+            exc.trajectory = Trajectory(  # the states resolved, at k + 1 instants
+                cast(FloatArray, np.arange(k + 1) * control_period_s), xs[: k + 1], us[: k + 1]
+            )
+            raise exc
         xs[k + 1] = x
     us[n] = us[n - 1] if n else 0.0
     time_s = cast(FloatArray, np.arange(n + 1) * control_period_s)  # float64 (stubs: floating)
