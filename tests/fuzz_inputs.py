@@ -38,6 +38,8 @@ import typing
 from collections import Counter
 from pathlib import Path
 
+import pydantic_core
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from harness_texts import SHORT, TINY_RW  # noqa: E402
 from time_limit import TimeLimit  # noqa: E402
@@ -111,6 +113,7 @@ def field_keys(kind: str) -> dict[str, list[tuple[str, typing.Any]]]:
 
         own = [(k, d) for k, d in leaves(InterceptScenario) if k != "estimator.options"]
         return {"{short}": own + [("estimator.options", {})] + options("intercept", "estimator")}
+    from kalman_vs_infoset.experiments.scenario import read
     from kalman_vs_infoset.experiments.sim.attitude_cmg_config import CmgScenario
     from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
     from kalman_vs_infoset.experiments.sim.gyrostat_config import GyrostatScenario
@@ -118,7 +121,19 @@ def field_keys(kind: str) -> dict[str, list[tuple[str, typing.Any]]]:
     est = options("attitude", "estimator_options")
     models = {"{tiny}": RwScenario, "smallsat_rw": RwScenario, "lqr_large_angle": RwScenario,
               "resurs_p": CmgScenario, "gyrostat_game": GyrostatScenario}  # fmt: skip
-    return {scenario: leaves(model) + est for scenario, model in models.items()}
+
+    def written(scenario: str, key: str, default):
+        """A field without a default (the inertia, say) is drawn near the bundled file's
+        value (``{tiny}`` is smallsat_rw shortened)."""
+        if default is not pydantic_core.PydanticUndefined:
+            return default
+        table: typing.Any = read("smallsat_rw" if scenario == "{tiny}" else scenario)[0]
+        for part in key.split("."):
+            table = table.get(part) if isinstance(table, dict) else None
+        return table
+
+    return {scenario: [(k, written(scenario, k, d)) for k, d in leaves(model)] + est
+            for scenario, model in models.items()}  # fmt: skip
 
 
 def _toml(value) -> str:
