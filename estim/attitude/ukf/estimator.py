@@ -242,7 +242,12 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     def _sigma_points(self, mean: FloatArray, cov: FloatArray) -> FloatArray:
         """Van der Merwe points ``(R, 13, 6)``: ``x, x + U_k, x - U_k`` (U = chol upper)."""
         lam = self.points.alpha**2 * (DIM + self.points.kappa) - DIM
-        lower = np.linalg.cholesky((DIM + lam) * cov)
+        try:
+            lower = np.linalg.cholesky((DIM + lam) * cov)
+        except np.linalg.LinAlgError:  # numpy's words name neither the filter nor why
+            raise np.linalg.LinAlgError(
+                "the UKF diverged: its covariance is no longer positive definite"
+            ) from None
         rows = np.swapaxes(lower, -1, -2)
         x = mean[:, None, :]
         return np.concatenate([x, x + rows, x - rows], axis=1)
