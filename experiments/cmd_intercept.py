@@ -50,6 +50,13 @@ def run(args) -> dict[str, Any]:
 
 def _summary(r: dict[str, Any]) -> list[str]:
     m, f = r["miss_m"], r["fuel_mps"]
+    premise = []
+    if "pointing_premise_failed_steps" in r:  # an attitude loop holds the axis
+        premise = [
+            f"  pointing premise: the true residual exceeded the knowledge bound the sets "
+            f"took at {r['pointing_premise_failed_steps']} bearings (their guarantee needs "
+            f"0), the loop's own bound at {r['pointing_bound_exceeded_steps']}"
+        ]
     return [
         f"{r['scenario']}: {r['estimator']} / {r['noise']} noise, "
         f"{runs_text(r['runs'])}, seed {r['seed']}",
@@ -60,6 +67,7 @@ def _summary(r: dict[str, Any]) -> list[str]:
         f"  truth outside belief: {r['truth_outside']} steps; empty set: "
         f"{runs_text(r['empty_set'])}; diverged: {runs_text(r['diverged'])}; "
         f"failures: {r['failures']}",
+        *premise,
     ]
 
 

@@ -132,7 +132,21 @@ def summarise(df: pd.DataFrame, sc: InterceptScenario, estimator, noise, seed, w
         "unbounded_steps": int(ok["unbounded_steps"].sum()) if "unbounded_steps" in ok else 0,
         "failures": int((df["status"] != "ok").sum()) if "status" in df else 0,
         "wall_s": float(wall_s),
+        **_pointing_premise(ok),
     }
+
+
+def _pointing_premise(ok: pd.DataFrame) -> dict[str, int]:
+    """With an attitude loop holding the axis (``[attitude]``): the bearings at which
+    the sets' premise failed (the true pointing residual over the knowledge bound they
+    took: their guarantee does not hold there, so steps outside are no fault of theirs)
+    and at which the loop's bound grew past it (the premise no longer guaranteed),
+    summed over the runs; nothing without the loop."""
+    cols = {"pointing_premise_failed_steps": "pointing_residual_over_bound_steps",
+            "pointing_bound_exceeded_steps": "pointing_bound_exceeded_steps"}  # fmt: skip
+    if cols["pointing_premise_failed_steps"] not in ok:
+        return {}
+    return {key: int(ok[col].sum()) for key, col in cols.items()}
 
 
 def _values(ok: pd.DataFrame, column: str) -> np.ndarray:

@@ -72,7 +72,7 @@ def test_a_batch_raises_and_each_run_alone_ends_diverged():
     raw, source = read("lqr_large_angle", ["body.inertia_kgm2=[1e-6, 1e-6, 1e-6]"])
     config = parse_scenario(source, raw)
     rngs = [np.random.default_rng(s) for s in (1, 2)]
-    with pytest.raises(LoopDiverged, match="diverged at t = .* runs \\[0, 1\\] of the batch"):
+    with pytest.raises(LoopDiverged, match="diverged at t = .* runs \\[0, 1\\] of a batch of 2"):
         simulate_runs(config, "lqr", "random", rngs, "box")
     record: dict = {}
     row = simulate_runs(config, "lqr", "random", rngs[:1], "box", record)

@@ -110,3 +110,42 @@ def test_the_coupling_counts_bearings_past_the_bound_the_sets_took():
     assert s["pointing_residual_over_bound_steps"] == 1
     assert s["pointing_bound_max_deg"] == pytest.approx(np.degrees(3e-4))
     assert s["pointing_residual_max_deg"] == pytest.approx(np.degrees(2.5e-4))
+
+
+def test_a_pointing_loop_that_diverges_says_so():
+    """A body of 1e-300 kg m^2 under the PD law overflows in its first period: the loop
+    raises LoopDiverged naming itself (it raised scipy's "quat must be finite")."""
+    from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged
+
+    cfg = PointingConfig(inertia_kgm2=(1e-300, 1e-300, 1e-300))
+    loop = PointingLoop.from_config(cfg, np.random.default_rng(0))
+    with pytest.raises(LoopDiverged, match="the attitude loop holding the axis diverged at t"):
+        loop.step(0.5)
+
+
+#: kp_fig3_attitude 290 km out (20 steps), a UKF on a body of 1e-4 kg m^2 holding the axis
+SHORT_E2E = ["truth.x_km=[290.0, 290.0]", "estimator.x_km=[250.0, 330.0]",
+             "attitude.inertia_kgm2=[1e-4, 1e-4, 1e-4]", 'attitude.estimator="ukf"']  # fmt: skip
+
+
+def test_the_intercept_summary_counts_bearings_where_the_sets_premise_failed(tmp_path, capsys):
+    """End to end, the sets' guarantee assumes the true pointing residual within the
+    knowledge bound they took. The summary counts the bearings where it was not (and
+    where the loop's own bound grew past it), so that steps outside are read against
+    them; the default box loop reports 0."""
+    import json
+
+    from kalman_vs_infoset.experiments.cli import main
+
+    base = ["intercept", "kp_fig3_attitude", "--runs", "1", "--workers", "1", "--no-progress"]
+    sets = [a for s in SHORT_E2E for a in ("--set", s)]
+    assert main([*base, "--out", str(tmp_path / "ukf"), *sets]) == 0
+    out = capsys.readouterr().out
+    assert "pointing premise: the true residual exceeded the knowledge bound" in out
+    assert main([*base, "--out", str(tmp_path / "ukf"), *sets, "--json"]) == 0  # read back
+    r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert r["pointing_premise_failed_steps"] > 0 and r["pointing_bound_exceeded_steps"] == 0
+    sets = [a for s in SHORT_E2E[:2] for a in ("--set", s)]  # the scenario's box loop
+    assert main([*base, "--out", str(tmp_path / "box"), *sets, "--json"]) == 0
+    r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert r["pointing_premise_failed_steps"] == 0 == r["pointing_bound_exceeded_steps"]

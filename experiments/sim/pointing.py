@@ -49,7 +49,7 @@ from kalman_vs_infoset.experiments.sim.fields import Vector3, Vector6, float_bou
 from kalman_vs_infoset.experiments.sim.fields import field as declared
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
-from kalman_vs_infoset.guidance.attitude.plant import RigidBody
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, unresolved
 from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, rk4_step
 from pydantic import model_validator
 
@@ -188,7 +188,13 @@ class PointingLoop:
         else:
             d = self.d_const
         known = AttitudeControl.held(u, h, T)
-        self.x = rk4_step(self.body, self.x, u, T, d)
+        with np.errstate(over="ignore", invalid="ignore"):  # reported by the check below
+            self.x = rk4_step(self.body, self.x, u, T, d)
+        bad = unresolved(self.x[:, 4:7], self.x, T)
+        if np.any(bad):  # the axis is lost: the run cannot go on (a failed run, said why)
+            raise LoopDiverged.of(
+                bad, self.x[:, 4:7], self.time_s + T, T, "the attitude loop holding the axis"
+            )
         self.belief = self.loop.step(self.belief, known, T, self._measure())
         self.energy_N2m2s += float(np.sum(u * u)) * T
         self.time_s += T

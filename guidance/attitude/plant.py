@@ -190,12 +190,25 @@ class LoopDiverged(ArithmeticError):
         The largest body rate there (inf or NaN for a state that overflowed).
     dt_s : float
         The integration step.
+    batch : int, default 1
+        The runs the loop simulated together (the message names the diverged ones when
+        there are several).
+    loop : str, default "the closed loop"
+        What diverged, as the message names it.
     """
 
     #: what the loop resolved before it diverged, if the loop keeps it (its own type)
     trajectory: object = None
 
-    def __init__(self, runs, time_s: float, rate_radps: float, dt_s: float) -> None:
+    def __init__(
+        self,
+        runs,
+        time_s: float,
+        rate_radps: float,
+        dt_s: float,
+        batch: int = 1,
+        loop: str = "the closed loop",
+    ) -> None:
         self.runs = tuple(int(r) for r in runs)
         self.time_s, self.rate_radps, self.dt_s = float(time_s), float(rate_radps), float(dt_s)
         what = (
@@ -204,20 +217,20 @@ class LoopDiverged(ArithmeticError):
             if np.isfinite(self.rate_radps) and self.rate_radps * self.dt_s > MAX_TURN_PER_STEP_RAD
             else "the state became non-finite"
         )
-        super().__init__(
-            f"the closed loop diverged at t = {self.time_s:.6g} s ({what}; "
-            f"runs {list(self.runs)} of the batch)"
-        )
+        which = f"; runs {list(self.runs)} of a batch of {batch}" if batch > 1 else ""
+        super().__init__(f"{loop} diverged at t = {self.time_s:.6g} s ({what}{which})")
 
     @classmethod
-    def of(cls, bad, w_radps, time_s: float, dt_s: float) -> LoopDiverged:
+    def of(
+        cls, bad, w_radps, time_s: float, dt_s: float, loop: str = "the closed loop"
+    ) -> LoopDiverged:
         """The error of the runs ``bad`` (a mask over the batch) at ``time_s``."""
         bad = np.atleast_1d(bad)
         w = np.atleast_2d(np.asarray(w_radps, dtype=float))[bad]
         with np.errstate(over="ignore", invalid="ignore"):
             rates = np.linalg.norm(w, axis=-1)
         rate = float(np.max(rates)) if rates.size else np.nan
-        return cls(np.flatnonzero(bad), time_s, rate, dt_s)
+        return cls(np.flatnonzero(bad), time_s, rate, dt_s, bad.size, loop)
 
 
 def total_momentum_Nms(body: RigidBody, state: AttitudeState) -> NDArray[np.float64]:
