@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from docs_checks import ATT, CHECKS, FIGS, GYC, PDG
-from docs_numbers import agrees, lookup, printed, results
+from docs_numbers import ROOT, agrees, lookup, printed, results
 from test_docs_attitude_estimators import PRINTED, _rows
 from test_docs_numbers import unlisted_numbers
 
@@ -40,6 +40,7 @@ DERIVED = {
     r"settle within the scenario's (\d+) s \(`not_settled`\), where every raw-measurement "
     r"and UKF run does\. Under random noise Resurs-P shows "
     r"no difference \(p from ([\d.]+) to ([\d.]+) over",
+    "diverged": r"its body rate turns the body more than (\d+) rad in\s+one integration step",
 }
 
 #: read by ``test_docs_attitude_estimators.test_the_box_never_lost_the_truth_in_these_files``
@@ -247,3 +248,21 @@ def test_the_paired_reading_of_the_other_scenarios_is_their_files():
         for noise in ("random", "game"):
             final = lqr[(est, noise)]["final_angle_deg"]
             assert final["larger_share"] == 0.0 and final["runs"] == 20, (est, noise)
+
+
+def test_no_published_attitude_run_diverged():
+    """The page's "no run of the results below diverged", and its bound: every attitude
+    results file's rows count no failed run (a loop that diverged failed its run before
+    the outcome existed) and no diverged one (the files written since)."""
+    from kalman_vs_infoset.guidance.attitude.plant import MAX_TURN_PER_STEP_RAD
+
+    (bound,) = _printed("diverged")
+    assert float(bound) == MAX_TURN_PER_STEP_RAD
+    assert "No run of the results below diverged." in (ROOT / ATT).read_text()
+    files = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / ATTITUDE).glob("*.json"))
+    files = [f for f in files if "pd_gains" not in f]
+    assert len(files) >= 7
+    for f in files:
+        data = results(f)
+        for row in data.get("rows", [data]):
+            assert row["failures"] == 0 and row.get("diverged", 0) == 0, f
