@@ -19,6 +19,10 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
         "fuel mean / p50 / p90 / max, m/s",
     ]
     head += ["truth outside (steps)", "empty set (runs)", "diverged (runs)", "failures"]
+    # with an attitude loop holding the axis: where the sets' premise failed (steps
+    # outside are read against it)
+    premise = any("pointing_premise_failed_steps" in r for r in rows)
+    head += ["pointing premise failed (bearings)"] if premise else []
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         m, f = r["miss_m"], r["fuel_mps"]
@@ -27,6 +31,7 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
         cells.append(f"{f['mean']:.1f} / {f['p50']:.1f} / {f['p90']:.1f} / {f['max']:.1f}")
         cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r.get("diverged", 0))]
         cells.append(str(r["failures"]))
+        cells += [str(r.get("pointing_premise_failed_steps", "-"))] if premise else []
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

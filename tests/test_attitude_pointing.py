@@ -149,3 +149,16 @@ def test_the_intercept_summary_counts_bearings_where_the_sets_premise_failed(tmp
     assert main([*base, "--out", str(tmp_path / "box"), *sets, "--json"]) == 0
     r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert r["pointing_premise_failed_steps"] == 0 == r["pointing_bound_exceeded_steps"]
+
+
+def test_the_summary_table_has_the_premise_column_only_end_to_end():
+    from kalman_vs_infoset.experiments.report import summary_markdown
+
+    stats = {"mean": 1.0, "p50": 1.0, "p90": 1.0, "max": 1.0}
+    row = {"estimator": "infoset", "runs": 2, "miss_m": stats, "fuel_mps": stats,
+           "truth_outside": 3, "empty_set": 0, "diverged": 0, "failures": 0}  # fmt: skip
+    plain = summary_markdown([row], ["estimator"])
+    assert "premise" not in plain
+    e2e = summary_markdown([{**row, "pointing_premise_failed_steps": 7}], ["estimator"])
+    head, _, line = e2e.splitlines()
+    assert head.endswith("| pointing premise failed (bearings) |") and line.endswith("| 7 |")
