@@ -243,6 +243,7 @@ def simulate_turn(
         h_mid = j_rot * phid
         known = AttitudeControl(-u, h_mid - h_err, h_mid + h_err)
         # the check below reports an overflowing state (numpy's warnings would not)
+        before = state
         with np.errstate(over="ignore", invalid="ignore"):
             for _ in range(cfg.substeps):
                 state = rk4_step(gyro, state, u, v, dt)
@@ -250,7 +251,8 @@ def simulate_turn(
         if np.any(bad):
             if runs > 1:  # the runner simulates each run of the batch alone
                 raise LoopDiverged.of(bad, state[:, X], (k + 1) * h, dt)
-            diverged_s[:], taken = (k + 1) * h, k
+            # the run ends at its last resolved state (the values below are of it)
+            diverged_s[:], taken, state = (k + 1) * h, k, before
             break
         meas, phid = measure(state)
         belief = loop.step(belief, known, h, meas)
