@@ -199,3 +199,23 @@ def test_a_diverged_gyrostat_run_ends_at_its_last_resolved_state_without_a_warni
         df = api.run_attitude("gyrostat_game", noise="none", estimator="ukf", runs=1,
                               gyrostat={"A_kgm2": [0.12000012, 0.1000001, 0.08000008]})  # fmt: skip
     assert df["status"].tolist() == ["ok"] and df["diverged"].tolist() == [1]
+
+
+@pytest.mark.parametrize(
+    ("command", "scenario", "key"),
+    [("attitude", "smallsat_rw", "body.inertia_kgm2"),
+     ("attitude", "gyrostat_game", "gyrostat.rotor_J_kgm2"),
+     ("attitude", "gyrostat_game", "gyrostat.A_kgm2"),
+     ("intercept", "kp_fig3_attitude", "attitude.inertia_kgm2")],
+)  # fmt: skip
+def test_an_inertia_past_1e12_is_refused_in_one_line(command, scenario, key, tmp_path, capsys):
+    """1e300 kg m^2 was admitted: the UKF's disturbance variance (J times its floor,
+    squared) overflowed, numpy warned and an eigenvalue solve failed the runs. Inertias
+    are bounded by ``MAX_INERTIA_KGM2`` (1e12; the ISS is about 1e8)."""
+    from kalman_vs_infoset.experiments.sim.fields import MAX_INERTIA_KGM2
+
+    value = [MAX_INERTIA_KGM2 * 10, 2.0, 3.0]
+    argv = [command, scenario, "--runs", "1", "--out", str(tmp_path), "--set", f"{key}={value}"]
+    assert main(argv) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"field '{key}' must be a number in (0, 1e+12]" in line

@@ -19,6 +19,7 @@ from typing import Annotated, Literal, overload
 import numpy as np
 from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
 from kalman_vs_infoset.experiments.sim.fields import (
+    Inertia,
     Table,
     Vector3,
     Vector4,
@@ -38,7 +39,7 @@ _POS = Annotated[float, float_bounds(0.0, open_lo=True)]
 class BodyTable(Table):
     """The rigid body: ``J = W diag(J_diag) W^T``."""
 
-    inertia_kgm2: Vector3[_POS] = field(..., "principal moments of inertia J_diag, kg m^2")
+    inertia_kgm2: Vector3[Inertia] = field(..., "principal moments of inertia J_diag, kg m^2")
     axes_rotvec_deg: Vector3[Annotated[float, float_bounds(-360.0, 360.0)]] = field(
         (0.0, 0.0, 0.0), "rotation vector of the principal axes W in the body frame, deg"
     )

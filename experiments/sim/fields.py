@@ -60,6 +60,12 @@ def float_bounds(
     return Field(allow_inf_nan=False, **bounds)
 
 
+#: the largest moment of inertia a scenario takes, kg m^2: the largest spacecraft (the
+#: ISS) is about 1e8; far beyond, the filters' disturbance variances overflow (1e300
+#: did: numpy's warnings, then a failed eigenvalue solve)
+MAX_INERTIA_KGM2 = 1e12
+
+
 def int_bounds(lo: int | None = None, hi: int | None = None) -> Any:
     """The bounds of an integer field, ``Annotated[int, int_bounds(lo, hi)]``."""
     return Field(ge=lo, le=hi)
@@ -207,3 +213,7 @@ def first_error(
     elif kind == "value_error":
         what = f"{what}; {msg}"
     return f"field '{dotted}' must be {what}{shown}"
+
+
+#: a moment of inertia, kg m^2: positive, at most :data:`MAX_INERTIA_KGM2`
+Inertia = Annotated[float, float_bounds(0.0, MAX_INERTIA_KGM2, open_lo=True)]

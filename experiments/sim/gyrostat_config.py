@@ -18,6 +18,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
 from kalman_vs_infoset.experiments.sim.fields import (
+    Inertia,
     Table,
     Vector3,
     Vector4,
@@ -43,8 +44,8 @@ _POS3 = Vector3[Annotated[float, float_bounds(0.0, open_lo=True)]]
 class GyrostatTable(Table):
     """The gyrostat, its rotor torque limits and the disturbance bounds (seed 1.1-1.4, 2.5)."""
 
-    A_kgm2: _POS3 = field(..., "total principal moments A_i (rotors included), kg m^2")
-    rotor_J_kgm2: _POS3 = field(..., "rotor axial moments J_i, kg m^2")
+    A_kgm2: Vector3[Inertia] = field(..., "total principal moments A_i (rotors included), kg m^2")
+    rotor_J_kgm2: Vector3[Inertia] = field(..., "rotor axial moments J_i, kg m^2")
     alpha_Nm: _POS3 = field(..., "rotor torque limits |u_i| <= alpha_i, N m")
     beta_Nm: Vector3[Annotated[float, float_bounds(0.0)]] = field(
         ..., "disturbance bounds |v_i| <= beta_i, N m"

@@ -45,7 +45,7 @@ from kalman_vs_infoset.estim.base import PointBelief
 from kalman_vs_infoset.estim.intercept.model import BearingBound, ChannelModel, Impulse
 from kalman_vs_infoset.experiments.sim.estimator_loop import EstimatorLoop
 from kalman_vs_infoset.experiments.sim.estimator_tables import AttitudeEstimatorTables
-from kalman_vs_infoset.experiments.sim.fields import Vector3, Vector6, float_bounds
+from kalman_vs_infoset.experiments.sim.fields import Inertia, Vector3, Vector6, float_bounds
 from kalman_vs_infoset.experiments.sim.fields import field as declared
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
@@ -65,7 +65,7 @@ class PointingConfig(AttitudeEstimatorTables):
 
     options_prefix: ClassVar[str] = "attitude.estimator_options"
 
-    inertia_kgm2: Vector3[_POS] = declared((40.0, 50.0, 60.0), "principal inertia, kg m^2")
+    inertia_kgm2: Vector3[Inertia] = declared((40.0, 50.0, 60.0), "principal inertia, kg m^2")
     controller: Literal["pd", "lqr"] = declared("pd", "quaternion PD or LQR")
     estimator: str = declared("box", "attitude estimator (registered name)")
     control_period_s: Annotated[float, float_bounds(1e-3, 1.0)] = declared(
