@@ -78,6 +78,9 @@ FLAG_VALUES = {
 }
 #: the errors of a run stopped by its limits (a run that raised anything else is a fault)
 LIMITS = {"RunTimeout", "MemoryError"}
+#: the errors of a run that cannot go on, said as such: the end-to-end intercept's axis
+#: loop diverged, or an attitude UKF's covariance lost definiteness
+REPORTED = ("LoopDiverged: ", "LinAlgError: the UKF diverged")
 RUNS_ONE = ("intercept", "compare", "adversaries", "sweep", "fig5", "attitude")
 
 
@@ -204,7 +207,8 @@ def draw(kind: str, rng: random.Random, keys, files: dict[str, Path], out: Path)
 
 def run(args: list[str], limit_s: int) -> tuple[str, str]:
     """``(outcome, detail)``: ``ok``, ``refused`` (one line, status 2), ``runs failed``
-    (status 1, reported: a run over ``--run-cpu-limit-s``), ``slow`` (over the limit) or
+    (status 1, reported: a run over ``--run-cpu-limit-s``, or one that cannot go on,
+    ``REPORTED``), ``slow`` (over the limit) or
     ``FAILED`` (raised, or another status or more lines)."""
     from kalman_vs_infoset.experiments.cli import main
 
@@ -227,9 +231,13 @@ def run(args: list[str], limit_s: int) -> tuple[str, str]:
         return "ok", ""
     if code == 2 and len(lines) == 1 and "Traceback" not in text:
         return "refused", lines[0]
-    reasons = re.findall(r"run \d+ failed: (\w+)", text)
-    if code == 1 and "Traceback" not in text and reasons and set(reasons) <= LIMITS:
-        return "runs failed", lines[-1]  # reported: over --run-cpu-limit-s or -memory-
+    reasons = re.findall(r"run \d+ failed: (\w+: .*)", text)
+
+    def reported(reason: str) -> bool:
+        return reason.split(":")[0] in LIMITS or reason.startswith(REPORTED)
+
+    if code == 1 and "Traceback" not in text and reasons and all(map(reported, reasons)):
+        return "runs failed", lines[-1]  # reported: a limit, or a run that cannot go on
     return "FAILED", f"exit status {code}, {len(lines)} lines:\n{text[-3000:]}"
 
 
