@@ -165,6 +165,11 @@ def unresolved(w_radps: ArrayLike, x: ArrayLike, dt_s: float) -> NDArray[np.bool
         The whole states (every component must be finite).
     dt_s : float
         The integration step.
+
+    Returns
+    -------
+    ndarray of bool (...,)
+        True where the state has left what the integration resolves.
     """
     finite = np.all(np.isfinite(x), axis=-1)
     with np.errstate(over="ignore", invalid="ignore"):  # an overflowed rate is unresolved
