@@ -18,13 +18,18 @@ Measured with :func:`exact_reference` (seeds 1 and 2, 120 steps of 0.05 s, at 10
 and 120 steps): the LP's interval inside every family's per-axis hull every time; the
 box's widths 1.0 to 3.6 times the LP's (the largest on the attitude axes, late), the
 zonotope's 1.0 to 2.4, the ellipsoid's hull equal to the box's here (its own gain is on
-coarsely measured rates, ``tests/test_attitude_sets.py``).
+coarsely measured rates, ``tests/test_attitude_sets.py``). Over 40 more seeds (100 to
+139, 40 steps, at 15 and 40) the LP's interval was inside every hull (the least margin
+-2e-12 of the width), the box's widths up to 6.7 times the LP's and the zonotope's up to
+3.8.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeEstimator
 from kalman_vs_infoset.estim.attitude.model import (
     AttitudeControl,
@@ -169,10 +174,7 @@ def reference():
     return exact_reference(seed=1, steps=60, times=(20, 60))
 
 
-def test_the_exact_set_lies_inside_every_attitude_set_family(reference):
-    """Soundness against the exact set, not only the truth: the LP's extremes along each
-    axis (states the data allow) are inside each family's hull, and each hull is at
-    least the LP's width (the LP is an inner reference)."""
+def _assert_inside(reference) -> None:
     for row in reference:
         width = row["hi"] - row["lo"]
         assert np.all(width > 0)
@@ -180,6 +182,20 @@ def test_the_exact_set_lies_inside_every_attitude_set_family(reference):
             lo, hi = row[name]
             assert np.all(lo <= row["lo"] + REL_TOL * width), (name, row["step"])
             assert np.all(hi >= row["hi"] - REL_TOL * width), (name, row["step"])
+
+
+def test_the_exact_set_lies_inside_every_attitude_set_family(reference):
+    """Soundness against the exact set, not only the truth: the LP's extremes along each
+    axis (states the data allow) are inside each family's hull, and each hull is at
+    least the LP's width (the LP is an inner reference)."""
+    _assert_inside(reference)
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_the_exact_set_lies_inside_every_family_on_any_seed(seed):
+    """The same on drawn truths and measurement errors (40 steps, at 15 and 40)."""
+    _assert_inside(exact_reference(seed=seed, steps=40, times=(15, 40)))
 
 
 def test_the_zonotope_is_nearer_the_exact_set_than_the_box(reference):
