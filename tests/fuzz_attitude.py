@@ -1,0 +1,112 @@
+"""Random attitude scenarios within the fields' bounds, each run by every attitude set
+family: the truth must be inside the set at every step (not collected by pytest: a
+tool, like ``fuzz_scenarios.py`` for the intercept).
+
+Each case changes a bundled scenario: the reaction-wheel turns (``smallsat_rw``'s PD,
+``lqr_large_angle``'s LQR; inertia scaled by 0.1 to 10 with its axes' ratios drawn,
+control period 0.01 to 0.2 s, a short turn) or the gyrostat (its moments scaled by 0.1
+to 10, the rotors' kept), measurement bounds 1e-4 to 0.1 deg and 1e-5 to 0.01 deg/s, the
+disturbance bound 1e-6 to 1e-2 N m (reaction wheels); then a noise (random, game).
+Every registered attitude set estimator runs it (two runs, numpy warnings as errors).
+A run whose closed loop diverged is counted, not a fault (the sets must still hold the
+truth up to it); a run that failed or a step outside is a fault. Scenarios the
+validation refuses are counted, not run. Exit status 1 on a fault.
+
+    python tests/fuzz_attitude.py --seconds 600 --seed 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import sys
+import time
+import warnings
+from collections import Counter
+from typing import Any
+
+SCENARIOS = ("smallsat_rw", "lqr_large_angle", "gyrostat_game")
+NOISES = ("random", "game")
+
+
+def set_estimators() -> list[str]:
+    """The registered attitude estimators that are neither a Kalman baseline nor the
+    measurement read as the state: the set families (box, zonotope, ellipsoid)."""
+    from kalman_vs_infoset.estim import registry
+
+    names = registry.names("attitude")
+    return [n for n in names if not {"baseline", "exact"} & set(registry.get("attitude", n).roles)]
+
+
+def draw_case(rng: random.Random) -> tuple[str, str, dict[str, Any]]:
+    """``(scenario, noise, keyword tables of run_attitude)``."""
+    scenario, noise = rng.choice(SCENARIOS), rng.choice(NOISES)
+    scale = 10 ** rng.uniform(-1.0, 1.0)
+    angle, rate = 10 ** rng.uniform(-4.0, -1.0), 10 ** rng.uniform(-5.0, -2.0)
+    if scenario == "gyrostat_game":
+        sim = {"horizon_factor": 1.01, "meas_angle_deg": angle, "meas_rate_degps": rate}
+        return scenario, noise, {"gyrostat": {"A_kgm2": [120 * scale, 100 * scale, 80 * scale]},
+                                 "simulation": sim}  # fmt: skip
+    return scenario, noise, {
+        "body": {"inertia_kgm2": [rng.uniform(0.5, 3.0) * scale for _ in range(3)]},
+        "simulation": {"duration_s": 15.0, "control_period_s": rng.choice((0.01, 0.05, 0.1, 0.2))},
+        "tables": {"noise": {"meas_angle_deg": angle, "meas_rate_degps": rate,
+                             "disturbance_Nm": 10 ** rng.uniform(-6.0, -2.0)}},
+    }  # fmt: skip
+
+
+def run_case(case_seed: int, estimators: list[str], counts: Counter) -> list[str]:
+    """The faults of one case (every estimator on the same drawn scenario)."""
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    from kalman_vs_infoset import api
+
+    scenario, noise, tables = draw_case(random.Random(case_seed))
+    faults = []
+    for est in estimators:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                df = api.run_attitude(scenario, noise=noise, estimator=est, runs=2,
+                                      seed=case_seed, **tables)  # fmt: skip
+        except InputError:
+            counts["refused"] += 1
+            return faults
+        counts["runs"] += len(df)
+        ok = df[df["status"] == "ok"]
+        counts["diverged"] += int(ok["diverged"].sum()) if "diverged" in ok else 0
+        counts["steps outside"] += int(ok["truth_outside"].sum())
+        if len(ok) < len(df) or ok["truth_outside"].sum() > 0:
+            errors = df.loc[df["status"] != "ok", "error"].tolist()
+            outside = ok["truth_outside"].tolist()
+            faults.append(f"case {case_seed}: {scenario} {noise} {est} {tables}: "
+                          f"outside {outside}, errors {errors}")  # fmt: skip
+    counts["cases"] += 1
+    return faults
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=float, default=300.0, help="how long to search (s)")
+    p.add_argument("--seed", type=int, default=0, help="first case's seed")
+    p.add_argument("--cases", type=int, default=None, help="at most this many cases")
+    args = p.parse_args(argv)
+    estimators = set_estimators()
+    counts: Counter = Counter()
+    faults: list[str] = []
+    t0, seed = time.monotonic(), args.seed
+    while time.monotonic() - t0 < args.seconds and (
+        args.cases is None or seed - args.seed < args.cases
+    ):
+        faults += run_case(seed, estimators, counts)
+        seed += 1
+    for fault in faults:
+        print("FAULT", fault)
+    print(f"{counts['cases']} cases ({counts['refused']} refused by the validation), "
+          f"{counts['runs']} runs of {', '.join(estimators)}: {counts['steps outside']} steps "
+          f"outside, {counts['diverged']} runs diverged, {len(faults)} faults")  # fmt: skip
+    return 1 if faults else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

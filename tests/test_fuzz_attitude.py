@@ -1,0 +1,26 @@
+"""Smoke test of the attitude guarantee search (``tests/fuzz_attitude.py``, a tool)."""
+
+import fuzz_attitude
+import pandas as pd
+
+
+def test_the_search_runs_every_set_family_and_finds_no_fault(capsys):
+    assert fuzz_attitude.set_estimators() == ["box", "zonotope", "ellipsoid"]
+    # case 3: smallsat_rw, random noise, a 0.1-s period: under a CPU-second
+    assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert line.startswith("1 cases (0 refused by the validation), 6 runs of box, zonotope")
+    assert line.endswith(": 0 steps outside, 0 runs diverged, 0 faults")
+
+
+def test_a_step_outside_is_a_fault(capsys, monkeypatch):
+    from kalman_vs_infoset import api
+
+    def outside(*args, **kwargs):
+        return pd.DataFrame({"status": ["ok", "ok"], "error": ["", ""], "diverged": [0, 0],
+                             "truth_outside": [1, 0]})  # fmt: skip
+
+    monkeypatch.setattr(api, "run_attitude", outside)
+    assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 1
+    out = capsys.readouterr().out
+    assert out.count("FAULT case 3:") == 3 and "outside [1, 0]" in out
