@@ -40,7 +40,8 @@ DERIVED = {
     r"settle within the scenario's (\d+) s \(`not_settled`\), where every raw-measurement "
     r"and UKF run does\. Under random noise Resurs-P shows "
     r"no difference \(p from ([\d.]+) to ([\d.]+) over",
-    "diverged": r"its body rate turns the body more than (\d+) rad in\s+one integration step",
+    "diverged": r"its\s+body\s+rate\s+turns\s+the\s+body\s+more\s+than\s+(\d+)\s+rad\s+in\s+one\s+"
+    r"integration\s+step",
 }
 
 #: read by ``test_docs_attitude_estimators.test_the_box_never_lost_the_truth_in_these_files``
