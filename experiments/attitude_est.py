@@ -53,6 +53,16 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     return [str(f) for f in plots.save(fig, out_dir / f"{stem}-cdf")]
 
 
+def rows_of(metrics: dict[str, np.ndarray], runs: int) -> list[dict[str, float | int]]:
+    """One row per run from a vectorised loop's per-run arrays ``(runs,)`` (other
+    entries, e.g. recorded histories, are left out); counts stay integers, as every
+    loop's rows hold them."""
+    keys = [k for k, v in metrics.items() if np.ndim(v) == 1]
+    kind = {k: int if np.issubdtype(np.asarray(metrics[k]).dtype, np.integer) else float
+            for k in keys}  # fmt: skip
+    return [{k: kind[k](metrics[k][i]) for k in keys} for i in range(runs)]
+
+
 def run_here(loop, source, scenario, controller, noise, runs, seed, estimator) -> dict[str, Any]:
     """A loop's attitude runs (:class:`experiments.attitude_loops.AttitudeLoop`) in this
     process, without files (tests, notebooks): the same chunks, retries and summary as

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.attitude_est import rows_of, run_here
 from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
 from kalman_vs_infoset.experiments.attitude_traces import trace_gyrostat
 from kalman_vs_infoset.experiments.errors import InputError
@@ -40,6 +40,11 @@ from kalman_vs_infoset.experiments.stats import estimator_counts, not_settled, s
 
 #: runs per task: the loop is vectorised over the runs of a chunk
 CHUNK = 8
+#: the values of a turn's end: no value for a run whose loop diverged before it
+PERFORMANCE = (
+    "settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps", "max_torque_Nm",
+    "max_torque_ratio", "max_rotor_rate_radps",
+)  # fmt: skip
 
 
 def parse_scenario(source: str, scenario: Mapping[str, Any]) -> GyrostatScenario:
@@ -67,29 +72,21 @@ def task(setup: GyrostatSetup, controller: str, noise: str, estimator: str, seed
     r = simulate_turn(
         s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, rngs, s.cfg, estimator
     )
-    keys = ("settle_time_s", "energy_N2m2s", "final_angle_deg", "final_rate_degps",
-            "max_torque_Nm", "max_torque_ratio", "max_rotor_rate_radps")  # fmt: skip
-    rows = [
-        {
-            "settle_time_s": float(r.settle_time_s[i]),
-            "energy_N2m2s": float(r.energy_N2m2s[i]),
-            "final_angle_deg": float(np.degrees(r.final_angle_rad[i])),
-            "final_rate_degps": float(np.degrees(r.final_rate_radps[i])),
-            "max_torque_Nm": float(r.max_abs_torque_Nm[i].max()),
-            "max_torque_ratio": float((r.max_abs_torque_Nm[i] / s.alpha_Nm).max()),
-            "max_rotor_rate_radps": float(r.max_rotor_rate_radps[i]),
-            "truth_outside": int(r.truth_outside[i]),
-            "empty_steps": int(r.empty_steps[i]),
-            "unbounded_steps": int(r.unbounded_steps[i]),
-            "mean_knowledge_bound_deg": float(r.mean_knowledge_bound_deg[i]),
-        }
-        for i in range(len(seeds))
-    ]
+    metrics = {
+        "settle_time_s": r.settle_time_s,
+        "energy_N2m2s": r.energy_N2m2s,
+        "final_angle_deg": np.degrees(r.final_angle_rad),
+        "final_rate_degps": np.degrees(r.final_rate_radps),
+        "max_torque_Nm": r.max_abs_torque_Nm.max(axis=-1),
+        "max_torque_ratio": (r.max_abs_torque_Nm / s.alpha_Nm).max(axis=-1),
+        "max_rotor_rate_radps": r.max_rotor_rate_radps,
+        "truth_outside": np.asarray(r.truth_outside, dtype=int),
+        "empty_steps": np.asarray(r.empty_steps, dtype=int),
+        "unbounded_steps": np.asarray(r.unbounded_steps, dtype=int),
+        "mean_knowledge_bound_deg": r.mean_knowledge_bound_deg,
+    }
     # a run whose loop diverged: no value for its turn's end (experiments.sim.divergence)
-    cols = {k: np.array([row[k] for row in rows]) for k in rows[0]}
-    marked = diverged_rows(cols, r.diverged_time_s, keys)
-    kind = {k: type(rows[0].get(k, 0.0)) for k in marked}
-    return [{k: kind[k](v[i]) for k, v in marked.items()} for i in range(len(seeds))]
+    return rows_of(diverged_rows(metrics, r.diverged_time_s, PERFORMANCE), len(seeds))
 
 
 def summarise(

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim import registry
-from kalman_vs_infoset.experiments.attitude_est import run_here
+from kalman_vs_infoset.experiments.attitude_est import rows_of, run_here
 from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
 from kalman_vs_infoset.experiments.attitude_traces import trace_rw
 from kalman_vs_infoset.experiments.errors import InputError
@@ -63,11 +63,7 @@ def task(
     metrics = simulate_runs(
         config, controller, noise, [np.random.default_rng(s) for s in seeds], estimator
     )
-    keys = [k for k, v in metrics.items() if np.ndim(v) == 1]
-    # step counts stay integers, as every other loop's rows hold them
-    kind = {k: int if np.issubdtype(np.asarray(metrics[k]).dtype, np.integer) else float
-            for k in keys}  # fmt: skip
-    return [{k: kind[k](metrics[k][i]) for k in keys} for i in range(len(seeds))]
+    return rows_of(metrics, len(seeds))
 
 
 def summarise(
