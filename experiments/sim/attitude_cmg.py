@@ -43,7 +43,7 @@ from kalman_vs_infoset.guidance.attitude.energy import (
 )
 from kalman_vs_infoset.guidance.attitude.euler_turn import EulerTurnTracker
 from kalman_vs_infoset.guidance.attitude.min_energy import min_energy_turn
-from kalman_vs_infoset.guidance.attitude.plant import unresolved
+from kalman_vs_infoset.guidance.attitude.plant import advance_checked
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
@@ -239,9 +239,8 @@ def simulate_turn(
             ext = -d_bound * np.sign(torque)
         elif rng is not None:  # noisy
             ext = rng.uniform(-1.0, 1.0, 3) * d_bound
-        with np.errstate(over="ignore", invalid="ignore"):  # reported by the check below
-            x_next = rk4_step(body, x, torque, dt, ext)
-        if unresolved(x_next[4:7], x_next, dt):
+        x_next, bad = advance_checked(rk4_step, body, x, (torque, dt, ext), 1, dt, slice(4, 7))
+        if bad:
             # the turn ends here (experiments.sim.divergence); x stays the last resolved
             diverged_s, n_done = (i + 1) * dt, i
             break

@@ -54,7 +54,7 @@ from kalman_vs_infoset.guidance.attitude.gyrostat import (
     linearising_torque,
     rk4_step,
 )
-from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, unresolved
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, advance_checked
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics.rotations import error_angle_rad, error_quaternion
@@ -242,12 +242,8 @@ def simulate_turn(
         h_err = j_rot * cfg.meas_rotor_radps + h * (np.abs(u) + jxd / b_mom + 1e-12)
         h_mid = j_rot * phid
         known = AttitudeControl(-u, h_mid - h_err, h_mid + h_err)
-        # the check below reports an overflowing state (numpy's warnings would not)
         before = state
-        with np.errstate(over="ignore", invalid="ignore"):
-            for _ in range(cfg.substeps):
-                state = rk4_step(gyro, state, u, v, dt)
-        bad = unresolved(state[:, X], state, dt)  # at the sampling instants
+        state, bad = advance_checked(rk4_step, gyro, state, (u, v, dt), cfg.substeps, dt, X)
         if np.any(bad):
             if runs > 1:  # the runner simulates each run of the batch alone
                 raise LoopDiverged.of(bad, state[:, X], (k + 1) * h, dt)

@@ -49,7 +49,7 @@ from kalman_vs_infoset.experiments.sim.fields import Inertia, Vector3, Vector6, 
 from kalman_vs_infoset.experiments.sim.fields import field as declared
 from kalman_vs_infoset.guidance.attitude.lqr import LQRController
 from kalman_vs_infoset.guidance.attitude.pd import QuaternionPD
-from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, unresolved
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, advance_checked
 from kalman_vs_infoset.guidance.attitude.wheels import ReactionWheels, rk4_step
 from pydantic import model_validator
 
@@ -188,9 +188,7 @@ class PointingLoop:
         else:
             d = self.d_const
         known = AttitudeControl.held(u, h, T)
-        with np.errstate(over="ignore", invalid="ignore"):  # reported by the check below
-            self.x = rk4_step(self.body, self.x, u, T, d)
-        bad = unresolved(self.x[:, 4:7], self.x, T)
+        self.x, bad = advance_checked(rk4_step, self.body, self.x, (u, T, d), 1, T, slice(4, 7))
         if np.any(bad):  # the axis is lost: the run cannot go on (a failed run, said why)
             raise LoopDiverged.of(
                 bad, self.x[:, 4:7], self.time_s + T, T, "the attitude loop holding the axis"

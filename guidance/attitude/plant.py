@@ -14,6 +14,7 @@ body-to-inertial); conversions go through ``Rotation``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -175,6 +176,25 @@ def unresolved(w_radps: ArrayLike, x: ArrayLike, dt_s: float) -> NDArray[np.bool
     with np.errstate(over="ignore", invalid="ignore"):  # an overflowed rate is unresolved
         fast = np.linalg.norm(w_radps, axis=-1) * dt_s > MAX_TURN_PER_STEP_RAD
     return ~finite | fast
+
+
+def advance_checked(
+    step: Callable[..., NDArray[np.float64]],
+    model: object,
+    x: NDArray[np.float64],
+    inputs: tuple,
+    substeps: int,
+    dt_s: float,
+    rates: slice,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """``substeps`` integration steps ``x <- step(model, x, *inputs)`` and
+    :func:`unresolved` of the result (its rates at ``x[..., rates]``): what every closed
+    loop does between two samples. numpy's overflow warnings are silenced inside, since
+    a state that overflows is what the check reports."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        for _ in range(substeps):
+            x = step(model, x, *inputs)
+    return x, unresolved(x[..., rates], x, dt_s)
 
 
 class LoopDiverged(ArithmeticError):

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
-from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, unresolved
+from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, advance_checked
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics import integrate
@@ -152,11 +152,7 @@ def simulate_closed_loop(
         u = wheels.limit(control(t, x), x[..., 7:10], control_period_s)
         m_ext = 0.0 if ext_torque is None else ext_torque(t, x, u)
         us[k] = u
-        # the check below reports an overflowing state (numpy's warnings would not)
-        with np.errstate(over="ignore", invalid="ignore"):
-            for _ in range(substeps):
-                x = rk4_step(body, x, u, dt, m_ext)
-        bad = unresolved(x[..., 4:7], x, dt)  # at the sampling instants
+        x, bad = advance_checked(rk4_step, body, x, (u, dt, m_ext), substeps, dt, slice(4, 7))
         if np.any(bad):
             exc = LoopDiverged.of(bad, x[..., 4:7], t + control_period_s, dt)
             exc.trajectory = Trajectory(  # the states resolved, at k + 1 instants
