@@ -213,6 +213,83 @@ def test_segment_sum_is_the_convex_minkowski_sum_with_at_most_two_more_vertices(
     assert abs(w - 1.0) < 1e-9 or want.area < 1e-12 * want.length**2
 
 
+def _moved_then_summed(poly, sheared, shear, dx, dz, g, want_scale):
+    """The two passes the replay ran before :func:`_nk._moved_segment1`: the move
+    (``x += shear y + dx``, then ``y += dz``, with the moved polygon's largest coordinate)
+    and :func:`_nk._segment1`."""
+    p = poly.copy()
+    big = 0.0
+    for j in range(len(p)):  # the replaced loop, statement by statement
+        if sheared:
+            p[j, 0] += shear * p[j, 1] + dx
+        p[j, 1] += dz
+        big = max(big, abs(p[j, 0]), abs(p[j, 1]))
+    dst = np.full((2 * len(p) + 8, 2), np.nan)
+    k, scale = _nk._segment1(p, len(p), g[0], g[1], dst, big, want_scale)
+    return p, dst[:k], scale
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(1, 40),
+    flat=st.sampled_from([1.0, 1e-9, 1e-15, 0.0]),
+    subdivide=st.integers(1, 20),
+    sheared=st.booleans(),
+    g_kind=st.sampled_from(["any", "zero", "along_x", "along_y", "tiny"]),
+)
+def test_moved_segment_sum_is_the_move_then_the_sum_bit_for_bit(
+    seed, n, flat, subdivide, sheared, g_kind
+):
+    """One pass (the replay's prediction and impulse) against the two it replaced, on
+    points, segments, polygons flat along ``g`` or cut into many collinear-to-rounding
+    vertices (the rare path), zero and tiny ``g``: the moved polygon, the sum and its
+    scale are equal to the last bit (the node set's published results depend on it)."""
+    rng = np.random.default_rng(seed)
+    pts = rng.normal(size=(n, 2)) * [1.0, flat] * 10.0 ** rng.integers(-3, 4)
+    if n >= 3 and flat > 0.0:
+        hull = _convex_polygon(rng, n, flat)
+        pts = hull if len(hull) >= 3 else pts[:1]
+    if subdivide > 1 and len(pts) >= 3:
+        d = np.roll(pts, -1, axis=0) - pts
+        s = np.linspace(0, 1, subdivide + 1)[1:-1, None]
+        pts = np.insert(pts, 1, pts[0] + s * d[0], axis=0)
+    g = {
+        "any": rng.normal(size=2),
+        "zero": np.zeros(2),
+        "along_x": np.array([rng.normal(), 0.0]),
+        "along_y": np.array([0.0, rng.normal()]),
+        "tiny": rng.normal(size=2) * 1e-300,
+    }[g_kind]
+    shear, dx, dz = rng.normal(size=3) * [10.0, 1.0, 1.0]
+    for want_scale in (False, True):
+        p_want, out_want, scale_want = _moved_then_summed(
+            pts, sheared, shear, dx, dz, g, want_scale
+        )
+        p = pts.copy()
+        dst = np.full((2 * len(p) + 8, 2), np.nan)
+        k, scale, big = _nk._moved_segment1(
+            p, len(p), sheared, shear, dx, dz, g[0], g[1], dst, want_scale
+        )
+        assert p.tobytes() == p_want.tobytes()
+        assert dst[:k].tobytes() == out_want.tobytes()
+        assert scale == scale_want or (np.isnan(scale) and np.isnan(scale_want))
+        assert big == max([0.0, *np.abs(p_want).ravel()])
+
+
+@pytest.mark.parametrize("n", [1, 2, 5])
+def test_moved_segment_sum_of_a_polygon_at_the_origin_is_flat_as_before(n):
+    """A polygon collapsed onto the origin (zero scale, so a zero flatness tolerance:
+    the boundary of the test ``|cross| > tol``) takes both ends of ``g`` at every vertex,
+    in one pass as in two."""
+    pts = np.zeros((n, 2))
+    g = np.array([0.3, -0.2])
+    p_want, out_want, _ = _moved_then_summed(pts, True, 2.0, 0.0, 0.0, g, True)
+    p, dst = pts.copy(), np.full((2 * n + 8, 2), np.nan)
+    k, _, _ = _nk._moved_segment1(p, n, True, 2.0, 0.0, 0.0, g[0], g[1], dst, True)
+    assert k == 2 * n and dst[:k].tobytes() == out_want.tobytes()
+
+
 @settings(max_examples=100, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(20, 400), cap=st.integers(8, 64))
 def test_outer_simplification_contains_the_polygon_within_the_cap(seed, n, cap):

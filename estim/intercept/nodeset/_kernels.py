@@ -151,6 +151,71 @@ def _segment1(src, m, g0, g1, dst, scale, want_scale):
 
 
 @njit(cache=True)
+def _moved_segment1(src, m, sheared, shear, dx, dz, g0, g1, dst, want_scale):
+    """:func:`_segment1` of ``src[:m]`` after a move of its vertices (in place: ``x +=
+    shear y + dx`` if ``sheared``, then ``y += dz``), in the same pass: each vertex is
+    moved as the pass first reads it, and the rounding scale (the moved polygon's
+    largest coordinate, which only the flatness test needs) is complete after it. The
+    output is the separate move's and :func:`_segment1`'s, bit for bit; a replay spends
+    most of its time in these passes. Returns the number of vertices, the output's
+    scale if ``want_scale`` (else 0) and the moved polygon's scale."""
+    if m == 0:
+        return 0, 0.0, 0.0
+    if g0 == 0.0 and g1 == 0.0:
+        big = 0.0
+        for j in range(m):
+            if sheared:
+                src[j, 0] += shear * src[j, 1] + dx
+            src[j, 1] += dz
+            big = max(big, abs(src[j, 0]), abs(src[j, 1]))
+            dst[j, 0], dst[j, 1] = src[j, 0], src[j, 1]
+        return m, big, big
+    last = m - 1
+    if sheared:
+        src[0, 0] += shear * src[0, 1] + dx
+    src[0, 1] += dz
+    big = max(0.0, abs(src[0, 0]), abs(src[0, 1]))
+    if last > 0:
+        if sheared:
+            src[last, 0] += shear * src[last, 1] + dx
+        src[last, 1] += dz
+    crc = g0 * (src[0, 1] - src[last, 1]) - g1 * (src[0, 0] - src[last, 0])
+    changes = 0
+    worst = 0.0  # the largest |cross|: the polygon is flat along g if it is within tol
+    k = 0
+    out_scale = 0.0
+    for j in range(m):
+        c = j + 1 if j + 1 < m else 0
+        if 0 < c < last:  # vertices 0 and m - 1 were moved before the pass
+            if sheared:
+                src[c, 0] += shear * src[c, 1] + dx
+            src[c, 1] += dz
+            big = max(big, abs(src[c, 0]), abs(src[c, 1]))
+        crp = crc
+        crc = g0 * (src[c, 1] - src[j, 1]) - g1 * (src[c, 0] - src[j, 0])
+        if abs(crc) > worst:
+            worst = abs(crc)
+        sp = 1.0 if crp > 0.0 else -1.0
+        sc = 1.0 if crc > 0.0 else -1.0
+        changes += sc != sp
+        dst[k, 0], dst[k, 1] = src[j, 0] + sp * g0, src[j, 1] + sp * g1
+        if want_scale:
+            out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+        k += 1
+        if sc != sp:
+            dst[k, 0], dst[k, 1] = src[j, 0] + sc * g0, src[j, 1] + sc * g1
+            if want_scale:
+                out_scale = max(out_scale, abs(dst[k, 0]), abs(dst[k, 1]))
+            k += 1
+    if last > 0:
+        big = max(big, abs(src[last, 0]), abs(src[last, 1]))
+    flat = not worst > 1e-14 * big * max(abs(g0), abs(g1))
+    if flat or changes != 2:
+        k, out_scale = _segment1_rare(src, m, g0, g1, dst, flat, want_scale)
+    return k, out_scale, big
+
+
+@njit(cache=True)
 def _segment1_rare(src, m, g0, g1, dst, flat, want_scale):
     """:func:`_segment1` for a polygon flat along ``g`` (every vertex takes both ends)
     or whose edge signs break into more than two runs (the runs taken from the extremes
@@ -325,12 +390,8 @@ def apply_ops(
                     d_lo, d_hi = _impulse_dv(pa[o], pb[o], u_lo[b], u_hi[b], q_lo[o, b])
                 zs = e_nom * tau
                 dy = 0.5 * (d_lo + d_hi) * zs
-                big = 0.0
-                for j in range(m):
-                    a_buf[j, 1] += dy
-                    big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
                 g = 0.5 * (d_hi - d_lo) * zs
-                m, _ = _segment1(a_buf, m, 0.0, g, b_buf, big, False)
+                m, _, _ = _moved_segment1(a_buf, m, False, 0.0, 0.0, dy, 0.0, g, b_buf, False)
                 a_buf, b_buf = b_buf, a_buf
             elif kind == RANGE:
                 if label[i] < h_lo[o + 1, b] or label[i] > h_hi[o + 1, b]:
@@ -346,13 +407,10 @@ def apply_ops(
                 nu_s = 0.5 * (q_hi[o, b] - q_lo[o, b])
                 shear = dt / (tau * t1) / (e_nom * scale)
                 ca, cz = dt * dt / (2.0 * t1) / scale, dt * (tau + t1) / 2.0 * e_nom
-                big = 0.0
-                for j in range(m):
-                    a_buf[j, 0] += shear * a_buf[j, 1] + mid * ca
-                    a_buf[j, 1] += mid * cz
-                    big = max(big, abs(a_buf[j, 0]), abs(a_buf[j, 1]))
                 ga, gz = nu_s * ca, nu_s * cz
-                m, big = _segment1(a_buf, m, ga, gz, b_buf, big, True)
+                m, big, _ = _moved_segment1(
+                    a_buf, m, True, shear, mid * ca, mid * cz, ga, gz, b_buf, True
+                )
                 # a disturbance that varies within the step (the kinematic term does)
                 # reaches +-nu dt^2/4 off the constant one's segment in Y~ (V~ fixed)
                 gz2 = nu_s * dt * dt / 4.0 * e_nom
