@@ -79,6 +79,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_tightness",
         "a set's interval of the miss vs the exact one",
     ),
+    "attitude-tightness": (
+        "kalman_vs_infoset.experiments.cmd_attitude_tightness",
+        "the attitude sets' intervals vs the exact ones",
+    ),
     "scenarios": (
         "kalman_vs_infoset.experiments.cmd_scenarios",
         "the bundled scenarios, one line each",

@@ -47,6 +47,8 @@ PDG = "docs/results/attitude/pd_gains.json"
 GYC = "docs/results/attitude/gyrostat_game-seed1-constant.json"
 SETS = "docs/results/attitude/smallsat_rw-sets.json"
 SIGNS = N + "resurs_inertia_signs/"
+#: kvi attitude-tightness's files, by scenario and noise
+ATT_T = "docs/results/attitude_tightness/{}-{}-seed0.json"
 MISS_FUEL = ("miss_m/mean", "fuel_mps/mean")
 
 
@@ -668,6 +670,25 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      (*_row("infoset", "random", "cpu_s", path=SLOW10 + "10kmps-known.json"),
       *_row("infoset", "random", "cpu_s", path=SLOW10 + "58kmps.json"),
       *_row("infoset", "random", "cpu_s", path=SLOW10 + "10kmps.json"))),
+    # docs/attitude.md: the attitude sets against the exact set (kvi attitude-tightness)
+    (ATT, r"On smallsat_rw the box's hull reaches ([\d.]+) times the exact width on the "
+     r"attitude axes under random noise and ([\d.]+) under the game torque \(([\d.]+) and "
+     r"([\d.]+) on the rates\), the zonotope's ([\d.]+) and ([\d.]+);",
+     ATT_T.format("smallsat_rw", "pd-random"),
+     ("estimators/box/max_ratio_attitude",
+      ATT_T.format("smallsat_rw", "pd-game") + "::estimators/box/max_ratio_attitude",
+      "estimators/box/max_ratio_rate",
+      ATT_T.format("smallsat_rw", "pd-game") + "::estimators/box/max_ratio_rate",
+      "estimators/zonotope/max_ratio_attitude",
+      ATT_T.format("smallsat_rw", "pd-game") + "::estimators/zonotope/max_ratio_attitude")),
+    (ATT, r"the box\s+reaches ([\d.]+) and ([\d.]+) times on the attitude axes and ([\d.]+) and "
+     r"([\d.]+) on the rates, the\s+zonotope ([\d.]+) on the attitude axes under both noises",
+     ATT_T.format("lqr_large_angle", "lqr-random"),
+     ("estimators/box/max_ratio_attitude",
+      ATT_T.format("lqr_large_angle", "lqr-game") + "::estimators/box/max_ratio_attitude",
+      "estimators/box/max_ratio_rate",
+      ATT_T.format("lqr_large_angle", "lqr-game") + "::estimators/box/max_ratio_rate",
+      "estimators/zonotope/max_ratio_attitude")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),

@@ -64,6 +64,8 @@ COMMANDS = {
               (*COMMON, "--estimators", "--noise", "--key", "--values")),
     "tightness": (["{short}"], ("--noise", "--seed", "--times", "--estimators", "--switch-s")),
     "attitude": (["{tiny}"], (*COMMON, "--trace", "--controller", "--noise", "--estimators")),
+    "attitude-tightness": (["{tiny}", "--times", "0.1"],
+                           ("--noise", "--seed", "--times", "--estimators", "--controller")),
     "pd-gains": (["--no-figures"], (
         "--angles-deg", "--quaternion-term", "--initial-turn", "--angle-tol-deg",
         "--rate-tol-degps", "--grid-step", "--control-period-s", "--horizon-s",

@@ -39,6 +39,7 @@ COMMAND_LINES = {
     "scenarios": [],
     "plot": ["x-trace.parquet", "--no-animation"],
     "paper-figures": ["--only", "kp", "--runs", "2"],
+    "attitude-tightness": ["smallsat_rw", "--times", "0.1"],
 }  # fmt: skip
 
 #: in one fresh interpreter: for each command, ``kvi CMD --help`` through ``cli.main``

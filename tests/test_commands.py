@@ -30,6 +30,7 @@ CHOOSERS = {
     "fig5": [],
     "attitude": ["smallsat_rw"],
     "tightness": ["kp_fig5"],
+    "attitude-tightness": ["smallsat_rw"],
 }
 
 

@@ -101,6 +101,9 @@ INPUTS = (
     r"\b1 deg up\b",
     r"2 x \(vector part\)",
     r"\(\d+\) angles",
+    r"seed 0\)",
+    r"run 0 of",
+    r"at 0\.1, 1, 5 and 20 s",
 )
 
 
@@ -169,6 +172,32 @@ def test_the_sets_keep_the_truth_in_the_published_runs():
     for name in ("box", "zonotope", "ellipsoid"):
         row = rows[name, "random"]
         assert row["truth_outside"] == int(outside) and row["empty_steps"] == int(empty), name
+
+
+def test_the_attitude_tightness_files_say_what_the_page_says():
+    """The page's words on ``kvi attitude-tightness``'s files: the exact interval inside
+    every family's hull at every time in every file; the times 0.1, 1, 5 and 20 s; the
+    zonotope's attitude ratio on lqr_large_angle the same under both noises (as printed)
+    and its rate ratios the box's; the ellipsoid's hull the box's."""
+    from docs_checks import ATT_T
+
+    zonotope = []
+    for scenario, noises in (("smallsat_rw", "pd-random pd-game"),
+                             ("lqr_large_angle", "lqr-random lqr-game")):  # fmt: skip
+        for noise in noises.split():
+            data = results(ATT_T.format(scenario, noise))
+            assert data["times_s"] == [0.1, 1.0, 5.0, 20.0] and data["seed"] == 0
+            assert data["exact_inside"] is True
+            est = data["estimators"]
+            for row in est.values():
+                assert row["exact_inside"] and all(t["exact_inside"] for t in row["times"])
+            for key in ("max_ratio_attitude", "max_ratio_rate"):
+                assert est["ellipsoid"][key] == pytest.approx(est["box"][key], abs=1e-3)
+            if scenario == "lqr_large_angle":
+                zonotope.append(round(est["zonotope"]["max_ratio_attitude"], 2))
+                rate = est["zonotope"]["max_ratio_rate"]
+                assert rate == pytest.approx(est["box"]["max_ratio_rate"], rel=1e-6)
+    assert len(set(zonotope)) == 1
 
 
 def test_every_number_of_the_attitude_page_is_checked():

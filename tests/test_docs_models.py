@@ -128,6 +128,7 @@ DERIVED = {
     r"(\d+) on Ctrl-C and (\d+) on SIGTERM .*?; (\d+) when runs failed .*? (\d+), quietly,",
     "pd_map": r"a summary of the (\d+)-deg settle-time map",
     "loop_diverged": r"a body rate turning the body more\s+than (\d+) rad in one integration step",
+    "attitude_tightness": r"sides by: (1e-4), or twice the attitude bound in radians",
     "riccati": r"the (\d)x(\d) stabilising Riccati solution of §2\.3 \(`J_diag` (\d) principal "
     r"moments, `q` the (\d) diagonal weights of `Q`, `r` the (\d) of `R`",
 }
@@ -522,6 +523,13 @@ def test_harness_numbers_are_the_commands_constants(tmp_path, capsys):
     from kalman_vs_infoset.guidance.attitude.plant import MAX_TURN_PER_STEP_RAD
 
     agree_each(_read("loop_diverged"), [MAX_TURN_PER_STEP_RAD])
+    from kalman_vs_infoset.experiments.cmd_attitude_tightness import (
+        INSIDE_REL_TOL,
+        inside_rel_tol,
+    )
+
+    agree_each(_read("attitude_tightness"), [INSIDE_REL_TOL])
+    assert inside_rel_tol([1e-6, 1e-3, 0.0]) == 2e-3 and inside_rel_tol([1e-6]) == INSIDE_REL_TOL
     ok, bad, ctrl_c, term, failed, pipe = map(int, _read("exit"))
     source = ast.parse((ROOT / "experiments" / "cli.py").read_text(encoding="utf-8"))
     returns = [n.value for n in ast.walk(source) if isinstance(n, ast.Return)]

@@ -168,7 +168,10 @@ def simulate_runs(
     (``time_s`` ``(n+1,)``, ``states`` ``(n+1, runs, 10)``, ``torque_Nm`` ``(n+1, runs,
     3)``, the last held), the target quaternion ``q_target`` and per control sample
     ``estimate`` ``(n, runs, 7)``, ``knowledge_bound_rad`` and ``truth_inside``
-    ``(n, runs)``.
+    ``(n, runs)``, the measurement ``meas_quat`` ``(n, runs, 4)`` and ``meas_rate_radps``
+    ``(n, runs, 3)``, the belief's per-axis ``hull`` (a list of ``n``
+    :meth:`EstimatorLoop.axis_hull` values) and the disturbance held over each period,
+    ``disturbance_Nm`` ``(n, runs, 3)`` (what :mod:`experiments.attitude_exact` needs).
     """
     body, _, _ = body_of(config)
     law = make_controller(controller, config)
@@ -186,6 +189,7 @@ def simulate_runs(
     )
     state = SimpleNamespace(belief=None, ctrl=None, outside=np.zeros(n, dtype=int))
     bounds, centres, insides = [], [], []
+    seen: dict[str, list] = {"meas_quat": [], "meas_rate_radps": [], "hull": [], "dist": []}
 
     def measure(x: np.ndarray) -> AttitudeMeasurement:
         if noise == "none":
@@ -204,15 +208,19 @@ def simulate_runs(
         if record is not None:
             centres.append(loop.centre(belief))
             insides.append(inside)
+            seen["meas_quat"].append(meas.quat)
+            seen["meas_rate_radps"].append(meas.rate_radps)
+            seen["hull"].append(loop.axis_hull(belief))
         x_est = np.concatenate([loop.centre(belief), x[:, 7:10]], axis=-1)
         u = wheels.limit(law.from_belief(PointBelief(x_est)), x[:, 7:10], period)
         state.belief, state.ctrl = belief, AttitudeControl.held(u, x[:, 7:10], period)
         return u
 
     def disturbance(_t: float, _x: np.ndarray, u: np.ndarray) -> np.ndarray:
-        if noise == "game":
-            return -d * np.sign(u)
-        return const_dist
+        m = -d * np.sign(u) if noise == "game" else const_dist
+        if record is not None:
+            seen["dist"].append(m)
+        return m
 
     try:
         traj = simulate_closed_loop(
@@ -229,6 +237,9 @@ def simulate_runs(
             time_s=traj.time_s, states=traj.x, torque_Nm=traj.torque_Nm,
             q_target=np.asarray(law.q_target, dtype=float), estimate=np.array(centres),
             knowledge_bound_rad=np.array(bounds), truth_inside=np.array(insides),
+            meas_quat=np.array(seen["meas_quat"]),
+            meas_rate_radps=np.array(seen["meas_rate_radps"]),
+            disturbance_Nm=np.array(seen["dist"]), hull=seen["hull"],
         )  # fmt: skip
     out = {
         "truth_outside": state.outside,

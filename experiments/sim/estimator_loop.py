@@ -86,3 +86,20 @@ class EstimatorLoop:
     @staticmethod
     def attitude_bound_rad(belief: AttitudeBelief) -> np.ndarray:
         return belief.attitude_bound_rad()
+
+    @staticmethod
+    def axis_hull(belief: AttitudeBelief) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Per run, the reference attitude ``q_ref`` ``(R, 4)`` and the centre and radius
+        ``(R, 6)`` of the belief's per-axis hull in its coordinates ``(log(q_ref^-1 q), w)``:
+        the box's own sides, a set's hull (``hull()``); None for a belief that is not a set
+        with axes of that kind (the UKF, ``perfect``)."""
+        from kalman_vs_infoset.estim.attitude.box.estimator import BoxAttitudeBelief
+        from kalman_vs_infoset.estim.attitude.sets.common import SetAttitudeBelief, box_cr
+
+        if isinstance(belief, SetAttitudeBelief):
+            c, r = belief.hull()
+        elif isinstance(belief, BoxAttitudeBelief):
+            c, r = box_cr(belief)
+        else:
+            return None
+        return np.array(belief.q_ref, dtype=float), np.array(c), np.array(r)

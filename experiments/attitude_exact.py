@@ -1,0 +1,202 @@
+"""The exact set of a reaction-wheel run's states along each axis, as linear programs.
+
+Every state a run's data allow is the truth ``x_k`` moved by a perturbation ``delta_k =
+(da, dw)`` (body-frame rotation vector ``log(q_k^-1 q)``, rate), reached from some
+initial perturbation under disturbances within their bound, with every measurement error
+within its bound. The perturbations are of the order of the measurement bounds, so one
+control period maps them linearly to first order (docs/attitude.md):
+
+.. math:: \\delta_{k+1} = A_k \\delta_k + B_k e_k,
+
+``e_k`` the disturbance's offset from the truth's over period ``k`` (held over the
+period, as the loops hold the truth's), ``A_k, B_k`` central differences of the plant's
+own integration (``substeps`` steps of :func:`guidance.attitude.wheels.rk4_step`) along
+the true trajectory; the wheels' momentum follows the known torque and is not perturbed.
+The measurement of sample ``k`` bounds ``delta_k`` axis by axis: ``|log(q_k^-1 q_m) - da|
+<= b_a`` and ``|w_m - w_k - dw| <= b_w`` (first order). The extremes of ``delta_k`` along
+each axis are then linear programs (scipy ``linprog``, HiGHS, sparse: the variables
+``delta_0 .. delta_k`` and ``e_0 .. e_{k-1}``, the dynamics as equalities).
+
+A disturbance that varies within a period can only add states, so the LP's interval
+lies inside the exact one (to the linearisation's order): a set that holds it is sound
+against it, and a set's width over it bounds the set's excess from above.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
+
+from kalman_vs_infoset.numerics.rotations import qexp, qinv, qlog, qmul
+
+#: finite-difference step of the Jacobians (central differences: error ~ step^2), in the
+#: perturbation's units (rad, rad/s)
+FD_STEP = 1e-7
+
+
+@dataclass(frozen=True)
+class ExactAxes:
+    """The LP's interval of ``delta_k`` per axis at one sample, with the trajectory that
+    attains each end (a witness: the initial perturbation and the disturbances).
+
+    Attributes
+    ----------
+    lo, hi : ndarray (6,)
+        The ends of ``delta_k`` (rad, rad/s).
+    delta0 : ndarray (12, 6)
+        Per end (axis 0 low, axis 0 high, axis 1 low, ...), the initial perturbation.
+    disturbance_Nm : ndarray (12, k, 3)
+        Per end, the disturbance held over each period (the truth's plus the LP's offset).
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    delta0: np.ndarray
+    disturbance_Nm: np.ndarray
+
+
+def delta_of(truth: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``(da, dw)`` ``(n, 6)`` of states ``x`` ``(n, >=7)`` relative to ``truth``."""
+    qt = np.broadcast_to(truth[0:4], x[:, 0:4].shape)
+    return np.concatenate([qlog(qmul(qinv(qt), x[:, 0:4])), x[:, 4:7] - truth[4:7]], axis=1)
+
+
+def _moved(truth: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The states ``truth (+) d`` for perturbations ``d`` ``(n, 6)``."""
+    x = np.repeat(truth[None], len(d), axis=0)
+    x[:, 0:4] = qmul(x[:, 0:4], qexp(d[:, 0:3]))
+    x[:, 4:7] += d[:, 3:6]
+    return x
+
+
+def period_jacobians(
+    body, x: np.ndarray, x_next: np.ndarray, u: np.ndarray, dist: np.ndarray,
+    period_s: float, substeps: int,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """``(A, B)`` ``(6, 6), (6, 3)`` of one control period at the truth ``x`` (10,), its
+    torque ``u`` and disturbance ``dist`` held (central differences, 18 states in one
+    batch); ``x_next`` is the truth at the period's end."""
+    # a disturbance step that moves the rate by about FD_STEP over the period: one the
+    # size of the disturbance bound moved the attitude by less than its rounding
+    h_d = FD_STEP * float(np.min(np.diag(body.inertia_kgm2))) / period_s
+    steps = np.zeros((9, 6))
+    steps[np.arange(6), np.arange(6)] = FD_STEP
+    pert = np.concatenate([_moved(x, steps[:6]), _moved(x, -steps[:6])])
+    pert = np.concatenate([pert, np.repeat(x[None], 6, axis=0)])
+    d = np.tile(dist, (18, 1))
+    for i in range(3):
+        d[12 + i, i] += h_d
+        d[15 + i, i] -= h_d
+    dt = period_s / substeps
+    y = pert
+    for _ in range(substeps):
+        y = rk4_step(body, y, np.tile(u, (18, 1)), dt, d)
+    dy = delta_of(x_next, y)
+    a = (dy[0:6] - dy[6:12]).T / (2 * FD_STEP)
+    b = (dy[12:15] - dy[15:18]).T / (2 * h_d)
+    return a, b
+
+
+def exact_intervals(
+    body, rec: dict[str, Any], bounds: dict[str, np.ndarray], period_s: float, substeps: int,
+    samples: list[int], run: int = 0,
+) -> dict[int, ExactAxes]:  # fmt: skip
+    """The LP's interval of ``delta_k`` per axis at each sample ``k`` of ``samples``.
+
+    Parameters
+    ----------
+    body : RigidBody
+        The plant's body.
+    rec : dict
+        A reaction-wheel run's record (:func:`experiments.sim.attitude_rw.simulate_runs`).
+    bounds : dict
+        ``angle_rad``, ``rate_radps``, ``disturbance_Nm``: the bounds (3,) the estimators
+        assume (their model's).
+    period_s, substeps : float, int
+        The control period and its integration steps.
+    samples : list of int
+        Control samples (the measurement ``k`` taken at ``k * period_s``).
+    run : int
+        The run of the record.
+
+    Returns
+    -------
+    dict of int to ExactAxes
+        Per sample, the ends of ``delta_k`` and their witnesses.
+    """
+    from scipy import sparse
+    from scipy.optimize import linprog
+
+    x = rec["states"][:, run]
+    u = rec["torque_Nm"][:, run]
+    dist = rec["disturbance_Nm"][:, run]
+    meas_bound = np.concatenate([bounds["angle_rad"], bounds["rate_radps"]])
+    dmax = np.asarray(bounds["disturbance_Nm"], dtype=float)
+    last = max(samples)
+    jac = [
+        period_jacobians(body, x[k], x[k + 1], u[k], dist[k], period_s, substeps)  # fmt: skip
+        for k in range(last)
+    ]
+    seen = np.concatenate(
+        [rec["meas_quat"][: last + 1, run], rec["meas_rate_radps"][: last + 1, run]], -1
+    )
+    # each measurement as a perturbation of the truth it measured
+    xs = x[: last + 1]
+    meas = np.concatenate(
+        [qlog(qmul(qinv(xs[:, 0:4]), seen[:, 0:4])), seen[:, 4:7] - xs[:, 4:7]], 1
+    )
+    # the variables in units of their bounds (HiGHS's feasibility tolerance, 1e-7, is
+    # absolute: on perturbations of 1e-7 rad/s it let the dynamics slip by their size)
+    d_scale = meas_bound
+    e_scale = np.where(dmax > 0, dmax, 1.0)
+    a_all = np.array([j[0] for j in jac]).reshape(-1, 6, 6) * d_scale[None, None, :]
+    a_all = a_all / d_scale[None, :, None]
+    b_all = np.array([j[1] for j in jac]).reshape(-1, 6, 3) * e_scale[None, None, :]
+    b_all = b_all / d_scale[None, :, None]
+    lim_d = np.stack([meas / d_scale - 1.0, meas / d_scale + 1.0], axis=-1).reshape(-1, 2)
+    lim_e = np.stack([(-dmax - dist[:last]) / e_scale, (dmax - dist[:last]) / e_scale], axis=-1)
+    lim_e = lim_e.reshape(-1, 2)
+    out = {}
+    for s in samples:
+        n_d, n_e = 6 * (s + 1), 3 * s
+        # y_{k+1} - A_k y_k - B_k f_k = 0, k = 0 .. s-1 (scaled), as one sparse matrix:
+        # row 6 k + i holds -A_k[i] at y_k, 1 at y_{k+1}[i], -B_k[i] at f_k
+        k, i, j = np.meshgrid(np.arange(s), np.arange(6), np.arange(6), indexing="ij")
+        rows = np.concatenate([(6 * k + i).ravel(), np.arange(6 * s), (6 * k + i)[..., :3].ravel()])
+        cols = np.concatenate(
+            [(6 * k + j).ravel(), 6 + np.arange(6 * s), (n_d + 3 * k + j)[..., :3].ravel()]
+        )
+        vals = np.concatenate([-a_all[:s].ravel(), np.ones(6 * s), -b_all[:s].ravel()])
+        a_eq = sparse.csr_matrix((vals, (rows, cols)), shape=(6 * s, n_d + n_e)) if s else None
+        limits = np.concatenate([lim_d[:n_d], lim_e[:n_e]])
+        lo, hi = np.empty(6), np.empty(6)
+        witness = np.empty((12, n_d + n_e))
+        for axis in range(6):
+            cost = np.zeros(n_d + n_e)
+            cost[6 * s + axis] = 1.0
+            for sign, store in ((1.0, lo), (-1.0, hi)):
+                res = linprog(sign * cost, A_eq=a_eq, b_eq=np.zeros(6 * s) if s else None,
+                              bounds=limits, method="highs")  # fmt: skip
+                if res.status != 0:
+                    raise RuntimeError(f"exact reference at sample {s}: {res.message}")
+                store[axis] = sign * res.fun * d_scale[axis]
+                witness[2 * axis + (sign < 0)] = res.x
+        out[s] = ExactAxes(
+            lo, hi, witness[:, :6] * d_scale,
+            dist[:s] + witness[:, n_d:].reshape(12, s, 3) * e_scale,
+        )  # fmt: skip
+    return out
+
+
+def belief_intervals(truth: np.ndarray, hull, run: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """A belief's per-axis interval ``(lo, hi)`` ``(6,)`` of ``delta`` relative to the
+    truth (10,): its hull ``(q_ref, c, r)`` (:meth:`EstimatorLoop.axis_hull`, run
+    ``run``) moved from its reference to the truth's frame (first order: the centre's
+    offset, the same radii)."""
+    q_ref, c, r = (np.asarray(v)[run] for v in hull)
+    centre = qmul(q_ref[None], qexp(c[None, 0:3]))
+    cd = np.concatenate([qlog(qmul(qinv(truth[None, 0:4]), centre))[0], c[3:6] - truth[4:7]])
+    return cd - r, cd + r

@@ -1,0 +1,231 @@
+"""``kvi attitude-tightness SCENARIO``: the attitude sets' per-axis intervals against the
+exact set of states a run's data allow (docs/attitude.md).
+
+One run of a reaction-wheel scenario (controllers ``pd`` and ``lqr``) per set estimator,
+seeded as run 0 of ``kvi attitude SCENARIO --seed SEED`` (the same truth and errors),
+simulated to the last requested time. At each requested time, after the update, each
+axis of ``delta = (attitude error about the body axes, rate)`` relative to the truth: the
+set's interval (its per-axis hull), the exact one (:mod:`experiments.attitude_exact`:
+linear programs over the initial state and the disturbances, linearised along the true
+trajectory; an inner reference), ``ratio`` = the set's width over the exact one (an upper
+bound of the set's excess) and ``exact_inside`` (the exact interval within the set's, to
+:func:`inside_rel_tol` of its width: the linearisation's order).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+from kalman_vs_infoset.experiments import options
+from kalman_vs_infoset.experiments.errors import InputError, stat_text
+
+#: the attitude runs import the compiled kernels (the command line announces a compilation)
+COMPILED_KERNELS = True
+
+#: the set estimators this command compares (a per-axis hull of a set)
+SET_FAMILIES = ("box", "zonotope", "ellipsoid")
+#: the exact interval may pass a set's side by this share of its width, or by twice the
+#: attitude bound in radians if larger: the linearisation's error, second order, is of the
+#: perturbation's size in radians relative to the first order (as is the change of frame
+#: from the set's reference attitude to the truth's)
+INSIDE_REL_TOL = 1e-4
+
+
+def inside_rel_tol(angle_bound_rad) -> float:
+    """The share of a set's width the exact interval may pass its sides by."""
+    return max(INSIDE_REL_TOL, 2.0 * float(max(angle_bound_rad)))
+
+
+AXES = ("attitude_x", "attitude_y", "attitude_z", "rate_x", "rate_y", "rate_z")
+#: the reaction-wheel loop's controllers (the exact reference models its plant)
+CONTROLLERS = ("pd", "lqr")
+
+
+def _times(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated positive times in s, got {text!r}"
+        )
+    return sorted(set(values))
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help=options.SCENARIO_HELP)
+    p.add_argument("--controller", default=None, choices=CONTROLLERS,
+                   help="pd or lqr (default: the scenario's 'controller')")  # fmt: skip
+    p.add_argument("--noise", choices=("random", "game", "none"), default="random",
+                   help="measurement errors and disturbance (default: %(default)s)")  # fmt: skip
+    p.add_argument("--seed", type=options.seed_int, default=0,
+                   help="root seed, as for kvi attitude (run 0; default 0)")  # fmt: skip
+    options.add_estimators(p, "attitude", list(SET_FAMILIES), ",".join(SET_FAMILIES))
+    p.add_argument("--times", type=_times, default=[0.1, 1.0, 5.0, 20.0],
+                   help="comma-separated times, s, multiples of the control period "
+                   "(default 0.1,1,5,20)")  # fmt: skip
+    p.add_argument("--out", help="output directory (default: results/attitude_tightness)")
+    options.add_overrides(p, "simulation.control_period_s=0.02")
+
+
+def _setup(args) -> tuple[Any, str, str]:
+    """The typed reaction-wheel scenario simulated to the last time, its controller and
+    name (``InputError`` of one line for another loop or a time off the period)."""
+    from kalman_vs_infoset.experiments.attitude_request import request
+
+    others = [e for e in args.estimators if e not in SET_FAMILIES]
+    if others:
+        raise InputError(
+            f"--estimators: {', '.join(others)} keeps no set to compare; attitude-tightness "
+            f"compares the set estimators {', '.join(SET_FAMILIES)}"
+        )
+    req = request(argparse.Namespace(
+        scenario=args.scenario, overrides=args.overrides, controller=args.controller,
+        noise=[args.noise], estimators=None, runs=1, seed=args.seed, out=None,
+    ))  # fmt: skip
+    if req.controller not in CONTROLLERS:
+        raise InputError(
+            f"{req.source}: controller {req.controller!r}: the exact reference models the "
+            f"reaction-wheel loop ({', '.join(CONTROLLERS)}), not this scenario's plant"
+        )
+    data = json.loads(json.dumps(dict(req.scenario), default=str))  # a deep copy
+    setup = req.loop.prepare(req.source, data, req.controller, args.noise)
+    period, duration = setup.simulation.control_period_s, setup.simulation.duration_s
+    for t in args.times:
+        if abs(round(t / period) * period - t) > 1e-9 * max(t, 1.0):
+            raise InputError(
+                f"--times: {t:g} s is not a multiple of the control period {period:g} s"
+            )
+        if t > duration - period + 1e-9:
+            raise InputError(
+                f"--times: {t:g} s is not before the run's end ({duration:g} s, the last "
+                f"control sample at {duration - period:g} s)"
+            )
+    # the loop is causal: a run cut after the last time has the same beliefs up to it
+    # (at least the shortest duration a scenario may have, and at most its own)
+    cut = min(max(max(args.times) + period, 1.0), duration)
+    data["simulation"] = {**data.get("simulation", {}), "duration_s": cut}
+    return req.loop.prepare(req.source, data, req.controller, args.noise), req.controller, req.name
+
+
+def compare(setup, controller: str, noise: str, estimator: str, seed: int,
+            times: list[float]) -> dict[str, Any]:  # fmt: skip
+    """One run of ``estimator`` and the exact intervals at ``times``: the record of
+    :func:`run`'s ``estimators`` entry."""
+    import numpy as np
+    from kalman_vs_infoset.experiments import attitude_exact
+    from kalman_vs_infoset.experiments.runner import run_seed
+    from kalman_vs_infoset.experiments.sim.attitude_rw import (
+        body_of,
+        estimator_model,
+        simulate_runs,
+    )
+
+    rec: dict[str, Any] = {}
+    rng = np.random.default_rng(run_seed(seed, 0))
+    out = simulate_runs(setup, controller, noise, [rng], estimator, rec)
+    if int(out["diverged"][0]):  # a counted outcome: nothing to compare after it
+        return {"times": [], "max_ratio_attitude": None, "max_ratio_rate": None,
+                "exact_inside": None,
+                "diverged_time_s": float(out["diverged_time_s"][0])}  # fmt: skip
+    period = setup.simulation.control_period_s
+    samples = [int(round(t / period)) for t in times]
+    model = estimator_model(setup)
+    bounds = {
+        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
+        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
+        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
+    }
+    body, _, _ = body_of(setup)
+    t0 = time.process_time()
+    exact = attitude_exact.exact_intervals(
+        body, rec, bounds, period, setup.simulation.substeps, samples
+    )
+    lp_cpu_s = time.process_time() - t0
+    rows = []
+    for t, k in zip(times, samples, strict=True):
+        lo, hi = exact[k].lo, exact[k].hi
+        s_lo, s_hi = attitude_exact.belief_intervals(rec["states"][k, 0], rec["hull"][k])
+        width = hi - lo
+        tol = inside_rel_tol(bounds["angle_rad"]) * (s_hi - s_lo)
+        inside = bool(np.all(s_lo <= lo + tol) and np.all(s_hi >= hi - tol))
+        deg = np.degrees  # the intervals in deg and deg/s, per axis
+        rows.append({
+            "time_s": t, "sample": k,
+            "set_lo_deg": deg(s_lo).tolist(), "set_hi_deg": deg(s_hi).tolist(),
+            "exact_lo_deg": deg(lo).tolist(), "exact_hi_deg": deg(hi).tolist(),
+            # (None where the exact interval is a point: no ratio to a zero width)
+            "ratio": [float(a / b) if b > 0 else None
+                      for a, b in zip(s_hi - s_lo, width, strict=True)],
+            "exact_inside": inside,
+            "truth_inside": bool(rec["truth_inside"][k, 0]),
+        })  # fmt: skip
+    ratios = np.array([[np.nan if v is None else v for v in r["ratio"]] for r in rows])
+
+    def top(cols: slice) -> float | None:
+        finite = ratios[:, cols][np.isfinite(ratios[:, cols])]
+        return float(finite.max()) if finite.size else None
+
+    return {
+        "inside_rel_tol": inside_rel_tol(bounds["angle_rad"]),
+        "times": rows,
+        "max_ratio_attitude": top(slice(0, 3)),
+        "max_ratio_rate": top(slice(3, 6)),
+        "exact_inside": all(r["exact_inside"] for r in rows),
+        "lp_cpu_s": lp_cpu_s,
+        "diverged_time_s": None,
+    }
+
+
+def run(args) -> dict[str, Any]:
+    from kalman_vs_infoset.experiments.files import atomic_write
+
+    t0 = time.perf_counter()
+    setup, controller, name = _setup(args)
+    out = options.out_folder(args.out, Path("results") / "attitude_tightness")
+    result: dict[str, Any] = {
+        "scenario": name, "controller": controller, "noise": args.noise, "seed": args.seed,
+        "times_s": list(args.times), "axes": list(AXES),
+        "estimators": {
+            est: compare(setup, controller, args.noise, est, args.seed, list(args.times))
+            for est in args.estimators
+        },
+    }  # fmt: skip
+    compared = [r["exact_inside"] for r in result["estimators"].values() if r["times"]]
+    result["exact_inside"] = all(compared) if compared else None
+    path = out / f"{name}-{controller}-{args.noise}-seed{args.seed}.json"
+    body = json.dumps(result, default=float, allow_nan=False) + "\n"
+    atomic_write(path, lambda tmp: Path(tmp).write_text(body))
+    result["files"] = [str(path)]
+    result["wall_s"] = time.perf_counter() - t0
+    return result
+
+
+def render(result: dict[str, Any]) -> str:
+    lines = [
+        f"{result['scenario']} ({result['controller']}): set / exact width per axis, "
+        f"{result['noise']} noise, seed {result['seed']}",
+        "  estimator  t, s |" + "".join(f" {a:>10s}" for a in result["axes"]) + " | inside",
+    ]
+    for est, r in result["estimators"].items():
+        if r["diverged_time_s"] is not None:
+            lines.append(
+                f"  {est:9s} the loop diverged at {r['diverged_time_s']:g} s: not compared"
+            )
+            continue
+        for row in r["times"]:
+            ratios = "".join(f" {stat_text(v, '10.3f')}" for v in row["ratio"])
+            lines.append(f"  {est:9s} {row['time_s']:5g} |{ratios} | {row['exact_inside']}")
+        lines.append(
+            f"  {est:9s} max ratio: attitude {stat_text(r['max_ratio_attitude'], '.3f')}, rate "
+            f"{stat_text(r['max_ratio_rate'], '.3f')}; exact inside every time: "
+            f"{r['exact_inside']}"
+        )
+    lines.append("  files: " + ", ".join(result["files"]) + f" ({result['wall_s']:.1f} s)")
+    return "\n".join(lines)
