@@ -7,7 +7,10 @@ Each case changes a bundled scenario: the reaction-wheel turns (``smallsat_rw``'
 control period 0.01 to 0.2 s, a short turn) or the gyrostat (its moments scaled by 0.1
 to 10, the rotors' kept), measurement bounds 1e-4 to 0.1 deg and 1e-5 to 0.01 deg/s, the
 disturbance bound 1e-6 to 1e-2 N m (reaction wheels); then a noise (random, game).
-Every registered attitude set estimator runs it (two runs, numpy warnings as errors).
+Every registered attitude set estimator runs it (two runs, numpy warnings as errors);
+on the reaction-wheel turns, run 0 of each is also compared with the exact set at ten
+control periods (``kvi attitude-tightness``'s comparison: the exact interval outside a
+set's hull is a fault).
 A run whose closed loop diverged is counted, not a fault (the sets must still hold the
 truth up to it); a run that failed or a step outside is a fault. Scenarios the
 validation refuses are counted, not run. Exit status 1 on a fault.
@@ -81,7 +84,42 @@ def run_case(case_seed: int, estimators: list[str], counts: Counter) -> list[str
             outside = ok["truth_outside"].tolist()
             faults.append(f"case {case_seed}: {scenario} {noise} {est} {tables}: "
                           f"outside {outside}, errors {errors}")  # fmt: skip
+    if scenario != "gyrostat_game":
+        faults += exact_faults(case_seed, scenario, noise, tables, estimators, counts)
     counts["cases"] += 1
+    return faults
+
+
+def _overrides(tables: dict[str, Any]) -> list[str]:
+    """``run_attitude``'s keyword tables as ``--set TABLE.KEY=VALUE`` lines."""
+    flat = {k: v for k, v in tables.items() if k != "tables"} | tables.get("tables", {})
+    return [f"{table}.{key}={value!r}" for table, fields in flat.items()
+            for key, value in fields.items()]  # fmt: skip
+
+
+def exact_faults(case_seed, scenario, noise, tables, estimators, counts) -> list[str]:
+    """Run 0 of each family against the exact set at ten control periods
+    (``kvi attitude-tightness``'s comparison): the exact interval outside a set's hull
+    beyond the linearisation's order is a fault."""
+    from kalman_vs_infoset.experiments import cmd_attitude_tightness as cat
+
+    period = tables["simulation"]["control_period_s"]
+    args = argparse.Namespace(scenario=scenario, overrides=_overrides(tables), controller=None,
+                              noise=noise, seed=case_seed, times=[10 * period],
+                              estimators=estimators)  # fmt: skip
+    setup, controller, _ = cat._setup(args)
+    faults = []
+    for est in estimators:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            res = cat.compare(setup, controller, noise, est, case_seed, args.times)
+        if res["diverged_time_s"] is not None:
+            continue
+        counts["exact checks"] += 1
+        if not res["exact_inside"]:
+            ratios = [t["ratio"] for t in res["times"]]
+            faults.append(f"case {case_seed}: {scenario} {noise} {est} {tables}: the exact "
+                          f"interval outside the hull (ratios {ratios})")  # fmt: skip
     return faults
 
 
@@ -104,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         print("FAULT", fault)
     print(f"{counts['cases']} cases ({counts['refused']} refused by the validation), "
           f"{counts['runs']} runs of {', '.join(estimators)}: {counts['steps outside']} steps "
-          f"outside, {counts['diverged']} runs diverged, {len(faults)} faults")  # fmt: skip
+          f"outside, {counts['diverged']} runs diverged, {counts['exact checks']} runs against "
+          f"the exact set, {len(faults)} faults")  # fmt: skip
     return 1 if faults else 0
 
 
