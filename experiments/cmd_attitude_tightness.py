@@ -199,12 +199,52 @@ def run(args) -> dict[str, Any]:
     }  # fmt: skip
     compared = [r["exact_inside"] for r in result["estimators"].values() if r["times"]]
     result["exact_inside"] = all(compared) if compared else None
-    path = out / f"{name}-{controller}-{args.noise}-seed{args.seed}.json"
+    stem = out / f"{name}-{controller}-{args.noise}-seed{args.seed}"
+    path = stem.parent / f"{stem.name}.json"
     body = json.dumps(result, default=float, allow_nan=False) + "\n"
     atomic_write(path, lambda tmp: Path(tmp).write_text(body))
-    result["files"] = [str(path)]
+    result["files"] = [str(p) for p in (path, *_figure(result, stem))]
     result["wall_s"] = time.perf_counter() - t0
     return result
+
+
+def _figure(result: dict[str, Any], stem: Path) -> list[Path]:
+    """The width ratios against time, the attitude axes and the rates side by side: one
+    colour a family, one marker an axis (PNG and SVG beside the JSON)."""
+    from kalman_vs_infoset.experiments import figstyle
+    from kalman_vs_infoset.experiments.plots import plt  # Agg backend
+
+    fig, panels = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    markers = ("o", "s", "^")
+    # families that coincide (the ellipsoid's hull is often the box's) stay visible: the
+    # first drawn widest, the next ones narrower and dashed over it
+    styles = [("-", 3.0), ("--", 2.0), (":", 1.5)]
+    for f, (est, r) in enumerate(result["estimators"].items()):
+        ls, lw = styles[f % len(styles)]
+        times = [row["time_s"] for row in r["times"]]
+        for half, ax in enumerate(panels):
+            for i, marker in enumerate(markers):
+                axis = 3 * half + i
+                ratio = [row["ratio"][axis] for row in r["times"]]
+                ratio = [math.nan if v is None else v for v in ratio]
+                label = f"{figstyle.words(est)}, {AXES[axis].split('_')[1]} axis"
+                colour = figstyle.estimator_colour(est)
+                ax.plot(times, ratio, marker=marker, ls=ls, lw=lw, ms=2 + 2 * lw, color=colour,
+                        label=label)  # fmt: skip
+    for ax, what in zip(panels, ("attitude error", "rate"), strict=True):
+        ax.axhline(1.0, color=figstyle.TRUTH, lw=0.8, label="the exact width")
+        ax.set_xscale("log")
+        ax.set_xlabel("time, s")
+        ax.set_ylabel(f"{what}: set width / exact width, -")
+        ax.set_title(f"{what} about the body axes")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(
+        f"{result['scenario']} ({result['controller']}): the attitude sets against the exact "
+        f"set, {result['noise']} noise, seed {result['seed']}",
+        fontsize=10,
+    )
+    return figstyle.save(fig, stem, dpi=130)
 
 
 def render(result: dict[str, Any]) -> str:

@@ -161,7 +161,22 @@ def test_the_linear_map_is_the_plant_to_second_order(monkeypatch):
         assert np.max(np.abs(got - want)) <= 1e-4 * np.max(np.abs(want))
 
 
-def test_the_command_compares_every_family_and_writes_its_json(tmp_path, capsys):
+def test_the_command_compares_every_family_and_writes_its_json(tmp_path, capsys, monkeypatch):
+    """The JSON on stdout and in its file, every family's intervals (the exact one
+    inside, the ratios as printed), the table, and the figure (labels with units, every
+    line in a legend: the picture tests' check)."""
+    from kalman_vs_infoset.experiments import figstyle
+    from test_pictures import figure_problems
+
+    drawn = []
+    save = figstyle.save
+
+    def checked(fig, stem, *args, **kw):
+        assert figure_problems(fig) == []
+        drawn.append(stem.name)
+        return save(fig, stem, *args, **kw)
+
+    monkeypatch.setattr(figstyle, "save", checked)
     out = tmp_path / "o"
     r = run(capsys, "attitude-tightness", "smallsat_rw", "--times", "0.1,0.5", "--out", out,
             "--json")  # fmt: skip
@@ -171,6 +186,10 @@ def test_the_command_compares_every_family_and_writes_its_json(tmp_path, capsys)
     assert result["exact_inside"] is True
     saved = json.loads((out / "smallsat_rw-pd-random-seed0.json").read_text())
     assert saved["estimators"] == result["estimators"]
+    assert drawn == ["smallsat_rw-pd-random-seed0"]
+    assert {p.rsplit("/", 1)[-1] for p in result["files"]} == {
+        f"smallsat_rw-pd-random-seed0.{ext}" for ext in ("json", "png", "svg")
+    }
     for est, rows in result["estimators"].items():
         assert [row["time_s"] for row in rows["times"]] == [0.1, 0.5]
         for row in rows["times"]:
