@@ -231,9 +231,11 @@ def _figure(result: dict[str, Any], stem: Path) -> list[Path]:
                 colour = figstyle.estimator_colour(est)
                 ax.plot(times, ratio, marker=marker, ls=ls, lw=lw, ms=2 + 2 * lw, color=colour,
                         label=label)  # fmt: skip
+    compared = any(r["times"] for r in result["estimators"].values())
     for ax, what in zip(panels, ("attitude error", "rate"), strict=True):
         ax.axhline(1.0, color=figstyle.TRUTH, lw=0.8, label="the exact width")
-        ax.set_xscale("log")
+        if compared:  # (every run diverged: no time to draw, and no log axis without one)
+            ax.set_xscale("log")
         ax.set_xlabel("time, s")
         ax.set_ylabel(f"{what}: set width / exact width, -")
         ax.set_title(f"{what} about the body axes")

@@ -225,6 +225,24 @@ def test_a_set_narrower_than_the_exact_interval_is_reported_outside(tmp_path, mo
     assert res["exact_inside"] is False
 
 
+def test_a_run_whose_loop_diverged_is_reported_not_compared(tmp_path, capsys):
+    """lqr_large_angle on a body of 1e-6 kg m^2 (its sampled loop diverges): each family's
+    run is reported diverged with its time, nothing compared, the figure drawn empty."""
+    out = tmp_path / "o"
+    tiny = "body.inertia_kgm2=[1e-6, 1e-6, 1e-6]"
+    r = run(capsys, "attitude-tightness", "lqr_large_angle", "--set", tiny, "--times", "0.1,1",
+            "--out", out, "--json")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    result = json.loads(r.stdout.strip().splitlines()[-1])
+    assert result["exact_inside"] is None
+    for row in result["estimators"].values():
+        assert row["times"] == [] and row["diverged_time_s"] > 0
+    assert len(result["files"]) == 3
+    r = run(capsys, "attitude-tightness", "lqr_large_angle", "--set", tiny, "--times", "0.1",
+            "--out", out)  # fmt: skip
+    assert r.returncode == 0 and "the loop diverged at" in r.stdout
+
+
 @pytest.mark.parametrize(
     ("argv", "says"),
     [
