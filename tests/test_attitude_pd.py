@@ -93,6 +93,22 @@ def test_regime_boundary_phi20_eq24(factor, reaches):
     assert bool(np.max(np.abs(tr.x[:, 9])) >= L_MAX * (1 - 1e-9)) is reaches
 
 
+def test_a_momentum_limit_never_reached_puts_phi20_at_infinity_without_overflow(capsys, tmp_path):
+    """eq. (24) with ``L_max`` = 1e300 N m s: ``L^2`` overflows a float (Python raises on
+    it), the boundary is ``inf`` (the limit is never reached), and ``kvi attitude`` with that
+    limit ends normally (it raised ``OverflowError`` from its summary)."""
+    from harness_texts import run_cli
+
+    _, phi20 = regime_boundaries(1.375, 2.625, J, M_MAX, 1e300)
+    assert phi20 == np.inf
+    _, finite = regime_boundaries(1.375, 2.625, J, M_MAX, L_MAX)  # the form's value: eq. (23)
+    eq23 = L_MAX**2 / (2 * J * M_MAX) + 2 * np.arcsin(2.625 * L_MAX / (1.375 * J))
+    assert finite == pytest.approx(eq23, rel=1e-15)
+    r = run_cli(capsys, "attitude", "smallsat_rw", "--set", "wheels.momentum_max_Nms=1e300",
+                "--set", "simulation.duration_s=1.0", "--json", "--out", tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+
+
 def test_baseline_rule_10_is_critical_damping_of_the_linearised_law():
     """Rule (10): k_w = 16/t_end, k_q = k_w^2/2; with the vector part the linearisation
     phi'' + k_w phi' + k_q/2 phi = 0 then has a double root (condition (9) with equality)."""

@@ -119,7 +119,9 @@ def regime_boundaries(
         return 2.0 * float(np.arcsin(arg)) if arg <= 1.0 else np.inf
 
     phi10 = two_asin(torque_max_Nm / (kq * j))
-    phi20 = momentum_max_Nms**2 / (2.0 * j * torque_max_Nm) + two_asin(
+    # L (L / (2 J M)), not L**2 / (2 J M): a momentum limit past 1e154 N m s (never
+    # reached) overflows the square, which Python's float raises on; the product is inf
+    phi20 = momentum_max_Nms * (momentum_max_Nms / (2.0 * j * torque_max_Nm)) + two_asin(
         k_w * momentum_max_Nms / (kq * j)
     )
     return phi10, phi20
