@@ -1,20 +1,22 @@
 """``kvi attitude-tightness SCENARIO``: the attitude sets' per-axis intervals against the
 exact set of states a run's data allow (docs/attitude.md).
 
-One run of a reaction-wheel scenario (controllers ``pd`` and ``lqr``) per set estimator,
-seeded as run 0 of ``kvi attitude SCENARIO --seed SEED`` (the same truth and errors),
-simulated to the last requested time. At each requested time, after the update, each
-axis of ``delta = (attitude error about the body axes, rate)`` relative to the truth: the
-set's interval (its per-axis hull), the exact one (:mod:`experiments.attitude_exact`:
-linear programs over the initial state and the disturbances, linearised along the true
-trajectory; an inner reference), ``ratio`` = the set's width over the exact one (an upper
-bound of the set's excess) and ``exact_inside`` (the exact interval within the set's, to
-:func:`inside_rel_tol` of its width: the linearisation's order).
+One run of a reaction-wheel scenario (controllers ``pd`` and ``lqr``) or of the gyrostat
+(``game``) per set estimator, seeded as run 0 of ``kvi attitude SCENARIO --seed SEED``
+(the same truth and errors), simulated to the last requested time. At each requested
+time, after the update, each axis of ``delta = (attitude error about the body axes,
+rate)`` relative to the truth: the set's interval (its per-axis hull), the exact one
+(:mod:`experiments.attitude_exact`: linear programs over the initial state and the
+disturbances, linearised along the true trajectory; an inner reference), ``ratio`` = the
+set's width over the exact one (an upper bound of the set's excess) and
+``exact_inside`` (the exact interval within the set's, to :func:`inside_rel_tol` of its
+width: the linearisation's order).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import time
@@ -42,8 +44,9 @@ def inside_rel_tol(angle_bound_rad) -> float:
 
 
 AXES = ("attitude_x", "attitude_y", "attitude_z", "rate_x", "rate_y", "rate_z")
-#: the reaction-wheel loop's controllers (the exact reference models its plant)
-CONTROLLERS = ("pd", "lqr")
+#: the loops whose plants the exact reference models: the reaction wheels' controllers and
+#: the gyrostat's game law (the gyrodines' ``energy`` and ``euler`` are not modelled)
+CONTROLLERS = ("pd", "lqr", "game")
 
 
 def _times(text: str) -> list[float]:
@@ -61,7 +64,7 @@ def _times(text: str) -> list[float]:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help=options.SCENARIO_HELP)
     p.add_argument("--controller", default=None, choices=CONTROLLERS,
-                   help="pd or lqr (default: the scenario's 'controller')")  # fmt: skip
+                   help="pd, lqr or game (default: the scenario's 'controller')")  # fmt: skip
     p.add_argument("--noise", choices=("random", "game", "none"), default="random",
                    help="measurement errors and disturbance (default: %(default)s)")  # fmt: skip
     p.add_argument("--seed", type=options.seed_int, default=0,
@@ -92,11 +95,15 @@ def _setup(args) -> tuple[Any, str, str]:
     if req.controller not in CONTROLLERS:
         raise InputError(
             f"{req.source}: controller {req.controller!r}: the exact reference models the "
-            f"reaction-wheel loop ({', '.join(CONTROLLERS)}), not this scenario's plant"
+            f"reaction-wheel loop and the gyrostat ({', '.join(CONTROLLERS)}), not the "
+            "gyrodines"
         )
     data = json.loads(json.dumps(dict(req.scenario), default=str))  # a deep copy
     setup = req.loop.prepare(req.source, data, req.controller, args.noise)
-    period, duration = setup.simulation.control_period_s, setup.simulation.duration_s
+    if req.controller == "game":
+        period, duration = setup.cfg.period_s, setup.cfg.horizon_s
+    else:
+        period, duration = setup.simulation.control_period_s, setup.simulation.duration_s
     for t in args.times:
         if abs(round(t / period) * period - t) > 1e-9 * max(t, 1.0):
             raise InputError(
@@ -110,6 +117,9 @@ def _setup(args) -> tuple[Any, str, str]:
     # the loop is causal: a run cut after the last time has the same beliefs up to it
     # (at least the shortest duration a scenario may have, and at most its own)
     cut = min(max(max(args.times) + period, 1.0), duration)
+    if req.controller == "game":
+        cfg = dataclasses.replace(setup.cfg, horizon_s=cut)
+        return dataclasses.replace(setup, cfg=cfg), req.controller, req.name
     data["simulation"] = {**data.get("simulation", {}), "duration_s": cut}
     return req.loop.prepare(req.source, data, req.controller, args.noise), req.controller, req.name
 
@@ -120,33 +130,20 @@ def compare(setup, controller: str, noise: str, estimator: str, seed: int,
     :func:`run`'s ``estimators`` entry."""
     import numpy as np
     from kalman_vs_infoset.experiments import attitude_exact
-    from kalman_vs_infoset.experiments.runner import run_seed
-    from kalman_vs_infoset.experiments.sim.attitude_rw import (
-        body_of,
-        estimator_model,
-        simulate_runs,
-    )
 
-    rec: dict[str, Any] = {}
-    rng = np.random.default_rng(run_seed(seed, 0))
-    out = simulate_runs(setup, controller, noise, [rng], estimator, rec)
-    if int(out["diverged"][0]):  # a counted outcome: nothing to compare after it
+    rng = np.random.default_rng(_run_seed(seed))
+    if controller == "game":
+        rec, diverged_s, period, substeps, bounds, plant = _gyrostat_run(setup, estimator, rng)
+    else:
+        rec, diverged_s, period, substeps, bounds, plant = _wheels_run(
+            setup, controller, noise, estimator, rng
+        )
+    if np.isfinite(diverged_s):  # a counted outcome: nothing to compare after it
         return {"times": [], "max_ratio_attitude": None, "max_ratio_rate": None,
-                "exact_inside": None,
-                "diverged_time_s": float(out["diverged_time_s"][0])}  # fmt: skip
-    period = setup.simulation.control_period_s
+                "exact_inside": None, "diverged_time_s": float(diverged_s)}  # fmt: skip
     samples = [int(round(t / period)) for t in times]
-    model = estimator_model(setup)
-    bounds = {
-        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
-        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
-        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
-    }
-    body, _, _ = body_of(setup)
     t0 = time.process_time()
-    exact = attitude_exact.exact_intervals(
-        body, rec, bounds, period, setup.simulation.substeps, samples
-    )
+    exact = attitude_exact.exact_intervals(plant, rec, bounds, period, substeps, samples)
     lp_cpu_s = time.process_time() - t0
     rows = []
     for t, k in zip(times, samples, strict=True):
@@ -181,6 +178,71 @@ def compare(setup, controller: str, noise: str, estimator: str, seed: int,
         "lp_cpu_s": lp_cpu_s,
         "diverged_time_s": None,
     }
+
+
+def _run_seed(seed: int):
+    from kalman_vs_infoset.experiments.runner import run_seed
+
+    return run_seed(seed, 0)
+
+
+def _wheels_run(setup, controller: str, noise: str, estimator: str, rng):
+    """One reaction-wheel run recorded: ``(record, diverged time or inf, period,
+    substeps, bounds, plant)``."""
+    import numpy as np
+    from kalman_vs_infoset.experiments import attitude_exact
+    from kalman_vs_infoset.experiments.sim.attitude_rw import (
+        body_of,
+        estimator_model,
+        simulate_runs,
+    )
+
+    rec: dict[str, Any] = {}
+    out = simulate_runs(setup, controller, noise, [rng], estimator, rec)
+    model = estimator_model(setup)
+    bounds = {
+        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
+        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
+        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
+    }
+    sim = setup.simulation
+    plant = attitude_exact.wheels_plant(body_of(setup)[0])
+    return rec, out["diverged_time_s"][0], sim.control_period_s, sim.substeps, bounds, plant
+
+
+def _gyrostat_run(setup, estimator: str, rng):
+    """One gyrostat turn recorded (its rotor rates measured: the plant's extra
+    components), in the reaction-wheel record's layout (samples first)."""
+    import numpy as np
+    from kalman_vs_infoset.experiments import attitude_exact
+    from kalman_vs_infoset.experiments.sim.gyrostat import gyrostat_model, simulate_turn
+
+    s, cfg = setup, setup.cfg
+    r = simulate_turn(s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, [rng], cfg,
+                      estimator, record=True)  # fmt: skip
+    model = gyrostat_model(s.gyro, s.beta_Nm, cfg)
+    bounds = {
+        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
+        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
+        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
+        # (a floor as the estimators' bounds have: exact rotor rates still bound)
+        "extra": np.full(3, max(cfg.meas_rotor_radps, 1e-12)),
+    }
+
+    def samples_first(a: np.ndarray | None) -> np.ndarray:
+        assert a is not None  # recorded
+        return np.swapaxes(a, 0, 1)
+
+    rec = {
+        "states": samples_first(r.states), "torque_Nm": samples_first(r.torques_Nm),
+        "disturbance_Nm": samples_first(r.disturbance_Nm),
+        "meas_quat": samples_first(r.meas_quat),
+        "meas_rate_radps": samples_first(r.meas_rate_radps),
+        "meas_extra": samples_first(r.meas_rotor_radps),
+        "hull": r.hull, "truth_inside": samples_first(r.truth_inside),
+    }  # fmt: skip
+    plant = attitude_exact.gyrostat_plant(s.gyro)
+    return rec, r.diverged_time_s[0], cfg.period_s, cfg.substeps, bounds, plant
 
 
 def run(args) -> dict[str, Any]:

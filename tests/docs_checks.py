@@ -689,6 +689,15 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       "estimators/box/max_ratio_rate",
       ATT_T.format("lqr_large_angle", "lqr-game") + "::estimators/box/max_ratio_rate",
       "estimators/zonotope/max_ratio_attitude")),
+    (ATT, r"the box reaches ([\d.]+) times on the attitude axes under\s+random disturbances "
+     r"and ([\d.]+) under the adversarial ones \(([\d.]+) and ([\d.]+) on the rates\),\s+the "
+     r"zonotope ([\d.]+) and ([\d.]+)\.", ATT_T.format("gyrostat_game", "game-random"),
+     ("estimators/box/max_ratio_attitude",
+      ATT_T.format("gyrostat_game", "game-game") + "::estimators/box/max_ratio_attitude",
+      "estimators/box/max_ratio_rate",
+      ATT_T.format("gyrostat_game", "game-game") + "::estimators/box/max_ratio_rate",
+      "estimators/zonotope/max_ratio_attitude",
+      ATT_T.format("gyrostat_game", "game-game") + "::estimators/zonotope/max_ratio_attitude")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),

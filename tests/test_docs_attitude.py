@@ -183,7 +183,8 @@ def test_the_attitude_tightness_files_say_what_the_page_says():
 
     zonotope = []
     for scenario, noises in (("smallsat_rw", "pd-random pd-game"),
-                             ("lqr_large_angle", "lqr-random lqr-game")):  # fmt: skip
+                             ("lqr_large_angle", "lqr-random lqr-game"),
+                             ("gyrostat_game", "game-random game-game")):  # fmt: skip
         for noise in noises.split():
             data = results(ATT_T.format(scenario, noise))
             assert data["times_s"] == [0.1, 1.0, 5.0, 20.0] and data["seed"] == 0

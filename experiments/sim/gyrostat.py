@@ -114,6 +114,12 @@ class LoopResult:
     disturbance_Nm: Array | None = None  # (R, n, 3)
     knowledge_bound_rad: Array | None = None  # (R, n+1) the belief's attitude bound
     truth_inside: Array | None = None  # (R, n+1) the truth in the belief
+    #: the measurements (R, n+1, 4 / 3 / 3) and the belief's per-axis hull at each sample
+    #: (EstimatorLoop.axis_hull): what experiments.attitude_exact needs
+    meas_quat: Array | None = None
+    meas_rate_radps: Array | None = None
+    meas_rotor_radps: Array | None = None
+    hull: list | None = None
 
 
 def disturbance_draws(disturbance: str, rngs, n: int, beta: NDArray) -> dict[str, NDArray]:
@@ -229,6 +235,9 @@ def simulate_turn(
         rec_u, rec_us, rec_v = (np.full((runs, n, 3), np.nan) for _ in range(3))
         rec_b, rec_in = np.full((runs, n + 1), np.nan), np.zeros((runs, n + 1), dtype=bool)
         rec_b[:, 0], rec_in[:, 0] = loop.attitude_bound_rad(belief), inside
+        rec_q, rec_w, rec_r = (np.full((runs, n + 1, m), np.nan) for m in (4, 3, 3))
+        rec_q[:, 0], rec_w[:, 0], rec_r[:, 0] = meas.quat, meas.rate_radps, phid
+        hulls = [loop.axis_hull(belief)]
 
     diverged_s, taken = np.full(runs, np.inf), n  # taken: the steps the belief was updated
     for k in range(n):
@@ -264,10 +273,12 @@ def simulate_turn(
             states[:, k + 1] = state
             rec_u[:, k], rec_us[:, k], rec_v[:, k] = u, u_star, v
             rec_b[:, k + 1], rec_in[:, k + 1] = bound, inside
+            rec_q[:, k + 1], rec_w[:, k + 1], rec_r[:, k + 1] = meas.quat, meas.rate_radps, phid
+            hulls.append(loop.axis_hull(belief))
 
     settled = last_out < n * h
     eta = error_quaternion(state[:, Q], q_t)
-    extra = {}
+    extra: dict[str, Any] = {}
     if record:
         extra = dict(
             time_s=np.arange(n + 1) * h,
@@ -277,6 +288,10 @@ def simulate_turn(
             disturbance_Nm=rec_v,
             knowledge_bound_rad=rec_b,
             truth_inside=rec_in,
+            meas_quat=rec_q,
+            meas_rate_radps=rec_w,
+            meas_rotor_radps=rec_r,
+            hull=hulls,
         )
     return LoopResult(
         diverged_time_s=diverged_s,
