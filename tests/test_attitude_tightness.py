@@ -45,9 +45,10 @@ def _setup(scenario: str, noise: str, t_s: float, *overrides: str):
     return cat._setup(args)
 
 
-def _run(setup, controller, noise, estimator, seed, monkeypatch):
-    """One recorded run and its beliefs, one per control sample."""
-    beliefs = []
+def _keeping_beliefs(monkeypatch) -> list:
+    """The beliefs of every control sample of the loops run from now on, kept as the loops
+    record their hulls (one per sample)."""
+    beliefs: list = []
     hull = estimator_loop.EstimatorLoop.axis_hull
 
     def keep(belief):
@@ -55,6 +56,12 @@ def _run(setup, controller, noise, estimator, seed, monkeypatch):
         return hull(belief)
 
     monkeypatch.setattr(estimator_loop.EstimatorLoop, "axis_hull", staticmethod(keep))
+    return beliefs
+
+
+def _run(setup, controller, noise, estimator, seed, monkeypatch):
+    """One recorded run and its beliefs, one per control sample."""
+    beliefs = _keeping_beliefs(monkeypatch)
     rec: dict = {}
     simulate_runs(setup, controller, noise, [np.random.default_rng(run_seed(seed, 0))],
                   estimator, rec)  # fmt: skip
@@ -153,14 +160,7 @@ def test_gyrostat_witnesses_are_truths_the_data_allow_and_every_set_holds_them(
     args = argparse.Namespace(scenario="gyrostat_game", overrides=[], controller=None,
                               noise=noise, seed=0, times=[1.0], estimators=[estimator])  # fmt: skip
     setup, _, _ = cat._setup(args)
-    beliefs = []
-    hull = estimator_loop.EstimatorLoop.axis_hull
-
-    def keep(belief):
-        beliefs.append(belief)
-        return hull(belief)
-
-    monkeypatch.setattr(estimator_loop.EstimatorLoop, "axis_hull", staticmethod(keep))
+    beliefs = _keeping_beliefs(monkeypatch)
     rec, diverged, period, substeps, bounds, plant = cat._gyrostat_run(
         setup, estimator, np.random.default_rng(run_seed(0, 0))
     )
