@@ -109,6 +109,20 @@ class ExactAxes:
     disturbance_Nm: np.ndarray
 
 
+def model_bounds(model, extra: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The bounds (3,) of :func:`exact_intervals` from the estimators' model
+    (:class:`estim.attitude.model.AttitudeModel`: the same premise as the sets'), with
+    ``extra`` those of the plant's extra components if it has some."""
+    out = {
+        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
+        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
+        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
+    }
+    if extra is not None:
+        out["extra"] = np.broadcast_to(extra, 3)
+    return out
+
+
 def delta_of(truth: np.ndarray, x: np.ndarray, extra: slice | None = None) -> np.ndarray:
     """``(da, dw[, extra])`` ``(n, p)`` of states ``x`` ``(n, >=7)`` relative to ``truth``."""
     qt = np.broadcast_to(truth[0:4], x[:, 0:4].shape)

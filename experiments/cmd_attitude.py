@@ -20,9 +20,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from kalman_vs_infoset.experiments import options, usage
-from kalman_vs_infoset.experiments.attitude_loops import (
-    LOOPS,
-)
+from kalman_vs_infoset.experiments.attitude_loops import LOOPS
 from kalman_vs_infoset.experiments.attitude_request import AttitudeRequest, request
 from kalman_vs_infoset.experiments.errors import runs_text, stat_text
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES

@@ -189,7 +189,6 @@ def _run_seed(seed: int):
 def _wheels_run(setup, controller: str, noise: str, estimator: str, rng):
     """One reaction-wheel run recorded: ``(record, diverged time or inf, period,
     substeps, bounds, plant)``."""
-    import numpy as np
     from kalman_vs_infoset.experiments import attitude_exact
     from kalman_vs_infoset.experiments.sim.attitude_rw import (
         body_of,
@@ -199,12 +198,7 @@ def _wheels_run(setup, controller: str, noise: str, estimator: str, rng):
 
     rec: dict[str, Any] = {}
     out = simulate_runs(setup, controller, noise, [rng], estimator, rec)
-    model = estimator_model(setup)
-    bounds = {
-        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
-        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
-        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
-    }
+    bounds = attitude_exact.model_bounds(estimator_model(setup))
     sim = setup.simulation
     plant = attitude_exact.wheels_plant(body_of(setup)[0])
     return rec, out["diverged_time_s"][0], sim.control_period_s, sim.substeps, bounds, plant
@@ -220,14 +214,10 @@ def _gyrostat_run(setup, estimator: str, rng):
     s, cfg = setup, setup.cfg
     r = simulate_turn(s.gyro, s.law, s.q0, s.q_target, s.beta_Nm, s.disturbance, [rng], cfg,
                       estimator, record=True)  # fmt: skip
-    model = gyrostat_model(s.gyro, s.beta_Nm, cfg)
-    bounds = {
-        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
-        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
-        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
-        # (a floor as the estimators' bounds have: exact rotor rates still bound)
-        "extra": np.full(3, max(cfg.meas_rotor_radps, 1e-12)),
-    }
+    # (the rotor rates' bound floored as the estimators' bounds are: exact ones still bound)
+    bounds = attitude_exact.model_bounds(
+        gyrostat_model(s.gyro, s.beta_Nm, cfg), extra=np.full(3, max(cfg.meas_rotor_radps, 1e-12))
+    )
 
     def samples_first(a: np.ndarray | None) -> np.ndarray:
         assert a is not None  # recorded

@@ -83,7 +83,7 @@ def run_attitude(
 
     from kalman_vs_infoset.api import _flatten, _index, _seed, _toml
     from kalman_vs_infoset.estim import registry
-    from kalman_vs_infoset.experiments import cmd_attitude
+    from kalman_vs_infoset.experiments.attitude_request import request
     from kalman_vs_infoset.experiments.runner import batched_task
     from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
@@ -107,7 +107,7 @@ def run_attitude(
         out=None,
         via="keyword overrides",
     )
-    req = cmd_attitude.request(args)  # the command's rules and one-line errors
+    req = request(args)  # the command's rules and one-line errors
     loop = req.loop
     setup = loop.prepare(req.source, dict(req.scenario), req.controller, noise)
     rows = []

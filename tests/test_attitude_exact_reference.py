@@ -253,15 +253,16 @@ def test_the_package_s_exact_reference_agrees_with_this_one():
     sparse, the dynamics as equalities, in units of the bounds) against this file's LP
     (dense, the dynamics eliminated, its own Jacobians) on the same run: the intervals
     agree to 1e-5 of their width (measured: 1.1e-7)."""
-    from kalman_vs_infoset.experiments.attitude_exact import exact_intervals, wheels_plant
+    from kalman_vs_infoset.experiments.attitude_exact import (
+        exact_intervals,
+        model_bounds,
+        wheels_plant,
+    )
 
     rec: dict = {}
     ours = exact_reference(seed=1, steps=40, times=(10, 40), record=rec)
-    bounds = {"angle_rad": np.broadcast_to(MODEL.meas_angle_bound_rad, 3),
-              "rate_radps": np.broadcast_to(MODEL.meas_rate_bound_radps, 3),
-              "disturbance_Nm": np.broadcast_to(MODEL.disturbance_bound_Nm, 3)}  # fmt: skip
     body = RigidBody(MODEL.inertia_kgm2)
-    theirs = exact_intervals(wheels_plant(body), rec, bounds, DT_S, 1, [10, 40])
+    theirs = exact_intervals(wheels_plant(body), rec, model_bounds(MODEL), DT_S, 1, [10, 40])
     for row in ours:
         width = row["hi"] - row["lo"]
         got = theirs[row["step"]]

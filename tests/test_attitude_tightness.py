@@ -25,7 +25,7 @@ from kalman_vs_infoset.experiments import attitude_exact as ax
 from kalman_vs_infoset.experiments import cmd_attitude_tightness as cat
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.sim import estimator_loop
-from kalman_vs_infoset.experiments.sim.attitude_rw import body_of, estimator_model, simulate_runs
+from kalman_vs_infoset.experiments.sim.attitude_rw import body_of
 from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
 
 from kalman_vs_infoset.numerics.rotations import qinv, qlog, qmul
@@ -59,72 +59,63 @@ def _keeping_beliefs(monkeypatch) -> list:
     return beliefs
 
 
-def _run(setup, controller, noise, estimator, seed, monkeypatch):
-    """One recorded run and its beliefs, one per control sample."""
-    beliefs = _keeping_beliefs(monkeypatch)
-    rec: dict = {}
-    simulate_runs(setup, controller, noise, [np.random.default_rng(run_seed(seed, 0))],
-                  estimator, rec)  # fmt: skip
-    return rec, beliefs
-
-
-def _bounds(setup) -> dict[str, np.ndarray]:
-    model = estimator_model(setup)
-    return {
-        "angle_rad": np.broadcast_to(model.meas_angle_bound_rad, 3),
-        "rate_radps": np.broadcast_to(model.meas_rate_bound_radps, 3),
-        "disturbance_Nm": np.broadcast_to(model.disturbance_bound_Nm, 3),
-    }
-
-
-def _replay(setup, rec, delta0, dist):
-    """The nonlinear plant from the truth's first state moved by ``delta0`` under the
-    disturbances ``dist`` (k, 3), with the run's torques: the states at every sample."""
-    body, _, _ = body_of(setup)
-    sim = setup.simulation
-    dt = sim.control_period_s / sim.substeps
-    x = ax._moved(rec["states"][0, 0], delta0[None])
-    out = [x[0]]
-    for k in range(len(dist)):
-        for _ in range(sim.substeps):
-            x = rk4_step(body, x, rec["torque_Nm"][k, 0][None], dt, dist[k][None])
-        out.append(x[0])
-    return np.array(out)
-
-
-def _meas_error(rec, xs):
-    """Each sample's measurement error if ``xs`` were the truth, per axis."""
-    k = len(xs)
-    q_m, w_m = rec["meas_quat"][:k, 0], rec["meas_rate_radps"][:k, 0]
-    return np.concatenate([qlog(qmul(qinv(xs[:, 0:4]), q_m)), w_m - xs[:, 4:7]], axis=1)
+def _recorded(setup, controller, noise, estimator, seed):
+    """The command's run of ``estimator`` (run 0 of ``seed``): ``(record, diverged time,
+    period, substeps, bounds, plant)``."""
+    rng = np.random.default_rng(run_seed(seed, 0))
+    if controller == "game":
+        return cat._gyrostat_run(setup, estimator, rng)
+    return cat._wheels_run(setup, controller, noise, estimator, rng)
 
 
 def _witness_check(scenario, noise, estimator, seed, t_s, monkeypatch):
-    setup, controller, _ = _setup(scenario, noise, t_s)
-    rec, beliefs = _run(setup, controller, noise, estimator, seed, monkeypatch)
-    bounds = _bounds(setup)
-    body, _, _ = body_of(setup)
-    sim = setup.simulation
-    k = int(round(t_s / sim.control_period_s))
-    plant = ax.wheels_plant(body)
-    exact = ax.exact_intervals(plant, rec, bounds, sim.control_period_s, sim.substeps, [k])[k]
-    b6 = np.concatenate([bounds["angle_rad"], bounds["rate_radps"]])
+    """The 12 witnesses at ``t_s`` replayed through the plant's own RK4 from the truth's
+    first state: every measured component's error within its bound to the
+    linearisation's order, disturbances within theirs, the LP's end reached, and the set
+    holding the witness at every sample. Returns the plant."""
+    args = argparse.Namespace(scenario=scenario, overrides=[], controller=None, noise=noise,
+                              seed=seed, times=[t_s], estimators=[estimator])  # fmt: skip
+    setup, controller, _ = cat._setup(args)
+    beliefs = _keeping_beliefs(monkeypatch)
+    rec, diverged, period, substeps, bounds, plant = _recorded(
+        setup, controller, noise, estimator, seed
+    )
+    assert not np.isfinite(diverged)
+    k = int(round(t_s / period))
+    exact = ax.exact_intervals(plant, rec, bounds, period, substeps, [k])[k]
+    extra = [bounds["extra"]] if plant.extra is not None else []
+    bound = np.concatenate([bounds["angle_rad"], bounds["rate_radps"], *extra])
     rel = witness_rel_tol(bounds)
     ends = np.stack([exact.lo, exact.hi], axis=1).ravel()  # axis 0 low, high, axis 1 ...
+    dt = period / substeps
+    seen = [rec["meas_quat"], rec["meas_rate_radps"]] + (
+        [rec["meas_extra"]] if plant.extra is not None else []
+    )
     for w in range(12):
         dist = exact.disturbance_Nm[w]
         assert np.all(np.abs(dist) <= bounds["disturbance_Nm"] * (1 + 1e-9))
-        xs = _replay(setup, rec, exact.delta0[w], dist)
-        err = _meas_error(rec, xs)
-        assert np.max(np.abs(err) / b6) <= 1 + rel, (w, np.max(np.abs(err) / b6))
+        x = ax._moved(rec["states"][0, 0], exact.delta0[w][None], plant.extra)
+        xs = [x[0]]
+        for j in range(k):
+            for _ in range(substeps):
+                x = plant.advance(x, rec["torque_Nm"][j, 0][None], dist[j][None], dt)
+            xs.append(x[0])
+        xs = np.array(xs)
+        # each measurement's error if the witness were the truth, per axis
+        got = [v[: k + 1, 0] for v in seen]
+        err = [qlog(qmul(qinv(xs[:, 0:4]), got[0])), got[1] - xs[:, 4:7]]
+        if plant.extra is not None:
+            err.append(got[2] - xs[:, plant.extra])
+        err = np.concatenate(err, axis=1)
+        assert np.max(np.abs(err) / bound) <= 1 + rel, (w, np.max(np.abs(err) / bound))
         reached = ax.delta_of(rec["states"][k, 0], xs[k : k + 1])[0][w // 2]
-        assert reached == pytest.approx(ends[w], abs=rel * b6[w // 2])
+        assert reached == pytest.approx(ends[w], abs=rel * bound[w // 2])
         # a witness passes its bounds by up to that share of them, so a set may leave it
         # out by as much (lqr_large_angle: by up to 4.4e-7 of the bound)
-        tol = rel * float(b6.max())
+        tol = rel * float(bound[:6].max())
         held = [bool(beliefs[j].inside(xs[j : j + 1, 0:7], tol)[0]) for j in range(k + 1)]
         assert all(held), (estimator, w, held.index(False))
-    return exact
+    return plant
 
 
 @pytest.mark.parametrize("estimator", cat.SET_FAMILIES)
@@ -157,58 +148,24 @@ def test_gyrostat_witnesses_are_truths_the_data_allow_and_every_set_holds_them(
     1 s: the 12 witnesses replayed through the gyrostat's own RK4 keep the attitude, rate
     and rotor-rate errors within their bounds to the linearisation's order, reach the
     LP's ends, and are held by the set at every sample."""
-    args = argparse.Namespace(scenario="gyrostat_game", overrides=[], controller=None,
-                              noise=noise, seed=0, times=[1.0], estimators=[estimator])  # fmt: skip
-    setup, _, _ = cat._setup(args)
-    beliefs = _keeping_beliefs(monkeypatch)
-    rec, diverged, period, substeps, bounds, plant = cat._gyrostat_run(
-        setup, estimator, np.random.default_rng(run_seed(0, 0))
-    )
-    assert not np.isfinite(diverged) and plant.dim == 9
-    k = int(round(1.0 / period))
-    exact = ax.exact_intervals(plant, rec, bounds, period, substeps, [k])[k]
-    b9 = np.concatenate([bounds["angle_rad"], bounds["rate_radps"], bounds["extra"]])
-    rel = witness_rel_tol(bounds)
-    ends = np.stack([exact.lo, exact.hi], axis=1).ravel()
-    dt = period / substeps
-    for w in range(12):
-        dist = exact.disturbance_Nm[w]
-        assert np.all(np.abs(dist) <= bounds["disturbance_Nm"] * (1 + 1e-9))
-        x = ax._moved(rec["states"][0, 0], exact.delta0[w][None], plant.extra)
-        xs = [x[0]]
-        for j in range(k):
-            for _ in range(substeps):
-                x = plant.advance(x, rec["torque_Nm"][j, 0][None], dist[j][None], dt)
-            xs.append(x[0])
-        xs = np.array(xs)
-        q_m, w_m = rec["meas_quat"][: k + 1, 0], rec["meas_rate_radps"][: k + 1, 0]
-        err = np.concatenate([qlog(qmul(qinv(xs[:, 0:4]), q_m)), w_m - xs[:, 4:7],
-                              rec["meas_extra"][: k + 1, 0] - xs[:, 7:10]], axis=1)  # fmt: skip
-        assert np.max(np.abs(err) / b9) <= 1 + rel, (w, np.max(np.abs(err) / b9))
-        reached = ax.delta_of(rec["states"][k, 0], xs[k : k + 1])[0][w // 2]
-        assert reached == pytest.approx(ends[w], abs=rel * b9[w // 2])
-        tol = rel * float(b9[:6].max())
-        held = [bool(beliefs[j].inside(xs[j : j + 1, 0:7], tol)[0]) for j in range(k + 1)]
-        assert all(held), (estimator, w, held.index(False))
+    plant = _witness_check("gyrostat_game", noise, estimator, 0, 1.0, monkeypatch)
+    assert plant.dim == 9  # the rotor rates perturbed and bounded
 
 
 def test_the_linear_map_is_the_plant_to_second_order(monkeypatch):
     """One period's ``(A, B)`` against the nonlinear plant on perturbations the size of
     the bounds: the residual is second order (under 1e-4 of the perturbation)."""
     setup, controller, _ = _setup("smallsat_rw", "random", 0.5)
-    rec, _ = _run(setup, controller, "random", "box", 0, monkeypatch)
+    rec, _, period, _, b, plant = _recorded(setup, controller, "random", "box", 0)
     body, _, _ = body_of(setup)
-    sim = setup.simulation
-    b = _bounds(setup)
     rng = np.random.default_rng(5)
     for k in (0, 20, 49):
         x, x1 = rec["states"][k, 0], rec["states"][k + 1, 0]
         u, d = rec["torque_Nm"][k, 0], rec["disturbance_Nm"][k, 0]
-        plant = ax.wheels_plant(body)
-        a_k, b_k = ax.period_jacobians(plant, x, x1, u, d, sim.control_period_s, sim.substeps)
+        a_k, b_k = ax.period_jacobians(plant, x, x1, u, d, period, setup.simulation.substeps)
         dx = rng.uniform(-1, 1, 6) * np.concatenate([b["angle_rad"], b["rate_radps"]])
         de = rng.uniform(-1, 1, 3) * b["disturbance_Nm"]
-        y = rk4_step(body, ax._moved(x, dx[None]), u[None], sim.control_period_s, (d + de)[None])
+        y = rk4_step(body, ax._moved(x, dx[None]), u[None], period, (d + de)[None])
         got = ax.delta_of(x1, y)[0]
         want = a_k @ dx + b_k @ de
         assert np.max(np.abs(got - want)) <= 1e-4 * np.max(np.abs(want))
@@ -262,17 +219,22 @@ def test_the_command_compares_every_family_and_writes_its_json(tmp_path, capsys,
     )
 
 
-def test_a_set_narrower_than_the_exact_interval_is_reported_outside(tmp_path, monkeypatch):
-    """The command's test is not vacuous: a box shrunk by 0.1 % about its centre leaves
-    part of the exact interval out (on the rate axes the two meet at the measurement)."""
+def shrink_hulls(monkeypatch, factor: float = 0.999) -> None:
+    """Every set's per-axis interval as the command reads it, shrunk about its centre."""
     real = ax.belief_intervals
 
     def narrower(truth, hull, run=0):
         lo, hi = real(truth, hull, run)
         c, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
-        return c - 0.999 * r, c + 0.999 * r
+        return c - factor * r, c + factor * r
 
     monkeypatch.setattr(ax, "belief_intervals", narrower)
+
+
+def test_a_set_narrower_than_the_exact_interval_is_reported_outside(tmp_path, monkeypatch):
+    """The command's test is not vacuous: a box shrunk by 0.1 % about its centre leaves
+    part of the exact interval out (on the rate axes the two meet at the measurement)."""
+    shrink_hulls(monkeypatch)
     setup, controller, _ = _setup("smallsat_rw", "random", 0.5)
     res = cat.compare(setup, controller, "random", "box", 0, [0.5])
     assert res["exact_inside"] is False

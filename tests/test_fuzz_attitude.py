@@ -18,16 +18,9 @@ def test_the_search_runs_every_set_family_and_finds_no_fault(capsys):
 def test_the_exact_interval_outside_a_hull_is_a_fault(capsys, monkeypatch):
     """A set whose hull misses part of the exact interval (here every hull shrunk by 0.1 %
     about its centre) is reported, case and family named."""
-    from kalman_vs_infoset.experiments import attitude_exact
+    from test_attitude_tightness import shrink_hulls
 
-    real = attitude_exact.belief_intervals
-
-    def narrower(truth, hull, run=0):
-        lo, hi = real(truth, hull, run)
-        c, r = 0.5 * (lo + hi), 0.5 * (hi - lo)
-        return c - 0.999 * r, c + 0.999 * r
-
-    monkeypatch.setattr(attitude_exact, "belief_intervals", narrower)
+    shrink_hulls(monkeypatch)
     assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 1
     out = capsys.readouterr().out
     assert out.count("FAULT case 3:") == 3 and "the exact interval outside the hull" in out
