@@ -127,8 +127,11 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
     bottom[2].set_ylabel("rate norm, deg/s")
     for ax in bottom:
         ax.set_xlabel("time t, s")
-    for ax in axes.flat:
-        fs.legend(ax, loc="best", fontsize=6)
+    for ax in axes[: len(rows)].flat:  # the time axis is shared: labelled once, below
+        ax.set_xlabel("")
+    # one legend below the panels (the same curves on every panel): eighteen per-panel
+    # legends repeated the entries, covered data and cost a third of the figure's time
+    fs.figure_legend(fig, axes.flat, fontsize=7, ncol=3)
     fig.suptitle(title or f"{first['scenario'].iloc[0]}: time histories")
     return fig
 
