@@ -1,9 +1,10 @@
 """``kvi attitude-tightness SCENARIO``: the attitude sets' per-axis intervals against the
 exact set of states a run's data allow (docs/attitude.md).
 
-One run of a reaction-wheel scenario (controllers ``pd`` and ``lqr``) or of the gyrostat
-(``game``) per set estimator, seeded as run 0 of ``kvi attitude SCENARIO --seed SEED``
-(the same truth and errors), simulated to the last requested time. At each requested
+One run of a reaction-wheel scenario (controllers ``pd`` and ``lqr``), of the gyrostat
+(``game``) or of the gyrodines' turn (``energy``, ``euler``: Resurs-P) per set
+estimator, seeded as run 0 of ``kvi attitude SCENARIO --seed SEED`` (the same truth and
+errors), simulated to the last requested time. At each requested
 time, after the update, each axis of ``delta = (attitude error about the body axes,
 rate)`` relative to the truth: the set's interval (its per-axis hull), the exact one
 (:mod:`experiments.attitude_exact`: linear programs over the initial state and the
@@ -44,9 +45,12 @@ def inside_rel_tol(angle_bound_rad) -> float:
 
 
 AXES = ("attitude_x", "attitude_y", "attitude_z", "rate_x", "rate_y", "rate_z")
-#: the loops whose plants the exact reference models: the reaction wheels' controllers and
-#: the gyrostat's game law (the gyrodines' ``energy`` and ``euler`` are not modelled)
-CONTROLLERS = ("pd", "lqr", "game")
+#: the loops whose plants the exact reference models: the reaction wheels' controllers, the
+#: gyrostat's game law and the gyrodines' laws (their plant is the reaction wheels' rigid
+#: body with the delivered torque held over a step: the same equations and RK4)
+CONTROLLERS = ("pd", "lqr", "game", "energy", "euler")
+#: the gyrodines' controllers
+CMG = ("energy", "euler")
 
 
 def _times(text: str) -> list[float]:
@@ -64,7 +68,8 @@ def _times(text: str) -> list[float]:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help=options.SCENARIO_HELP)
     p.add_argument("--controller", default=None, choices=CONTROLLERS,
-                   help="pd, lqr or game (default: the scenario's 'controller')")  # fmt: skip
+                   help="pd, lqr, game, energy or euler (default: the scenario's "
+                   "'controller')")  # fmt: skip
     p.add_argument("--noise", choices=("random", "game", "none"), default="random",
                    help="measurement errors and disturbance (default: %(default)s)")  # fmt: skip
     p.add_argument("--seed", type=options.seed_int, default=0,
@@ -78,8 +83,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _setup(args) -> tuple[Any, str, str]:
-    """The typed reaction-wheel scenario simulated to the last time, its controller and
-    name (``InputError`` of one line for another loop or a time off the period)."""
+    """The typed scenario simulated to the last time, its controller and name
+    (``InputError`` of one line for another loop or a time off the period)."""
     from kalman_vs_infoset.experiments.attitude_request import request
 
     others = [e for e in args.estimators if e not in SET_FAMILIES]
@@ -92,16 +97,17 @@ def _setup(args) -> tuple[Any, str, str]:
         scenario=args.scenario, overrides=args.overrides, controller=args.controller,
         noise=[args.noise], estimators=None, runs=1, seed=args.seed, out=None,
     ))  # fmt: skip
-    if req.controller not in CONTROLLERS:
+    if req.controller not in CONTROLLERS:  # (a controller a later loop adds)
         raise InputError(
             f"{req.source}: controller {req.controller!r}: the exact reference models the "
-            f"reaction-wheel loop and the gyrostat ({', '.join(CONTROLLERS)}), not the "
-            "gyrodines"
+            f"loops of {', '.join(CONTROLLERS)}"
         )
     data = json.loads(json.dumps(dict(req.scenario), default=str))  # a deep copy
     setup = req.loop.prepare(req.source, data, req.controller, args.noise)
     if req.controller == "game":
         period, duration = setup.cfg.period_s, setup.cfg.horizon_s
+    elif req.controller in CMG:
+        period, duration = setup.dt_s, setup.horizon_s
     else:
         period, duration = setup.simulation.control_period_s, setup.simulation.duration_s
     for t in args.times:
@@ -114,6 +120,8 @@ def _setup(args) -> tuple[Any, str, str]:
                 f"--times: {t:g} s is not before the run's end ({duration:g} s, the last "
                 f"control sample at {duration - period:g} s)"
             )
+    if req.controller in CMG:  # the turn's laws plan its duration: cut by steps (_cmg_run)
+        return setup, req.controller, req.name
     # the loop is causal: a run cut after the last time has the same beliefs up to it
     # (at least the shortest duration a scenario may have, and at most its own)
     cut = min(max(max(args.times) + period, 1.0), duration)
@@ -134,6 +142,10 @@ def compare(setup, controller: str, noise: str, estimator: str, seed: int,
     rng = np.random.default_rng(_run_seed(seed))
     if controller == "game":
         rec, diverged_s, period, substeps, bounds, plant = _gyrostat_run(setup, estimator, rng)
+    elif controller in CMG:
+        rec, diverged_s, period, substeps, bounds, plant = _cmg_run(
+            setup, controller, noise, estimator, rng, times
+        )
     else:
         rec, diverged_s, period, substeps, bounds, plant = _wheels_run(
             setup, controller, noise, estimator, rng
@@ -233,6 +245,27 @@ def _gyrostat_run(setup, estimator: str, rng):
     }  # fmt: skip
     plant = attitude_exact.gyrostat_plant(s.gyro)
     return rec, r.diverged_time_s[0], cfg.period_s, cfg.substeps, bounds, plant
+
+
+def _cmg_run(setup, controller: str, noise: str, estimator: str, rng, times: list[float]):
+    """One gyrodine turn recorded (seeded as ``kvi attitude``'s run: no generator for
+    ``none``), in the reaction-wheel record's layout (samples first, one run); its plant
+    is the reaction wheels' rigid body (:func:`guidance.attitude.cmg.rk4_step` integrates
+    the same equations by the same RK4, with the delivered torque held over a step)."""
+    from kalman_vs_infoset.experiments import attitude_exact
+    from kalman_vs_infoset.experiments.sim.attitude_cmg import estimator_model, simulate_turn
+
+    r: dict[str, Any] = {}
+    gen = None if noise == "none" else rng
+    steps = int(round(max(times) / setup.dt_s)) + 1  # the samples asked for and one more
+    res = simulate_turn(setup, controller, gen, estimator, noise, r, steps=steps)
+    bounds = attitude_exact.model_bounds(estimator_model(setup, noise))
+    keys = ("states", "torque_Nm", "disturbance_Nm", "meas_quat", "meas_rate_radps")
+    rec = {k: r[k][:, None] for k in keys}
+    rec["truth_inside"] = r["truth_inside"][:, None]
+    rec["hull"] = r["hull"]
+    plant = attitude_exact.wheels_plant(setup.body)
+    return rec, res.diverged_time_s, setup.dt_s, 1, bounds, plant
 
 
 def run(args) -> dict[str, Any]:

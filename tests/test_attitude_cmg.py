@@ -253,3 +253,36 @@ def test_the_gyrodine_loop_s_library_checks_come_back_as_one_line(monkeypatch):
     scenario = load_toml(ROOT / "data/scenarios/resurs_p.toml")
     with pytest.raises(InputError, match=r"^resurs_p.toml: sr_damping must be positive$"):
         setup_from_scenario("resurs_p.toml", scenario)
+
+
+@pytest.mark.parametrize("controller", ["energy", "euler"])
+def test_a_turn_cut_after_some_steps_is_the_whole_turn_s_prefix(controller):
+    """``simulate_turn(..., steps=k)`` (what ``kvi attitude-tightness`` runs) is a longer
+    run's first ``k`` steps to the last bit (the loop is causal), NaN after them; its
+    record's truth is the gyrodines' RK4 of the delivered torque and disturbance, and
+    each measurement is within the estimators' bounds of the truth it measured."""
+    from kalman_vs_infoset.experiments.sim.attitude_cmg import estimator_model, simulate_turn
+
+    from kalman_vs_infoset.numerics.rotations import qinv, qlog, qmul
+
+    setup = setup_from_scenario("resurs_p", load_toml(ROOT / "data/scenarios/resurs_p.toml"))
+    k, runs = 40, {}
+    for steps in (k, 3 * k):  # (the whole turn: 3000 steps, 3 CPU-s with the box)
+        rec: dict = {}
+        rng = np.random.default_rng(7)
+        runs[steps] = (simulate_turn(setup, controller, rng, "box", "game", rec, steps=steps), rec)
+    (cut, rec), (whole, _) = runs[k], runs[3 * k]
+    np.testing.assert_array_equal(cut.error_rotvec_deg[: k + 1], whole.error_rotvec_deg[: k + 1])
+    np.testing.assert_array_equal(cut.torque_Nm[:k], whole.torque_Nm[:k])
+    assert np.isnan(cut.torque_Nm[k:]).all() and np.isnan(cut.rate_degps[k + 1 :]).all()
+    assert rec["states"].shape == (k + 1, 10) and len(rec["hull"]) == k + 1
+    for j in range(k):
+        step = rk4_step(setup.body, rec["states"][j], rec["torque_Nm"][j], setup.dt_s,
+                        rec["disturbance_Nm"][j])  # fmt: skip
+        np.testing.assert_array_equal(step, rec["states"][j + 1])
+    model = estimator_model(setup, "game")
+    err = qlog(qmul(qinv(rec["states"][:, 0:4]), rec["meas_quat"]))
+    assert np.all(np.abs(err) <= model.meas_angle_bound_rad * (1 + 1e-9))
+    rate_err = np.abs(rec["meas_rate_radps"] - rec["states"][:, 4:7])
+    assert np.all(rate_err <= model.meas_rate_bound_radps * (1 + 1e-9))
+    assert np.all(np.abs(rec["disturbance_Nm"]) <= model.disturbance_bound_Nm * (1 + 1e-12))

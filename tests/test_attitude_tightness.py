@@ -26,6 +26,7 @@ from kalman_vs_infoset.experiments import cmd_attitude_tightness as cat
 from kalman_vs_infoset.experiments.runner import run_seed
 from kalman_vs_infoset.experiments.sim import estimator_loop
 from kalman_vs_infoset.experiments.sim.attitude_rw import body_of
+from kalman_vs_infoset.guidance.attitude.cmg import rk4_step as cmg_rk4_step
 from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
 
 from kalman_vs_infoset.numerics.rotations import qinv, qlog, qmul
@@ -59,28 +60,47 @@ def _keeping_beliefs(monkeypatch) -> list:
     return beliefs
 
 
-def _recorded(setup, controller, noise, estimator, seed):
+def _recorded(setup, controller, noise, estimator, seed, t_s=0.5):
     """The command's run of ``estimator`` (run 0 of ``seed``): ``(record, diverged time,
     period, substeps, bounds, plant)``."""
     rng = np.random.default_rng(run_seed(seed, 0))
     if controller == "game":
         return cat._gyrostat_run(setup, estimator, rng)
+    if controller in cat.CMG:
+        return cat._cmg_run(setup, controller, noise, estimator, rng, [t_s])
     return cat._wheels_run(setup, controller, noise, estimator, rng)
 
 
-def _witness_check(scenario, noise, estimator, seed, t_s, monkeypatch):
+def _loop_advance(setup, controller, plant):
+    """The loop's own integration step, ``advance(states, torque, disturbance, dt)``: the
+    gyrodines' turn integrates with :func:`guidance.attitude.cmg.rk4_step`, which the
+    reference stands in for by the reaction wheels' (the same equations); the witnesses
+    are replayed through the loop's own."""
+    if controller not in cat.CMG:
+        return plant.advance
+
+    def advance(x, u, d, dt):
+        return np.array([cmg_rk4_step(setup.body, xi, ui, dt, di)
+                         for xi, ui, di in zip(x, u, d, strict=True)])  # fmt: skip
+
+    return advance
+
+
+def _witness_check(scenario, noise, estimator, seed, t_s, monkeypatch, controller=None):
     """The 12 witnesses at ``t_s`` replayed through the plant's own RK4 from the truth's
     first state: every measured component's error within its bound to the
     linearisation's order, disturbances within theirs, the LP's end reached, and the set
     holding the witness at every sample. Returns the plant."""
-    args = argparse.Namespace(scenario=scenario, overrides=[], controller=None, noise=noise,
-                              seed=seed, times=[t_s], estimators=[estimator])  # fmt: skip
+    args = argparse.Namespace(scenario=scenario, overrides=[], controller=controller,
+                              noise=noise, seed=seed, times=[t_s],
+                              estimators=[estimator])  # fmt: skip
     setup, controller, _ = cat._setup(args)
     beliefs = _keeping_beliefs(monkeypatch)
     rec, diverged, period, substeps, bounds, plant = _recorded(
-        setup, controller, noise, estimator, seed
+        setup, controller, noise, estimator, seed, t_s
     )
     assert not np.isfinite(diverged)
+    advance = _loop_advance(setup, controller, plant)
     k = int(round(t_s / period))
     exact = ax.exact_intervals(plant, rec, bounds, period, substeps, [k])[k]
     extra = [bounds["extra"]] if plant.extra is not None else []
@@ -98,7 +118,7 @@ def _witness_check(scenario, noise, estimator, seed, t_s, monkeypatch):
         xs = [x[0]]
         for j in range(k):
             for _ in range(substeps):
-                x = plant.advance(x, rec["torque_Nm"][j, 0][None], dist[j][None], dt)
+                x = advance(x, rec["torque_Nm"][j, 0][None], dist[j][None], dt)
             xs.append(x[0])
         xs = np.array(xs)
         # each measurement's error if the witness were the truth, per axis
@@ -150,6 +170,19 @@ def test_gyrostat_witnesses_are_truths_the_data_allow_and_every_set_holds_them(
     LP's ends, and are held by the set at every sample."""
     plant = _witness_check("gyrostat_game", noise, estimator, 0, 1.0, monkeypatch)
     assert plant.dim == 9  # the rotor rates perturbed and bounded
+
+
+@pytest.mark.parametrize("estimator", cat.SET_FAMILIES)
+@pytest.mark.parametrize("controller, noise", [("energy", "random"), ("euler", "game")])
+def test_gyrodine_witnesses_are_truths_the_data_allow_and_every_set_holds_them(
+    controller, noise, estimator, monkeypatch
+):
+    """resurs_p (the gyrodines' energy-saving law under random errors, the Euler-axis turn
+    under the adversary's torque), 1 s: the 12 witnesses replayed through the turn's own
+    RK4 (:func:`guidance.attitude.cmg.rk4_step`, the delivered torques held) keep their
+    errors within the bounds to the linearisation's order, reach the LP's ends and are
+    held by the set at every sample."""
+    _witness_check("resurs_p", noise, estimator, 0, 1.0, monkeypatch, controller)
 
 
 def test_the_linear_map_is_the_plant_to_second_order(monkeypatch):
@@ -261,8 +294,9 @@ def test_a_run_whose_loop_diverged_is_reported_not_compared(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "says"),
     [
-        (["resurs_p"], "not the gyrodines"),
-        (["smallsat_rw", "--controller", "energy"], "invalid choice"),
+        (["smallsat_rw", "--controller", "energy"], "--controller energy runs scenarios of"),
+        (["smallsat_rw", "--controller", "bang"], "invalid choice"),
+        (["resurs_p", "--times", "360"], "not before the run's end"),
         (["smallsat_rw", "--estimators", "ukf"], "ukf keeps no set"),
         (["smallsat_rw", "--times", "0.105"], "not a multiple of the control period"),
         (["smallsat_rw", "--times", "80"], "not before the run's end"),

@@ -145,8 +145,13 @@ def simulate_turn(
     estimator: str | None = None,
     noise: str | None = None,
     record: dict | None = None,
+    steps: int | None = None,
 ) -> TurnResult:
     """One closed-loop turn; noise is drawn from ``rng`` (None: perfect measurements).
+
+    ``steps``: simulate only the turn's first ``steps`` steps (the loop is causal: the
+    same steps as the whole turn's, the laws still planning the whole turn); the
+    histories after them are NaN, as after a divergence. None: the whole horizon.
 
     Each step ``X`` is read from the estimator's belief centre ``(rotvec(q), w)``. With
     ``rng`` the attitude/rate errors are uniform within ``+-sqrt(3) std`` (a body-frame
@@ -157,7 +162,12 @@ def simulate_turn(
     ``record`` (a dict, filled when given; observing only) receives per instant
     ``estimate`` (the belief's ``X``, rad and rad/s, ``(n+1, 6)``), ``knowledge_bound_rad``
     and ``truth_inside`` (``(n+1,)``) and, for the energy law, the auxiliary state
-    ``xi`` (``(n+1, 6)``).
+    ``xi`` (``(n+1, 6)``); and what :mod:`experiments.attitude_exact` needs: the true
+    ``states`` ``(n+1, 10)``, the measurements ``meas_quat`` ``(n+1, 4)`` and
+    ``meas_rate_radps`` ``(n+1, 3)``, the belief's per-axis ``hull`` (a list of ``n+1``
+    :meth:`EstimatorLoop.axis_hull` values) and per step the delivered ``torque_Nm`` and
+    the disturbance ``disturbance_Nm`` ``(n, 3)`` (both held over the step). A turn
+    that diverged records the instants before it.
     """
     if controller not in CONTROLLERS:
         raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
@@ -174,10 +184,14 @@ def simulate_turn(
     q0 = Rotation.from_rotvec(setup.initial_error_rad).as_quat()
     x = np.concatenate([q0, np.zeros(3), cluster.momentum_Nms(beta)])
 
+    seen: dict[str, list[Any]] = {"meas_quat": [], "meas_rate_radps": []}
+
     def measured(xx: NDArray[np.float64]) -> AttitudeMeasurement:
-        if noisy:
-            return draw_measurement(xx, model, rng)
-        return AttitudeMeasurement(xx[0:4], xx[4:7])
+        m = draw_measurement(xx, model, rng) if noisy else AttitudeMeasurement(xx[0:4], xx[4:7])
+        if record is not None:
+            seen["meas_quat"].append(np.asarray(m.quat, dtype=float).reshape(4))
+            seen["meas_rate_radps"].append(np.asarray(m.rate_radps, dtype=float).reshape(3))
+        return m
 
     def estimate(b) -> NDArray[np.float64]:
         c = loop.centre(b)[0]
@@ -193,7 +207,8 @@ def simulate_turn(
     cmd, delivered = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
     trace_k_u = np.full(n + 1, np.nan) if controller == "energy" else np.empty(0)
     trace_inc = np.full(n, np.nan) if controller == "energy" else np.empty(0)
-    diverged_s, n_done = np.inf, n  # n_done: the steps the belief was updated
+    n_run = n if steps is None else max(0, min(int(steps), n))
+    diverged_s, n_done = np.inf, n_run  # n_done: the steps the belief was updated
     min_manip, n_singular = np.inf, 0
 
     if controller == "energy":
@@ -217,10 +232,12 @@ def simulate_turn(
     rec: dict[str, list[Any]] | None = None
     if record is not None:
         rec = {"estimate": [xm], "knowledge_bound_rad": [float(loop.attitude_bound_rad(belief)[0])],
-               "truth_inside": [bool(loop.inside(belief, x[None])[0])], "xi": []}  # fmt: skip
+               "truth_inside": [bool(loop.inside(belief, x[None])[0])], "xi": [],
+               "states": [x], "hull": [loop.axis_hull(belief)], "torque_Nm": [],
+               "disturbance_Nm": []}  # fmt: skip
         if controller == "energy":
             rec["xi"].append(ctrl.xi)
-    for i in range(n):
+    for i in range(n_run):
         err[i], rate[i], hist_h[i] = truth[:3], x[4:7], x[7:10]
         h_gyro = cluster.momentum_Nms(beta)  # known on board from the precession angles
         if controller == "energy":
@@ -255,15 +272,23 @@ def simulate_turn(
             ctrl, diag = law.update(ctrl, a_i, b_i, xm)
             trace_k_u[i + 1], trace_inc[i] = diag.trace_k_u, diag.trace_increment
         if rec is not None:
+            rec["states"].append(x)
+            rec["torque_Nm"].append(torque)
+            rec["disturbance_Nm"].append(np.zeros(3) if ext is None else ext)
+            rec["hull"].append(loop.axis_hull(belief))
             rec["estimate"].append(xm)
             rec["knowledge_bound_rad"].append(float(loop.attitude_bound_rad(belief)[0]))
             rec["truth_inside"].append(bool(loop.inside(belief, x[None])[0]))
             if controller == "energy":
                 rec["xi"].append(ctrl.xi)
     if rec is not None and record is not None:  # rec exists only when record was given
+        hull = rec.pop("hull")
         record.update({k: np.array(v) for k, v in rec.items()})
-    if n_done == n:
-        err[n], rate[n], hist_h[n] = truth[:3], x[4:7], x[7:10]
+        # the measurements of the recorded instants (a diverged step measured nothing)
+        record.update({k: np.array(v[: len(rec["states"])]) for k, v in seen.items()})
+        record["hull"] = hull
+    if n_done == n_run:
+        err[n_run], rate[n_run], hist_h[n_run] = truth[:3], x[4:7], x[7:10]
     return TurnResult(
         controller=controller,
         dt_s=dt,
