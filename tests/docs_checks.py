@@ -698,6 +698,19 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       ATT_T.format("gyrostat_game", "game-game") + "::estimators/box/max_ratio_rate",
       "estimators/zonotope/max_ratio_attitude",
       ATT_T.format("gyrostat_game", "game-game") + "::estimators/zonotope/max_ratio_attitude")),
+    (ATT, r"energy-saving law's turn takes the box to\s+([\d.]+) times on the attitude axes "
+     r"and ([\d.]+) on the rates under random errors,.*?and to ([\d.]+) and ([\d.]+) under "
+     r"the adversary's torque; the zonotope\s+reaches ([\d.]+) and ([\d.]+) on the attitude "
+     r"axes, the box's ratios on the rates\. The\s+Euler-axis turn stays closer: the box "
+     r"([\d.]+) and ([\d.]+) on the attitude axes",
+     ATT_T.format("resurs_p", "energy-random"),
+     ("estimators/box/max_ratio_attitude", "estimators/box/max_ratio_rate",
+      ATT_T.format("resurs_p", "energy-game") + "::estimators/box/max_ratio_attitude",
+      ATT_T.format("resurs_p", "energy-game") + "::estimators/box/max_ratio_rate",
+      "estimators/zonotope/max_ratio_attitude",
+      ATT_T.format("resurs_p", "energy-game") + "::estimators/zonotope/max_ratio_attitude",
+      ATT_T.format("resurs_p", "euler-random") + "::estimators/box/max_ratio_attitude",
+      ATT_T.format("resurs_p", "euler-game") + "::estimators/box/max_ratio_attitude")),
     (PERF, r"\(`kvi bench --json`, the line kept in `docs/results/bench.json`; x86_64, "
      r"(\d+) CPUs, Linux, Python ([\d.]+), numpy ([\d.]+), load average ([\d.]+)\)", BENCH,
      ("machine/cpus", "machine/python", "machine/numpy", "machine/load_average")),

@@ -184,7 +184,9 @@ def test_the_attitude_tightness_files_say_what_the_page_says():
     zonotope = []
     for scenario, noises in (("smallsat_rw", "pd-random pd-game"),
                              ("lqr_large_angle", "lqr-random lqr-game"),
-                             ("gyrostat_game", "game-random game-game")):  # fmt: skip
+                             ("gyrostat_game", "game-random game-game"),
+                             ("resurs_p", "energy-random energy-game euler-random euler-game"),
+                             ):  # fmt: skip
         for noise in noises.split():
             data = results(ATT_T.format(scenario, noise))
             assert data["times_s"] == [0.1, 1.0, 5.0, 20.0] and data["seed"] == 0
