@@ -6,8 +6,8 @@ import pandas as pd
 
 def test_the_search_runs_every_set_family_and_finds_no_fault(capsys):
     assert fuzz_attitude.set_estimators() == ["box", "zonotope", "ellipsoid"]
-    # case 3: smallsat_rw, random noise, a 0.1-s period: under a CPU-second
-    assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 0
+    # case 14: smallsat_rw, random noise, a 0.2-s period: under a CPU-second
+    assert fuzz_attitude.main(["--seconds", "60", "--seed", "14", "--cases", "1"]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert line.startswith("1 cases (0 refused by the validation), 6 runs of box, zonotope")
     assert line.endswith(
@@ -21,9 +21,9 @@ def test_the_exact_interval_outside_a_hull_is_a_fault(capsys, monkeypatch):
     from test_attitude_tightness import shrink_hulls
 
     shrink_hulls(monkeypatch)
-    assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 1
+    assert fuzz_attitude.main(["--seconds", "60", "--seed", "14", "--cases", "1"]) == 1
     out = capsys.readouterr().out
-    assert out.count("FAULT case 3:") == 3 and "the exact interval outside the hull" in out
+    assert out.count("FAULT case 14:") == 3 and "the exact interval outside the hull" in out
 
 
 def test_a_step_outside_is_a_fault(capsys, monkeypatch):
@@ -34,6 +34,17 @@ def test_a_step_outside_is_a_fault(capsys, monkeypatch):
                              "truth_outside": [1, 0]})  # fmt: skip
 
     monkeypatch.setattr(api, "run_attitude", outside)
-    assert fuzz_attitude.main(["--seconds", "60", "--seed", "3", "--cases", "1"]) == 1
+    assert fuzz_attitude.main(["--seconds", "60", "--seed", "14", "--cases", "1"]) == 1
     out = capsys.readouterr().out
-    assert out.count("FAULT case 3:") == 3 and "outside [1, 0]" in out
+    assert out.count("FAULT case 14:") == 3 and "outside [1, 0]" in out
+
+
+def test_a_gyrodine_case_sets_its_top_level_fields_and_its_controller():
+    """Resurs-P's cases change top-level fields (``--set dt_s=...``) and draw the law."""
+    import random
+
+    scenario, controller, noise, tables = fuzz_attitude.draw_case(random.Random(12))
+    assert (scenario, controller) == ("resurs_p", "euler")
+    lines = fuzz_attitude._overrides(tables)
+    assert f"dt_s={tables['dt_s']!r}" in lines and f"horizon_s={tables['horizon_s']!r}" in lines
+    assert any(line.startswith("noise.game_disturbance_Nm=") for line in lines)
