@@ -9,6 +9,8 @@ The results files and their commands are listed in ``docs/results/README.txt``.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from docs_checks import ATT, CHECKS, FIGS, GYC, PDG
@@ -40,6 +42,9 @@ DERIVED = {
     r"settle within the scenario's (\d+) s \(`not_settled`\), where every raw-measurement "
     r"and UKF run does\. Under random noise Resurs-P shows "
     r"no difference \(p from ([\d.]+) to ([\d.]+) over",
+    "tightness_seeds": r"On seeds (\d) and (\d) \(`docs/results/attitude_tightness/seeds/`: "
+    r"smallsat_rw under random errors, lqr_large_angle and Resurs-P's energy-saving turn under "
+    r"the adversary, at ([\d.]+), ([\d.]+) and ([\d.]+) s\) the exact interval lies inside",
     "diverged": r"its\s+body\s+rate\s+turns\s+the\s+body\s+more\s+than\s+(\d+)\s+rad\s+in\s+one\s+"
     r"integration\s+step",
 }
@@ -201,6 +206,24 @@ def test_the_attitude_tightness_files_say_what_the_page_says():
                 rate = est["zonotope"]["max_ratio_rate"]
                 assert rate == pytest.approx(est["box"]["max_ratio_rate"], rel=1e-6)
     assert len(set(zonotope)) == 1
+
+
+def test_the_attitude_tightness_files_of_other_seeds_hold_the_exact_interval():
+    """The page: on seeds 1 and 2 (``seeds/``: smallsat_rw random, lqr_large_angle and
+    resurs_p game; 0.1, 1 and 5 s) the exact interval lies inside every hull."""
+    folder = ROOT / "docs/results/attitude_tightness/seeds"
+    seen = set()
+    for path in sorted(folder.glob("*.json")):
+        data = json.loads(path.read_text())
+        seen.add((data["scenario"], data["noise"], data["seed"]))
+        assert data["times_s"] == [0.1, 1.0, 5.0] and data["exact_inside"] is True, path.name
+        for row in data["estimators"].values():
+            assert all(t["exact_inside"] for t in row["times"]), path.name
+    *seeds, t0, t1, t2 = _printed("tightness_seeds")
+    assert data["times_s"] == [float(t0), float(t1), float(t2)]
+    want = {(s, n, int(seed)) for s, n in (("smallsat_rw", "random"), ("lqr_large_angle", "game"),
+                                           ("resurs_p", "game")) for seed in seeds}  # fmt: skip
+    assert seen == want
 
 
 def test_every_number_of_the_attitude_page_is_checked():
