@@ -203,8 +203,12 @@ def test_the_attitude_tightness_files_say_what_the_page_says():
                 assert est["ellipsoid"][key] == pytest.approx(est["box"][key], abs=1e-3)
             if scenario == "lqr_large_angle":
                 zonotope.append(round(est["zonotope"]["max_ratio_attitude"], 2))
+            # the zonotope's rate ratios are the box's (on resurs_p to 1.0e-5 of them, far
+            # below the two decimals the page prints)
+            rel = {"lqr_large_angle": 1e-6, "resurs_p": 2e-5}.get(scenario)
+            if rel is not None:
                 rate = est["zonotope"]["max_ratio_rate"]
-                assert rate == pytest.approx(est["box"]["max_ratio_rate"], rel=1e-6)
+                assert rate == pytest.approx(est["box"]["max_ratio_rate"], rel=rel)
     assert len(set(zonotope)) == 1
 
 
