@@ -175,7 +175,7 @@ def period_jacobians(
 
 def exact_intervals(
     plant: Plant, rec: dict[str, Any], bounds: dict[str, np.ndarray], period_s: float,
-    substeps: int, samples: list[int], run: int = 0,
+    substeps: int, samples: list[int], run: int = 0, solved: Callable[[], None] | None = None,
 ) -> dict[int, ExactAxes]:  # fmt: skip
     """The LP's interval of ``delta_k`` per axis at each sample ``k`` of ``samples``.
 
@@ -197,6 +197,8 @@ def exact_intervals(
         Control samples (the measurement ``k`` taken at ``k * period_s``).
     run : int
         The run of the record.
+    solved : callable, optional
+        Called after each of the ``12 len(samples)`` programs (a progress display).
 
     Returns
     -------
@@ -264,6 +266,8 @@ def exact_intervals(
                 if res.status != 0:
                     raise RuntimeError(f"exact reference at sample {s}: {res.message}")
                 store[axis] = sign * res.fun * d_scale[axis]
+                if solved is not None:
+                    solved()
                 witness[2 * axis + (sign < 0)] = res.x
         out[s] = ExactAxes(
             lo, hi, witness[:, :p] * d_scale,

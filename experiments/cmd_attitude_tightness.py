@@ -18,14 +18,17 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import json
 import math
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from kalman_vs_infoset.experiments import options
 from kalman_vs_infoset.experiments.errors import InputError, stat_text
+from kalman_vs_infoset.experiments.progress import step_progress, steps_shown
 
 #: the attitude runs import the compiled kernels (the command line announces a compilation)
 COMPILED_KERNELS = True
@@ -79,6 +82,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="comma-separated times, s, multiples of the control period "
                    "(default 0.1,1,5,20)")  # fmt: skip
     p.add_argument("--out", help="output directory (default: results/attitude_tightness)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress display on stderr (a comparison slower than a few "
+                   "seconds shows its linear programs solved)")  # fmt: skip
     options.add_overrides(p, "simulation.control_period_s=0.02")
 
 
@@ -132,10 +138,10 @@ def _setup(args) -> tuple[Any, str, str]:
     return req.loop.prepare(req.source, data, req.controller, args.noise), req.controller, req.name
 
 
-def compare(setup, controller: str, noise: str, estimator: str, seed: int,
-            times: list[float]) -> dict[str, Any]:  # fmt: skip
+def compare(setup, controller: str, noise: str, estimator: str, seed: int, times: list[float],
+            solved: Callable[[], None] | None = None) -> dict[str, Any]:  # fmt: skip
     """One run of ``estimator`` and the exact intervals at ``times``: the record of
-    :func:`run`'s ``estimators`` entry."""
+    :func:`run`'s ``estimators`` entry (``solved``: called after each linear program)."""
     import numpy as np
     from kalman_vs_infoset.experiments import attitude_exact
 
@@ -155,7 +161,9 @@ def compare(setup, controller: str, noise: str, estimator: str, seed: int,
                 "exact_inside": None, "diverged_time_s": float(diverged_s)}  # fmt: skip
     samples = [int(round(t / period)) for t in times]
     t0 = time.process_time()
-    exact = attitude_exact.exact_intervals(plant, rec, bounds, period, substeps, samples)
+    exact = attitude_exact.exact_intervals(
+        plant, rec, bounds, period, substeps, samples, solved=solved
+    )
     lp_cpu_s = time.process_time() - t0
     rows = []
     for t, k in zip(times, samples, strict=True):
@@ -274,14 +282,27 @@ def run(args) -> dict[str, Any]:
     t0 = time.perf_counter()
     setup, controller, name = _setup(args)
     out = options.out_folder(args.out, Path("results") / "attitude_tightness")
-    result: dict[str, Any] = {
-        "scenario": name, "controller": controller, "noise": args.noise, "seed": args.seed,
-        "times_s": list(args.times), "axes": list(AXES),
-        "estimators": {
-            est: compare(setup, controller, args.noise, est, args.seed, list(args.times))
-            for est in args.estimators
-        },
-    }  # fmt: skip
+    # a long comparison (the programs grow with the samples) shows how many programs are
+    # solved, as a slow run shows its steps: a bar, or log lines when stderr is a file
+    programs = 2 * len(AXES) * len(args.times) * len(args.estimators)
+    with (
+        steps_shown(not args.no_progress),
+        step_progress(programs, f"{name} exact set", unit="program") as shown,
+    ):
+        count = itertools.count(1)
+
+        def solved() -> None:
+            shown(next(count))
+
+        result: dict[str, Any] = {
+            "scenario": name, "controller": controller, "noise": args.noise, "seed": args.seed,
+            "times_s": list(args.times), "axes": list(AXES),
+            "estimators": {
+                est: compare(setup, controller, args.noise, est, args.seed, list(args.times),
+                             solved)
+                for est in args.estimators
+            },
+        }  # fmt: skip
     compared = [r["exact_inside"] for r in result["estimators"].values() if r["times"]]
     result["exact_inside"] = all(compared) if compared else None
     stem = out / f"{name}-{controller}-{args.noise}-seed{args.seed}"

@@ -108,8 +108,11 @@ class _SlowRun:
     """Silent for :data:`SLOW_RUN_S`, then a bar of the run's steps (terminal, notebook)
     or a log line every ``every_s``."""
 
-    def __init__(self, total: int, desc: str, after_s: float, every_s: float) -> None:
+    def __init__(
+        self, total: int, desc: str, after_s: float, every_s: float, unit: str = "step"
+    ) -> None:
         self.total, self.desc, self.after_s, self.every_s = total, desc, after_s, every_s
+        self.unit = unit
         self.t0 = time.monotonic()
         self.bar: Any = None
 
@@ -118,10 +121,12 @@ class _SlowRun:
             if time.monotonic() - self.t0 < self.after_s:
                 return
             if _isatty() or _in_notebook():
-                self.bar = tqdm(total=self.total, initial=done, desc=self.desc, unit="step",
+                self.bar = tqdm(total=self.total, initial=done, desc=self.desc, unit=self.unit,
                                 file=sys.stderr, leave=False)  # fmt: skip
             else:
-                self.bar = _LogProgress(self.total, 0, self.desc, self.every_s, "steps (at most)")
+                self.bar = _LogProgress(
+                    self.total, 0, self.desc, self.every_s, f"{self.unit}s (at most)"
+                )
         self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
@@ -131,12 +136,17 @@ class _SlowRun:
 
 @contextmanager
 def step_progress(
-    total: int, desc: str, after_s: float | None = None, every_s: float | None = None
+    total: int,
+    desc: str,
+    after_s: float | None = None,
+    every_s: float | None = None,
+    unit: str = "step",
 ) -> Iterator[Callable[[int], None]]:
     """A callable ``shown(done)`` taking the steps done of one run: nothing for a run
     faster than ``after_s`` (default :data:`SLOW_RUN_S`) or outside :func:`steps_shown`,
     else a bar of the steps, or a log line every ``every_s`` (default
-    :data:`LOG_EVERY_S`) where no bar can be drawn. ``total`` is the run's step bound."""
+    :data:`LOG_EVERY_S`) where no bar can be drawn. ``total`` is the run's step bound;
+    ``unit`` names what is counted (``"step"``; ``kvi attitude-tightness``: ``"program"``)."""
     if _steps_pid != os.getpid():
         yield lambda done: None
         return
@@ -145,6 +155,7 @@ def step_progress(
         desc,
         SLOW_RUN_S if after_s is None else after_s,
         LOG_EVERY_S if every_s is None else every_s,
+        unit,
     )
     try:
         yield run

@@ -252,6 +252,27 @@ def test_the_command_compares_every_family_and_writes_its_json(tmp_path, capsys,
     )
 
 
+def test_a_slow_comparison_shows_its_programs_in_a_log(tmp_path, capsys, monkeypatch):
+    """stderr is not a terminal here: once the comparison is slow (here at once), log
+    lines of the linear programs solved, in order, up to all of them; ``--no-progress``
+    and a fast comparison show none."""
+    from kalman_vs_infoset.experiments import progress
+
+    argv = ["attitude-tightness", "smallsat_rw", "--times", "0.1,0.2", "--estimators", "box"]
+    r = run(capsys, *argv, "--out", tmp_path / "a")
+    assert r.returncode == 0 and "programs (at most)" not in r.stderr  # fast
+    monkeypatch.setattr(progress, "SLOW_RUN_S", 0.0)
+    monkeypatch.setattr(progress, "LOG_EVERY_S", 0.0)
+    r = run(capsys, *argv, "--out", tmp_path / "b")
+    assert r.returncode == 0, r.stderr
+    lines = [line for line in r.stderr.splitlines() if "programs (at most)" in line]
+    assert lines and all(line.startswith("kvi: smallsat_rw exact set: ") for line in lines)
+    done = [int(line.split(": ")[-1].split("/")[0]) for line in lines]
+    assert done == sorted(done) and done[-1] == 24  # 12 programs a time, two times
+    r = run(capsys, *argv, "--no-progress", "--out", tmp_path / "c")
+    assert r.returncode == 0 and "programs (at most)" not in r.stderr
+
+
 def shrink_hulls(monkeypatch, factor: float = 0.999) -> None:
     """Every set's per-axis interval as the command reads it, shrunk about its centre."""
     real = ax.belief_intervals
