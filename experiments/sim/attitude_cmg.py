@@ -184,21 +184,18 @@ def simulate_turn(
     q0 = Rotation.from_rotvec(setup.initial_error_rad).as_quat()
     x = np.concatenate([q0, np.zeros(3), cluster.momentum_Nms(beta)])
 
-    seen: dict[str, list[Any]] = {"meas_quat": [], "meas_rate_radps": []}
-
     def measured(xx: NDArray[np.float64]) -> AttitudeMeasurement:
-        m = draw_measurement(xx, model, rng) if noisy else AttitudeMeasurement(xx[0:4], xx[4:7])
-        if record is not None:
-            seen["meas_quat"].append(np.asarray(m.quat, dtype=float).reshape(4))
-            seen["meas_rate_radps"].append(np.asarray(m.rate_radps, dtype=float).reshape(3))
-        return m
+        if noisy:
+            return draw_measurement(xx, model, rng)
+        return AttitudeMeasurement(xx[0:4], xx[4:7])
 
     def estimate(b) -> NDArray[np.float64]:
         c = loop.centre(b)[0]
         return np.concatenate([qlog(c[0:4]), c[4:7]])
 
     truth = _measure(x)
-    belief = loop.start(measured(x))
+    meas = measured(x)
+    belief = loop.start(meas)
     outside = int(np.sum(~loop.inside(belief, x[None])))
     bound_sum = 0.0
 
@@ -233,8 +230,9 @@ def simulate_turn(
     if record is not None:
         rec = {"estimate": [xm], "knowledge_bound_rad": [float(loop.attitude_bound_rad(belief)[0])],
                "truth_inside": [bool(loop.inside(belief, x[None])[0])], "xi": [],
-               "states": [x], "hull": [loop.axis_hull(belief)], "torque_Nm": [],
-               "disturbance_Nm": []}  # fmt: skip
+               "states": [x], "torque_Nm": [], "disturbance_Nm": [],
+               "meas_quat": [meas.quat], "meas_rate_radps": [meas.rate_radps]}  # fmt: skip
+        hulls = [loop.axis_hull(belief)]  # tuples of arrays: a list, not an array
         if controller == "energy":
             rec["xi"].append(ctrl.xi)
     for i in range(n_run):
@@ -264,7 +262,8 @@ def simulate_turn(
         x = x_next
         truth = _measure(x)
         known = AttitudeControl.held(torque, h_before, dt)
-        belief = loop.step(belief, known, dt, measured(x))
+        meas = measured(x)
+        belief = loop.step(belief, known, dt, meas)
         outside += int(np.sum(~loop.inside(belief, x[None])))
         bound_sum += float(loop.attitude_bound_rad(belief)[0])
         xm = estimate(belief)
@@ -275,18 +274,20 @@ def simulate_turn(
             rec["states"].append(x)
             rec["torque_Nm"].append(torque)
             rec["disturbance_Nm"].append(np.zeros(3) if ext is None else ext)
-            rec["hull"].append(loop.axis_hull(belief))
+            rec["meas_quat"].append(meas.quat)
+            rec["meas_rate_radps"].append(meas.rate_radps)
+            hulls.append(loop.axis_hull(belief))
             rec["estimate"].append(xm)
             rec["knowledge_bound_rad"].append(float(loop.attitude_bound_rad(belief)[0]))
             rec["truth_inside"].append(bool(loop.inside(belief, x[None])[0]))
             if controller == "energy":
                 rec["xi"].append(ctrl.xi)
     if rec is not None and record is not None:  # rec exists only when record was given
-        hull = rec.pop("hull")
         record.update({k: np.array(v) for k, v in rec.items()})
-        # the measurements of the recorded instants (a diverged step measured nothing)
-        record.update({k: np.array(v[: len(rec["states"])]) for k, v in seen.items()})
-        record["hull"] = hull
+        # (a measurement of one instant, batched as one run: (1, 4), (1, 3))
+        record["meas_quat"] = record["meas_quat"].reshape(-1, 4)
+        record["meas_rate_radps"] = record["meas_rate_radps"].reshape(-1, 3)
+        record["hull"] = hulls
     if n_done == n_run:
         err[n_run], rate[n_run], hist_h[n_run] = truth[:3], x[4:7], x[7:10]
     return TurnResult(
