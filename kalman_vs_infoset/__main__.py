@@ -1,5 +1,5 @@
 import sys
 
-from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset._entry import main
 
 sys.exit(main())

@@ -14,6 +14,7 @@ import sys
 import threading
 import time
 import types
+from pathlib import Path
 
 import pytest
 from kalman_vs_infoset.experiments import cli, errors, executors, signals
@@ -64,6 +65,46 @@ def test_a_stop_while_the_command_loads_is_one_line_and_its_status(
     assert got == status
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [line], err
+
+
+class _StopImporting:
+    """A finder that stops the import of one module as a Ctrl-C would."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def find_spec(self, name, path=None, target=None):
+        if name == self.name:
+            raise KeyboardInterrupt
+        return None
+
+
+def test_a_ctrl_c_while_the_command_line_loads_is_one_line_and_130(monkeypatch, capsys):
+    """The ``kvi`` script (and ``python -m kalman_vs_infoset``) imports the command line
+    inside its own handler: a Ctrl-C landing there (before ``cli.main`` puts its
+    handlers in place) printed Python's traceback, now one line and status 130; and
+    the installed script is that entry point."""
+    from importlib.metadata import entry_points
+
+    from kalman_vs_infoset import _entry
+
+    (script,) = [e for e in entry_points(group="console_scripts") if e.name == "kvi"]
+    assert script.value == "kalman_vs_infoset._entry:main"
+    main_py = (Path(_entry.__file__).parent / "__main__.py").read_text()
+    assert "from kalman_vs_infoset._entry import main" in main_py
+    monkeypatch.delitem(sys.modules, "kalman_vs_infoset.experiments.cli")
+    monkeypatch.setattr(sys, "meta_path", [_StopImporting("kalman_vs_infoset.experiments.cli"),
+                                           *sys.meta_path])  # fmt: skip
+    try:
+        got = _entry.main()
+    except KeyboardInterrupt:
+        pytest.fail("KeyboardInterrupt escaped the entry point (a traceback for the user)")
+    assert got == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["kvi: interrupted"]
+    monkeypatch.undo()  # the command line loads again and runs
+    monkeypatch.setattr(sys, "argv", ["kvi", "scenarios"])
+    assert _entry.main() == 0
+    assert "kp_fig3" in capsys.readouterr().out
 
 
 def test_a_stop_landing_in_a_finalizer_is_not_printed_and_still_stops_the_command(
