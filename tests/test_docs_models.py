@@ -549,10 +549,10 @@ def test_the_along_sight_drift_is_the_code_s_on_kp_fig5():
     code's ``r`` (the farthest reach of the a-priori box with the reserve) and ``T`` (the
     longest approach) gives the closing-speed and range drifts kp_fig5 takes by default
     (``a T``, ``a T^2 / 2``); the tolerance without the option is the code's."""
-    from kalman_vs_infoset.experiments.sim.intercept_config import (
+    from kalman_vs_infoset.experiments.sim.sun_gravity import (
         RANGE_DRIFT_TOL_M,
-        _reach,
         longest_approach_s,
+        reach,
     )
     from kalman_vs_infoset.guidance.intercept.truth import K_SUN_KM3PS2
 
@@ -560,7 +560,7 @@ def test_the_along_sight_drift_is_the_code_s_on_kp_fig5():
 
     (two,) = printed(MODELS, DERIVED["drift_formula"])
     sc = api.load_scenario("kp_fig5")
-    r_km = _reach(sc.estimator, sc.guidance.reserve_mps)[0]
+    r_km = reach(sc.estimator, sc.guidance.reserve_mps)[0]
     d_km, t_s = sc.model.sun_distance_km, longest_approach_s(sc)
     a_mps2 = int(two) * K_SUN_KM3PS2 * r_km / (d_km - r_km) ** 3 * 1e3  # km/s^2 -> m/s^2
     m = sc.channel_model()

@@ -46,9 +46,9 @@ from kalman_vs_infoset.experiments.sim.intercept_config import (
     CHANNELS,
     NOISES,
     InterceptScenario,
-    longest_approach_s,
 )
 from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling, PointingLoop
+from kalman_vs_infoset.experiments.sim.sun_gravity import longest_approach_s
 from kalman_vs_infoset.experiments.sim.trace import Recorder, channel_row
 from kalman_vs_infoset.guidance.intercept.law import ForecastCentringLaw, ImpulseLimits
 from kalman_vs_infoset.guidance.intercept.truth import TwoBodyTruth
