@@ -11,7 +11,6 @@ from __future__ import annotations
 import gc
 import os
 import signal
-import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -27,9 +26,6 @@ from contextlib import contextmanager
 from functools import partial
 from typing import Any
 
-from kalman_vs_infoset.estim.common import _kernels as _k
-from kalman_vs_infoset.estim.intercept import kinematic
-from kalman_vs_infoset.estim.intercept.nodeset.estimator import warm_up as nodeset_warm_up
 from kalman_vs_infoset.experiments import provenance
 from kalman_vs_infoset.experiments.errors import (
     InputError,
@@ -40,7 +36,7 @@ from kalman_vs_infoset.experiments.errors import (
 )
 from kalman_vs_infoset.experiments.limits import RunLimits, limited
 from kalman_vs_infoset.experiments.provenance import code_identity
-from kalman_vs_infoset.guidance.intercept._kepler import warm_up as kepler_warm_up
+from kalman_vs_infoset.experiments.warm import exit_with_parent, warm_kernels
 
 #: how often a pool worker checks that its parent is alive (s)
 WATCHDOG_S = 1.0
@@ -105,19 +101,6 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         gc.unfreeze()  # this process collects its objects again
 
 
-def warm_kernels() -> None:
-    """Load the compiled (numba) kernels of the intercept estimators and the truth in
-    this process (from the on-disk cache, or compiled once), and the libraries every
-    run imports at its end, so that forked workers inherit them instead of each
-    importing them on its first run (scipy.optimize: 0.3 CPU-s a worker)."""
-    import scipy.optimize  # noqa: F401 - the closest approach's minimize_scalar
-
-    _k.warm_up()
-    kinematic.warm_up()
-    nodeset_warm_up()
-    kepler_warm_up()
-
-
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
     """End a pool's worker processes now (the command is stopping: their chunks are
     not finished, so nothing is lost that a rerun does not compute)."""
@@ -132,16 +115,7 @@ def _worker_init(parent_pid: int) -> None:
     """A pool worker exits when its parent dies (a SIGKILLed command left its workers
     running for good): the kernel's parent-death signal on Linux, and a watchdog thread
     that sees the worker re-parented anywhere."""
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent_pid:  # the parent died before the signal was armed
-        os._exit(1)
+    exit_with_parent(parent_pid)
     # Ctrl-C and SIGTERM are the command's to handle (it saves and stops the workers)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)

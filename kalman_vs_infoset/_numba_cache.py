@@ -95,6 +95,7 @@ class CompileNotice:
         self.depth, self.kernels = 0, 0
         self.cpu_s, self._t0 = 0.0, 0.0
         self._listener: Any = None  # numba's event listener while installed
+        self.aside_kernels, self.aside_cpu_s = 0, 0.0  # a helper process's compilations
 
     def install(self) -> CompileNotice:
         from numba.core import event
@@ -110,6 +111,7 @@ class CompileNotice:
 
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
+        _INSTALLED.append(self)
         return self
 
     def uninstall(self) -> None:
@@ -118,6 +120,8 @@ class CompileNotice:
 
             event.unregister("numba:compile", self._listener)
             self._listener = None
+            if self in _INSTALLED:
+                _INSTALLED.remove(self)
 
     def _out(self) -> TextIO:
         return self.stream if self.stream is not None else sys.stderr
@@ -147,10 +151,29 @@ class CompileNotice:
 
     def report(self) -> None:
         """One line with the compilation's CPU time, if anything was compiled."""
-        if self.kernels and os.getpid() == self.pid:
+        if (self.kernels or self.aside_kernels) and os.getpid() == self.pid:
+            cpu_s = self.cpu_s + self.aside_cpu_s
+            n = self.aside_kernels
+            aside = f", {n} of them in a helper process" if n else ""
             print(
-                f"{self.prog}: compiled the numba kernels in {self.cpu_s:.1f} CPU-s "
-                f"({self.kernels} compilations; cached: later runs load them)",
+                f"{self.prog}: compiled the numba kernels in {cpu_s:.1f} CPU-s "
+                f"({self.kernels + self.aside_kernels} compilations{aside}; cached: later "
+                "runs load them)",
                 file=self._out(),
                 flush=True,
             )
+
+
+#: the notices installed in this process (the helper's compilations are added to them)
+_INSTALLED: list[CompileNotice] = []
+
+
+def note_compiled_aside(kernels: int, cpu_s: float) -> None:
+    """Count ``kernels`` compilations of ``cpu_s`` CPU seconds that a helper process
+    did for this one (:mod:`kalman_vs_infoset.experiments.warm`) in the notices
+    installed here; a helper's start is this process's first compilation, which the
+    notice announces itself."""
+    for notice in _INSTALLED:
+        if os.getpid() == notice.pid:
+            notice.aside_kernels += kernels
+            notice.aside_cpu_s += cpu_s
