@@ -60,6 +60,14 @@ def _toys(folder, monkeypatch, first=None, **aside) -> None:
     monkeypatch.setenv("PYTHONPATH", str(folder))
 
 
+def _helpers_started(monkeypatch) -> list:
+    """The helper processes :func:`warm.warm_kernels` starts, as they start."""
+    started: list = []
+    real = warm._start_helper
+    monkeypatch.setattr(warm, "_start_helper", lambda m: started.append(real(m)) or started[-1])
+    return started
+
+
 def test_the_helper_compiles_its_group_into_the_cache_and_this_process_loads_it(
     tmp_path, monkeypatch
 ):
@@ -84,9 +92,7 @@ def test_a_stopped_warm_up_stops_the_helper(tmp_path, monkeypatch):
     """Ctrl-C while this process compiles its group: the helper (here a minute from
     done) is killed at once, not left compiling."""
     _toys(tmp_path, monkeypatch, first={"interrupt": True}, sleep_s=60)
-    started = []
-    real = warm._start_helper
-    monkeypatch.setattr(warm, "_start_helper", lambda m: started.append(real(m)) or started[-1])
+    started = _helpers_started(monkeypatch)
     t0 = time.monotonic()
     with pytest.raises(KeyboardInterrupt):
         warm.warm_kernels((("toy_first",), ("toy_aside",)), aside=True)
@@ -97,9 +103,7 @@ def test_a_stopped_warm_up_stops_the_helper(tmp_path, monkeypatch):
 
 def test_a_failed_helper_leaves_its_group_to_this_process(tmp_path, monkeypatch):
     _toys(tmp_path, monkeypatch, fail_in_helper=True)
-    started = []
-    real = warm._start_helper
-    monkeypatch.setattr(warm, "_start_helper", lambda m: started.append(real(m)) or started[-1])
+    started = _helpers_started(monkeypatch)
     warm.warm_kernels((("toy_first",), ("toy_aside",)), aside=True)
     (helper,) = started
     assert helper.returncode == 1  # it failed; the group's warm-up ran here, and passed
