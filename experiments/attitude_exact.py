@@ -17,7 +17,9 @@ bounded like the rates (``Plant.extra``).
 The measurement of sample ``k`` bounds ``delta_k`` axis by axis: ``|log(q_k^-1 q_m) - da|
 <= b_a`` and ``|w_m - w_k - dw| <= b_w`` (first order). The extremes of ``delta_k`` along
 each axis are then linear programs (scipy ``linprog``, HiGHS, sparse: the variables
-``delta_0 .. delta_k`` and ``e_0 .. e_{k-1}``, the dynamics as equalities).
+``delta_0 .. delta_k`` and ``e_0 .. e_{k-1}``, the dynamics as equalities), tried again by
+another method where HiGHS reports numerical difficulties
+(:func:`kalman_vs_infoset.numerics.lp.linprog_highs`).
 
 A disturbance that varies within a period can only add states, so the LP's interval
 lies inside the exact one (to the linearisation's order): a set that holds it is sound
@@ -32,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from kalman_vs_infoset.numerics.lp import LinearProgramFailed, linprog_highs
 from kalman_vs_infoset.numerics.rotations import qexp, qinv, qlog, qmul
 
 #: finite-difference step of the Jacobians (central differences: error ~ step^2), in the
@@ -206,7 +209,6 @@ def exact_intervals(
         Per sample, the ends of ``delta_k`` and their witnesses.
     """
     from scipy import sparse
-    from scipy.optimize import linprog
 
     p = plant.dim
     x = rec["states"][:, run]
@@ -261,10 +263,16 @@ def exact_intervals(
             cost = np.zeros(n_d + n_e)
             cost[p * s + axis] = 1.0
             for sign, store in ((1.0, lo), (-1.0, hi)):
-                res = linprog(sign * cost, A_eq=a_eq, b_eq=np.zeros(p * s) if s else None,
-                              bounds=limits, method="highs")  # fmt: skip
+                # the truth (all zeros) is feasible and the box bounds the program:
+                # any status but optimal is the method's, and the next one is tried
+                res = linprog_highs(sign * cost, A_eq=a_eq,
+                                    b_eq=np.zeros(p * s) if s else None, bounds=limits,
+                                    retry=(1, 2, 3, 4))  # fmt: skip
                 if res.status != 0:
-                    raise RuntimeError(f"exact reference at sample {s}: {res.message}")
+                    raise LinearProgramFailed(
+                        f"the exact reference's linear program at sample {s} (t = "
+                        f"{s * period_s:g} s) failed by every method tried: {res.message}"
+                    )
                 store[axis] = sign * res.fun * d_scale[axis]
                 if solved is not None:
                     solved()

@@ -40,6 +40,7 @@ from kalman_vs_infoset.experiments.errors import (
 )
 
 from kalman_vs_infoset._numba_cache import CompileNotice
+from kalman_vs_infoset.numerics.lp import LinearProgramFailed
 
 #: the Monte Carlo runner, imported by the commands that run (not by the parser)
 _RUNNER = "kalman_vs_infoset.experiments.runner"
@@ -289,6 +290,9 @@ def _run(parser, module, args) -> int:
     except KeyboardInterrupt:
         print(f"{where}: interrupted; finished runs are saved; rerun to resume", file=sys.stderr)
         return 130
+    except LinearProgramFailed as exc:  # valid input, a program no method solved
+        print(f"{where}: error: {exc}", file=sys.stderr)
+        return 1
     except RuntimeError as exc:  # WorkerLost, when the command uses the runner
         executors = sys.modules.get("kalman_vs_infoset.experiments.executors")
         if executors is None or not isinstance(exc, executors.WorkerLost):

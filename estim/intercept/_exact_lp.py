@@ -33,7 +33,8 @@ import numpy as np
 import scipy.sparse as sp
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from numpy.typing import NDArray
-from scipy.optimize import linprog
+
+from kalman_vs_infoset.numerics.lp import NUMERICAL, LinearProgramFailed, linprog_highs
 
 FloatArray = NDArray[np.float64]
 X_UNIT_M = 1e3  # s is an LP variable in km (column scaling)
@@ -205,11 +206,15 @@ class ChannelLP:
 
     # -- solving -----------------------------------------------------------------------
     def solve(self, c, bounds, a_ub=None, b_ub=None, a_eq=None, b_eq=None):
-        """HiGHS; the dynamics by default. The result, or ``None`` unless optimal."""
+        """HiGHS (tried again where it reports numerical difficulties:
+        :func:`~kalman_vs_infoset.numerics.lp.linprog_highs`); the dynamics by default.
+        The result, or ``None`` when the program is infeasible (an empty cell)."""
         self.n_lp[0] += 1
         a_eq = self.a_eq if a_eq is None else a_eq
         b_eq = self.b_eq if b_eq is None else b_eq
-        res = linprog(c, a_ub, b_ub, a_eq, b_eq, bounds=bounds, method="highs")
+        res = linprog_highs(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
+        if res.status in NUMERICAL:  # no method solved it: not an empty cell
+            raise LinearProgramFailed(f"the exact set's linear program failed: {res.message}")
         return res if res.status == 0 else None
 
     def x0(self, s_m: float, e_mps: float) -> tuple[float, float]:
