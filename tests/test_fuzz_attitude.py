@@ -48,3 +48,25 @@ def test_a_gyrodine_case_sets_its_top_level_fields_and_its_controller():
     lines = fuzz_attitude._overrides(tables)
     assert f"dt_s={tables['dt_s']!r}" in lines and f"horizon_s={tables['horizon_s']!r}" in lines
     assert any(line.startswith("noise.game_disturbance_Nm=") for line in lines)
+
+
+def test_a_comparison_that_raises_is_a_fault_and_the_search_goes_on(capsys, monkeypatch):
+    """An exception in a case's exact comparison (one stopped the search of seed 8800 at
+    its case 8886, the counts and the case lost) is that case's fault, named; the next
+    cases run."""
+    from kalman_vs_infoset.experiments import cmd_attitude_tightness as cat
+
+    real, calls = cat.compare, []
+
+    def compare(*args, **kwargs):
+        calls.append(args[4])  # the case's seed
+        if len(calls) == 1:
+            raise RuntimeError("a failed program")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cat, "compare", compare)
+    assert fuzz_attitude.main(["--seconds", "120", "--seed", "14", "--cases", "2"]) == 1
+    out = capsys.readouterr().out
+    assert "FAULT case 14:" in out and "raised RuntimeError: a failed program" in out
+    assert out.strip().splitlines()[-1].startswith("2 cases")
+    assert 15 in calls  # the search went on
