@@ -98,3 +98,21 @@ def test_a_program_no_method_solves_is_one_line_and_status_1(argv, tmp_path, cap
     assert "Traceback" not in r.stderr
     assert lines[-1].startswith(f"kvi {argv[0]}: error: the exact ")
     assert "linear program" in lines[-1] and "failed" in lines[-1]
+
+
+def test_the_exact_set_confirms_an_empty_cell_by_every_method(monkeypatch):
+    """The intercept reference's program: infeasible once and then solved is solved (a
+    wrong verdict of infeasibility would shrink the exact set); infeasible by every
+    method is an empty cell (``None``); numerical difficulties by every method raise."""
+    from kalman_vs_infoset.estim.intercept._exact_lp import ChannelLP
+
+    program = SimpleNamespace(n_lp=[0], a_eq=None, b_eq=None)
+    cost, bounds = np.array([-1.0, -2.0]), [(0, None), (0, None)]
+    args = (cost, bounds, [[1.0, 1.0]], [1.0])
+    calls = _scripted(monkeypatch, [2])
+    assert ChannelLP.solve(program, *args).fun == pytest.approx(-2.0) and len(calls) == 2
+    calls = _scripted(monkeypatch, [2, 2, 2])
+    assert ChannelLP.solve(program, *args) is None and len(calls) == 3
+    _scripted(monkeypatch, [4, 4, 4])
+    with pytest.raises(lp.LinearProgramFailed):
+        ChannelLP.solve(program, *args)

@@ -206,13 +206,16 @@ class ChannelLP:
 
     # -- solving -----------------------------------------------------------------------
     def solve(self, c, bounds, a_ub=None, b_ub=None, a_eq=None, b_eq=None):
-        """HiGHS (tried again where it reports numerical difficulties:
-        :func:`~kalman_vs_infoset.numerics.lp.linprog_highs`); the dynamics by default.
-        The result, or ``None`` when the program is infeasible (an empty cell)."""
+        """HiGHS (:func:`~kalman_vs_infoset.numerics.lp.linprog_highs`); the dynamics by
+        default. The result, or ``None`` when the program is infeasible (an empty cell):
+        a verdict of infeasibility is tried again by the other methods too, since a
+        wrong one would shrink the reference and let a set that is too small pass."""
         self.n_lp[0] += 1
         a_eq = self.a_eq if a_eq is None else a_eq
         b_eq = self.b_eq if b_eq is None else b_eq
-        res = linprog_highs(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
+        res = linprog_highs(
+            c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds, retry=(*NUMERICAL, 2)
+        )
         if res.status in NUMERICAL:  # no method solved it: not an empty cell
             raise LinearProgramFailed(f"the exact set's linear program failed: {res.message}")
         return res if res.status == 0 else None
