@@ -85,6 +85,7 @@ from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from numpy.typing import NDArray
 
 from kalman_vs_infoset.numerics.arrays import readonly
+from kalman_vs_infoset.numerics.lp import LinearProgramFailed
 
 FloatArray = NDArray[np.float64]
 
@@ -253,7 +254,13 @@ class ExactChannelSet:
             return None
         a, b, c = (obj or Objective()).coefficients(x[-1], e_mps)
         row = lp.objective_row(a, b)
-        res = lp.solve(-row, bounds)
+        try:
+            res = lp.solve(-row, bounds)
+        except LinearProgramFailed:
+            # no method certified a value here (a point at the set's edge, values of 1e4
+            # m in a band 40 m wide): the inner bounds take certified points only, so it
+            # is left out, as an infeasible one is
+            return None
         return None if res is None else (float(row @ res.x + c), res.x)
 
     def _x0_ends(self, cell: Cell) -> list[tuple[float, float]]:
