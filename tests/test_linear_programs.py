@@ -116,3 +116,18 @@ def test_the_exact_set_confirms_an_empty_cell_by_every_method(monkeypatch):
     _scripted(monkeypatch, [4, 4, 4])
     with pytest.raises(lp.LinearProgramFailed):
         ChannelLP.solve(program, *args)
+
+
+def test_a_probe_no_method_solves_is_left_out_of_the_inner_bounds(monkeypatch):
+    """A feasibility probe of the intercept's exact set at a consistent point (the
+    truth's ``(x0, e)``) is certified; the same probe on which every method reports
+    numerical difficulties gives no value (``None``), as an inconsistent point does: the
+    inner bounds take certified points only (it stopped the command before)."""
+    from kalman_vs_infoset.estim.intercept.exact_reference import ExactChannelSet
+    from test_exact_reference import SMALL, SMALL_BOX, TRUTH, _small_history
+
+    history, _ = _small_history()
+    ref = ExactChannelSet(SMALL, SMALL_BOX, history)
+    assert ref.fixed(TRUTH["x0"], TRUTH["e"]) is not None
+    _scripted(monkeypatch, [4] * 3)
+    assert ref.fixed(TRUTH["x0"], TRUTH["e"]) is None
