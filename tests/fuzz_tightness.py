@@ -7,7 +7,9 @@ some, and the loosest cases (not collected by pytest: a tool, like
 ``fuzz_scenarios.py``). Exit status 1 if a case failed.
 
 This search found exact references the default HiGHS method does not solve (now tried
-again by the other methods: :mod:`kalman_vs_infoset.numerics.lp`).
+again by the other methods: :mod:`kalman_vs_infoset.numerics.lp`), and an auxiliary-model
+truth whose bearing ``y / x`` passed pi (a traceback; such a run now stops there, its
+later times null with a reason).
 
     python tests/fuzz_tightness.py --seconds 900 --seed 70000
 """

@@ -71,6 +71,33 @@ def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_pat
     assert "  max ratio -; files: " in render(none)
 
 
+#: tests/fuzz_tightness.py's case 81451: a truth 38.9 km aside at 41 km, closing at 7.7
+#: km/s, whose auxiliary-model bearing y / x passes pi before 5 s
+WIDE_ANGLE = [
+    "--set", "model.closing_speed_kmps=7.634110091247706",
+    "--set", "model.nominal_range_km=75.27803896245895",
+    "--set", "model.bearing_bound_end_rad=0.00023", "--set", "model.dt_s=1.0",
+    "--set", "estimator.x_km=[41.147729522115206, 55.12519902708176]",
+    "--set", "estimator.closing_speed_kmps=[7.615322349967465, 7.661171192996122]",
+    "--set", "estimator.vx_kmps=[-8.661171192996122, -6.615322349967465]",
+    "--set", "truth.x_km=[41.147729522115206, 41.147729522115206]",
+    "--set", "truth.vx_kmps=[-7.661171192996122, -7.661171192996122]",
+    "--set", "estimator.y_km=[-38.91060763806985, 38.91060763806985]",
+    "--set", "estimator.vy_kmps=[-0.5851188134518749, 0.5851188134518749]",
+    "--set", "truth.y_km=[38.91060763806985, 38.91060763806985]",
+    "--set", "truth.vy_kmps=[0.5851188134518749, 0.5851188134518749]",
+]  # fmt: skip
+
+
+def test_times_after_the_truth_s_bearing_passed_pi_are_null_with_a_reason(capsys, tmp_path):
+    """The auxiliary truth's bearing ``y / x`` is no angle past pi: the run stops there
+    (a ValueError's traceback before), and those times say why."""
+    code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "5", *WIDE_ANGLE)
+    assert code == 0, out.err
+    res = json.loads(out.out.strip().splitlines()[-1])
+    assert res["reason"] == ["truth's bearing beyond pi"] and res["ratio"] == [None]
+
+
 @pytest.mark.parametrize(
     "args",
     [

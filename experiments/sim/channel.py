@@ -81,6 +81,11 @@ class ChannelErrors:
             getattr(self.game, what)(*args)
 
 
+#: the reason of the records a run does not reach because the truth's bearing (the
+#: auxiliary model's ``y / x``) left ``[-pi, pi]``
+BEYOND_PI = "truth's bearing beyond pi"
+
+
 def run_channel(
     sc, estimator: str, noise: str, seed: int, steps: Sequence[int], observe: Observer,
     guided: bool = False, switch_s: float = 50.0,
@@ -90,7 +95,10 @@ def run_channel(
     At each step of ``steps`` (after the bearing and range, before the impulse)
     ``observe(belief, estimator, history, truth_w_m)`` makes the step's record;
     ``history`` holds the times ``t``, bearings ``a``, impulses ``k`` and ranges ``d``
-    so far (NaN: none measured). Returns the records by step and the fuel spent (m/s).
+    so far (NaN: none measured). A run stops where the truth's bearing ``y / x``, with an
+    admissible error, could leave ``[-pi, pi]`` (far outside the small-angle model): the
+    steps from there get the record ``{"truth_w_m": None, "reason": BEYOND_PI}``.
+    Returns the records by step and the fuel spent (m/s).
     """
     model, dt = sc.channel_model(), sc.model.dt_s
     children = np.random.SeedSequence(seed).spawn(3)
@@ -110,6 +118,14 @@ def run_channel(
         if x < model.eps_m:
             break
         obs = np.array([y / x, (v * x + e * y) / x**2, x])
+        if abs(obs[0]) + float(model.bearing_bound(x)) > np.pi:
+            # the auxiliary model's bearing y / x (its small-angle reading) beyond what an
+            # angle can be, with an admissible error: the truth has left the model's
+            # domain, and this step and the later ones are not run
+            for s in steps:
+                if s >= step:
+                    records[s] = {"truth_w_m": None, "reason": BEYOND_PI}
+            break
         alpha = errors.bearing(t, obs)
         belief = est.update(belief, Bearing(alpha))
         d_m = np.nan
