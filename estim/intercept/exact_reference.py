@@ -257,9 +257,9 @@ class ExactChannelSet:
         try:
             res = lp.solve(-row, bounds)
         except LinearProgramFailed:
-            # no method certified a value here (a point at the set's edge, values of 1e4
-            # m in a band 40 m wide): the inner bounds take certified points only, so it
-            # is left out, as an infeasible one is
+            # no method certified a value here (e.g. a point at the set's edge whose
+            # variables lie in bands 40 m wide about 1e4 m): the inner bounds take
+            # certified points only, so it is left out, as an infeasible one is
             return None
         return None if res is None else (float(row @ res.x + c), res.x)
 
