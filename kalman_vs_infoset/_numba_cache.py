@@ -171,8 +171,8 @@ _INSTALLED: list[CompileNotice] = []
 def note_compiled_aside(kernels: int, cpu_s: float) -> None:
     """Count ``kernels`` compilations of ``cpu_s`` CPU seconds that a helper process
     did for this one (:mod:`kalman_vs_infoset.experiments.warm`) in the notices
-    installed here; a helper's start is this process's first compilation, which the
-    notice announces itself."""
+    installed here (their report adds them; the start line is this process's own, at
+    its first compilation)."""
     for notice in _INSTALLED:
         if os.getpid() == notice.pid:
             notice.aside_kernels += kernels
