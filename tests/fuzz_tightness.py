@@ -83,6 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0, help="first case's seed")
     p.add_argument("--cases", type=int, default=None, help="at most this many cases")
     p.add_argument("--out", default="results/fuzz_tightness", help="the command's --out")
+    p.add_argument("--log", default=None, help="a JSON line a case is appended to this file")
     args = p.parse_args(argv)
     counts = {"ok": 0, "refused": 0, "fault": 0}
     ratios: dict[bool, list[float]] = {False: [], True: []}
@@ -93,8 +94,12 @@ def main(argv: list[str] | None = None) -> int:
         counts[outcome] += 1
         if outcome == "fault":
             print(f"FAULT case {seed}: {message}", flush=True)
+        options = any(a.startswith("estimator.infoset.") for a in case_argv(seed))
+        if args.log is not None:  # every case, to pick the loosest of a kind afterwards
+            row = {"seed": seed, "outcome": outcome, "ratio": worst, "options": options}
+            with open(args.log, "a") as log:
+                log.write(json.dumps(row) + "\n")
         if worst is not None:
-            options = any(a.startswith("estimator.infoset.") for a in case_argv(seed))
             ratios[options].append(worst)
             loosest = sorted([*loosest, (worst, f"case {seed}: {message}")], reverse=True)[:5]
         seed += 1
