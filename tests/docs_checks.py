@@ -79,6 +79,9 @@ ROUNDS = "docs/results/tightness/rounds/kp_fig5-"
 
 #: (document, pattern with one group per number, results file, key per group)
 CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
+    # the auxiliary model's impulse (docs/infoset.md)
+    ("docs/infoset.md", r"The same case\s+now reads ([\d.]+) at 6 s", "docs/results/tightness/"
+     "impulse_geometry/case70830-tightness-infoset-game-seed70830-guided.json", ("ratio/0",)),
     ("docs/infoset.md", r"kp_fig5 runs \(([\d.]+) at 95 s under switching errors, seed 5\)",
      "docs/results/tightness/kp_fig5-tightness-infoset-switch-seed5.json", ("ratio/4",)),
     # the tightening's rounds (docs/infoset.md)

@@ -42,6 +42,9 @@ HISTORY = (
     r"read 1\.017 against the default's 1\.009 on seed 773",
     r"a box of \+-36 km from 1632 km read up to 2\.58 times the exact width, and 1\.010 "
     r"with the box as it is \(case 70000 of",
+    r"\(case 70830 of `tests/fuzz_tightness\.py`: bearings of 0\.23 to 0\.36 rad, a truth "
+    r"at a corner of its box, saturated guidance\) it read 601 times the exact width at 6 "
+    r"s, where the exact set had collapsed to 0\.6 m",
 )
 
 #: the options' values and defaults, the experiments' seeds, times and counts, the

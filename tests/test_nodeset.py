@@ -189,6 +189,35 @@ def test_node_slice_is_the_exact_polygon_of_the_seed_operations():
     assert ours.symmetric_difference(poly).area <= 1e-7 * poly.area
 
 
+@pytest.mark.parametrize("family", ["nodes", "slabs"])
+def test_an_impulse_moves_the_auxiliary_model_set_by_exactly_k_x_over_e(family):
+    """The auxiliary model's impulse is ``V += k`` whatever the bearing, so ``w = (V x +
+    e Y) / e`` moves by ``k x / e`` at every state: the set of that model alone (no
+    kinematic margin) moves both ends of its interval of ``w`` by exactly that, 0.3 rad
+    off the axis. The set of the two-body motion spreads it by the impulse's geometry
+    (``k cos^2(alpha)``, docs/models.md §1.3: at least half of ``k sin^2(alpha) x / e``
+    here); before this release the auxiliary-model set spread it too (601 times the
+    exact width in case 70830 of tests/fuzz_tightness.py, docs/infoset.md)."""
+    from kalman_vs_infoset.estim.intercept.slabs.estimator import InformationSetEstimator
+
+    x0, k = 300e3, 40.0
+    prior = ChannelPrior((0.30 * x0, 0.31 * x0), (-10.0, 10.0), (x0, x0))
+    spread = k * np.sin(0.30) ** 2 * x0 / E
+    for margin in (False, True):
+        if family == "nodes":
+            est = NodeSetEstimator(MODEL, kinematic_margin=margin)
+        else:
+            est = InformationSetEstimator(MODEL, sections="slabs", kinematic_margin=margin)
+        b = est.update(est.initial(prior), Bearing(0.305))
+        ext = [est.predict(b, DT, dv).extremes(ZeroEffortMiss(MODEL)) for dv in (0.0, k)]
+        (lo0, hi0), (lo1, hi1) = ((e.min_value, e.max_value) for e in ext)
+        if margin:
+            assert (hi1 - lo1) - (hi0 - lo0) >= 0.5 * spread
+        else:
+            assert lo1 - lo0 == pytest.approx(k * x0 / E, abs=1e-6)
+            assert hi1 - hi0 == pytest.approx(k * x0 / E, abs=1e-6)
+
+
 @settings(max_examples=30, deadline=None)
 @given(v=st.lists(st.floats(-1.0, 1.0), min_size=1, max_size=40))
 def test_disturbance_set_holds_every_varying_disturbance(v):

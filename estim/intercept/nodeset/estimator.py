@@ -129,8 +129,9 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     kinematic_margin : bool
         The set of the two-body motion: add the bound of the neglected kinematic term
         to ``nu`` (module docstring) and widen a wide prior box by the exact bearing
-        and rate of its Cartesian states (:meth:`initial`). Off: the set of the
-        auxiliary model alone (``kvi tightness``).
+        and rate of its Cartesian states (:meth:`initial`), and apply an impulse as
+        the two-body motion does (``k cos^2(alpha)``: :meth:`_impulse`). Off: the set
+        of the auxiliary model alone (``kvi tightness``).
     max_vertices : int or None
         ``None`` (the default): slices are never simplified. Each prediction adds up
         to four vertices to a slice that no bearing clips, so a slice grows with the
@@ -315,14 +316,23 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
     def _impulse(self, s: NodeSet, control: float | Impulse, per: FloatArray) -> OpLog:
         """The operation of an impulse ``k`` (m/s, relative velocity): ``V += k
         cos^2(alpha)``, i.e. ``V~ += k u cos^2(alpha)`` with ``u`` anywhere in the piece
-        and ``alpha`` up to the piece's largest bearing; an
+        and ``alpha`` up to the piece's largest bearing (the two-body motion's change;
+        without ``kinematic_margin``, the auxiliary model's ``V += k``); an
         :class:`~estim.intercept.model.Impulse` known to ``+-dk`` adds ``dk u_hi`` either way.
         The per-piece bounds of ``w`` in ``per`` move by what the impulse can do."""
         k, dk = impulse_parts(control)
         # per piece (compiled: a handful of numbers, every step): with sin^2 of the
         # largest bearing, dV~ in [min, max](k u_lo (1 - sin^2), k u_hi) -+ dk u_hi;
         # zs moves by e_nom tau dV~ with tau in [tau_lo, tau_hi]; w = (e/e_nom)^2 zs
-        lo, hi, cos2 = _nk.impulse_interval(per, s.u_lo, s.u_hi, s.e_nom, float(k), float(dk))
+        # (the auxiliary model alone, without the kinematic margin, has V += k exactly,
+        # whatever the bearing: the kernel sees bearings of 0, i.e. cos^2 = 1, and only
+        # the bounds of w move in ``per``)
+        geometry = per
+        if not self.kinematic_margin:
+            geometry = per.copy()
+            geometry[:, 2:4] = 0.0
+        lo, hi, cos2 = _nk.impulse_interval(geometry, s.u_lo, s.u_hi, s.e_nom, float(k), float(dk))
+        per[:, :2] = geometry[:, :2]
         if self.impulse_per_piece:  # k, dk and cos^2: replays form the interval per piece
             return OpLog.one(_nk.IMPULSE, len(lo), pa=k, pb=dk, q_lo=cos2, q_hi=hi)
         return OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi)

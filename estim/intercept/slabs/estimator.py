@@ -142,8 +142,9 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         kept to ``max_vertices`` vertices (conservatively: the set only grows).
     kinematic_margin : bool
         The set of the two-body motion: add the bound of the neglected kinematic term
-        to ``nu`` (module docstring; ``"slabs"`` only) and widen a wide prior box by
-        the exact bearing and rate of its Cartesian states (:meth:`initial`). Off
+        to ``nu`` (module docstring; ``"slabs"`` only), widen a wide prior box by
+        the exact bearing and rate of its Cartesian states (:meth:`initial`), and
+        spread an impulse by its geometry (``k cos^2(alpha)``: :meth:`_impulse`). Off
         reproduces the set of the auxiliary model, with the model's ``nu`` alone,
         which holds a two-body truth only while that term stays under ``nu``.
     split_ratio, max_sections : float, int
@@ -326,7 +327,8 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         return replace(self._select(belief, keep), x_lo_m=x_lo[keep], x_hi_m=x_hi[keep])
 
     def _impulse(self, belief: InformationSet, control: float | Impulse) -> InformationSet:
-        """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``.
+        """Apply impulse ``k`` (m/s, relative velocity): ``omega += k/x``, ``w += k x/e``
+        (with ``kinematic_margin``, the two-body motion's ``omega += k cos^2(alpha)/x``).
 
         ``control`` may be an :class:`~estim.intercept.model.Impulse` whose magnitude is only
         known to ``+-dk``: the set is then widened by ``dk x/e`` in ``w``.
@@ -337,8 +339,9 @@ class InformationSetEstimator(Estimator[InformationSet, ChannelPrior]):
         scale = k / self.model.e / self.w_scale_m
         half = abs(scale) * 0.5 * (belief.x_hi_m - belief.x_lo_m)
         half = half + dk * belief.x_hi_m / self.model.e / self.w_scale_m
-        if self.sections != "points":
-            # the true change is omega += k cos^2(alpha)/x: widen by k sin^2(alpha) x/e
+        if self.sections != "points" and self.kinematic_margin:
+            # the two-body motion's change is omega += k cos^2(alpha)/x: widen by
+            # k sin^2(alpha) x/e (the auxiliary model alone has omega += k/x exactly)
             a_abs, _ = belief.sections.abs_max()
             sin2 = np.sin(np.minimum(a_abs * self.alpha_scale_rad, 0.5 * np.pi)) ** 2
             half = half + (abs(k) + dk) * sin2 * belief.x_hi_m / self.model.e / self.w_scale_m

@@ -26,7 +26,8 @@ class SlabOptions(InterceptOptions):
         bool,
         Field(
             description="the two-body motion: bound the kinematic term the linear model "
-            "neglects, and widen a wide prior box by its Cartesian states' exact map"
+            "neglects, widen a wide prior box by its Cartesian states' exact map, and "
+            "spread an impulse by its geometry (k cos^2 of the bearing)"
         ),
     ] = True
     split_ratio: Annotated[
