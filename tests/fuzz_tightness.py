@@ -9,7 +9,10 @@ some, and the loosest cases (not collected by pytest: a tool, like
 This search found exact references the default HiGHS method does not solve (now tried
 again by the other methods: :mod:`kalman_vs_infoset.numerics.lp`), and an auxiliary-model
 truth whose bearing ``y / x`` passed pi (a traceback; such a run now stops there, its
-later times null with a reason).
+later times null with a reason), and auxiliary-model sets that spread an impulse by its
+two-body geometry (case 70830: 601 times the exact width far off the axis; now the
+auxiliary model's ``V += k``). ``--log`` keeps a line a case, to pick the loosest of a
+kind (default options or drawn ones) afterwards.
 
     python tests/fuzz_tightness.py --seconds 900 --seed 70000
 """
