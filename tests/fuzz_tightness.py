@@ -15,6 +15,10 @@ auxiliary model's ``V += k``). ``--log`` keeps a line a case, to pick the looses
 kind (default options or drawn ones) afterwards.
 
     python tests/fuzz_tightness.py --seconds 900 --seed 70000
+    python tests/fuzz_tightness.py --seed 300000 --cases 1000 --json summary.json
+
+A search's cases are independent: ``--from-log`` summarises the first ``--cases`` of a
+longer search's ``--log`` file, the same numbers as a search of that many cases.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import argparse
 import contextlib
 import io
 import json
+import os
 import shlex
 import sys
 import time
@@ -80,6 +85,58 @@ def run_case(seed: int, out: str) -> tuple[str, float | None, str]:
     return "ok", worst, command
 
 
+QUANTILES = (50, 75, 90, 95, 100)
+
+
+def summary(rows: list[dict], first_seed: int) -> dict:
+    """The search's numbers from its case rows (``seed``, ``outcome``, ``ratio``,
+    ``options``): counts, and quantiles of the cases' largest ratios at the default
+    options and with options drawn (``null`` where no case was compared)."""
+    counts = {k: sum(r["outcome"] == k for r in rows) for k in ("ok", "refused", "fault")}
+    out: dict = {"first_seed": first_seed, "cases": len(rows), **counts}
+    for key, options in (("default_options", False), ("options_drawn", True)):
+        kept = [r for r in rows if r["ratio"] is not None and r["options"] is options]
+        if not kept:
+            out[key] = None
+            continue
+        q = np.nanpercentile([r["ratio"] for r in kept], QUANTILES)
+        loosest = max(kept, key=lambda r: r["ratio"])
+        quantiles = {f"p{k}": float(v) for k, v in zip(QUANTILES, q, strict=True)}
+        out[key] = {"compared": len(kept), **quantiles, "loosest_seed": loosest["seed"]}
+    return out
+
+
+def _search(args) -> tuple[list[dict], list[tuple[float, str]]]:
+    rows: list[dict] = []
+    loosest: list[tuple[float, str]] = []
+    end, seed = time.monotonic() + args.seconds, args.seed
+    while time.monotonic() < end and (args.cases is None or seed - args.seed < args.cases):
+        outcome, worst, message = run_case(seed, args.out)
+        if outcome == "fault":
+            print(f"FAULT case {seed}: {message}", flush=True)
+        options = any(a.startswith("estimator.infoset.") for a in case_argv(seed))
+        row = {"seed": seed, "outcome": outcome, "ratio": worst, "options": options}
+        rows.append(row)
+        if args.log is not None:  # every case, to pick the loosest of a kind afterwards
+            with open(args.log, "a") as log:
+                log.write(json.dumps(row) + "\n")
+        if worst is not None:
+            loosest = sorted([*loosest, (worst, f"case {seed}: {message}")], reverse=True)[:5]
+        seed += 1
+    return rows, loosest
+
+
+def _from_log(args) -> list[dict]:
+    """The rows of a ``--log`` file from ``--seed`` on, at most ``--cases`` of them (the
+    cases are independent: the first ``n`` of a longer search are a search of ``n``)."""
+    with open(args.from_log) as log:
+        rows = sorted((json.loads(line) for line in log if line.strip()), key=lambda r: r["seed"])
+    rows = [r for r in rows if r["seed"] >= args.seed]
+    if [r["seed"] for r in rows] != list(range(args.seed, args.seed + len(rows))):
+        raise SystemExit(f"{args.from_log}: the cases from seed {args.seed} are not consecutive")
+    return rows if args.cases is None else rows[: args.cases]
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seconds", type=float, default=300.0, help="how long to search (s)")
@@ -87,36 +144,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cases", type=int, default=None, help="at most this many cases")
     p.add_argument("--out", default="results/fuzz_tightness", help="the command's --out")
     p.add_argument("--log", default=None, help="a JSON line a case is appended to this file")
+    p.add_argument("--json", default=None, help="write the summary to this file")
+    p.add_argument("--from-log", default=None, help="summarise this --log file, run nothing")
     args = p.parse_args(argv)
-    counts = {"ok": 0, "refused": 0, "fault": 0}
-    ratios: dict[bool, list[float]] = {False: [], True: []}
-    loosest: list[tuple[float, str]] = []
-    end, seed = time.monotonic() + args.seconds, args.seed
-    while time.monotonic() < end and (args.cases is None or seed - args.seed < args.cases):
-        outcome, worst, message = run_case(seed, args.out)
-        counts[outcome] += 1
-        if outcome == "fault":
-            print(f"FAULT case {seed}: {message}", flush=True)
-        options = any(a.startswith("estimator.infoset.") for a in case_argv(seed))
-        if args.log is not None:  # every case, to pick the loosest of a kind afterwards
-            row = {"seed": seed, "outcome": outcome, "ratio": worst, "options": options}
-            with open(args.log, "a") as log:
-                log.write(json.dumps(row) + "\n")
-        if worst is not None:
-            ratios[options].append(worst)
-            loosest = sorted([*loosest, (worst, f"case {seed}: {message}")], reverse=True)[:5]
-        seed += 1
-    for options, values in ratios.items():
-        if values:
-            q = np.nanpercentile(values, [50, 75, 90, 95, 100])
-            print(f"largest ratio a case, {'options drawn' if options else 'default options'} "
-                  f"({len(values)} cases): median {q[0]:.3f}, p75 {q[1]:.3f}, p90 {q[2]:.3f}, "
-                  f"p95 {q[3]:.3f}, max {q[4]:.3g}")  # fmt: skip
+    rows, loosest = (_from_log(args), []) if args.from_log else _search(args)
+    result = summary(rows, args.seed)
+    for key in ("default_options", "options_drawn"):
+        if (q := result[key]) is not None:
+            print(f"largest ratio a case, {key.replace('_', ' ')} ({q['compared']} cases): "
+                  f"median {q['p50']:.3f}, p75 {q['p75']:.3f}, p90 {q['p90']:.3f}, "
+                  f"p95 {q['p95']:.3f}, max {q['p100']:.3g}")  # fmt: skip
     for worst, message in loosest:
         print(f"loosest: {worst:.3g} {message}")
-    print(f"{sum(counts.values())} cases: {counts['ok']} ok, {counts['refused']} refused by "
-          f"the validation, {counts['fault']} faults")  # fmt: skip
-    return 1 if counts["fault"] else 0
+    print(f"{result['cases']} cases: {result['ok']} ok, {result['refused']} refused by "
+          f"the validation, {result['fault']} faults")  # fmt: skip
+    if args.json is not None:
+        tmp = f"{args.json}.tmp"
+        with open(tmp, "w") as f:
+            f.write(json.dumps(result) + "\n")
+        os.replace(tmp, args.json)  # whole or not at all
+    return 1 if result["fault"] else 0
 
 
 if __name__ == "__main__":

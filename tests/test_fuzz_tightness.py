@@ -43,3 +43,34 @@ def test_a_failing_case_is_a_fault_named_with_its_command(answer, found, capsys,
     out = capsys.readouterr().out
     assert "FAULT case 70000: " in out and found in out
     assert "kvi tightness kp_fig3 --seed 70000" in out
+
+
+def test_the_summary_of_a_log_is_the_search_s_and_is_written_whole(tmp_path, capsys):
+    """``--log`` then ``--from-log --json``: the quantiles of the cases' largest ratios
+    by kind (numpy's percentiles of the logged ratios), the counts, the loosest seed;
+    ``--cases`` keeps the first cases only, and a gap in the seeds is refused."""
+    import numpy as np
+
+    log = tmp_path / "log.jsonl"
+    ratios = [1.01, None, 1.5, 1.02, 1.2, None]
+    with open(log, "w") as f:
+        for i, r in enumerate(ratios):
+            row = {"seed": 10 + i, "outcome": "ok" if r else "refused", "ratio": r,
+                   "options": i % 2 == 1}  # fmt: skip
+            f.write(json.dumps(row) + "\n")
+    out = tmp_path / "summary.json"
+    argv = ["--from-log", str(log), "--seed", "10", "--json", str(out)]
+    assert fuzz_tightness.main(argv) == 0
+    got = json.loads(out.read_text())
+    assert (got["cases"], got["ok"], got["refused"], got["fault"]) == (6, 4, 2, 0)
+    assert got["default_options"]["compared"] == 3  # seeds 10, 12, 14
+    assert got["default_options"]["p50"] == float(np.percentile([1.01, 1.5, 1.2], 50))
+    assert got["default_options"]["p100"] == 1.5 and got["default_options"]["loosest_seed"] == 12
+    assert got["options_drawn"]["compared"] == 1 and got["options_drawn"]["loosest_seed"] == 13
+    assert "6 cases: 4 ok, 2 refused" in capsys.readouterr().out
+    assert fuzz_tightness.main([*argv, "--cases", "2"]) == 0
+    assert json.loads(out.read_text())["cases"] == 2
+    with open(log, "a") as f:
+        f.write(json.dumps({"seed": 17, "outcome": "ok", "ratio": 1.0, "options": False}) + "\n")
+    with pytest.raises(SystemExit, match="not consecutive"):
+        fuzz_tightness.main(argv)
