@@ -98,6 +98,36 @@ def test_times_after_the_truth_s_bearing_passed_pi_are_null_with_a_reason(capsys
     assert res["reason"] == ["truth's bearing beyond pi"] and res["ratio"] == [None]
 
 
+#: tests/fuzz_tightness.py's case 70811: the truth at a corner of its range and lateral
+#: boxes, the errors at their bound, no guidance: a feasible range under a micrometre
+CORNER_SLIVER = [
+    "--noise", "bias", "--seed", "70811",
+    "--set", "model.nu_mps2=0.0001", "--set", "model.dt_s=1.0",
+    "--set", "model.bearing_bound_start_rad=1.681643001101254e-05",
+    "--set", "model.bearing_bound_end_rad=0.00015",
+    "--set", "model.nominal_range_km=1397.4192673428142",
+    "--set", "estimator.x_km=[1392.5296562152528, 1573.6880330348383]",
+    "--set", "truth.x_km=[1392.5296562152528, 1392.5296562152528]",
+    "--set", "estimator.y_km=[-29.382157291354474, 29.382157291354474]",
+    "--set", "truth.y_km=[29.382157291354474, 29.382157291354474]",
+    "--set", "truth.vy_kmps=[-0.1, -0.1]",
+]  # fmt: skip
+
+
+def test_a_range_collapsed_at_the_box_s_end_keeps_a_bounded_tight_set(capsys, tmp_path):
+    """A feasible range that collapses under a micrometre at the end of the prior box
+    (``CORNER_SLIVER``): the refinement narrows brackets down to ``MIN_SPACING_REL`` =
+    1e-14 of the labels, which keeps three live nodes in the sliver, and the set's
+    interval of the miss is bounded and within 1.001 of the exact one. With 1e-12 the
+    piece kept one or two live nodes beside a dead one and the interval was infinite
+    (null in the JSON) from the first step (docs/infoset.md)."""
+    code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "1,7", *CORNER_SLIVER)
+    assert code == 0, out.err
+    res = json.loads(out.out.strip().splitlines()[-1])
+    assert res["exact_inside"] == [True, True]
+    assert all(r is not None and 1.0 <= r <= 1.001 for r in res["ratio"]), res["ratio"]
+
+
 @pytest.mark.parametrize(
     "args",
     [

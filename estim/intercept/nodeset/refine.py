@@ -29,12 +29,18 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-#: refinement stops when the new nodes are closer than this (relative to tau)
-MIN_SPACING_REL = 1e-12
+#: refinement stops when the new nodes are closer than this (relative to tau): about
+#: 70 ulps of a label. A feasible range that collapses at an end of the prior box (a
+#: truth at its corner, errors at their bound) can be a sliver of 2e-13 of the labels:
+#: 1e-12 stopped with fewer than three live nodes there, and the bound of the miss
+#: across their cell was unbounded (cases 70191 and 70811 of tests/fuzz_tightness.py).
+#: Closer nodes carry more rounding in their secants; MAX_SECANT_REACH (._geometry)
+#: bounds how far such a secant is extrapolated.
+MIN_SPACING_REL = 1e-14
 
 #: a new node this close (relative to its label) to another of its piece is a twin of
 #: it, and is not added (:func:`_twins`); well under the refinement's spacing above
-DUPLICATE_REL = 1e-13
+DUPLICATE_REL = 1e-15
 
 
 class NodeRefinement:
