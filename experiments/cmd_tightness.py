@@ -118,7 +118,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="keep the set's kinematic margin (off by default: the truth here is the "
         "auxiliary model, which has no kinematic term; with it on, the set models the "
         "nonlinear motion, widens a prior box wide against its range by the Cartesian "
-        "states' exact map, and may leave out auxiliary-model states)")  # fmt: skip
+        "states' exact map, spreads an impulse k by its geometry, k cos^2 of the "
+        "bearing, and may leave out auxiliary-model states)")  # fmt: skip
     add("--out", help="output directory (default: results/tightness)")
     add("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", dest="overrides",
         help="override a scenario field (as for intercept)")  # fmt: skip
