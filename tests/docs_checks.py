@@ -36,6 +36,7 @@ FAM = "docs/results/families/compare_kp_fig5_families.json"
 WIDE = "docs/results/wide_d/kp_fig5-closing_speed_57_59-infoset-"
 ADV5 = "docs/results/adversaries/kp_fig5-adversaries.json"
 VS = "docs/results/vs_35e3739.json"
+FZT = "docs/results/fuzz_tightness/seed400000-1200.json"
 VS_5F9 = "docs/results/vs_35e3739_at_5f9e157.json"
 VS_E8E = "docs/results/vs_35e3739_at_e8e92a3.json"
 VS_8790E49 = "docs/results/vs_35e3739_at_8790e49.json"
@@ -231,6 +232,15 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"energy index of ([\d.]+) N\^2 m\^2 s and a final error of ([\d.e-]+) deg", GYC,
      ("settle_time_s/mean", "settle_time_s/max", "energy_N2m2s/mean", "final_angle_deg/mean")),
     (ATT, r"measured peak ([\d.]+) alpha", FIGS, (N + "gyrostat/max_torque_ratio/box/game",)),
+    # README: the tightness search on random scenarios (tests/fuzz_tightness.py)
+    (README, r"On (\d+) random\s+scenarios within the fields' bounds", FZT, ("cases",)),
+    (README, r"three times; (\d+) compared, the rest refused", FZT, ("ok",)),
+    (README, r"At the node set's default options \((\d+) cases\) a case's largest\s+ratio had "
+     r"a median of ([\d.]+) and a 95th percentile of ([\d.]+); (\d+) passed 1\.1, and one "
+     r"read\s+(\d+):", FZT, tuple(f"default_options/{k}" for k in (
+         "compared", "p50", "p95", "n_over_1_1", "p100"))),
+    (README, r"trade tightness for time, the 95th\s+percentile was ([\d.]+)\.", FZT,
+     ("options_drawn/p95",)),
     # README: the runs per CPU-second against release 35e3739
     (README, r"Fig\. 5's Monte Carlo does ([\d.]+) times the runs per CPU-second of release "
      r"(?:`35e3739` )?\((\d+) runs,", VS, ("runs_per_cpu_s_ratio_mean", "runs")),

@@ -59,6 +59,22 @@ def case_argv(seed: int) -> list[str]:
     return argv
 
 
+def drawn_options(seed: int) -> bool:
+    """Whether case ``seed`` runs the information set with an option other than its
+    default (a drawn option may equal the default: that case counts as a default one)."""
+    import tomllib
+
+    from kalman_vs_infoset.estim.intercept.nodeset.options import InfosetOptions
+
+    defaults = InfosetOptions().model_dump()
+    for arg in case_argv(seed):
+        if arg.startswith("estimator.infoset."):
+            key, value = arg.removeprefix("estimator.infoset.").split("=", 1)
+            if tomllib.loads(f"v = {value}")["v"] != defaults[key]:
+                return True
+    return False
+
+
 def run_case(seed: int, out: str) -> tuple[str, float | None, str]:
     """``(outcome, largest ratio, message)`` of one case: outcome ``ok``, ``refused``
     (status 2) or ``fault`` (another status, or the exact interval outside the set)."""
@@ -86,6 +102,8 @@ def run_case(seed: int, out: str) -> tuple[str, float | None, str]:
 
 
 QUANTILES = (50, 75, 90, 95, 100)
+#: the summary counts the cases whose largest ratio passes each of these
+OVER = (1.03, 1.1, 2)
 
 
 def summary(rows: list[dict], first_seed: int) -> dict:
@@ -102,7 +120,9 @@ def summary(rows: list[dict], first_seed: int) -> dict:
         q = np.nanpercentile([r["ratio"] for r in kept], QUANTILES)
         loosest = max(kept, key=lambda r: r["ratio"])
         quantiles = {f"p{k}": float(v) for k, v in zip(QUANTILES, q, strict=True)}
-        out[key] = {"compared": len(kept), **quantiles, "loosest_seed": loosest["seed"]}
+        over = {f"n_over_{str(t).replace('.', '_')}": sum(r["ratio"] > t for r in kept)
+                for t in OVER}  # fmt: skip
+        out[key] = {"compared": len(kept), **quantiles, **over, "loosest_seed": loosest["seed"]}
     return out
 
 
@@ -114,7 +134,7 @@ def _search(args) -> tuple[list[dict], list[tuple[float, str]]]:
         outcome, worst, message = run_case(seed, args.out)
         if outcome == "fault":
             print(f"FAULT case {seed}: {message}", flush=True)
-        options = any(a.startswith("estimator.infoset.") for a in case_argv(seed))
+        options = drawn_options(seed)
         row = {"seed": seed, "outcome": outcome, "ratio": worst, "options": options}
         rows.append(row)
         if args.log is not None:  # every case, to pick the loosest of a kind afterwards
@@ -134,7 +154,9 @@ def _from_log(args) -> list[dict]:
     rows = [r for r in rows if r["seed"] >= args.seed]
     if [r["seed"] for r in rows] != list(range(args.seed, args.seed + len(rows))):
         raise SystemExit(f"{args.from_log}: the cases from seed {args.seed} are not consecutive")
-    return rows if args.cases is None else rows[: args.cases]
+    rows = rows if args.cases is None else rows[: args.cases]
+    # (classified again: a log of an earlier version counted a drawn default as an option)
+    return [{**r, "options": drawn_options(r["seed"])} for r in rows]
 
 
 def main(argv: list[str] | None = None) -> int:

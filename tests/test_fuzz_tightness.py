@@ -47,26 +47,34 @@ def test_a_failing_case_is_a_fault_named_with_its_command(answer, found, capsys,
 
 def test_the_summary_of_a_log_is_the_search_s_and_is_written_whole(tmp_path, capsys):
     """``--log`` then ``--from-log --json``: the quantiles of the cases' largest ratios
-    by kind (numpy's percentiles of the logged ratios), the counts, the loosest seed;
-    ``--cases`` keeps the first cases only, and a gap in the seeds is refused."""
+    by kind (numpy's percentiles of the logged ratios; the kind from the case's drawn
+    options, whatever the log says), the counts, the loosest seed; ``--cases`` keeps the
+    first cases only, and a gap in the seeds is refused."""
     import numpy as np
 
     log = tmp_path / "log.jsonl"
-    ratios = [1.01, None, 1.5, 1.02, 1.2, None]
+    ratios = dict(zip(range(10, 16), [1.01, None, 1.5, 1.02, 1.2, None], strict=True))
     with open(log, "w") as f:
-        for i, r in enumerate(ratios):
-            row = {"seed": 10 + i, "outcome": "ok" if r else "refused", "ratio": r,
-                   "options": i % 2 == 1}  # fmt: skip
+        for seed, r in ratios.items():
+            row = {"seed": seed, "outcome": "ok" if r else "refused", "ratio": r, "options": None}
             f.write(json.dumps(row) + "\n")
     out = tmp_path / "summary.json"
     argv = ["--from-log", str(log), "--seed", "10", "--json", str(out)]
     assert fuzz_tightness.main(argv) == 0
     got = json.loads(out.read_text())
     assert (got["cases"], got["ok"], got["refused"], got["fault"]) == (6, 4, 2, 0)
-    assert got["default_options"]["compared"] == 3  # seeds 10, 12, 14
-    assert got["default_options"]["p50"] == float(np.percentile([1.01, 1.5, 1.2], 50))
-    assert got["default_options"]["p100"] == 1.5 and got["default_options"]["loosest_seed"] == 12
-    assert got["options_drawn"]["compared"] == 1 and got["options_drawn"]["loosest_seed"] == 13
+    for key, options in (("default_options", False), ("options_drawn", True)):
+        kept = {s: r for s, r in ratios.items()
+                if r is not None and fuzz_tightness.drawn_options(s) is options}  # fmt: skip
+        if not kept:
+            assert got[key] is None
+            continue
+        assert got[key]["compared"] == len(kept)
+        assert got[key]["p50"] == float(np.percentile(list(kept.values()), 50))
+        assert got[key]["p100"] == max(kept.values())
+        assert got[key]["loosest_seed"] == max(kept, key=kept.__getitem__)
+        assert got[key]["n_over_1_1"] == sum(r > 1.1 for r in kept.values())
+        assert got[key]["n_over_2"] == 0 and got[key]["n_over_1_03"] >= got[key]["n_over_1_1"]
     assert "6 cases: 4 ok, 2 refused" in capsys.readouterr().out
     assert fuzz_tightness.main([*argv, "--cases", "2"]) == 0
     assert json.loads(out.read_text())["cases"] == 2
@@ -74,3 +82,15 @@ def test_the_summary_of_a_log_is_the_search_s_and_is_written_whole(tmp_path, cap
         f.write(json.dumps({"seed": 17, "outcome": "ok", "ratio": 1.0, "options": False}) + "\n")
     with pytest.raises(SystemExit, match="not consecutive"):
         fuzz_tightness.main(argv)
+
+
+def test_a_drawn_option_equal_to_its_default_is_a_default_case():
+    """Case 400957 draws only ``sections = "nodes"``, the default: a default case (it
+    was counted among the drawn options); case 400911 draws ``max_pieces = 1``."""
+    argv = fuzz_tightness.case_argv(400957)
+    assert [a for a in argv if a.startswith("estimator.infoset.")] == [
+        'estimator.infoset.sections="nodes"'
+    ]
+    assert fuzz_tightness.drawn_options(400957) is False
+    assert "estimator.infoset.max_pieces=1" in fuzz_tightness.case_argv(400911)
+    assert fuzz_tightness.drawn_options(400911) is True
