@@ -129,7 +129,9 @@ def summary(rows: list[dict], first_seed: int) -> dict:
 def _search(args) -> tuple[list[dict], list[tuple[float, str]]]:
     rows: list[dict] = []
     loosest: list[tuple[float, str]] = []
-    end, seed = time.monotonic() + args.seconds, args.seed
+    # --cases alone is a fixed search (its numbers reproduce): no time limit then
+    seconds = args.seconds if args.seconds is not None else 300.0 if args.cases is None else np.inf
+    end, seed = time.monotonic() + seconds, args.seed
     while time.monotonic() < end and (args.cases is None or seed - args.seed < args.cases):
         outcome, worst, message = run_case(seed, args.out)
         if outcome == "fault":
@@ -161,7 +163,12 @@ def _from_log(args) -> list[dict]:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seconds", type=float, default=300.0, help="how long to search (s)")
+    p.add_argument(
+        "--seconds",
+        type=float,
+        default=None,
+        help="how long to search, s (default: 300; no limit with --cases)",
+    )
     p.add_argument("--seed", type=int, default=0, help="first case's seed")
     p.add_argument("--cases", type=int, default=None, help="at most this many cases")
     p.add_argument("--out", default="results/fuzz_tightness", help="the command's --out")

@@ -1,5 +1,6 @@
 """Smoke test of the tightness search (``tests/fuzz_tightness.py``, a tool)."""
 
+import argparse
 import json
 import sys
 
@@ -94,3 +95,20 @@ def test_a_drawn_option_equal_to_its_default_is_a_default_case():
     assert fuzz_tightness.drawn_options(400957) is False
     assert "estimator.infoset.max_pieces=1" in fuzz_tightness.case_argv(400911)
     assert fuzz_tightness.drawn_options(400911) is True
+
+
+def test_a_search_of_a_number_of_cases_has_no_time_limit(monkeypatch):
+    """``--cases N`` alone runs N cases whatever they cost (the published summary's
+    command); ``--seconds`` alone, or by default 300 s, bounds the time."""
+    import time as time_module
+
+    clock = iter(range(0, 10**6, 1000))  # every reading 1000 s later
+    monkeypatch.setattr(time_module, "monotonic", lambda: float(next(clock)))
+    monkeypatch.setattr(fuzz_tightness, "run_case", lambda seed, out: ("refused", None, ""))
+    assert fuzz_tightness.main(["--cases", "3", "--seed", "5"]) == 0
+    rows, _ = fuzz_tightness._search(argparse.Namespace(
+        seconds=None, cases=3, seed=5, out="", log=None))  # fmt: skip
+    assert [r["seed"] for r in rows] == [5, 6, 7]
+    rows, _ = fuzz_tightness._search(argparse.Namespace(
+        seconds=None, cases=None, seed=5, out="", log=None))  # fmt: skip
+    assert rows == []  # the first reading is past the default 300 s
