@@ -181,7 +181,7 @@ SLOW = {
 def test_every_remedy_a_refusal_names_with_the_drift_is_accepted_as_printed(name, tables):
     """With the option a scenario passes two checks (the gravity across the line of
     sight under ``nu``, the range drift under half of ``eps``); a remedy named by
-    either keeps both (an outside review: 1.17e6 km named for the first was refused by
+    either keeps both (once, 1.17e6 km named for the first was refused by
     the second; a larger ``nu`` named where the drift alone refused the Sun)."""
     import re
 

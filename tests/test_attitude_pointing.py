@@ -94,7 +94,7 @@ class _ScriptedLoop:
 def test_the_coupling_counts_bearings_past_the_bound_the_sets_took():
     """The sets take the knowledge bound at the start for the whole run; a bearing at
     which the loop's bound (or the true residual) exceeds it is counted, so a run whose
-    premise failed is visible in its table (an outside review saw the bound grow)."""
+    premise failed is visible in its table (the bound was seen to grow in a run)."""
     from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling
 
     # (residual, bound): within; bound grown, residual within; both past; back within

@@ -99,8 +99,8 @@ README_DERIVED = {
     "range_finder": r"At (\d+) runs per variant \(`kvi fig5 --runs (\d+)`, (\d+) engagements, "
     r"the truth never outside the set; .*?\), paired run by run, the range finder saves "
     r"([\d.]+) m of miss \(95 % interval ([\d.]+) to ([\d.]+) m\) and ([\d.]+) m/s of fuel "
-    r"under random errors, the seed's \"no essential improvement\", and costs ([\d.]+) m of "
-    r"miss under the game",
+    r"under random errors, the intercept paper's \"no essential improvement\", and costs "
+    r"([\d.]+) m of miss under the game",
     "attitude": r"--noise random,game --runs (\d+)` on four scenarios; .*? end closer than the "
     r"box in all but (\d+) of their (\d+) runs on the smallsat and the LQR turn, while under "
     r"the adversarial torque on Resurs-P the box ends closest "

@@ -98,6 +98,31 @@ def test_no_tracked_file_cites_the_internal_brief_by_section():
     assert not hits, "citations of the internal brief:\n" + "\n".join(hits)
 
 
+#: the project's own process, which a reader of the package has no access to: its
+#: tracker's issue numbers and its reviews (built from pieces, as FORBIDDEN is)
+PROCESS = re.compile(
+    "|".join(
+        ["\\(" + "issue \\d", "outside " + "review", "internal " + "brief", "defect " + "letter"]
+    ),
+    re.IGNORECASE,
+)
+
+
+def test_no_tracked_file_refers_to_the_project_s_issues_or_reviews():
+    """The README, docs, CHANGELOG and code speak of the science and the package, not of
+    the tracker or the reviews that led to a change (a journal's "2019, issue 4" is not
+    matched: only an issue number in parentheses is)."""
+    hits = []
+    for path in tracked_files():
+        text = text_of(path)
+        if text is None or path.name == Path(__file__).name:
+            continue
+        for number, line in enumerate(text.splitlines(), start=1):
+            if PROCESS.search(line):
+                hits.append(f"{path}:{number}: {line.strip()[:120]}")
+    assert not hits, "references to the project's process:\n" + "\n".join(hits)
+
+
 def test_models_md_has_the_cited_numbering():
     missing = EXPECTED_SECTIONS - models_sections()
     assert not missing, f"docs/models.md lacks the sections {sorted(missing)}"
@@ -129,3 +154,6 @@ def test_the_checks_recognise_what_they_look_for():
     assert HEADING.match("#### Numbers printed in the paper") is None
     assert all(f.startswith(("../", "shared/")) for f in FORBIDDEN) and len(FORBIDDEN) == 3
     assert BRIEF_CITATION.search("(" + "SP" + "EC 2.5)") and not BRIEF_CITATION.search("SPECS")
+    assert PROCESS.search("### Pictures (" + "issue 13)")
+    assert PROCESS.search("An Outside " + "Review")
+    assert not PROCESS.search("2019, issue 4. doi:10.18698/2308-6033-2019-4-1871")
