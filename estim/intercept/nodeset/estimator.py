@@ -332,7 +332,8 @@ class NodeSetEstimator(NodeRefinement, Estimator[NodeSet, ChannelPrior]):
             geometry = per.copy()
             geometry[:, 2:4] = 0.0
         lo, hi, cos2 = _nk.impulse_interval(geometry, s.u_lo, s.u_hi, s.e_nom, float(k), float(dk))
-        per[:, :2] = geometry[:, :2]
+        if geometry is not per:  # the kernel moved the copy's bounds of w
+            per[:, :2] = geometry[:, :2]
         if self.impulse_per_piece:  # k, dk and cos^2: replays form the interval per piece
             return OpLog.one(_nk.IMPULSE, len(lo), pa=k, pb=dk, q_lo=cos2, q_hi=hi)
         return OpLog.one(_nk.IMPULSE, len(lo), q_lo=lo, q_hi=hi)
