@@ -22,6 +22,7 @@ process's main thread only, on Linux only (elsewhere the option is refused).
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -106,12 +107,37 @@ def _data_segment_bytes() -> int | None:
     return None
 
 
+#: the process that warmed its BLAS (:func:`_warm_blas`; a forked worker warms its own)
+_BLAS_WARM_PID: int | None = None
+
+
+def _warm_blas() -> None:
+    """Have the BLAS library allocate its work buffers now, once per process.
+
+    OpenBLAS (numpy's) allocates them at its first call of each size class, on every
+    thread it uses, and when an allocation fails it does not raise: it prints
+    "Memory allocation still failed after 10 retries, giving up" and ends the process.
+    Under a memory limit that first call would end the command, not fail the run; after
+    this, the buffers are part of the process's memory before the limit is set."""
+    global _BLAS_WARM_PID
+    if _BLAS_WARM_PID == os.getpid():
+        return
+    import numpy as np
+
+    a = np.full((256, 256), 1e-3)  # large enough for the multithreaded paths
+    np.linalg.cholesky(a @ a.T + np.eye(256))
+    np.linalg.solve(a + np.eye(256), a[:, 0])
+    _BLAS_WARM_PID = os.getpid()
+
+
 @contextmanager
 def memory_limit(mb: float | None) -> Iterator[None]:
     """Let the block grow the data segment by at most ``mb`` MiB: an allocation over it
     raises ``MemoryError`` (nothing when ``mb`` is None, outside the main thread or
     where the limit cannot be set)."""
     main = threading.current_thread() is threading.main_thread()
+    if mb is not None and main and MEMORY_LIMIT_SUPPORTED:
+        _warm_blas()
     now = None if mb is None or not main or not MEMORY_LIMIT_SUPPORTED else _data_segment_bytes()
     if mb is None or now is None:
         yield
@@ -127,6 +153,16 @@ def memory_limit(mb: float | None) -> Iterator[None]:
         resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
 
 
+def _noted(row: dict[str, Any], limits: RunLimits) -> dict[str, Any]:
+    """A run that failed under a memory limit says so: an allocation over the limit
+    inside a library (an import, a C extension) can fail as an ``OSError`` or even a
+    ``SystemError`` instead of a ``MemoryError``."""
+    if row.get("status") != "failed" or "--run-memory-limit-mb" in str(row.get("error")):
+        return row
+    note = f" (under the memory limit of {limits.memory_mb:g} MiB a run, --run-memory-limit-mb)"
+    return {**row, "error": f"{row.get('error')}{note}"}
+
+
 def limited(task: Callable[[list[int]], Pairs], limits: RunLimits, runs: list[int]) -> Pairs:
     """``task(runs)`` under ``limits`` per run; a run over one comes back as a failed row
     with the reason (picklable with :func:`functools.partial`)."""
@@ -136,7 +172,8 @@ def limited(task: Callable[[list[int]], Pairs], limits: RunLimits, runs: list[in
     mem = None if limits.memory_mb is None else limits.memory_mb * n
     try:
         with cpu_limit(cpu), memory_limit(mem):
-            return task(runs)
+            pairs = task(runs)
+        return pairs if limits.memory_mb is None else [(j, _noted(r, limits)) for j, r in pairs]
     except RunTimeout:
         error = f"RunTimeout: over the CPU-time limit of {limits.cpu_s:g} s a run"
         error += " (--run-cpu-limit-s)"
