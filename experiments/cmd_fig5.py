@@ -41,6 +41,39 @@ def add_arguments(p) -> None:
     options.add_overrides(p, "estimator.infoset.min_split_tau_s=1")
 
 
+def variant_keys(folder: Path) -> list[str]:
+    """The fields (``table.key``) in which the variants' scenario files differ, but for
+    their names and descriptions: what makes a variant."""
+    from kalman_vs_infoset.experiments.scenario import load_toml
+
+    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {prefix + k: v})
+        return out
+
+    a, b = (flat(load_toml(folder / fname)) for fname, _ in VARIANTS)
+    keys = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
+    return [k for k in keys if k not in ("name", "description")]
+
+
+def _refuse_variant_overrides(folder: Path, overrides: list[str]) -> None:
+    """A ``--set`` of a field that makes a variant would run both variants alike under
+    their own labels (``range_finder.enabled=true``: "bearing only" rows with the range
+    finder): refused in one line."""
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    defining = variant_keys(folder)
+    for item in overrides:
+        key = item.partition("=")[0].strip()
+        if key in defining:
+            names = " and ".join(v for _, v in VARIANTS)
+            raise InputError(
+                f"--set {key}: fig5's variants ({names}) differ in it, each from its own "
+                f"file; to change it, run `kvi intercept` or `kvi compare` on a scenario"
+            )
+
+
 def _stem(args) -> str:
     """The files' stem: ``fig5``, with the estimators and seed when not the seed's and
     the ``--set`` overrides (as a scenario's name takes them), so another choice never
@@ -62,6 +95,7 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments.stats import ok_mean
 
     t0 = time.perf_counter()
+    _refuse_variant_overrides(scenario_folder(args.scenarios), args.overrides)
     out = options.out_folder(args.out, Path("results/fig5"))
     frames, rows = [], []
     sc = None

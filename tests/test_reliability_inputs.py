@@ -406,3 +406,31 @@ def test_a_sweep_value_the_scenario_refuses_is_named(short, tmp_path, capsys):
                    "--values", "[0.005, 0.0]")  # fmt: skip
     assert err.startswith("kvi sweep: error: --values: model.nu_mps2 = 0.0: ")
     assert "field 'model.nu_mps2' 0" in err
+
+
+def test_fig5_refuses_a_set_of_the_field_that_makes_its_variants(capsys, tmp_path):
+    """``fig5 --set range_finder.enabled=true`` ran both variants with the range finder,
+    the first under the label "bearing only": a field in which the variants' files
+    differ is refused in one line (no folder made); other fields of the range finder
+    (which only the range variant uses) are taken."""
+    from kalman_vs_infoset.experiments.cmd_fig5 import _refuse_variant_overrides, variant_keys
+    from kalman_vs_infoset.experiments.scenario import scenario_folder
+
+    folder = scenario_folder(None)
+    assert variant_keys(folder) == ["range_finder.enabled"]
+    out = tmp_path / "f5"
+    for value in ("true", "false"):
+        r = run(capsys, "fig5", "--runs", "1", "--set", f"range_finder.enabled={value}",
+                "--out", out)  # fmt: skip
+        assert one_line_error(r) and "range_finder.enabled" in r.stderr, r.stderr
+        assert not out.exists()
+    _refuse_variant_overrides(folder, ["range_finder.rel_bound=0.1", "model.nu_mps2=0.01"])
+    # the variants read from another folder: what they differ in there
+    other = tmp_path / "scen"
+    other.mkdir()
+    for name in ("kp_fig5.toml", "kp_fig5_range.toml"):
+        text = (folder / name).read_text(encoding="utf-8")
+        if name == "kp_fig5_range.toml":
+            text = text.replace("nu_mps2 = 0.005", "nu_mps2 = 0.01")
+        (other / name).write_text(text, encoding="utf-8")
+    assert variant_keys(other) == ["model.nu_mps2", "range_finder.enabled"]
