@@ -69,6 +69,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+#: tables whose fields no value of a sweep can change: a key there was taken and ignored
+#: (every value had the same rows)
+UNSWEPT = {
+    "experiment": "every value runs the same paired runs: set them with --runs, --seed, "
+    "--noise and --estimators (or sweep the seed by running the command once per --seed)",
+    "reference": "the paper's printed numbers, which no run reads",
+}
+
+
 def _keys(text: str, overrides: list[str]) -> list[str]:
     """The swept fields: one TABLE.KEY, or several set to the same value (a comma list,
     e.g. both Kalman filters' ``noise_inflation``)."""
@@ -80,6 +89,8 @@ def _keys(text: str, overrides: list[str]) -> list[str]:
                 f"--key {text!r}: expected TABLE.KEY or TABLE.SUBTABLE.KEY, or a comma list "
                 "of them (e.g. model.nu_mps2, estimator.infoset.n_nodes)"
             )
+        if parts[0] in UNSWEPT:
+            raise InputError(f"--key {key}: {UNSWEPT[parts[0]]}")
     if len(set(keys)) < len(keys):
         raise InputError(f"--key {text!r}: a key given twice")
     given = {o.partition("=")[0].strip() for o in overrides}

@@ -597,6 +597,10 @@ def test_sweep_takes_an_estimator_option_as_set_does(short, tmp_path, capsys):
         (["--key", "model.nu_mps2", "--values", "[]"], "non-empty TOML array"),
         (["--key", "model.nu_mps2", "--values", "0.1"], "non-empty TOML array"),
         (["--key", "model.nu_mps2", "--values", "[0.1, -1]"], "field 'model.nu_mps2' must be"),
+        # fields no value changes (the runs are --runs/--seed's): taken and ignored before
+        (["--key", "experiment.seed", "--values", "[1, 2]"], "same paired runs"),
+        (["--key", "model.nu_mps2,experiment.runs", "--values", "[1]"], "same paired runs"),
+        (["--key", "reference.miss_random_m", "--values", "[1]"], "no run reads"),
     ],
 )
 def test_sweep_bad_input_exits_2_before_any_run(short, tmp_path, capsys, args, message):
