@@ -242,6 +242,8 @@ def run(args) -> dict[str, Any]:
     stem = out / (
         f"{sc.name}-tightness-{args.estimators[0]}-{args.noise}-seed{seed}"
         + ("-guided" if args.guided else "")
+        # the set with its kinematic margin is another set: its own files
+        + ("-margin" if args.kinematic_margin else "")
         # another switch time is another experiment: its own files (the default's keep
         # their names)
         + (f"-switch{switch:g}s" if switch != DEFAULT_SWITCH_S else "")

@@ -55,6 +55,21 @@ def test_tightness_reports_the_exact_interval_inside_the_set(capsys, tmp_path, s
         assert all("-switch4s" in Path(f).name for f in res["files"])
 
 
+def test_the_set_with_its_kinematic_margin_keeps_files_of_its_own(capsys, tmp_path):
+    """``--kinematic-margin`` is another set: its files do not replace the auxiliary
+    model's (they did: the two wrote one stem)."""
+    written = []
+    for extra in ([], ["--kinematic-margin"]):
+        code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "3", *extra)
+        assert code == 0, out.err
+        res = json.loads(out.out.strip().splitlines()[-1])
+        assert res["kinematic_margin"] is bool(extra)
+        written.append({Path(f).name for f in res["files"]})
+    assert not written[0] & written[1]
+    assert all("-margin" in name for name in written[1])
+    assert len(list(tmp_path.glob("*.json"))) == 2
+
+
 def test_times_after_the_truth_passed_eps_are_null_with_a_reason(capsys, tmp_path):
     code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "2,150")
     assert code == 0, out.err
