@@ -20,6 +20,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from kalman_vs_infoset.experiments import options
 from kalman_vs_infoset.experiments.errors import InputError
 
 
@@ -67,7 +68,11 @@ def run(args) -> dict[str, Any]:
             raise InputError(f"{p}: no such trace file")
         if p not in paths:
             paths.append(p)
-    files = plot_files(paths, out=args.out, animation=not args.no_animation)
+    # the figures are this command's only output: a folder it cannot write is refused
+    # before any drawing (not skipped figure by figure)
+    out = options.out_folder(args.out, paths[0].parent)
+    options.writable_folder(out, "--out" if args.out else "the traces' folder")
+    files = plot_files(paths, out=out, animation=not args.no_animation)
     return {"traces": [str(p) for p in paths], "files": [str(f) for f in files]}
 
 

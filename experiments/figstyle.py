@@ -217,14 +217,18 @@ def save(
 ) -> list[Path]:
     """Write ``<stem>.png`` and ``<stem>.svg`` (names may hold dots), each atomically (a
     figure stopped mid-write leaves the one before it, never half a file); close the
-    figure."""
+    figure. Returns the files there: those written, and in a folder the system refuses to
+    write (:func:`~kalman_vs_infoset.experiments.files.derived_write` warns) those an
+    earlier command wrote; never a file that does not exist."""
     plain_log_labels(fig)
     stem = Path(stem)
-    out = [stem.parent / f"{stem.name}.{ext}" for ext in formats]
+    out = []
     try:
-        for i, (p, ext) in enumerate(zip(out, formats, strict=True)):
+        for i, ext in enumerate(formats):
+            p = stem.parent / f"{stem.name}.{ext}"
             # the temporary file's name ends in .tmp: the format is given, not guessed
-            derived_write(p, partial(fig.savefig, format=ext, dpi=dpi))
+            if derived_write(p, partial(fig.savefig, format=ext, dpi=dpi)) or p.is_file():
+                out.append(p)
             if i == 0:  # laid out once: the other formats keep the positions (half the cost)
                 fig.set_layout_engine("none")
     finally:

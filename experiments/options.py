@@ -304,6 +304,23 @@ def out_folder(given: str | None, default: Path) -> Path:
     return out
 
 
+def writable_folder(folder: Path, flag: str = "--out") -> Path:
+    """``folder``, made if missing; refused in one line when the system does not let this
+    process write a file there (read-only, no permission, immutable): for a command
+    whose output is only files, which would otherwise be skipped one warning each."""
+    import os
+    import tempfile
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".kvi-probe.", suffix=".tmp", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InputError(f"{flag} {folder}: cannot write there ({exc.strerror})") from None
+    return folder
+
+
 def resolve(args: argparse.Namespace) -> tuple[Any, int, int, Path]:
     """The intercept scenario of :func:`add_common`'s options with its runs, seed and
     output folder (the scenario's where an option is not given)."""

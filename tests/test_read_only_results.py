@@ -74,3 +74,48 @@ def test_a_runs_table_that_cannot_be_saved_is_still_an_error(short, tmp_path, ca
     r = cli_inproc(capsys, "intercept", short, "--runs", "1", "--workers", "1", "--no-progress",
                    "--out", tmp_path / "out")  # fmt: skip
     assert r.returncode == 2 and "Read-only file system" in r.stderr.strip().splitlines()[-1]
+
+
+def test_plot_refuses_a_folder_it_cannot_write_before_drawing(tmp_path, capsys, monkeypatch):
+    """``plot``'s only output is figures: a folder the system refuses (here every new
+    file there: EROFS) is refused in one line, exit 2, before any trace is read (it
+    printed the figures' names with exit status 0, none written); a file as ``--out`` is
+    "not a directory", as for every command."""
+    import tempfile
+
+    trace = tmp_path / "a-trace.parquet"
+    trace.write_bytes(b"not read: the folder is refused first")
+    (tmp_path / "file").write_text("x")
+    r = cli_inproc(capsys, "plot", trace, "--out", tmp_path / "file")
+    assert r.returncode == 2 and r.stderr.strip().endswith("--out " + str(tmp_path / "file")
+                                                           + ": not a directory")  # fmt: skip
+
+    def refuse(*args, **kwargs):
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    for extra in (["--out", str(tmp_path / "figs")], []):  # given, or the traces' folder
+        r = cli_inproc(capsys, "plot", trace, *extra)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert "cannot write there (Read-only file system)" in r.stderr
+    assert list(tmp_path.glob("*.png")) == []
+
+
+def test_a_figure_not_written_is_not_listed_unless_an_earlier_one_is_there(tmp_path, monkeypatch):
+    """``figstyle.save`` returns the files that are there: none when a refused folder
+    holds none (``pd-gains`` listed figures that did not exist), the earlier ones when
+    it does (a complete read-only folder summarised again)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from kalman_vs_infoset.experiments import figstyle
+
+    stem = tmp_path / "fig"
+    written = figstyle.save(plt.figure(), stem)
+    assert [p.name for p in written] == ["fig.png", "fig.svg"]
+    _refuse_every_write(monkeypatch)
+    with pytest.warns(RuntimeWarning, match="not written"):
+        assert figstyle.save(plt.figure(), tmp_path / "new") == []
+    with pytest.warns(RuntimeWarning, match="not written"):
+        assert figstyle.save(plt.figure(), stem) == written
