@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
-from kalman_vs_infoset.experiments.errors import runs_text
+from kalman_vs_infoset.experiments.errors import InputError, runs_text
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -58,9 +58,20 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments.intercept_runs import run_grid
     from kalman_vs_infoset.experiments.report import write_tables, write_text
 
+    key = "adversary.lookahead_steps"
     if args.lookahead is not None:
-        args.overrides = [*args.overrides, f"adversary.lookahead_steps={args.lookahead}"]
-    sc, runs, seed, out = options.resolve(args)
+        if any(o.partition("=")[0].strip() == key for o in args.overrides):
+            raise InputError(f"--lookahead and --set {key} both set the depth; give one of them")
+        args.overrides = [*args.overrides, f"{key}={args.lookahead}"]
+    try:
+        sc, runs, seed, out = options.resolve(args)
+    except InputError as exc:
+        # the field's check, said of the option given (the override is this command's)
+        field = f"field '{key}' "
+        if args.lookahead is not None and field in str(exc):
+            why = str(exc).split(field, 1)[1]
+            raise InputError(f"--lookahead {args.lookahead}: {why}") from None
+        raise
     t0 = time.perf_counter()
     rows, frames = run_grid(sc, args, runs, seed, out, args.estimators, RULES)
     ref = sc.reference

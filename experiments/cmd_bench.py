@@ -87,32 +87,47 @@ from kalman_vs_infoset.experiments.options import positive_int
 COMPILED_KERNELS = True
 
 
+#: the defaults of --steps, --repeat and --mc-runs, and --quick's
+STEPS, REPEAT, MC_RUNS = 120, 3, 8
+QUICK_STEPS, QUICK_MC_RUNS = 5, 2
+
+
+def counts(args) -> tuple[int, int, int]:
+    """Steps timed, repetitions and Monte Carlo runs: each as given, else the default
+    (``--quick``'s with it). A given option counts with ``--quick`` too: it was silently
+    replaced by the preview's."""
+    quick = args.quick
+    return (
+        args.steps or (QUICK_STEPS if quick else STEPS),
+        args.repeat or (1 if quick else REPEAT),
+        args.mc_runs or (QUICK_MC_RUNS if quick else MC_RUNS),
+    )
+
+
 def add_arguments(p) -> None:
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument(
         "--steps",
         type=positive_int,
-        default=120,
-        help="estimator steps timed (default: %(default)s)",
+        help=f"estimator steps timed (default: {STEPS}; --quick: {QUICK_STEPS})",
     )
     p.add_argument(
         "--repeat",
         type=positive_int,
-        default=3,
         help="repetitions of each timing: the median of the step, engagement and approach "
-        "costs, the best of the throughputs (default: %(default)s)",
+        f"costs, the best of the throughputs (default: {REPEAT}; --quick: 1)",
     )
     p.add_argument(
         "--mc-runs",
         type=positive_int,
-        default=8,
-        help="Monte Carlo runs for the throughput (default: %(default)s)",
+        help=f"Monte Carlo runs for the throughput (default: {MC_RUNS}; --quick: {QUICK_MC_RUNS})",
     )
     p.add_argument(
         "--quick",
         action="store_true",
-        help="a cheap preview: 5 steps, one repetition, short approaches, 2 Monte Carlo runs, "
-        "no first-run compilation measurement",
+        help=f"a cheap preview: {QUICK_STEPS} steps, one repetition, short approaches, "
+        f"{QUICK_MC_RUNS} Monte Carlo runs, no first-run compilation measurement (--steps, "
+        "--repeat and --mc-runs given still count)",
     )
 
 
@@ -377,8 +392,7 @@ def run(args) -> dict[str, Any]:
     fig3 = load_scenario(root / "kp_fig3.toml")
     fig5 = load_scenario(root / "kp_fig5.toml")
     quick = args.quick
-    n_steps, repeat = (5, 1) if quick else (args.steps, args.repeat)
-    mc_runs = 2 if quick else args.mc_runs
+    n_steps, repeat, mc_runs = counts(args)
     ref, unit = compared()
     # warm-up: imports, compiled kernels, filterpy
     step_cost_us([ref], fig3, 5, 1)

@@ -52,10 +52,12 @@ def _summary(r: dict[str, Any]) -> list[str]:
     m, f = r["miss_m"], r["fuel_mps"]
     premise = []
     if "pointing_premise_failed_steps" in r:  # an attitude loop holds the axis
+        failed, over = r["pointing_premise_failed_steps"], r["pointing_bound_exceeded_steps"]
+        # (read as a failure when it said "exceeded ... at 0 bearings")
+        held = "held at every bearing" if not failed else f"failed at {failed} bearings"
         premise = [
-            f"  pointing premise: the true residual exceeded the knowledge bound the sets "
-            f"took at {r['pointing_premise_failed_steps']} bearings (their guarantee needs "
-            f"0), the loop's own bound at {r['pointing_bound_exceeded_steps']}"
+            f"  pointing premise (the true residual within the knowledge bound the sets took, "
+            f"as their guarantee needs): {held}; the loop's own bound exceeded it at {over}"
         ]
     return [
         f"{r['scenario']}: {r['estimator']} / {r['noise']} noise, "

@@ -188,3 +188,33 @@ def test_adversaries_command_on_a_tiny_case(tiny, tmp_path, capsys):
     assert res["scenario"].endswith("+adversary.lookahead_steps=1")
     md = next(f for f in res["files"] if f.endswith(".md"))
     assert "| ekf | lookahead | 1 |" in open(md).read()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        # the field's check, said of the option given (it said "kp_fig5 (with --set)")
+        (["--lookahead", "100"], "--lookahead 100: must be an integer in [1, 6] (got 100)"),
+        # two ways to set one depth (it said "--set ... given twice")
+        (["--lookahead", "1", "--set", "adversary.lookahead_steps=3"],
+         "--lookahead and --set adversary.lookahead_steps both set the depth"),
+    ],
+)  # fmt: skip
+def test_adversaries_says_which_option_is_wrong(tmp_path, capsys, extra, message):
+    from harness_texts import one_line_error
+    from harness_texts import run_cli as run
+
+    r = run(capsys, "adversaries", "kp_fig5", "--runs", "1", "--out", tmp_path / "a", *extra)
+    assert one_line_error(r) and message in r.stderr, r.stderr
+    assert not (tmp_path / "a").exists()
+
+
+def test_an_impulse_limit_error_names_the_scenario_fields(tmp_path, capsys):
+    """Not the package's module path ('kalman_vs_infoset.guidance.min_impulse_mps')."""
+    from harness_texts import one_line_error
+    from harness_texts import run_cli as run
+
+    r = run(capsys, "intercept", "kp_fig3", "--set", "guidance.min_impulse_mps=10", "--runs",
+            "1", "--out", tmp_path / "g")  # fmt: skip
+    assert one_line_error(r), r.stderr
+    assert "field 'guidance.min_impulse_mps' must be <= 'guidance.max_impulse_mps'" in r.stderr

@@ -141,11 +141,15 @@ def test_the_intercept_summary_counts_bearings_where_the_sets_premise_failed(tmp
     sets = [a for s in SHORT_E2E for a in ("--set", s)]
     assert main([*base, "--out", str(tmp_path / "ukf"), *sets]) == 0
     out = capsys.readouterr().out
-    assert "pointing premise: the true residual exceeded the knowledge bound" in out
     assert main([*base, "--out", str(tmp_path / "ukf"), *sets, "--json"]) == 0  # read back
     r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert r["pointing_premise_failed_steps"] > 0 and r["pointing_bound_exceeded_steps"] == 0
+    n = r["pointing_premise_failed_steps"]
+    assert f"the sets took, as their guarantee needs): failed at {n} bearings" in out
     sets = [a for s in SHORT_E2E[:2] for a in ("--set", s)]  # the scenario's box loop
+    assert main([*base, "--out", str(tmp_path / "box"), *sets]) == 0
+    out = capsys.readouterr().out  # 0 reads as what it is (it said "exceeded ... at 0")
+    assert "as their guarantee needs): held at every bearing; the loop's own bound" in out
     assert main([*base, "--out", str(tmp_path / "box"), *sets, "--json"]) == 0
     r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert r["pointing_premise_failed_steps"] == 0 == r["pointing_bound_exceeded_steps"]

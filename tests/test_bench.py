@@ -217,3 +217,20 @@ def test_a_plug_in_that_raises_is_left_out_of_the_timings_and_said(monkeypatch):
             cmd_bench._working(["toy_broken"], fig3, ("toy_broken",))
     finally:
         registry.unregister("intercept", "toy_broken")
+
+
+def test_options_given_count_with_quick_too():
+    """``bench --quick --steps 3 --mc-runs 4`` timed 5 steps and 2 runs (``--quick``'s),
+    silently; an option given now counts, and the others take the preview's or the
+    full defaults."""
+    from kalman_vs_infoset.experiments.cli import build_parser
+    from kalman_vs_infoset.experiments.cmd_bench import counts
+
+    def parsed(*args):
+        return build_parser("bench").parse_args(["bench", *args])
+
+    assert counts(parsed()) == (120, 3, 8)
+    assert counts(parsed("--quick")) == (5, 1, 2)
+    assert counts(parsed("--quick", "--steps", "3", "--mc-runs", "4")) == (3, 1, 4)
+    assert counts(parsed("--quick", "--repeat", "2")) == (5, 2, 2)
+    assert counts(parsed("--steps", "7")) == (7, 3, 8)

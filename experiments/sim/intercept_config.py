@@ -378,7 +378,7 @@ class InterceptScenario(Table):
             check_differential_gravity(m, self.truth, g.reserve_mps, least_km)
         if g.min_impulse_mps > g.max_impulse_mps:
             raise ValueError(
-                "field 'kalman_vs_infoset.guidance.min_impulse_mps' must be <= max_impulse_mps"
+                "field 'guidance.min_impulse_mps' must be <= 'guidance.max_impulse_mps'"
             )
         if not (g.lateral or g.vertical):
             raise ValueError("field 'guidance.lateral' or 'guidance.vertical' must be true")
