@@ -28,6 +28,11 @@ class EstimatorOptions(BaseModel):
         """The estimator with these options (``setting``: the problem's, see the registry)."""
         raise NotImplementedError(f"{type(self).__name__} builds no estimator")
 
+    def unused_fields(self) -> dict[str, str]:
+        """The fields the estimator these options build does not read, each with why (an
+        option of another variant of the family); a command warns when one is set."""
+        return {}
+
 
 class NoOptions(EstimatorOptions):
     """An estimator without options (its registration gives the factory)."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import tomllib
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypeVar
@@ -246,7 +247,26 @@ def load_scenario(
     to check against ``nu``."""
     data, source = read(path, overrides, kind="intercept", via=via)
     context = {"auxiliary_truth": True} if auxiliary_truth else None
-    return validate(InterceptScenario, data, source, context=context)
+    sc = validate(InterceptScenario, data, source, context=context)
+    _warn_unused(sc, overrides, via)
+    return sc
+
+
+def _warn_unused(sc: InterceptScenario, overrides: Sequence[str], via: str) -> None:
+    """One warning for each override of an estimator option that the estimator these
+    options build does not read (``estimator.infoset.n_sections`` with the node set): its
+    results would equal the original's under another name."""
+    for item in overrides:
+        key = item.partition("=")[0].strip()
+        parts = key.split(".")
+        if len(parts) != 3 or parts[0] != "estimator" or parts[1] not in sc.estimator.options:
+            continue
+        # (a plug-in may register any pydantic model: without the method, none)
+        opts = sc.estimator.options_for(parts[1])
+        unused: dict[str, str] = getattr(opts, "unused_fields", dict)()
+        if parts[2] in unused:
+            warnings.warn(f"{via} {key} has no effect: {unused[parts[2]]}", UserWarning,
+                          stacklevel=2)  # fmt: skip
 
 
 def parse_scenario(data: dict[str, Any], source: str = "<scenario>") -> InterceptScenario:

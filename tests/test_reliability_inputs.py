@@ -434,3 +434,32 @@ def test_fig5_refuses_a_set_of_the_field_that_makes_its_variants(capsys, tmp_pat
             text = text.replace("nu_mps2 = 0.005", "nu_mps2 = 0.01")
         (other / name).write_text(text, encoding="utf-8")
     assert variant_keys(other) == ["model.nu_mps2", "range_finder.enabled"]
+
+
+def test_an_override_of_an_option_the_estimator_does_not_read_is_warned(capsys, tmp_path):
+    """``--set estimator.infoset.n_sections=2`` with the node set ran the bundled set
+    under a new name, silently (its results equal the original's): an option of
+    another variant of the family is warned, once; an option the set reads is not."""
+    import warnings
+
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    with pytest.warns(UserWarning, match=r"--set estimator.infoset.n_sections has no effect"):
+        load_scenario("kp_fig5", ["estimator.infoset.n_sections=2"])
+    slabs = 'estimator.infoset.sections="slabs"'
+    node_only = r'n_nodes has no effect: a node-set option: sections = "slabs"'
+    with pytest.warns(UserWarning, match=node_only):
+        load_scenario("kp_fig5", [slabs, "estimator.infoset.n_nodes=20"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # read: no warning
+        load_scenario("kp_fig5", [slabs, "estimator.infoset.n_sections=40"])
+        load_scenario("kp_fig5", ["estimator.infoset.n_nodes=20", "model.nu_mps2=0.01"])
+        load_scenario("kp_fig5", ["estimator.infoset.kinematic_margin=false"])
+    r = run(capsys, "intercept", "kp_fig5", "--set", "estimator.infoset.max_sections=500",
+            "--runs", "1", "--workers", "1", "--no-progress", "--out", tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    warned = [line for line in r.stderr.splitlines() if "has no effect" in line]
+    assert warned == [
+        "kvi: warning: --set estimator.infoset.max_sections has no effect: the node set "
+        '(sections = "nodes") does not read it: it sizes slabs and points'
+    ]

@@ -133,6 +133,14 @@ class InfosetOptions(SlabOptions):
         spacing_m = (x_km[1] - x_km[0]) * 1e3 / max(self.n_sections - 1, 1)
         return e_mps * dt_s + spacing_m
 
+    def unused_fields(self) -> dict[str, str]:
+        if self.sections == "nodes":
+            why = 'the node set (sections = "nodes") does not read it: it sizes slabs and points'
+            return {f: why for f in SlabOptions.model_fields if f != "kinematic_margin"}
+        why = f'a node-set option: sections = "{self.sections}" does not read it'
+        return {f: why for f in type(self).model_fields if f not in SlabOptions.model_fields
+                and f != "sections"}  # fmt: skip
+
     def build(self, setting):
         if self.sections != "nodes":
             return self.slab_estimator(setting, sections=self.sections)
