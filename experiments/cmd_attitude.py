@@ -51,7 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", default=None, help="output directory (default: results/attitude/<scenario>)"
     )
     options.add_runner(parser)
-    options.add_trace(parser)
+    options.add_trace(parser, "run 0 when --runs is 1, else none")
     options.add_overrides(parser, "simulation.control_period_s=0.02")
 
 

@@ -207,8 +207,9 @@ def parse_runs(text: str) -> list[int]:
     return runs
 
 
-def add_trace(p: argparse.ArgumentParser) -> None:
-    """``--trace RUNS``: record these runs' per-step history (:mod:`.traces`)."""
+def add_trace(p: argparse.ArgumentParser, default: str = "") -> None:
+    """``--trace RUNS``: record these runs' per-step history (:mod:`.traces`);
+    ``default``: what the command traces without the option, if anything."""
     p.add_argument(
         "--trace",
         type=parse_runs,
@@ -216,7 +217,7 @@ def add_trace(p: argparse.ArgumentParser) -> None:
         metavar="RUNS",
         help=f"record the per-step history of these runs (e.g. 0,3; at most {MAX_TRACED}) as "
         "<results>-trace.parquet in the _traces folder beside the run tables, and draw "
-        "their figures",
+        "their figures" + (f" (default: {default})" if default else ""),
     )
 
 
