@@ -213,7 +213,7 @@ def scenario():
     [("none", "auto"), ("random", "auto"), ("none", "constant"), ("game", "auto")],
 )
 def test_turn_completes_within_tau_and_torques_within_alpha(scenario, noise, disturbance):
-    """Issue 7 acceptance: every disturbance kind, including the adversarial one."""
+    """Every disturbance kind, including the adversarial one."""
     sc = {**scenario, "simulation": {**scenario["simulation"], "disturbance": disturbance}}
     res = run(str(SCENARIO), sc, "game", noise, runs=3 if disturbance == "constant" else 2, seed=7)
     assert res["failures"] == 0 and res["unsettled_runs"] == 0 == res["not_settled"]

@@ -40,7 +40,7 @@ def short(tmp_path):
 
 
 def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path, capsys):
-    """Issue 3: Fig. 3 with random noise misses by <= 10 m with 150..400 m/s of fuel;
+    """Fig. 3 with random noise misses by <= 10 m with 150..400 m/s of fuel;
     game noise costs more fuel; the truth never leaves the set, no empty set."""
     out = {}
     for noise in ("random", "game"):
@@ -312,7 +312,7 @@ def test_real_entry_point_reports_bad_input_in_one_line():
 
 
 def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, capsys):
-    """Issue 4: compare returns one row per estimator x noise, zero failures, zero
+    """compare returns one row per estimator x noise, zero failures, zero
     containment violations for the set estimators, writes Parquet and PNG; run j has the
     same truth for every estimator; the same seed twice gives the same table."""
     names = ("infoset", "ekf", "ukf", "box")

@@ -153,7 +153,7 @@ def _run(factory, y, v, x0, e, mode, v_mode, controls, switch_s, seed, steps, dt
 
 @pytest.mark.parametrize("name", FACTORIES)
 def test_issue12_corner_is_in_the_initial_set_and_stays_in(name):
-    """Issue 12's counterexample: y = -10 km, Vy = -100 m/s, x0 = 6301.299 km, true
+    """A counterexample: y = -10 km, Vy = -100 m/s, x0 = 6301.299 km, true
     closing speed 58.1 km/s (kp_fig5 boxes) has w = (e y + Vy x)/e_nom = -20881.55 m;
     an initial set built at e = e_nom reached down to -20864.31 m only. Bearings held
     at -a for 20 s: the state satisfies every bearing, the box and nu."""
