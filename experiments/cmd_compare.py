@@ -25,6 +25,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     options.add_grid(p)
 
 
+def summary_stem(args: argparse.Namespace, name: str) -> str:
+    """The summary files' stem: ``<scenario>-compare``, with the estimators, noises and
+    seed when they are not the defaults (as ``fig5``'s), so that a compare of other
+    estimators or another seed never replaces another's summary in one ``--out``."""
+    from kalman_vs_infoset.estim import registry
+
+    parts = [f"{name}-compare"]
+    if list(args.estimators) != list(registry.names("intercept")):
+        parts.append("+".join(args.estimators))
+    if list(args.noise) != list(options.GRID_NOISES):
+        parts.append("+".join(args.noise))
+    if args.seed is not None:
+        parts.append(f"s{args.seed}")
+    return "-".join(parts)
+
+
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
@@ -38,7 +54,7 @@ def run(args) -> dict[str, Any]:
     t0 = time.perf_counter()
     rows, frames = run_grid(sc, args, runs, seed, out / "runs", args.estimators, args.noise)
     table = pd.concat(frames, ignore_index=True)
-    stem = out / f"{sc.name}-compare"
+    stem = out / summary_stem(args, sc.name)
     files = write_tables(table, stem)
     floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
     marks = {
@@ -48,10 +64,10 @@ def run(args) -> dict[str, Any]:
     fig = plots.cdf_figure(
         table, ["estimator", "noise"], f"{sc.name}: estimators x noise, {runs} paired runs", marks
     )
-    files += plots.save(fig, out / f"{sc.name}-compare-cdf")
+    files += plots.save(fig, stem.with_name(stem.name + "-cdf"))
     compared = paired.comparison(table, args.estimators, "intercept")
     text = summary_markdown(rows, ["estimator", "noise"]) + paired.section(compared)
-    files.append(write_text(out / f"{sc.name}-compare.md", text))
+    files.append(write_text(stem.with_name(stem.name + ".md"), text))
     if traced:  # one trace per estimator x noise, drawn together
         pairs = [(e, n) for e in args.estimators for n in args.noise]
         files += write_traces(sc, traced, pairs, frames, seed, out / "runs")

@@ -283,6 +283,10 @@ def add_common(p: argparse.ArgumentParser) -> None:
     add_overrides(p, "estimator.ekf.noise_inflation=10")
 
 
+#: the noises of ``compare`` and ``sweep`` when ``--noise`` is not given
+GRID_NOISES = ("random", "game")
+
+
 def add_grid(p: argparse.ArgumentParser, trace: bool = True) -> None:
     """A scenario's options, ``--trace`` (with ``trace``), ``--estimators`` (default: all)
     and ``--noise`` (default: random,game): the estimators x noises of ``compare`` and
@@ -294,7 +298,7 @@ def add_grid(p: argparse.ArgumentParser, trace: bool = True) -> None:
     if trace:
         add_trace(p)
     add_estimators(p, "intercept", list(registry.names("intercept")), "all")
-    add_noise(p, NOISES, ["random", "game"], "random,game")
+    add_noise(p, NOISES, list(GRID_NOISES), ",".join(GRID_NOISES))
 
 
 def out_folder(given: str | None, default: Path) -> Path:

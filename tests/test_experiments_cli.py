@@ -341,10 +341,10 @@ def test_compare_pairs_estimators_on_the_same_realisations(short, tmp_path, caps
     assert {(x["estimator"], x["noise"]) for x in out["paired"]["rows"]} == {
         (e, n) for e in names[1:] for n in ("random", "game")
     }
-    summary = (tmp_path / "a" / "short-compare.md").read_text()
+    summary = (tmp_path / "a" / "short-compare-infoset+ekf+ukf+box.md").read_text()
     assert "Paired by run, each estimator minus infoset" in summary
     r2 = cli_inproc(capsys, *args, "--out", tmp_path / "b")
-    table2 = pd.read_parquet(Path(tmp_path / "b") / "short-compare.parquet")
+    table2 = pd.read_parquet(Path(tmp_path / "b") / "short-compare-infoset+ekf+ukf+box.parquet")
     cols = ["estimator", "noise", "run", "miss_m", "fuel_mps", "truth_outside"]
     pd.testing.assert_frame_equal(table[cols], table2[cols])
     assert r2.returncode == 0
@@ -618,9 +618,32 @@ def test_compare_files_keep_their_extensions_when_the_name_has_dots(short, tmp_p
         "--noise", "random", "--runs", "1", "--out", tmp_path, "--no-progress",
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
-    stem = "short+model.nu_mps2=0.01-compare"
+    stem = "short+model.nu_mps2=0.01-compare-infoset-random"
     for name in (f"{stem}.parquet", f"{stem}.csv", f"{stem}.md", f"{stem}-cdf.png"):
         assert (tmp_path / name).is_file(), name
+
+
+def test_compare_summaries_of_other_choices_keep_their_own_files(short, tmp_path, capsys):
+    """A compare of other estimators, noises or seed in the same ``--out`` replaced the
+    first one's summary (``<scenario>-compare.*``): the choices that are not the
+    defaults are in the name, as in fig5's (the defaults keep the plain name)."""
+    from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.experiments.cli import build_parser
+    from kalman_vs_infoset.experiments.cmd_compare import summary_stem
+
+    def stem(*args):
+        return summary_stem(build_parser("compare").parse_args(["compare", "x", *args]), "sc")
+
+    assert stem() == "sc-compare"
+    assert stem("--estimators", ",".join(registry.names("intercept"))) == "sc-compare"
+    assert stem("--noise", "random,game", "--seed", "7") == "sc-compare-s7"
+    assert stem("--estimators", "ukf,infoset", "--noise", "bias") == "sc-compare-ukf+infoset-bias"
+    common = ["--runs", "1", "--workers", "1", "--no-progress", "--out", tmp_path]
+    for extra in (["--estimators", "infoset"], ["--estimators", "infoset", "--seed", "9"]):
+        r = cli_inproc(capsys, "compare", short, "--noise", "random", *extra, *common)
+        assert r.returncode == 0, r.stderr
+    mds = sorted(p.name for p in tmp_path.glob("*.md"))
+    assert mds == ["short-compare-infoset-random-s9.md", "short-compare-infoset-random.md"]
 
 
 def test_code_identity_follows_the_sources_that_decide_a_run(tmp_path, monkeypatch):

@@ -65,7 +65,7 @@ def test_a_toy_estimator_runs_through_compare_without_editing_the_package(toys, 
     assert all(r["failures"] == 0 and r["runs"] == 2 for r in rows.values())
     assert np.isfinite(rows[("toy", "random")]["miss_m"]["mean"])
     # paired: both estimators saw the same truths
-    table = pd.read_parquet(tmp_path / "short-compare.parquet")
+    table = pd.read_parquet(tmp_path / "short-compare-toy+infoset.parquet")
     by = table.groupby("estimator")
     np.testing.assert_array_equal(
         by.get_group("toy").sort_values(["noise", "run"])["x0_km"],
