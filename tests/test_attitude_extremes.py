@@ -111,3 +111,41 @@ def test_attained_values_are_at_states_of_the_belief_within_the_extremes(name, a
     assert ext.min_value <= att.min_value <= att.max_value <= ext.max_value
     with pytest.raises(TypeError, match="RateComponent"):
         b.attained(lambda s: np.asarray(s)[..., 0])
+
+
+def test_measurement_and_control_shapes_are_checked_in_one_line():
+    """A (2, 3) "quaternion" was taken as a measurement (the point belief returned a
+    (2, 6) state, the others failed as numpy broadcast errors), and a measurement or
+    control of one run was broadcast over a belief of two, silently."""
+    w = np.zeros((1, 3))
+    with pytest.raises(ValueError, match=r"quat must be \(R, 4\)"):
+        AttitudeMeasurement(np.ones((2, 3)), np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="quat has 2 runs and rate_radps 1"):
+        AttitudeMeasurement(np.tile([1.0, 0, 0, 0], (2, 1)), w)
+    with pytest.raises(ValueError, match=r"must be \(R, 3\) each"):
+        AttitudeControl(np.zeros((2, 3)), np.zeros((1, 3)), np.zeros((1, 3)))
+    q2 = np.tile([[1.0, 0.0, 0.0, 0.0]], (2, 1))
+    for name in registry.names("attitude"):
+        est = registry.get("attitude", name).build(None, MODEL)
+        b = est.initial(AttitudePrior(AttitudeMeasurement(q2, np.zeros((2, 3)))))
+        with pytest.raises(ValueError, match="the belief holds 2 runs and the measurement 1"):
+            est.update(b, AttitudeMeasurement(q2[:1], w))
+        if name != "perfect":  # (the point belief takes no inputs)
+            with pytest.raises(ValueError, match="the belief holds 2 runs and the control 1"):
+                est.predict(b, 0.1, AttitudeControl.zero(1))
+        est.predict(b, 0.1, AttitudeControl.zero(2))  # one row a run: taken
+
+
+@pytest.mark.parametrize("name", SETS)
+def test_the_counts_of_a_set_belief_are_values_too(name):
+    """The zonotope's and ellipsoid's ``n_empty``, ``last_empty`` were writable and shared
+    by successive beliefs (a write into one changed the belief before it)."""
+    b1 = _belief(name)
+    b2 = registry.get("attitude", name).build(None, MODEL).predict(b1, 0.1, AttitudeControl.zero(1))
+    for b in (b1, b2):
+        for field in ("n_empty", "last_empty"):
+            arr = getattr(b, field, None)
+            if arr is not None:
+                with pytest.raises(ValueError, match="read-only"):
+                    arr[0] = 5
+    assert b1.contradictions == b2.contradictions

@@ -125,6 +125,9 @@ class AttitudeControl:
                 raise ValueError(f"{name} must be finite")
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
+        shapes = {a.shape for a in (self.torque_Nm, self.h_lo_Nms, self.h_hi_Nms)}
+        if len(shapes) != 1 or self.torque_Nm.ndim != 2 or self.torque_Nm.shape[1] != 3:
+            raise ValueError(f"torque_Nm, h_lo_Nms and h_hi_Nms must be (R, 3) each; got {shapes}")
         if np.any(self.h_lo_Nms > self.h_hi_Nms):
             raise ValueError("h_lo_Nms must not exceed h_hi_Nms")
 
@@ -151,17 +154,36 @@ class AttitudeMeasurement:
 
     def __post_init__(self) -> None:
         q = np.array(np.atleast_2d(self.quat), dtype=float)
+        w = np.array(np.atleast_2d(self.rate_radps), dtype=float)
+        # (R, 4) and (R, 3) of one R: a (2, 3) "quaternion" was taken, and failed later
+        # as a numpy broadcast error deep in an estimator
+        if q.ndim != 2 or q.shape[1] != 4 or w.ndim != 2 or w.shape[1] != 3:
+            raise ValueError(
+                f"quat must be (R, 4) and rate_radps (R, 3) (or one row each); got "
+                f"{np.shape(self.quat)} and {np.shape(self.rate_radps)}"
+            )
+        if q.shape[0] != w.shape[0]:
+            raise ValueError(f"quat has {q.shape[0]} runs and rate_radps {w.shape[0]}")
         norm = np.linalg.norm(q, axis=-1, keepdims=True)
         if not (np.isfinite(q).all() and np.all(norm > 0.0)):
             raise ValueError("quat must be finite and non-zero")
         q /= norm
-        w = np.array(np.atleast_2d(self.rate_radps), dtype=float)
         if not np.isfinite(w).all():
             raise ValueError("rate_radps must be finite")
         for arr in (q, w):
             arr.setflags(write=False)
         object.__setattr__(self, "quat", q)
         object.__setattr__(self, "rate_radps", w)
+
+
+def check_runs(belief_runs: int, given: int, what: str) -> None:
+    """A measurement or control has one row per run of the belief: a single row was
+    broadcast over every run, silently, and other counts failed as numpy broadcast
+    errors."""
+    if given != belief_runs:
+        raise ValueError(
+            f"the belief holds {belief_runs} runs and the {what} {given}: one row a run"
+        )
 
 
 @dataclass(frozen=True)

@@ -270,10 +270,17 @@ class ChannelModel:
         v_mps2: ArrayLike = 0.0,
         closing_speed_mps: float | None = None,
     ) -> NDArray[np.float64]:
-        """Exact one-step propagation of ``(alpha, omega, x)`` rows with constant ``v``.
+        """Exact one-step propagation of ``(alpha, omega, x)`` rows with constant ``v``:
+        the auxiliary linear model's motion (docs/models.md §1.3).
 
         ``closing_speed_mps`` (default ``e``) is the true closing speed: the same
         formulas hold for any constant closing speed, with ``x1 = x0 - e_true dt``.
+
+        This is not the Cartesian motion the default information set is sound for (with
+        its kinematic margin on, it models the nonlinear motion and may leave out states
+        of this model: a truth moved by this map from a corner of the prior box can lie
+        outside it late in an approach). Pair it with ``kinematic_margin=False``, or move
+        a Cartesian truth (:mod:`kalman_vs_infoset.guidance.intercept.truth`).
         """
         s = np.asarray(state, dtype=float)
         e_true = self.e if closing_speed_mps is None else closing_speed_mps

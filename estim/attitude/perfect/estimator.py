@@ -17,6 +17,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
     NeverEmptyBelief,
+    check_runs,
     check_step,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
@@ -94,4 +95,5 @@ class PerfectAttitudeEstimator(Estimator[AttitudePointBelief, AttitudePrior]):
     def update(self, belief: AttitudePointBelief, measurement: Any) -> AttitudePointBelief:
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
+        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
         return AttitudePointBelief.of(measurement)

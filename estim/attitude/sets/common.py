@@ -51,6 +51,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    check_runs,
     rate_component,
 )
 from kalman_vs_infoset.estim.attitude.sets.maps import (
@@ -85,12 +86,11 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
             object.__setattr__(
                 self, name, readonly(np.array(getattr(self, name), float), copy=False)
             )
-        if self.n_empty is None:
-            object.__setattr__(
-                self, "n_empty", readonly(np.zeros(self.runs, dtype=int), copy=False)
-            )
-        if self.last_empty is None:
-            object.__setattr__(self, "last_empty", readonly(np.zeros(self.runs, bool), copy=False))
+        # the counts too (given ones were writable and shared with the belief before)
+        n_empty = np.zeros(self.runs, int) if self.n_empty is None else self.n_empty
+        last = np.zeros(self.runs, bool) if self.last_empty is None else self.last_empty
+        object.__setattr__(self, "n_empty", readonly(n_empty, int, copy=None))
+        object.__setattr__(self, "last_empty", readonly(last, bool, copy=None))
 
     @abstractmethod
     def set_radius(self) -> FloatArray:
@@ -283,6 +283,7 @@ class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
         """Six strips of the box's ``B ∩ measurement`` on ``Z``, then the re-centring."""
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
+        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
         lo, hi, box_empty = meet_measurement(self.box, belief.box, measurement)
         box = self.box.update(belief.box, measurement)
         fall_c, fall_m = self.from_box(lo, hi)

@@ -54,6 +54,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeModel,
     AttitudePrior,
     NeverEmptyBelief,
+    check_runs,
     check_step,
     rate_component,
     rk4_attitude,
@@ -258,6 +259,7 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
             return AttitudeControl.zero(belief.runs)
         if not isinstance(control, AttitudeControl):
             raise TypeError("control must be an AttitudeControl")
+        check_runs(belief.runs, control.torque_Nm.shape[0], "control")
         return control
 
     def _propagate(self, belief, sigmas, dt_s, ctrl: AttitudeControl):
@@ -302,6 +304,7 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     def update(self, belief: UkfAttitudeBelief, measurement: Any) -> UkfAttitudeBelief:
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
+        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
         z = np.concatenate(
             [qlog(qmul(qinv(belief.q_ref), measurement.quat)), measurement.rate_radps], axis=-1
         )
