@@ -75,8 +75,8 @@ def _flatten(prefix: str, value: Any) -> Iterable[tuple[str, Any]]:
 
 def _toml(value: Any) -> str:
     """A Python value as a TOML value (numbers, booleans, strings, lists of them)."""
-    if isinstance(value, np.generic):
-        value = value.item()
+    if isinstance(value, np.generic | np.ndarray):  # an array: its list (as a tuple's)
+        value = value.tolist()
     if isinstance(value, tuple):
         value = list(value)
     if isinstance(value, float) and not np.isfinite(value):

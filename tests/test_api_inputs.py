@@ -77,7 +77,7 @@ def test_a_bearing_beyond_pi_and_a_range_not_positive_are_refused_too():
             Range(bad)
 
 
-@pytest.mark.parametrize("name", ["ekf", "infoset_slabs", "zonotope"])
+@pytest.mark.parametrize("name", ["ekf", "infoset_slabs", "zonotope", "pf"])
 def test_extremes_of_a_function_that_is_not_per_state_is_a_type_error(name):
     """A function that does not give one value per state (here the first row) raised
     IndexError inside the EKF and "only 0-dimensional arrays..." in the section sets;
@@ -131,3 +131,18 @@ def test_a_seed_outside_the_tables_int64_range_is_refused_naming_the_argument(ca
         getattr(api, call)("kp_fig3", "ekf", "random", seed=-1)
     with pytest.raises(ValueError, match=r"^seed must be at most 9223372036854775807"):
         getattr(api, call)("kp_fig3", "ekf", "random", seed=2**63)
+
+
+def test_an_array_override_is_a_list_and_a_wrong_mask_is_refused():
+    """``load_scenario(..., estimator={"closing_speed_kmps": np.array(...)})`` raised
+    "ndarray is not JSON serializable" (tuples and numpy scalars were taken); a boolean
+    mask of another length than the polygons kept the first ones, silently."""
+    from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+
+    sc = api.load_scenario("kp_fig3", estimator={"closing_speed_kmps": np.array([57.0, 59.0])})
+    assert sc.estimator.closing_speed_kmps == (57.0, 59.0)
+    square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+    polys = ConvexPolygons.from_list([np.array(square)] * 5)
+    assert polys.select(np.array([True, False, True, False, True])).n == 3
+    with pytest.raises(IndexError, match=r"a mask of \(3,\) for 5 polygons"):
+        polys.select(np.ones(3, dtype=bool))

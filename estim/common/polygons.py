@@ -398,6 +398,8 @@ class ConvexPolygons:
         """Keep the polygons chosen by a boolean mask or an index array (order kept)."""
         idx = np.asarray(mask_or_index)
         if idx.dtype == bool:
+            if idx.shape != (self.n,):  # (a shorter mask kept its first polygons)
+                raise IndexError(f"a mask of {idx.shape} for {self.n} polygons")
             idx = np.flatnonzero(idx)
         counts = self.counts[idx]
         if len(idx) > 1:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
+from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.intercept.gaussian.belief import GaussianBelief
 from kalman_vs_infoset.estim.intercept.model import ChannelModel
 from kalman_vs_infoset.estim.intercept.pf.filter import ParticleSet
@@ -124,7 +124,7 @@ class ParticleBelief(Belief):
         if self.is_empty:
             raise ValueError(f"extremes of an empty particle belief (status {self.status})")
         rows = self.rows[self.cloud.weights > 0.0]
-        vals = np.asarray(fn(rows), dtype=float)
+        vals = state_values(fn, rows)  # (a TypeError for a bad function, as elsewhere)
         i, j = int(np.argmin(vals)), int(np.argmax(vals))
         return Extremes(float(vals[i]), rows[i].copy(), float(vals[j]), rows[j].copy())
 
