@@ -146,3 +146,19 @@ def test_an_array_override_is_a_list_and_a_wrong_mask_is_refused():
     assert polys.select(np.array([True, False, True, False, True])).n == 3
     with pytest.raises(IndexError, match=r"a mask of \(3,\) for 5 polygons"):
         polys.select(np.ones(3, dtype=bool))
+
+
+@pytest.mark.parametrize("name", api.estimators("intercept"))
+def test_contains_of_a_state_of_another_shape_says_so_in_one_line(name):
+    """``contains`` of a ``(2,)`` state raised "not enough values to unpack", of a
+    ``(2, 3)`` array "only 0-dimensional arrays can be converted" (or was answered):
+    every intercept belief now asks for ``(alpha, omega, x)``."""
+    from kalman_vs_infoset.estim.intercept.model import Bearing
+
+    sc = api.load_scenario("kp_fig3")
+    est = api.get_estimator(name).build(sc.estimator.options_for(name), sc.setting())
+    belief = est.update(est.initial(sc.estimator.prior("lateral")), Bearing(-1.3e-3))
+    for bad in (np.zeros(2), np.zeros((2, 3))):
+        with pytest.raises(ValueError, match=r"a channel state is \(alpha rad, omega rad/s, x m\)"):
+            belief.contains(bad)
+    belief.contains(np.array([-1.3e-3, 0.0, 5801.3e3]))  # (a bool; inside or not)

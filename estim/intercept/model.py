@@ -414,3 +414,15 @@ class ChannelSetting:
 
     model: ChannelModel
     closing_speed_mps: tuple[float, float] | None = None
+
+
+def channel_state(state: ArrayLike) -> tuple[float, float, float]:
+    """A channel's true state ``(alpha rad, omega rad/s, x m)`` as three floats; one
+    line for another shape (a ``(2,)`` state gave "not enough values to unpack", a
+    ``(2, 3)`` array "only 0-dimensional arrays can be converted")."""
+    s = np.asarray(state, dtype=float)
+    if s.shape != (3,):
+        raise ValueError(
+            f"a channel state is (alpha rad, omega rad/s, x m): shape (3,), got {s.shape}"
+        )
+    return float(s[0]), float(s[1]), float(s[2])

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
-from kalman_vs_infoset.estim.intercept.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel, channel_state
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
@@ -211,7 +211,7 @@ class GaussianBelief(Belief):
 
         Measured in the internal coordinates; ``inf`` off a flat ellipsoid.
         """
-        d = (self.from_rows(np.asarray(state, dtype=float).reshape(3)) - self.mean)[PERM]
+        d = (self.from_rows(np.array(channel_state(state))) - self.mean)[PERM]
         low = self._root
         z = np.zeros(3)
         for i in range(3):

@@ -24,7 +24,7 @@ import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
-from kalman_vs_infoset.estim.intercept.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel, channel_state
 from kalman_vs_infoset.estim.intercept.nodeset import _attained, _contains
 from kalman_vs_infoset.estim.intercept.nodeset import _geometry as _ng
 from kalman_vs_infoset.estim.intercept.nodeset import bounds as nb
@@ -336,7 +336,7 @@ class NodeSet(Belief):
         """
         if self.is_empty:
             return False
-        alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float)[:3])
+        alpha, omega, x = channel_state(state)
         if not (np.isfinite(alpha) and np.isfinite(omega) and np.isfinite(x)):
             return False  # (no bound would exclude a nan)
         s = self._summary

@@ -28,7 +28,7 @@ from functools import cached_property
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.intercept.gaussian.belief import GaussianBelief
-from kalman_vs_infoset.estim.intercept.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel, channel_state
 from kalman_vs_infoset.estim.intercept.pf.filter import ParticleSet
 from numpy.typing import ArrayLike, NDArray
 
@@ -130,6 +130,7 @@ class ParticleBelief(Belief):
 
     def contains(self, state: ArrayLike) -> bool:
         """Whether ``state`` lies in the n-sigma ellipsoid of the weighted moments."""
+        channel_state(state)  # (3,), or one line
         if self.is_empty:
             return False
         return self.moments.contains(state)

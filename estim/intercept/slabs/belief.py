@@ -16,7 +16,7 @@ import shapely
 from kalman_vs_infoset.estim.base import Belief, Extremes, StateFunction, Status, state_values
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.intercept.costs import MissForecast, ZeroEffortMiss
-from kalman_vs_infoset.estim.intercept.model import ChannelModel
+from kalman_vs_infoset.estim.intercept.model import ChannelModel, channel_state
 from kalman_vs_infoset.estim.intercept.slabs.sections import (
     PolygonFamily,
     PolygonSections,
@@ -155,7 +155,7 @@ class InformationSet(Belief):
         is a relative numerical tolerance (of the polygons' magnitude in the scaled
         coordinates; each representation's own for the others).
         """
-        alpha, omega, x = (float(v) for v in np.asarray(state, dtype=float))
+        alpha, omega, x = channel_state(state)
         if self.is_empty:
             return False
         p = (
