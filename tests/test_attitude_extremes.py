@@ -149,3 +149,17 @@ def test_the_counts_of_a_set_belief_are_values_too(name):
                 with pytest.raises(ValueError, match="read-only"):
                     arr[0] = 5
     assert b1.contradictions == b2.contradictions
+
+
+def test_a_state_of_another_run_count_is_refused_by_every_belief():
+    """``box.contains(state of one run)`` on a belief of two runs broadcast the state over
+    both and answered True; the other beliefs failed with a numpy concatenate error."""
+    q2 = np.tile([[1.0, 0.0, 0.0, 0.0]], (2, 1))
+    for name in registry.names("attitude"):
+        est = registry.get("attitude", name).build(None, MODEL)
+        b = est.initial(AttitudePrior(AttitudeMeasurement(q2, np.zeros((2, 3)))))
+        states = np.concatenate([q2, np.zeros((2, 3))], axis=1)
+        assert b.inside(states).shape == (2,)
+        for bad in (states[0], states[:, :5], np.tile(states, (2, 1))):
+            with pytest.raises(ValueError, match=r"a state \(q, w, \.\.\.\) per run: \(2, 7\)"):
+                b.contains(bad)

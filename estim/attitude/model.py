@@ -176,6 +176,19 @@ class AttitudeMeasurement:
         object.__setattr__(self, "rate_radps", w)
 
 
+def run_states(state: ArrayLike, runs: int) -> FloatArray:
+    """The true states ``(q, w, ...)`` of a belief's runs as an ``(R, 7+)`` array (one
+    state alone for a single run); one line for another shape: a state of one run was
+    broadcast over a belief of several (the box answered for all), or failed as a numpy
+    error."""
+    s = np.atleast_2d(np.asarray(state, dtype=float))
+    if s.ndim != 2 or s.shape[0] != runs or s.shape[1] < 7:
+        raise ValueError(
+            f"a state (q, w, ...) per run: ({runs}, 7) or wider, got {np.shape(state)}"
+        )
+    return s
+
+
 def check_runs(belief_runs: int, given: int, what: str) -> None:
     """A measurement or control has one row per run of the belief: a single row was
     broadcast over every run, silently, and other counts failed as numpy broadcast

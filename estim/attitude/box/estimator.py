@@ -68,6 +68,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     check_runs,
     check_step,
     rate_component,
+    run_states,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -274,7 +275,7 @@ class BoxAttitudeBelief(EmptyRunCounts, AttitudeBelief):
 
     def inside(self, state: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
         """Per run: whether the state ``(q, w, ...)`` lies in the box."""
-        e, w = self.error_of(state)
+        e, w = self.error_of(run_states(state, self.runs))
         ok_e = np.all(np.abs(e - self.e_c) <= self.e_r + tol, axis=-1)
         ok_w = np.all(np.abs(w - self.w_c) <= self.w_r + tol, axis=-1)
         return ok_e & ok_w

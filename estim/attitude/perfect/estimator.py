@@ -19,6 +19,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     NeverEmptyBelief,
     check_runs,
     check_step,
+    run_states,
 )
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
 from numpy.typing import ArrayLike, NDArray
@@ -56,7 +57,7 @@ class AttitudePointBelief(NeverEmptyBelief):
 
     def inside(self, state: ArrayLike) -> NDArray[np.bool_]:
         """Per run: the state equals the point within :data:`EQUAL_TOL`."""
-        x, c = np.atleast_2d(np.asarray(state, dtype=float)), self.state
+        x, c = run_states(state, self.runs), self.state
         da = qlog(qmul(qinv(c[:, 0:4]), x[:, 0:4]))
         diff = np.concatenate([da, c[:, 4:7] - x[:, 4:7]], axis=-1)
         return np.all(np.abs(diff) <= EQUAL_TOL, -1)

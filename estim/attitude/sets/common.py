@@ -53,6 +53,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudePrior,
     check_runs,
     rate_component,
+    run_states,
 )
 from kalman_vs_infoset.estim.attitude.sets.maps import (
     NoEnclosure,
@@ -152,6 +153,7 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
 
     def inside(self, state: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
         """Per run: whether the state ``(q, w, ...)`` lies in ``Z ∩ B`` (exact tests)."""
+        state = run_states(state, self.runs)
         x = self.error_of(state)
         ok_box = self.box.inside(state, tol)
         lost = self.lost

@@ -58,6 +58,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     check_step,
     rate_component,
     rk4_attitude,
+    run_states,
 )
 from kalman_vs_infoset.estim.attitude.ukf.options import DEFAULTS
 from kalman_vs_infoset.estim.base import Estimator, Extremes, StateFunction, Status
@@ -144,7 +145,7 @@ class UkfAttitudeBelief(NeverEmptyBelief):
         return np.sqrt(np.maximum(np.sum(r * sol, axis=-1), 0.0))
 
     def inside(self, state: ArrayLike) -> NDArray[np.bool_]:
-        return self.mahalanobis(state) <= self.gate
+        return self.mahalanobis(run_states(state, self.runs)) <= self.gate
 
     def contains(self, state: ArrayLike) -> bool:
         return bool(np.all(self.inside(state)))
