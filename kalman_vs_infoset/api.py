@@ -320,6 +320,8 @@ def trace(
     estimator, noise = _choice(sc, estimator, noise)
     seed = _seed(seed, sc.experiment.seed)
     runs = [_index(j, "a run index", 0) for j in runs]
+    if not runs:  # (two frames without columns came back)
+        raise ValueError("runs must name at least one run to trace")
     sets_every = _index(sets_every, "sets_every", 1)
     steps, sets, _ = _traces.intercept_trace(sc, estimator, noise, seed, runs, sets_every)
     return steps, sets

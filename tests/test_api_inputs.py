@@ -44,6 +44,8 @@ def test_bounds_of_counts_and_problems():
         api.run_engagement("kp_fig3", "ekf", "random", run=-1)
     with pytest.raises(ValueError, match="sets_every must be at least 1"):
         api.trace("kp_fig3", "ekf", "random", sets_every=0)
+    with pytest.raises(ValueError, match="runs must name at least one run"):  # (empty frames)
+        api.trace("kp_fig3", "ekf", "random", runs=[])
     with pytest.raises(ValueError, match="problem must be one of"):
         api.estimators("foo")
     # numpy integers are integers
