@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 from docs_checks import CHECKS, FIGMD, FIGS
-from docs_numbers import agrees, lookup, printed, results
+from docs_numbers import ROOT, agrees, lookup, printed, results
 from test_docs_numbers import unlisted_numbers
 
 #: the sentences whose numbers the tests below derive, by test
@@ -63,7 +63,8 @@ INPUTS = (
     r"phi0 = 0\.63 deg",
     r"gains 0\.63 deg",
     r"Grid 0\.1-3\.0, step 0\.025",
-    r"within 150 s",
+    # the settle map's white: its horizon less its hold (checked below against the code)
+    r"within 145 s \(the 150-s horizon less the 5-s hold",
     r"from 0\.2 to 6 deg",
     r"1 deg up",
     r"w / 2 \+ 2 \(1 - lambda0\)",
@@ -119,3 +120,14 @@ def test_every_number_of_the_figures_page_is_checked():
     patterns = [c[1] for c in CHECKS if c[0] == FIGMD] + list(DERIVED.values())
     patterns += [pattern for _, pattern in READINGS]
     assert unlisted_numbers(FIGMD, patterns, INPUTS) == []
+
+
+def test_the_settle_map_s_white_is_the_study_s_horizon_less_its_hold():
+    """akimov_fig10: a case is not settled when its settle time exceeds the horizon less
+    the hold that confirms it (``gain_study.settle_times``), 145 s, not the 150-s horizon."""
+    from kalman_vs_infoset.guidance.attitude.gain_study import MANEUVER_150 as m
+
+    page = " ".join((ROOT / FIGMD).read_text(encoding="utf-8").split())
+    said = (f"White: not settled within {m.horizon_s - m.hold_s:g} s (the {m.horizon_s:g}-s "
+            f"horizon less the {m.hold_s:g}-s hold that confirms a settle)")  # fmt: skip
+    assert said in page
