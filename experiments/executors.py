@@ -203,7 +203,11 @@ def results(job, todo: list[int], executor, workers, scheduler, limits: RunLimit
     n = min(workers or os.cpu_count() or 1, len(chunks))
     lost = {"dead": 0, "memory": 0}
     oom_before = oom_kills()
-    if executor is None and scheduler is None and n == 1:
+    # a memory limit is set in a worker process, never in this one: a library that fails
+    # an allocation under it without raising (OpenBLAS exits, CPython can crash within an
+    # import) then ends that worker, which is reported, not the command
+    in_process = not (limits and limits.memory_mb is not None)
+    if executor is None and scheduler is None and n == 1 and in_process:
         if limits:
             warm_kernels()  # loaded before the limits: each run is judged by its own cost
         for chunk in chunks:

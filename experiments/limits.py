@@ -127,6 +127,14 @@ def _warm_blas() -> None:
     a = np.full((256, 256), 1e-3)  # large enough for the multithreaded paths
     np.linalg.cholesky(a @ a.T + np.eye(256))
     np.linalg.solve(a + np.eye(256), a[:, 0])
+    # and the libraries a run imports on its first use of an estimator (the Kalman filters'
+    # filterpy, which imports scipy.stats): an import under a small limit can crash
+    # CPython itself, not raise
+    import filterpy.kalman  # noqa: F401
+    import scipy.optimize  # noqa: F401
+    import scipy.stats  # noqa: F401
+    import shapely  # noqa: F401 - the section sets' polygons
+
     _BLAS_WARM_PID = os.getpid()
 
 

@@ -245,7 +245,9 @@ def run(args: list[str], limit_s: int) -> tuple[str, str]:
     reasons = re.findall(r"run \d+ failed: (\w+: .*)", text)
 
     def reported(reason: str) -> bool:
-        return reason.split(":")[0] in LIMITS or reason.startswith(REPORTED)
+        # (a run failing otherwise under a memory limit says so in its reason)
+        under_limit = reason.endswith("--run-memory-limit-mb)")
+        return reason.split(":")[0] in LIMITS or reason.startswith(REPORTED) or under_limit
 
     if code == 1 and "Traceback" not in text and reasons and all(map(reported, reasons)):
         return "runs failed", lines[-1]  # reported: a limit, or a run that cannot go on
