@@ -92,9 +92,11 @@ def control_processes(
         ax[4].set_ylabel("fuel spent, m/s")
         ax[4].set_xlabel("time t, s")
         miss = float(d["miss_m"].iloc[0]) if "miss_m" in d else float("nan")
+        # a ring over the paper's star (drawn later, larger): both stay visible
         ax[2].plot(
-            [t[-1]], [miss], "o", color=style["color"], ms=6, label=f"ours: miss {miss:.1f} m"
-        )
+            [t[-1]], [miss], "o", color=style["color"], ms=12, mfc="none", mew=1.8, zorder=5,
+            label=f"ours: miss {miss:.1f} m",
+        )  # fmt: skip
         # (miss, fuel) or (miss, fuel, label): the label says whose numbers they are
         marks = tuple((paper or {}).get(noise, (None, None)))
         p_miss, p_fuel = marks[0], marks[1]
