@@ -39,6 +39,11 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
         ax.set_xlabel(label)
         ax.set_ylabel(plots.CDF_LABEL)
         ax.set_ylim(0, 1.02)
+        unsettled = int((~np.isfinite(df[col].to_numpy(dtype=float))).sum())
+        if col == "settle_time_s" and unsettled:  # their curves end below 1: say why
+            why = ("no run settled" if unsettled == len(df) else
+                   f"{unsettled} of {len(df)} runs never settled:\ncurves end below 1")  # fmt: skip
+            ax.text(0.02, 0.97, why, transform=ax.transAxes, va="top", fontsize=7)
         vals = df[col].to_numpy(dtype=float)
         vals = vals[np.isfinite(vals)]
         if (
@@ -49,7 +54,12 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
         ):
             ax.set_xscale("log")
     fs.figure_legend(fig, axes)  # a panel may be empty (no run settled)
-    fig.suptitle(f"{stem}: controller / estimator / noise (colour: estimator, line: noise)")
+    # the scenario and its runs, not the files' stem (estimators, noises, seed run together)
+    name = str(df["scenario"].iloc[0]) if "scenario" in df and len(df) else stem
+    per = max((len(g) for _, g in groups), default=0)
+    seed = f", seed {df['seed'].iloc[0]}" if "seed" in df and len(df) else ""
+    fig.suptitle(f"{name}: {per} runs per curve{seed}; curves: controller / estimator / noise "
+                 "(colour: estimator, line: noise)")  # fmt: skip
     return [str(f) for f in plots.save(fig, out_dir / f"{stem}-cdf")]
 
 

@@ -145,3 +145,21 @@ def test_the_rows_count_steps_in_integers(scenario, overrides, tmp_path, monkeyp
     df = api.run_attitude(scenario, noise="random", runs=2, estimator="box", **overrides)
     for column in ("truth_outside", "empty_steps", "unbounded_steps"):
         assert pd.api.types.is_integer_dtype(df[column]), (column, df[column].dtype)
+
+
+def test_the_attitude_cdf_says_its_scenario_and_the_runs_that_never_settled(tmp_path, monkeypatch):
+    """The CDF figure's title was the files' stem ("...-perfect+ukf+box-random+game-s0");
+    a settle-time panel whose runs never settled was empty without a word."""
+    import pandas as pd
+    from kalman_vs_infoset.experiments import attitude_est, plots
+
+    figs = []
+    monkeypatch.setattr(plots, "save", lambda fig, stem: figs.append(fig) or [])
+    rows = [{"scenario": "tiny", "seed": 3, "controller": "pd", "estimator": e, "noise": "random",
+             "settle_time_s": s, "energy_N2m2s": 1.0 + j, "final_angle_deg": 0.1 * (j + 1)}
+            for e, s in (("box", float("inf")), ("ukf", 12.0)) for j in range(2)]  # fmt: skip
+    attitude_est.write_figure(tmp_path, "tiny-pd-box+ukf-random-s3", pd.DataFrame(rows))
+    (fig,) = figs
+    assert fig._suptitle.get_text().startswith("tiny: 2 runs per curve, seed 3; curves:")
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert "2 of 4 runs never settled:\ncurves end below 1" in texts
