@@ -449,3 +449,20 @@ def test_a_plug_in_belief_with_the_interface_only_is_described_without_its_box()
     assert all(np.isnan(wrapped[k]) for k in own)
     for key in set(plain) - box - own:
         assert wrapped[key] == plain[key] or (np.isnan(plain[key]) and np.isnan(wrapped[key])), key
+
+
+def test_a_cdf_of_more_than_six_curves_keeps_its_legend_below_the_panels():
+    """Nine curves (three estimators x three noises) had their legend inside the fuel
+    panel, over two filters' curves; above six it goes below both panels."""
+    import pandas as pd
+    from kalman_vs_infoset.experiments import plots
+
+    def figure(n_est: int):
+        rows = [{"estimator": f"e{i}", "noise": n, "miss_m": 1.0 + j, "fuel_mps": 100.0 + j,
+                 "status": "ok"} for i in range(n_est) for n in ("random", "game", "bias")
+                for j in range(3)]  # fmt: skip
+        return plots.cdf_figure(pd.DataFrame(rows), ["estimator", "noise"], "t")
+
+    nine, six = figure(3), figure(2)
+    assert nine.legends and not any(ax.get_legend() for ax in nine.axes)
+    assert not six.legends and all(ax.get_legend() for ax in six.axes)
