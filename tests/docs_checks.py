@@ -79,6 +79,26 @@ def _e2e_row(label: str, noise: str, more: str = r" \|", fields: tuple[str, ...]
 ROUNDS = "docs/results/tightness/rounds/kp_fig5-"
 
 #: (document, pattern with one group per number, results file, key per group)
+#: figures.md's table of the inertia sign readings: each row's cell and its key in the
+#: results file
+SIGN_READINGS = (
+    ('standard, all "-"', "[-,-,-] standard"),
+    ('entries, all "+"', "[+,+,+] entries"),
+    ("[+, -, -]", "[+,-,-]"),
+    ("[+, -, +]", "[+,-,+]"),
+    ("[+, +, -]", "[+,+,-]"),
+    ("[-, +, +]", "[-,+,+]"),
+    ("[-, +, -]", "[-,+,-]"),
+    ("[-, -, +]", "[-,-,+]"),
+)
+
+
+def _sign_row(cell: str, key: str) -> tuple[str, str, str, tuple[str, ...]]:
+    """A CHECKS row of that table: Z of the energy-saving law and of the Euler baseline."""
+    return (FIGMD, rf"\| {re.escape(cell)} \| ([\d]+) \| ([\d]+) \|", FIGS,
+            (SIGNS + f"Z_energy/{key}", SIGNS + f"Z_euler/{key}"))  # fmt: skip
+
+
 CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     # the auxiliary model's impulse (docs/infoset.md)
     ("docs/infoset.md", r"The same case\s+now reads ([\d.]+) at 6 s", "docs/results/tightness/"
@@ -136,22 +156,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      (N + "resurs/initial_swing_Nm/U0=0",)),
     (FIGMD, r"\(excess variation ([\d.]+) N m against ([\d.]+) N m\)", FIGS,
      (N + "resurs/initial_swing_Nm/U0 paper", N + "resurs/initial_swing_Nm/U0=0")),
-    (FIGMD, r"\| standard, all \"-\" \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[-,-,-] standard", SIGNS + "Z_euler/[-,-,-] standard")),
-    (FIGMD, r"\| entries, all \"\+\" \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[+,+,+] entries", SIGNS + "Z_euler/[+,+,+] entries")),
-    (FIGMD, r"\| \[\+, -, -\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[+,-,-]", SIGNS + "Z_euler/[+,-,-]")),
-    (FIGMD, r"\| \[\+, -, \+\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[+,-,+]", SIGNS + "Z_euler/[+,-,+]")),
-    (FIGMD, r"\| \[\+, \+, -\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[+,+,-]", SIGNS + "Z_euler/[+,+,-]")),
-    (FIGMD, r"\| \[-, \+, \+\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[-,+,+]", SIGNS + "Z_euler/[-,+,+]")),
-    (FIGMD, r"\| \[-, \+, -\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[-,+,-]", SIGNS + "Z_euler/[-,+,-]")),
-    (FIGMD, r"\| \[-, -, \+\] \| ([\d]+) \| ([\d]+) \|", FIGS,
-     (SIGNS + "Z_energy/[-,-,+]", SIGNS + "Z_euler/[-,-,+]")),
+    *(_sign_row(cell, key) for cell, key in SIGN_READINGS),
     (FIGMD, r"UKF spends Z = ([\d]+) N\^2 m\^2 s \(exact state ([\d]+)\)", FIGS,
      (N + "resurs_noisy/Z_noisy", N + "resurs_noisy/Z_exact")),
     (FIGMD, r"error at 300 s ([\d.]+) deg \(exact state ([\d.]+) deg\)", FIGS,
