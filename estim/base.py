@@ -117,7 +117,9 @@ class Belief(ABC):
 
     @abstractmethod
     def centre(self) -> NDArray[np.float64]:
-        """A point estimate of the state (set centre or mean)."""
+        """A point estimate of the state (set centre or mean). An empty set (``is_empty``:
+        past the blind range, status ``terminal``, say) holds no state and has no
+        centre: NaN in every component; a filter keeps its mean."""
 
     @abstractmethod
     def extremes(self, fn: StateFunction) -> Extremes:

@@ -164,3 +164,21 @@ def test_contains_of_a_state_of_another_shape_says_so_in_one_line(name):
         with pytest.raises(ValueError, match=r"a channel state is \(alpha rad, omega rad/s, x m\)"):
             belief.contains(bad)
     belief.contains(np.array([-1.3e-3, 0.0, 5801.3e3]))  # (a bool; inside or not)
+
+
+@pytest.mark.parametrize("name", api.estimators("intercept"))
+def test_an_empty_set_has_no_centre_and_a_filter_keeps_its_mean(name):
+    """``Belief.centre``'s docstring: an empty set (here after predictions alone, past
+    what its bounds hold) returns NaN in every component; the filters keep a mean."""
+    from kalman_vs_infoset.estim.intercept.model import Bearing
+
+    sc = api.load_scenario("kp_fig3")
+    est = api.get_estimator(name).build(sc.estimator.options_for(name), sc.setting())
+    b = est.update(est.initial(sc.estimator.prior("lateral")), Bearing(-1.3e-3))
+    for _ in range(60):
+        if b.is_empty:
+            break
+        b = est.predict(b, 5.0)
+    assert b.is_empty
+    sets = {"infoset", "ellipsoid", "zonotope", "box"}
+    assert np.isnan(b.centre()).all() if name in sets else np.isfinite(b.centre()).all()
