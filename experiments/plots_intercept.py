@@ -132,7 +132,8 @@ def estimator_overlay(
         fig, grid = fs.figure(3, 1, size=(7.0, 8.5), sharex="col")
         axes = grid[:, 0]
     ax = axes
-    for est, grp in steps[steps["noise"] == noise].groupby("estimator", sort=True):
+    groups = list(steps[steps["noise"] == noise].groupby("estimator", sort=True))
+    for k, (est, grp) in enumerate(groups):
         d = _one(grp, run, channel)
         t = d["t_s"].to_numpy()
         style = fs.line(str(est), noise)
@@ -151,9 +152,12 @@ def estimator_overlay(
             ax[0].plot(t, end, **style, label=f"{fs.words(est, noise)}: interval ends - truth")
         outside = ~d["truth_inside"].to_numpy(dtype=bool)
         if outside.any():
+            # one row of ticks per estimator about 0 (in the axis's linear part): on one
+            # row the last estimator's ticks hid the others'
+            row = (k - (len(groups) - 1) / 2.0) * 4.0
             ax[0].plot(
                 t[outside],
-                np.zeros(outside.sum()),
+                np.full(outside.sum(), row),
                 "|",
                 color=style["color"],
                 ms=8,
