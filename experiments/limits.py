@@ -107,20 +107,21 @@ def _data_segment_bytes() -> int | None:
     return None
 
 
-#: the process that warmed its BLAS (:func:`_warm_blas`; a forked worker warms its own)
-_BLAS_WARM_PID: int | None = None
+#: the process that loaded them (:func:`_load_before_limit`; a forked worker loads its own)
+_LOADED_PID: int | None = None
 
 
-def _warm_blas() -> None:
-    """Have the BLAS library allocate its work buffers now, once per process.
+def _load_before_limit() -> None:
+    """Allocate the BLAS work buffers and import the libraries runs import on first use,
+    once per process, before a memory limit is set.
 
-    OpenBLAS (numpy's) allocates them at its first call of each size class, on every
+    OpenBLAS (numpy's) allocates its buffers at its first call of each size class, on every
     thread it uses, and when an allocation fails it does not raise: it prints
     "Memory allocation still failed after 10 retries, giving up" and ends the process.
     Under a memory limit that first call would end the command, not fail the run; after
     this, the buffers are part of the process's memory before the limit is set."""
-    global _BLAS_WARM_PID
-    if _BLAS_WARM_PID == os.getpid():
+    global _LOADED_PID
+    if _LOADED_PID == os.getpid():
         return
     import numpy as np
 
@@ -135,7 +136,7 @@ def _warm_blas() -> None:
     import scipy.stats  # noqa: F401
     import shapely  # noqa: F401 - the section sets' polygons
 
-    _BLAS_WARM_PID = os.getpid()
+    _LOADED_PID = os.getpid()
 
 
 @contextmanager
@@ -145,7 +146,7 @@ def memory_limit(mb: float | None) -> Iterator[None]:
     where the limit cannot be set)."""
     main = threading.current_thread() is threading.main_thread()
     if mb is not None and main and MEMORY_LIMIT_SUPPORTED:
-        _warm_blas()
+        _load_before_limit()
     now = None if mb is None or not main or not MEMORY_LIMIT_SUPPORTED else _data_segment_bytes()
     if mb is None or now is None:
         yield

@@ -131,6 +131,11 @@ class AttitudeControl:
         if np.any(self.h_lo_Nms > self.h_hi_Nms):
             raise ValueError("h_lo_Nms must not exceed h_hi_Nms")
 
+    @property
+    def runs(self) -> int:
+        """Number of runs (rows)."""
+        return int(self.torque_Nm.shape[0])
+
     @classmethod
     def held(cls, torque_Nm: ArrayLike, h0_Nms: ArrayLike, dt_s: float, h_err_Nms: float = 0.0):
         """Momentum ``h(s) = h0 - M_u s`` (``dh/dt = -M_u``) over ``[0, dt_s]``, +- ``h_err``."""
@@ -174,6 +179,11 @@ class AttitudeMeasurement:
             arr.setflags(write=False)
         object.__setattr__(self, "quat", q)
         object.__setattr__(self, "rate_radps", w)
+
+    @property
+    def runs(self) -> int:
+        """Number of runs (rows)."""
+        return int(self.quat.shape[0])
 
 
 def run_states(state: ArrayLike, runs: int) -> FloatArray:

@@ -363,7 +363,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
             control = AttitudeControl.zero(belief.runs)
         elif not isinstance(control, AttitudeControl):
             raise TypeError("control must be an AttitudeControl")
-        check_runs(belief.runs, control.torque_Nm.shape[0], "control")
+        check_runs(belief.runs, control.runs, "control")
         return self._predict(belief, dt_s, control, depth=0)
 
     def _predict(
@@ -450,7 +450,7 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
         """Intersect with the measurement's box; empty -> restart from it (status counted)."""
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
-        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
+        check_runs(belief.runs, measurement.runs, "measurement")
         lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
         if np.any(lost):  # "any state": re-reference at the measurement
             q_ref = np.where(lost[:, None], measurement.quat, belief.q_ref)

@@ -96,5 +96,5 @@ class PerfectAttitudeEstimator(Estimator[AttitudePointBelief, AttitudePrior]):
     def update(self, belief: AttitudePointBelief, measurement: Any) -> AttitudePointBelief:
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
-        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
+        check_runs(belief.runs, measurement.runs, "measurement")
         return AttitudePointBelief.of(measurement)

@@ -285,7 +285,7 @@ class SetAttitudeEstimator(Estimator[SetAttitudeBelief, AttitudePrior]):
         """Six strips of the box's ``B ∩ measurement`` on ``Z``, then the re-centring."""
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
-        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
+        check_runs(belief.runs, measurement.runs, "measurement")
         lo, hi, box_empty = meet_measurement(self.box, belief.box, measurement)
         box = self.box.update(belief.box, measurement)
         fall_c, fall_m = self.from_box(lo, hi)

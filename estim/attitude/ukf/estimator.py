@@ -260,7 +260,7 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
             return AttitudeControl.zero(belief.runs)
         if not isinstance(control, AttitudeControl):
             raise TypeError("control must be an AttitudeControl")
-        check_runs(belief.runs, control.torque_Nm.shape[0], "control")
+        check_runs(belief.runs, control.runs, "control")
         return control
 
     def _propagate(self, belief, sigmas, dt_s, ctrl: AttitudeControl):
@@ -305,7 +305,7 @@ class UkfAttitudeEstimator(Estimator[UkfAttitudeBelief, AttitudePrior]):
     def update(self, belief: UkfAttitudeBelief, measurement: Any) -> UkfAttitudeBelief:
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
-        check_runs(belief.runs, measurement.quat.shape[0], "measurement")
+        check_runs(belief.runs, measurement.runs, "measurement")
         z = np.concatenate(
             [qlog(qmul(qinv(belief.q_ref), measurement.quat)), measurement.rate_radps], axis=-1
         )
