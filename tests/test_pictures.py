@@ -314,6 +314,38 @@ def test_a_figure_stopped_mid_write_leaves_the_one_before_it(tmp_path):
     assert not plt.fignum_exists(fig.number)
 
 
+def test_a_figure_laid_out_once_is_written_as_savefig_writes_it(tmp_path, monkeypatch):
+    """``figstyle.save`` lays a constrained-layout figure out once and drops the engine
+    (savefig drew each format twice): the PNG and SVG are byte for byte what ``savefig``
+    writes when it lays the figure out for the PNG and the SVG keeps those positions,
+    here with a log axis, a figure legend below the panels and a title above them."""
+    import matplotlib.pyplot as plt
+
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "0")  # the SVG's date
+    monkeypatch.setitem(plt.rcParams, "svg.hashsalt", "same ids")
+
+    def figure():
+        fig, axes = figstyle.figure(2, 2)
+        for i, ax in enumerate(axes.flat):
+            ax.plot([1.0, 10.0, 300.0], [0.0, 0.5 + i, 1.0], label=f"curve {i}")
+            ax.set(xlabel="miss distance, m", ylabel="fraction of runs", title=f"panel {i}")
+        axes[0, 1].set_xscale("log")
+        figstyle.figure_legend(fig, axes.flat)
+        fig.suptitle("a title over the panels")
+        figstyle.plain_log_labels(fig)
+        return fig
+
+    ref = figure()  # laid out by the PNG's savefig, the SVG in the same positions
+    ref.savefig(tmp_path / "ref.png", format="png", dpi=figstyle.DPI)
+    ref.set_layout_engine("none")
+    ref.savefig(tmp_path / "ref.svg", format="svg", dpi=figstyle.DPI)
+    plt.close(ref)
+    figstyle.save(figure(), tmp_path / "ours")
+    for ext in ("png", "svg"):
+        ours, theirs = ((tmp_path / f"{n}.{ext}").read_bytes() for n in ("ours", "ref"))
+        assert ours == theirs, ext
+
+
 def test_crowded_cdf_puts_one_legend_below_the_panels():
     """Eight estimators x four noises: the legend leaves the axes (it hid the curves)."""
     from kalman_vs_infoset.experiments import plots
