@@ -318,7 +318,8 @@ def test_a_figure_laid_out_once_is_written_as_savefig_writes_it(tmp_path, monkey
     """``figstyle.save`` lays a constrained-layout figure out once and drops the engine
     (savefig drew each format twice): the PNG and SVG are byte for byte what ``savefig``
     writes when it lays the figure out for the PNG and the SVG keeps those positions,
-    here with a log axis, a figure legend below the panels and a title above them."""
+    here with a log axis, a 3-D panel, a figure legend below the panels and a title above
+    them."""
     import matplotlib.pyplot as plt
 
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "0")  # the SVG's date
@@ -326,6 +327,8 @@ def test_a_figure_laid_out_once_is_written_as_savefig_writes_it(tmp_path, monkey
 
     def figure():
         fig, axes = figstyle.figure(2, 2)
+        axes[1, 1].remove()
+        axes[1, 1] = fig.add_subplot(2, 2, 4, projection="3d")  # laid out as it is drawn
         for i, ax in enumerate(axes.flat):
             ax.plot([1.0, 10.0, 300.0], [0.0, 0.5 + i, 1.0], label=f"curve {i}")
             ax.set(xlabel="miss distance, m", ylabel="fraction of runs", title=f"panel {i}")
