@@ -18,13 +18,18 @@ run: $(STAMP)
 
 # two pytest-xdist workers (the Dask tests share one worker and its cluster: loadgroup)
 # (the numba kernels compile into their cache while mypy runs: about 30 CPU-s on a
-# clean clone, on the core mypy leaves free)
+# clean clone, on the core mypy leaves free; after mypy that core collects the tests
+# once, so that pytest caches its rewritten test modules and each worker reads them:
+# half its collection, about 3 CPU-s a worker. Pytest writes that cache only where
+# Python may write bytecode: PYTHONDONTWRITEBYTECODE, set in some shells, is unset.)
+PYTEST := PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest
 test: $(STAMP)
 	$(BIN)/ruff check --no-cache .
 	$(BIN)/ruff format --check --no-cache .
 	$(BIN)/python tests/compile_kernels.py & warm=$$!; \
-	  $(MAKE) --no-print-directory typecheck; status=$$?; wait $$warm; exit $$status
-	$(BIN)/python -m pytest -n 2 --dist loadgroup
+	  $(MAKE) --no-print-directory typecheck; status=$$?; \
+	  $(PYTEST) --collect-only -q >/dev/null 2>&1; wait $$warm; exit $$status
+	$(PYTEST) -n 2 --dist loadgroup
 
 # mypy on the installed package. The folders install under one import name through
 # setuptools package-dir, which mypy cannot follow (editable finder), so a tree of
