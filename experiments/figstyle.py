@@ -219,7 +219,8 @@ def _lay_out_once(fig, dpi: float) -> None:
     use is the layout it starts, then the drawing itself), even the placeholder
     ``"none"`` leaves: here the engine runs as that first draw runs it (at the saving
     resolution, before anything is drawn) and then leaves, so each format is drawn once,
-    every file byte for byte as before, for about a third less time."""
+    every file byte for byte as before, for about a quarter less CPU time (a figure of
+    fifteen panels: 1.2 to 0.9 CPU-s)."""
     engine = fig.get_layout_engine()
     if engine is None:
         return
