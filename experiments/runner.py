@@ -84,6 +84,10 @@ class Job:
     #: the estimator's problem ("intercept", "attitude"): a plug-in's code is recorded
     #: and checked on resume (:func:`experiments.provenance.estimator_identity`)
     problem: str | None = None
+    #: ``decides(description) -> description``: the part of a results description (as
+    #: JSON) that decides this job's runs, where it is less than the whole (the tables
+    #: of options its runs never read left out); compared on resume, both sides alike
+    decides: Callable[[dict[str, Any]], dict[str, Any]] | None = None
 
     @property
     def desc(self) -> str:
@@ -209,7 +213,9 @@ def run_job(
     path = job_path(out_dir, job)
     meta = {**job.meta, "code": _code(job)}
     meta_path = sidecar_path(path)
-    if path.exists() and not _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
+    if path.exists() and not _check_resumable(
+        path, existing_sidecar(path), meta, rerun_other_code, job.decides
+    ):
         table = _read_table(path)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
             _say_all_done(job, runs, path)  # the output is otherwise the same
@@ -225,7 +231,9 @@ def run_job(
         with exclusive(path, job.desc):
             table = {}
             if path.exists():  # read again: another command may have written it meanwhile
-                if _check_resumable(path, existing_sidecar(path), meta, rerun_other_code):
+                if _check_resumable(
+                    path, existing_sidecar(path), meta, rerun_other_code, job.decides
+                ):
                     # gone before the new description is written: an interruption
                     # cannot leave the old runs under this code's name
                     path.unlink()
@@ -334,11 +342,17 @@ def _code(job: Job) -> dict[str, Any]:
 
 
 def _check_resumable(
-    path: Path, meta_path: Path, meta: dict[str, Any], rerun_other_code: bool = False
+    path: Path,
+    meta_path: Path,
+    meta: dict[str, Any],
+    rerun_other_code: bool = False,
+    decides: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> bool:
     """Refuse (one line) to add runs to results of another scenario or other code. The
-    resolved scenarios are compared, not the paths that named them. Returns whether
-    the file is of other code and ``rerun_other_code`` lets its runs be run again."""
+    resolved scenarios are compared, not the paths that named them, and of them what
+    decides a run (:func:`_what_decides_a_run`, then the job's ``decides``). Returns
+    whether the file is of other code and ``rerun_other_code`` lets its runs be run
+    again."""
     fix = "use another --out or delete the file"
     try:
         old = json.loads(meta_path.read_text())
@@ -353,8 +367,9 @@ def _check_resumable(
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
     now = json.loads(json.dumps(meta))  # as the file holds it (JSON types)
-    here = _what_decides_a_run(now)
-    there = _what_decides_a_run(old)
+    here, there = _what_decides_a_run(now), _what_decides_a_run(old)
+    if decides is not None:
+        here, there = decides(here), decides(there)
     if there != here:
         key, a, b = _first_difference(there, here)
         raise InputError(

@@ -490,6 +490,43 @@ def test_a_study_extended_through_the_file_resumes(short, tmp_path, capsys):
     assert r.returncode == 2 and "different scenario" in r.stderr
 
 
+def test_an_edit_of_options_a_job_never_reads_resumes_it(short, tmp_path, capsys):
+    """A table of runs depends on its estimator's own options and, under game errors, on
+    the information set's, which the adversary reasons with: an edit of another
+    estimator's table (here the UKF's, added to the file: neither the set nor the EKF
+    reads it) was refused as "results of a different scenario
+    (scenario.estimator.options.ukf...)"; it resumes, the runs kept as they were. An
+    edit of a table a job reads is still refused: the EKF's own, and the set's for the
+    EKF under game errors (while the EKF under random errors resumes)."""
+    out = tmp_path / "out"
+    text = short.read_text()
+    args = ("intercept", short, "--estimators", "infoset,ekf", "--noise", "random,game",
+            "--out", out, "--no-progress")  # fmt: skip
+    assert cli_inproc(capsys, *args, "--runs", "2").returncode == 0
+    before = {p.name: _table(pd.read_parquet(p)) for p in sorted(out.glob("*.parquet"))}
+    assert len(before) == 4
+    short.write_text(text + "[estimator.ukf]\nn_sigma = 4.0\n")
+    r = cli_inproc(capsys, *args, "--runs", "3")
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.count("2 runs of 3 already in") == 4, r.stderr
+    for name, old in before.items():
+        new = _table(pd.read_parquet(out / name))
+        pd.testing.assert_frame_equal(new[new["run"] < 2].reset_index(drop=True), old)
+    short.write_text(text + "[estimator.ekf]\nn_sigma = 4.0\n")
+    r = cli_inproc(capsys, *args, "--runs", "3")
+    assert r.returncode == 2 and "scenario.estimator.options.ekf" in r.stderr, r.stderr
+    ekf = ("intercept", short, "--estimators", "ekf", "--noise", "random,game", "--out",
+           tmp_path / "ekf", "--no-progress")  # fmt: skip
+    short.write_text(text)
+    assert cli_inproc(capsys, *ekf, "--runs", "2").returncode == 0
+    short.write_text(text.replace("n_sections = 9", "n_sections = 9\nn_nodes = 10"))
+    r = cli_inproc(capsys, *ekf, "--runs", "3")
+    assert r.returncode == 2, r.stderr
+    assert "ekf-random: 2 runs of 3 already in" in r.stderr, r.stderr
+    assert "ekf-game-s11.parquet: results of a different scenario" in r.stderr, r.stderr
+    assert "scenario.estimator.options.infoset.n_nodes" in r.stderr, r.stderr
+
+
 def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tmp_path, capsys):
     """``--set range_finder.enabled=false`` resolves to the same scenario as the file
     with that line edited (the name aside, which gets a ``+key=value`` suffix), gives

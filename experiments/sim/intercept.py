@@ -84,6 +84,18 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
     return est, est.initial(sc.estimator.prior(channel))
 
 
+def option_tables_read(estimator_name: str, noise_name: str) -> frozenset[str]:
+    """The ``[estimator.<name>]`` option tables an engagement of ``estimator_name`` under
+    ``noise_name`` reads: its estimator's own (:func:`make_estimator`; an estimator is
+    built from its table and the channel, nothing else) and, under game errors, the
+    reference set's, which the adversary reasons with (:func:`build_noise`). Another
+    estimator's table changes none of its runs."""
+    tables = {estimator_name}
+    if noise_name == "game":
+        tables.add(registry.reference("intercept").name)
+    return frozenset(tables)
+
+
 def build_noise(
     name: str, sc: InterceptScenario, model: ChannelModel, channels, rng, sensor=None,
     pursuer: str | None = None,
