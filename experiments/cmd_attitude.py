@@ -66,6 +66,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         run_job,
         run_seed,
     )
+    from kalman_vs_infoset.experiments.sim.estimator_tables import tables_kept
 
     req = request(args)
     # a single run is shown as its time histories (a CDF of one run is one step)
@@ -92,6 +93,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                 ),  # fmt: skip
                 chunk=loop.chunk,
                 problem="attitude",
+                # a loop's estimator reads its own options table only (EstimatorLoop)
+                decides=partial(tables_kept, ("estimator_options",), frozenset({est})),
             )
             df = run_job(
                 job, req.runs, req.out, args.workers, args.scheduler, not args.no_progress,

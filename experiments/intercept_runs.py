@@ -23,6 +23,7 @@ from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import run_limits
 from kalman_vs_infoset.experiments.progress import step_progress
 from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
+from kalman_vs_infoset.experiments.sim.estimator_tables import tables_kept
 from kalman_vs_infoset.experiments.sim.intercept import (
     Engagement,
     EngagementResult,
@@ -53,22 +54,11 @@ def intercept_job(
         task=partial(_intercept_chunk, sc, estimator, noise, seed),
         chunk=chunk,
         problem="intercept",
-        decides=partial(_tables_kept, option_tables_read(estimator, noise)),
+        # another estimator's options table decides none of these runs
+        decides=partial(
+            tables_kept, ("estimator", "options"), option_tables_read(estimator, noise)
+        ),
     )
-
-
-def _tables_kept(tables: frozenset[str], described: dict[str, Any]) -> dict[str, Any]:
-    """A results description with only the ``[estimator.<name>]`` option tables of
-    ``tables`` (:func:`~kalman_vs_infoset.experiments.sim.intercept.option_tables_read`):
-    an edit of another estimator's options resumes these runs instead of refusing them."""
-    scenario = described.get("scenario")
-    if not isinstance(scenario, dict):
-        return described
-    est = scenario.get("estimator")
-    if not (isinstance(est, dict) and isinstance(est.get("options"), dict)):
-        return described
-    kept = {k: v for k, v in est["options"].items() if k in tables}
-    return {**described, "scenario": {**scenario, "estimator": {**est, "options": kept}}}
 
 
 def _intercept_chunk(sc, estimator: str, noise: str, seed: int, runs: list[int]):

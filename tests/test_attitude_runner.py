@@ -163,3 +163,27 @@ def test_the_attitude_cdf_says_its_scenario_and_the_runs_that_never_settled(tmp_
     assert fig._suptitle.get_text().startswith("tiny: 2 runs per curve, seed 3; curves:")
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert "2 of 4 runs never settled:\ncurves end below 1" in texts
+
+
+def test_an_edit_of_another_estimators_options_resumes_the_attitude_runs(
+    scenario, tmp_path, capsys
+):
+    """An attitude loop's estimator reads only its own ``[estimator_options.<name>]``
+    table: the box's runs resume after a UKF table is added to the file (they were
+    refused as "results of a different scenario"), the finished ones kept, and are
+    refused after an edit of the box's own table."""
+    out = tmp_path / "out"
+    text = scenario.read_text()
+    code, _ = _attitude(capsys, scenario, out, "--workers", "1")
+    assert code == 0
+    before = _table(out)
+    scenario.write_text(text + "[estimator_options.ukf]\ngate_prob = 0.99\n")
+    code, _ = _attitude(capsys, scenario, out, "--workers", "1")
+    assert code == 0
+    pd.testing.assert_frame_equal(_table(out), before)
+    scenario.write_text(text + "[estimator_options.box]\nabs_inflation_rad = 1e-6\n")
+    args = ["attitude", str(scenario), "--noise", "random", "--estimators", "box", "--runs",
+            str(RUNS), "--seed", "3", "--out", str(out), "--no-progress"]  # fmt: skip
+    code = main(args)
+    err = capsys.readouterr().err
+    assert code == 2 and "different scenario (scenario.estimator_options.box" in err, err

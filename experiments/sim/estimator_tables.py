@@ -34,6 +34,30 @@ def check_option_tables(problem: str, prefix: str, tables: Mapping[str, Any]) ->
             raise ValueError(first_error(exc, f"{prefix}.{name}.", reg.options)) from None
 
 
+def tables_kept(
+    where: tuple[str, ...], names: frozenset[str], described: dict[str, Any]
+) -> dict[str, Any]:
+    """A results description (its ``scenario`` as JSON) with only the option tables
+    ``names`` of those at ``scenario.<where>`` (``("estimator", "options")`` for an
+    intercept scenario, ``("estimator_options",)`` for an attitude one): what decides
+    the runs of an estimator that reads only those (a resume compares it,
+    :class:`~kalman_vs_infoset.experiments.runner.Job`); no table there reads as none
+    kept, and a description of another layout is returned unchanged."""
+    parents: list[dict[str, Any]] = []
+    here: Any = described.get("scenario")
+    for i, key in enumerate((*where, None)):
+        if here is None and i == len(where):
+            here = {}  # no tables at all: as the empty table of tables
+        if not isinstance(here, dict):
+            return described
+        parents.append(here)
+        here = here.get(key) if key is not None else None
+    node: dict[str, Any] = {k: v for k, v in parents[-1].items() if k in names}
+    for key, parent in zip(reversed(where), reversed(parents[:-1]), strict=True):
+        node = {**parent, key: node}
+    return {**described, "scenario": node}
+
+
 def not_a_table(options_prefix: str = "estimator_options") -> str:
     """The line for an attitude scenario given ``[estimator.<name>]`` tables (the
     intercept's form): its ``estimator`` is a name, the options sit at
