@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                 chunk=loop.chunk,
                 problem="attitude",
                 # a loop's estimator reads its own options table only (EstimatorLoop)
-                decides=partial(tables_kept, ("estimator_options",), frozenset({est})),
+                decides=partial(tables_kept, "attitude", ("estimator_options",), frozenset({est})),
             )
             df = run_job(
                 job, req.runs, req.out, args.workers, args.scheduler, not args.no_progress,

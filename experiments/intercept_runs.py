@@ -56,7 +56,7 @@ def intercept_job(
         problem="intercept",
         # another estimator's options table decides none of these runs
         decides=partial(
-            tables_kept, ("estimator", "options"), option_tables_read(estimator, noise)
+            tables_kept, "intercept", ("estimator", "options"), option_tables_read(estimator, noise)
         ),
     )
 

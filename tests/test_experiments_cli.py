@@ -495,9 +495,10 @@ def test_an_edit_of_options_a_job_never_reads_resumes_it(short, tmp_path, capsys
     the information set's, which the adversary reasons with: an edit of another
     estimator's table (here the UKF's, added to the file: neither the set nor the EKF
     reads it) was refused as "results of a different scenario
-    (scenario.estimator.options.ukf...)"; it resumes, the runs kept as they were. An
-    edit of a table a job reads is still refused: the EKF's own, and the set's for the
-    EKF under game errors (while the EKF under random errors resumes)."""
+    (scenario.estimator.options.ukf...)"; it resumes, the runs kept as they were, and so
+    does a table that writes an estimator's defaults. An edit of a table a job reads is
+    still refused: the EKF's own, and the set's for the EKF under game errors (while the
+    EKF under random errors resumes)."""
     out = tmp_path / "out"
     text = short.read_text()
     args = ("intercept", short, "--estimators", "infoset,ekf", "--noise", "random,game",
@@ -512,9 +513,13 @@ def test_an_edit_of_options_a_job_never_reads_resumes_it(short, tmp_path, capsys
     for name, old in before.items():
         new = _table(pd.read_parquet(out / name))
         pd.testing.assert_frame_equal(new[new["run"] < 2].reset_index(drop=True), old)
+    short.write_text(text + "[estimator.ekf]\nn_sigma = 3.0\n")  # its default: the same runs
+    r = cli_inproc(capsys, *args, "--runs", "3")
+    assert r.returncode == 0 and r.stderr.count("all 3 runs already in") == 4, r.stderr
     short.write_text(text + "[estimator.ekf]\nn_sigma = 4.0\n")
     r = cli_inproc(capsys, *args, "--runs", "3")
-    assert r.returncode == 2 and "scenario.estimator.options.ekf" in r.stderr, r.stderr
+    assert r.returncode == 2, r.stderr
+    assert "(scenario.estimator.options.ekf.n_sigma: 3.0 in the file, 4.0 now)" in r.stderr
     ekf = ("intercept", short, "--estimators", "ekf", "--noise", "random,game", "--out",
            tmp_path / "ekf", "--no-progress")  # fmt: skip
     short.write_text(text)

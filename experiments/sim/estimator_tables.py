@@ -35,13 +35,15 @@ def check_option_tables(problem: str, prefix: str, tables: Mapping[str, Any]) ->
 
 
 def tables_kept(
-    where: tuple[str, ...], names: frozenset[str], described: dict[str, Any]
+    problem: str, where: tuple[str, ...], names: frozenset[str], described: dict[str, Any]
 ) -> dict[str, Any]:
     """A results description (its ``scenario`` as JSON) with only the option tables
     ``names`` of those at ``scenario.<where>`` (``("estimator", "options")`` for an
-    intercept scenario, ``("estimator_options",)`` for an attitude one): what decides
-    the runs of an estimator that reads only those (a resume compares it,
-    :class:`~kalman_vs_infoset.experiments.runner.Job`); no table there reads as none
+    intercept scenario, ``("estimator_options",)`` for an attitude one), each as the
+    options it gives (validated by the ``problem``'s registered model, defaults filled
+    in: a table that writes defaults is the same as none): what decides the runs of an
+    estimator that reads only those (a resume compares it,
+    :class:`~kalman_vs_infoset.experiments.runner.Job`). No table there reads as none
     kept, and a description of another layout is returned unchanged."""
     parents: list[dict[str, Any]] = []
     here: Any = described.get("scenario")
@@ -52,10 +54,20 @@ def tables_kept(
             return described
         parents.append(here)
         here = here.get(key) if key is not None else None
-    node: dict[str, Any] = {k: v for k, v in parents[-1].items() if k in names}
+    tables = parents[-1]
+    node: dict[str, Any] = {k: _as_options(problem, k, tables.get(k, {})) for k in sorted(names)}
     for key, parent in zip(reversed(where), reversed(parents[:-1]), strict=True):
         node = {**parent, key: node}
     return {**described, "scenario": node}
+
+
+def _as_options(problem: str, name: str, table: Any) -> Any:
+    """``table`` as the options of estimator ``name`` it gives (JSON, defaults filled
+    in); as it is where no registered model takes it (compared as written)."""
+    try:
+        return registry.get(problem, name).options.model_validate(table).model_dump(mode="json")
+    except (KeyError, ValidationError, ValueError, TypeError):
+        return table
 
 
 def not_a_table(options_prefix: str = "estimator_options") -> str:
