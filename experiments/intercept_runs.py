@@ -45,6 +45,7 @@ def intercept_job(
     runs a task (1 by default: ``kvi bench`` measures 1 against several runs a task,
     ``runs_per_cpu_s_by_chunk``, and several did not pay; docs/performance.md)."""
     choice = {"estimator": estimator, "noise": noise}
+    read = option_tables_read(estimator, noise)
     return Job(
         name=sc.name,
         label=f"{estimator}-{noise}",
@@ -54,10 +55,9 @@ def intercept_job(
         task=partial(_intercept_chunk, sc, estimator, noise, seed),
         chunk=chunk,
         problem="intercept",
-        # another estimator's options table decides none of these runs
-        decides=partial(
-            tables_kept, "intercept", ("estimator", "options"), option_tables_read(estimator, noise)
-        ),
+        # another estimator's options table decides none of these runs, nor its code
+        decides=partial(tables_kept, "intercept", ("estimator", "options"), read),
+        reads=read - {estimator},
     )
 
 

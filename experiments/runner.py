@@ -88,6 +88,9 @@ class Job:
     #: JSON) that decides this job's runs, where it is less than the whole (the tables
     #: of options its runs never read left out); compared on resume, both sides alike
     decides: Callable[[dict[str, Any]], dict[str, Any]] | None = None
+    #: other registered estimators whose code decides the runs (the game adversary's
+    #: information set): a plug-in among them is recorded and checked as the job's own
+    reads: frozenset[str] = frozenset()
 
     @property
     def desc(self) -> str:
@@ -333,11 +336,18 @@ def _say_all_done(job: Job, runs: int, path: Path) -> None:
 
 
 def _code(job: Job) -> dict[str, Any]:
-    """The code that writes a job's results: the package's, and a plug-in estimator's."""
+    """The code that writes a job's results: the package's, a plug-in estimator's, and
+    those of the plug-ins among the other estimators its runs read (``estimators_read``,
+    by name; absent when there are none, as in every description written before it)."""
     code: dict[str, Any] = dict(code_identity())
     plugin = estimator_identity(job.problem, job.meta["estimator"]) if job.problem else None
     if plugin is not None:
         code["estimator"] = plugin
+    if job.problem:
+        read = {n: estimator_identity(job.problem, n) for n in sorted(job.reads)}
+        read = {n: i for n, i in read.items() if i is not None}
+        if read:
+            code["estimators_read"] = read
     return code
 
 
@@ -378,15 +388,27 @@ def _check_resumable(
     before = (old.get("code") or {}).get("sources_sha256")
     plugin_then = (old.get("code") or {}).get("estimator")
     plugin_now = now["code"].get("estimator")
-    if before == meta["code"]["sources_sha256"] and plugin_then == plugin_now:
+    read_then = (old.get("code") or {}).get("estimators_read") or {}
+    read_now = now["code"].get("estimators_read") or {}
+    same_sources = before == meta["code"]["sources_sha256"]
+    if same_sources and plugin_then == plugin_now and read_then == read_now:
         return False
     if rerun_other_code:
         return True
-    if before == meta["code"]["sources_sha256"]:  # the plug-in's code changed
+    again = f"{fix}, or run them again with --rerun-other-code"
+    if same_sources and plugin_then != plugin_now:  # the plug-in's code changed
         raise InputError(
             f"{path}: results written by another version of the estimator "
             f"{meta.get('estimator')!r} ({_plugin_text(plugin_then)}, now "
-            f"{_plugin_text(plugin_now)}); {fix}, or run them again with --rerun-other-code"
+            f"{_plugin_text(plugin_now)}); {again}"
+        )
+    if same_sources:  # the code of an estimator the runs read changed
+        name = next(n for n in sorted({*read_then, *read_now})
+                    if read_then.get(n) != read_now.get(n))  # fmt: skip
+        raise InputError(
+            f"{path}: results written with another version of the estimator {name!r} that "
+            f"the runs read ({_plugin_text(read_then.get(name))}, now "
+            f"{_plugin_text(read_now.get(name))}); {again}"
         )
     was = f"sources {before[:12]}" if before else "code that recorded no identity"
     raise InputError(

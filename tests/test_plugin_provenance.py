@@ -101,3 +101,67 @@ def test_a_dask_worker_with_another_version_of_a_plug_in_is_refused(plugin):
     other = {**mine["intercept/toyplug"], "sources_sha256": "0" * 64}
     with pytest.raises(InputError, match="w2 runs another version of the estimator plug-in"):
         _check_workers_code(_Cluster({"w1": mine, "w2": {"intercept/toyplug": other}}), "x")
+
+
+REFERENCE_PLUGIN = """
+from kalman_vs_infoset.estim import registry
+
+BUILT_IN = registry.get("intercept", "infoset")
+
+
+def build(options, setting):
+    return BUILT_IN.factory(options, setting)  # the package's set, from this module
+
+
+VERSION = {version}
+"""
+
+
+def test_runs_whose_adversary_reads_an_edited_plug_in_set_are_refused(short, tmp_path, monkeypatch):
+    """Under game errors the adversary reasons with the reference information set, so its
+    code decides the runs of any estimator: a plug-in replacing it (same name, the
+    reference) is recorded with those runs (``estimators_read``) and an edit of it
+    refused on resume, as the job's own plug-in is; runs under random errors, which
+    read no set but their own, resume. With the package's own set nothing is recorded
+    (descriptions as before)."""
+    import json
+
+    sc = load_scenario(short)
+    out = tmp_path / "out"
+
+    def run(noise, runs, **kw):
+        return intercept_runs.run_experiment(
+            sc, "ekf", noise, runs, 3, out, workers=1, progress=False, **kw
+        )
+
+    run("game", 1)
+    meta = json.loads((out / "_meta" / f"{sc.name}-ekf-game-s3.json").read_text())
+    assert "estimators_read" not in meta["code"]
+    folder = tmp_path / "plug"
+    folder.mkdir()
+    source = folder / "refplug.py"
+    source.write_text(REFERENCE_PLUGIN.format(version=1))
+    monkeypatch.syspath_prepend(str(folder))
+    module = importlib.import_module("refplug")
+    orig = registry.get("intercept", "infoset")
+    registry.register("infoset", "intercept", orig.options, module.build, replace=True,
+                      reference=True)  # fmt: skip
+    try:
+        out = tmp_path / "plugged"  # (run() reads it when called)
+        run("game", 1)
+        run("random", 1)
+        meta = json.loads((out / "_meta" / f"{sc.name}-ekf-game-s3.json").read_text())
+        assert meta["code"]["estimators_read"]["infoset"]["modules"] == ["refplug"]
+        assert len(run("game", 2)) == 2  # the same code: resumed
+        source.write_text(REFERENCE_PLUGIN.format(version=2))
+        with pytest.raises(InputError, match="estimator 'infoset' that the runs read"):
+            run("game", 3)
+        assert len(run("random", 2)) == 2
+        assert len(run("game", 3, rerun_other_code=True)) == 3
+    finally:
+        registry.register(orig.name, orig.problem, orig.options, orig.factory, orig.doc,
+                          replace=True, rank=orig.rank, reference=orig.reference,
+                          roles=orig.roles, label=orig.label, colour=orig.colour,
+                          trace_fields=orig.trace_fields)  # fmt: skip
+        sys.modules.pop("refplug", None)
+    assert registry.get("intercept", "infoset").factory is orig.factory
