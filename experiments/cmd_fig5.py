@@ -44,15 +44,9 @@ def add_arguments(p) -> None:
 def variant_keys(folder: Path) -> list[str]:
     """The fields (``table.key``) in which the variants' scenario files differ, but for
     their names and descriptions: what makes a variant."""
-    from kalman_vs_infoset.experiments.scenario import load_toml
+    from kalman_vs_infoset.experiments.scenario import dotted_fields, load_toml
 
-    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for k, v in d.items():
-            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {prefix + k: v})
-        return out
-
-    a, b = (flat(load_toml(folder / fname)) for fname, _ in VARIANTS)
+    a, b = (dotted_fields(load_toml(folder / fname)) for fname, _ in VARIANTS)
     keys = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
     return [k for k in keys if k not in ("name", "description")]
 

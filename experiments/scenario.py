@@ -121,6 +121,16 @@ def check_kind(data: Mapping[str, Any], expected: Kind, source: str | Path) -> N
         raise InputError(f"{source} is an {kind} scenario: run it with {RUN_WITH[kind]}")
 
 
+def dotted_fields(tables: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """The fields of nested tables by their dotted keys (``{"model": {"dt_s": 0.5}}``:
+    ``{"model.dt_s": 0.5}``), the form ``--set TABLE.KEY=VALUE`` names them in."""
+    out: dict[str, Any] = {}
+    for key, value in tables.items():
+        name = f"{prefix}.{key}" if prefix else str(key)
+        out.update(dotted_fields(value, name) if isinstance(value, Mapping) else {name: value})
+    return out
+
+
 def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str, Any]:
     """A copy of a parsed scenario with ``TABLE.KEY=VALUE`` overrides applied.
 

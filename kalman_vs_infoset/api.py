@@ -20,7 +20,7 @@ True
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Sequence
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any
@@ -65,12 +65,9 @@ def scenarios() -> list[str]:
     return data.scenario_names()
 
 
-def _flatten(prefix: str, value: Any) -> Iterable[tuple[str, Any]]:
-    if isinstance(value, Mapping):
-        for key, sub in value.items():
-            yield from _flatten(f"{prefix}.{key}" if prefix else str(key), sub)
-    else:
-        yield prefix, value
+def _sets(tables: Any) -> list[str]:
+    """Keyword tables of overrides as ``--set`` items (``TABLE.KEY=<TOML value>``)."""
+    return [f"{key}={_toml(v)}" for key, v in _scenario.dotted_fields(tables).items()]
 
 
 def _toml(value: Any) -> str:
@@ -115,8 +112,7 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenar
     >>> sc.name
     'kp_fig5+experiment.runs=4+model.nu_mps2=0.01'
     """
-    sets = [f"{key}={_toml(v)}" for key, v in _flatten("", overrides)]
-    return _scenario.load_scenario(name_or_path, sets, via="keyword overrides")
+    return _scenario.load_scenario(name_or_path, _sets(overrides), via="keyword overrides")
 
 
 def _resolve(scenario: InterceptScenario | str | Path) -> InterceptScenario:

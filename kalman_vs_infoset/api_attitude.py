@@ -81,7 +81,7 @@ def run_attitude(
     """
     import pandas as pd
 
-    from kalman_vs_infoset.api import _flatten, _index, _seed, _toml
+    from kalman_vs_infoset.api import _index, _seed, _sets
     from kalman_vs_infoset.estim import registry
     from kalman_vs_infoset.experiments.attitude_request import request
     from kalman_vs_infoset.experiments.runner import batched_task
@@ -98,7 +98,7 @@ def run_attitude(
         raise ValueError(f"noise must be one of {', '.join(NOISES)}, got {noise!r}")
     args = argparse.Namespace(
         scenario=str(scenario),
-        overrides=[f"{key}={_toml(v)}" for key, v in _flatten("", {**(tables or {}), **overrides})],
+        overrides=_sets({**(tables or {}), **overrides}),
         controller=controller,
         noise=[noise],
         estimators=None if estimator is None else [estimator],
