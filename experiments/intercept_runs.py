@@ -27,7 +27,7 @@ from kalman_vs_infoset.experiments.sim.estimator_tables import tables_kept
 from kalman_vs_infoset.experiments.sim.intercept import (
     Engagement,
     EngagementResult,
-    option_tables_read,
+    estimators_read,
 )
 from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
 from kalman_vs_infoset.experiments.stats import summary_stats
@@ -45,7 +45,7 @@ def intercept_job(
     runs a task (1 by default: ``kvi bench`` measures 1 against several runs a task,
     ``runs_per_cpu_s_by_chunk``, and several did not pay; docs/performance.md)."""
     choice = {"estimator": estimator, "noise": noise}
-    read = option_tables_read(estimator, noise)
+    read = estimators_read(estimator, noise)
     return Job(
         name=sc.name,
         label=f"{estimator}-{noise}",

@@ -47,16 +47,15 @@ def tables_kept(
     kept, and a description of another layout is returned unchanged."""
     parents: list[dict[str, Any]] = []
     here: Any = described.get("scenario")
-    for i, key in enumerate((*where, None)):
-        if here is None and i == len(where):
-            here = {}  # no tables at all: as the empty table of tables
+    for key in where:
         if not isinstance(here, dict):
             return described
         parents.append(here)
-        here = here.get(key) if key is not None else None
-    tables = parents[-1]
-    node: dict[str, Any] = {k: _as_options(problem, k, tables.get(k, {})) for k in sorted(names)}
-    for key, parent in zip(reversed(where), reversed(parents[:-1]), strict=True):
+        here = here.get(key, {} if key == where[-1] else None)  # no tables: none
+    if not isinstance(here, dict):
+        return described
+    node: dict[str, Any] = {k: _as_options(problem, k, here.get(k, {})) for k in sorted(names)}
+    for key, parent in zip(reversed(where), reversed(parents), strict=True):
         node = {**parent, key: node}
     return {**described, "scenario": node}
 

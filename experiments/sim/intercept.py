@@ -84,12 +84,12 @@ def build_estimator(name: str, sc: InterceptScenario, model: ChannelModel, chann
     return est, est.initial(sc.estimator.prior(channel))
 
 
-def option_tables_read(estimator_name: str, noise_name: str) -> frozenset[str]:
-    """The ``[estimator.<name>]`` option tables an engagement of ``estimator_name`` under
-    ``noise_name`` reads: its estimator's own (:func:`make_estimator`; an estimator is
-    built from its table and the channel, nothing else) and, under game errors, the
-    reference set's, which the adversary reasons with (:func:`build_noise`). Another
-    estimator's table changes none of its runs."""
+def estimators_read(estimator_name: str, noise_name: str) -> frozenset[str]:
+    """The estimators whose code and ``[estimator.<name>]`` option table decide an
+    engagement of ``estimator_name`` under ``noise_name``: its own (:func:`make_estimator`;
+    an estimator is built from its table and the channel, nothing else) and, under game
+    errors, the reference set, which the adversary reasons with (:func:`build_noise`).
+    No other estimator changes its runs."""
     tables = {estimator_name}
     if noise_name == "game":
         tables.add(registry.reference("intercept").name)
