@@ -16,11 +16,14 @@ Colour = estimator (:mod:`kalman_vs_infoset.experiments.figstyle`); the truth is
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments.files import atomic_write
 from matplotlib import animation
 from matplotlib.collections import PolyCollection
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -251,7 +254,11 @@ def animate(
         return ()
 
     anim = animation.FuncAnimation(fig, draw, frames=frames, blit=False)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(path, writer=animation.PillowWriter(fps=fps), dpi=72)
+    # written whole or not at all, as every other file (atomic_write): pillow takes the
+    # format from the name, so the frames go to a GIF of their own first
+    with tempfile.TemporaryDirectory() as scratch:
+        gif = Path(scratch) / "set.gif"
+        anim.save(gif, writer=animation.PillowWriter(fps=fps), dpi=72)
+        atomic_write(path, lambda tmp: shutil.copyfile(gif, tmp))
     fs.plt.close(fig)
     return path

@@ -19,15 +19,40 @@ from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.results import TRACE_DIR, existing_sidecar
 
 NOISE_ORDER = ("random", "game", "bias", "none")
+#: the columns the figures of an intercept trace and of its sets file read
+STEP_COLUMNS = (
+    "scenario", "estimator", "noise", "run", "step", "t_s", "channel", "alpha_true_rad",
+    "alpha_meas_rad", "alpha_err_rad", "alpha_bound_rad", "forecast_lo_m", "forecast_hi_m",
+    "forecast_true_m", "truth_inside", "impulse_mps", "fuel_mps", "miss_m", "x_true_m",
+    "zem_true_m",
+)  # fmt: skip
+SET_COLUMNS = ("run", "step", "t_s", "phase", "channel", "estimator", "x_m", "alpha_rad", "zem_m")
+
+
+def _read_table(path: Path, what: str) -> pd.DataFrame:
+    try:
+        return pd.read_parquet(path)
+    except Exception as exc:  # missing, truncated or not Parquet
+        raise InputError(f"{path}: cannot read {what} ({type(exc).__name__})") from None
+
+
+def _missing(df: pd.DataFrame, path: Path, needed, what: str) -> None:
+    """One line naming the first column of ``needed`` that ``df`` lacks, if any."""
+    lacking = [c for c in needed if c not in df.columns]
+    if lacking:
+        raise InputError(
+            f"{path}: {what} without its column {lacking[0]!r} (rewrite it with --trace)"
+        )
 
 
 def _read(path: Path) -> pd.DataFrame:
-    try:
-        df = pd.read_parquet(path)
-    except Exception as exc:  # missing, truncated or not Parquet
-        raise InputError(f"{path}: cannot read a trace ({type(exc).__name__})") from None
+    df = _read_table(path, "a trace")
     if not ({"run", "step"} <= set(df.columns) and ({"channel", "axis"} & set(df.columns))):
         raise InputError(f"{path}: not a trace (written by --trace: run, step, channel or axis)")
+    if "channel" in df:
+        _missing(df, path, STEP_COLUMNS, "an intercept trace")
+    if not len(df):
+        raise InputError(f"{path}: a trace without steps (nothing to draw)")
     return df
 
 
@@ -72,31 +97,37 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
     df = pd.concat(steps, ignore_index=True)
     if "seed" not in df:
         df = df.assign(seed=None)
-    for seed, by_seed in df.groupby("seed", dropna=False, sort=True):
+    # traces of other scenarios (e.g. --set overrides) or seeds in one folder are drawn
+    # apart: their runs share numbers, not truths
+    for (name, seed), group in df.groupby(["scenario", "seed"], dropna=False, sort=True):
         tag = "" if pd.isna(seed) else f"-s{int(seed)}"
-        files += _step_figures(by_seed, str(by_seed["scenario"].iloc[0]), tag, out, paper)
+        files += _step_figures(group, str(name), tag, out, paper)
     for path in paths:
         files += _set_figures(path, out, animation)
     return files
 
 
 def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> list[Path]:
-    """One seed's figures; their names carry what distinguishes the run (estimator,
-    noises, seed ``tag``, run), so drawing another seed never replaces them."""
+    """One scenario's and seed's figures; their names carry what distinguishes the run
+    (estimator, noises, seed ``tag``, run), so drawing another seed never replaces them.
+    Each figure shows the estimators and noises that traced the run (a run traced by
+    one estimator only, or failed for another, is drawn with the traces it has)."""
     from kalman_vs_infoset.experiments import plots_intercept
 
     files: list[Path] = []
     for run in sorted(df["run"].unique()):
-        for est in dict.fromkeys(df["estimator"]):
-            d = df[df["estimator"] == est]
+        at = df[df["run"] == run]
+        for est in dict.fromkeys(at["estimator"]):
+            d = at[at["estimator"] == est]
             noises = _noises(d)
             fig = plots_intercept.control_processes(d, int(run), str(est), noises, paper=paper)
             # '+' between noises, as the other figure names (a comma is awkward in a shell)
             stem = f"{name}-{est}-{'+'.join(noises)}{tag}-run{run}-processes"
             files += fs.save(fig, out / stem)
-        if df["estimator"].nunique() > 1:
-            for noise in _noises(df):
-                fig = plots_intercept.estimator_overlay(df, int(run), noise)
+        for noise in _noises(at):
+            by_noise = at[at["noise"] == noise]
+            if by_noise["estimator"].nunique() > 1:
+                fig = plots_intercept.estimator_overlay(by_noise, int(run), noise)
                 files += fs.save(fig, out / f"{name}-{noise}{tag}-run{run}-overlay")
     return files
 
@@ -107,7 +138,8 @@ def _set_figures(path: Path, out: Path, animation: bool) -> list[Path]:
     sets_path = path.with_name(path.name.replace("-trace.parquet", "-trace-sets.parquet"))
     if not sets_path.exists():
         return []
-    sets, steps = pd.read_parquet(sets_path), pd.read_parquet(path)
+    sets, steps = _read_table(sets_path, "the sets of a trace"), _read(path)
+    _missing(sets, sets_path, SET_COLUMNS, "the sets of a trace")
     stem = path.name.replace("-trace.parquet", "")
     files: list[Path] = []
     for run in sorted(sets["run"].unique()):
