@@ -100,12 +100,14 @@ def _combined(path: Path) -> bool:
 
 
 def _tables(folder: Path) -> list[Path]:
-    """The runs' own tables of a results folder: beside the combined table (adversaries,
-    sweep), or in ``runs/`` (compare, fig5); a combined table alone is read as is."""
+    """The runs' own tables of a results folder: beside the combined table (intercept,
+    adversaries, sweep) and in ``runs/`` (compare, fig5), both when two commands wrote
+    to one ``--out`` (their default folders are the same); a combined table alone is
+    read as is."""
     found = sorted(p for p in folder.glob("*.parquet") if not p.name.endswith(TRACE_SUFFIXES))
     files = [p for p in found if not _combined(p)]
-    if not files and (folder / "runs").is_dir():  # compare, fig5: the runs in runs/
-        files = _tables(folder / "runs")
+    if (folder / "runs").is_dir():
+        files += _tables(folder / "runs")
     return files or found
 
 
@@ -117,7 +119,8 @@ def load_results(folder: str | Path) -> pd.DataFrame:
     folder : str or pathlib.Path
         A folder written by ``kvi intercept``, ``kvi attitude``, ``kvi compare``,
         ``kvi fig5`` (their ``runs/``), or :func:`kalman_vs_infoset.api.run_experiment`
-        with ``out``; or a single results table.
+        with ``out`` (by several of them: the tables at its top and in its ``runs/``);
+        or a single results table.
 
     Returns
     -------
@@ -145,6 +148,7 @@ def load_results(folder: str | Path) -> pd.DataFrame:
     else:
         raise InputError(f"{folder}: no such results folder or table")
     frames, meta = [], {}
+    runs_read: dict[str, set[int]] = {}  # by table name: one job's runs
     for f in files:
         try:
             df = pd.read_parquet(f)
@@ -152,8 +156,13 @@ def load_results(folder: str | Path) -> pd.DataFrame:
             raise InputError(f"{f}: cannot read ({type(exc).__name__})") from None
         if not {"run", "status"} <= set(df.columns):
             continue  # a summary table beside the runs
+        # a table of the same name at the top and in runs/ holds the runs of one job
+        # (run j is seeded alike in both): each run is read once, the top's first
+        seen = runs_read.setdefault(f.name, set())
+        df = df[~df["run"].isin(seen)]
+        seen.update(int(r) for r in df["run"])
         frames.append(df)
-        meta[f.name] = read_metadata(f)
+        meta.setdefault(f.name, read_metadata(f))
     out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     out.attrs["metadata"] = meta
     return out

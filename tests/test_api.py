@@ -216,3 +216,30 @@ def test_run_attitude_changes_the_noise_table_through_tables(tmp_path, capsys, m
     plain = api.run_attitude("smallsat_rw", noise="random", estimator="box", runs=2,
                              simulation={"duration_s": 3.0})  # fmt: skip
     assert (df["mean_knowledge_bound_deg"] > 5 * plain["mean_knowledge_bound_deg"]).all()
+
+
+def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(tmp_path):
+    """``intercept`` and ``compare`` default to one folder: the first's table at its top,
+    the second's in ``runs/`` beside its combined table. Every run of both is read (the
+    top's tables hid ``runs/``), and a table of one name in both places (one job, run
+    ``j`` seeded alike) gives each run once."""
+    from kalman_vs_infoset.experiments.report import write_tables
+
+    out = tmp_path / "results"
+    api.run_experiment("kp_fig3", "ekf", "game", runs=2, seed=3, out=out)
+    for est in ("ekf", "ukf"):
+        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out / "runs")
+    api.run_experiment("kp_fig3", "ekf", "game", runs=3, seed=3, out=out / "runs")
+    below = pd.concat([pd.read_parquet(p) for p in sorted((out / "runs").glob("*.parquet"))])
+    write_tables(below, out / "kp_fig3-compare")
+    loaded = api.load_results(out)
+    keys = sorted(zip(loaded["estimator"], loaded["noise"], loaded["run"], strict=True))
+    assert keys == sorted(
+        [("ekf", "game", j) for j in range(3)]
+        + [(e, "random", j) for e in ("ekf", "ukf") for j in range(2)]
+    )
+    assert sorted(loaded.attrs["metadata"]) == [
+        "kp_fig3-ekf-game-s3.parquet",
+        "kp_fig3-ekf-random-s3.parquet",
+        "kp_fig3-ukf-random-s3.parquet",
+    ]
