@@ -147,7 +147,8 @@ def load_results(folder: str | Path) -> pd.DataFrame:
             raise InputError(f"{folder}: no results tables (*.parquet) here or in runs/")
     else:
         raise InputError(f"{folder}: no such results folder or table")
-    frames, meta = [], {}
+    frames: list[pd.DataFrame] = []
+    meta: dict[str, dict[str, Any]] = {}
     runs_read: dict[str, set[int]] = {}  # by table name: one job's runs
     for f in files:
         try:

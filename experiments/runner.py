@@ -363,17 +363,38 @@ def _check_resumable(
     decides a run (:func:`_what_decides_a_run`, then the job's ``decides``). Returns
     whether the file is of other code and ``rerun_other_code`` lets its runs be run
     again."""
-    fix = "use another --out or delete the file"
+    # both descriptions must allow it: the JSON in _meta/ and the table's own, which
+    # travels with its rows (a table copied without its JSON beside another job's was
+    # resumed under that job's description). A table of an earlier release has only the
+    # JSON; a lost or damaged JSON need not cost the runs when the table has its own.
     try:
-        old = json.loads(meta_path.read_text())
+        descriptions = [own] if (own := read_metadata(path)) else []
+    except InputError:  # an unreadable table: _read_table names it and the remedy
+        descriptions = []
+    try:
+        descriptions.append(json.loads(meta_path.read_text()))
     except (OSError, ValueError):
-        # the table carries the same description in its own metadata (lost or damaged
-        # JSON beside it need not cost the runs)
-        old = read_metadata(path) or None
-        if old is None:
+        if not descriptions:
             raise InputError(
-                f"{path}: no readable {meta_path.name} to check it against; {fix}"
+                f"{path}: no readable {meta_path.name} to check it against; use another "
+                "--out or delete the file"
             ) from None
+    other = False
+    for old in descriptions:  # each checked: a refusal raises
+        other = _other_code(path, meta_path, old, meta, rerun_other_code, decides) or other
+    return other
+
+
+def _other_code(
+    path: Path,
+    meta_path: Path,
+    old: Any,
+    meta: dict[str, Any],
+    rerun_other_code: bool,
+    decides: Callable[[dict[str, Any]], dict[str, Any]] | None,
+) -> bool:
+    """:func:`_check_resumable` against one stored description ``old``."""
+    fix = "use another --out or delete the file"
     if not isinstance(old, dict):
         raise InputError(f"{path}: {meta_path.name} is not a results description; {fix}")
     now = json.loads(json.dumps(meta))  # as the file holds it (JSON types)

@@ -463,3 +463,21 @@ def test_an_override_of_an_option_the_estimator_does_not_read_is_warned(capsys, 
         "kvi: warning: --set estimator.infoset.max_sections has no effect: the node set "
         '(sections = "nodes") does not read it: it sizes slabs and points'
     ]
+
+
+def test_a_table_copied_beside_another_jobs_description_is_refused(tmp_path, capsys):
+    """The table's own description decides a resume: a table of one scenario copied
+    (without its ``_meta`` JSON) over the table of another was resumed under the other's
+    description, adding runs of one setting to runs of another in one table."""
+    p, q = tmp_path / "a.toml", tmp_path / "b.toml"
+    p.write_text(SHORT)
+    q.write_text(SHORT.replace("nominal_range_km = 1000.0", "nominal_range_km = 999.0"))
+    args = ["--workers", 1, "--no-progress", "--estimators", "ekf"]
+    assert run(capsys, "intercept", p, "--runs", 1, *args, "--out", tmp_path / "A").returncode == 0
+    assert run(capsys, "intercept", q, "--runs", 2, *args, "--out", tmp_path / "B").returncode == 0
+    (table,) = (tmp_path / "A").glob("*.parquet")
+    (other,) = (tmp_path / "B").glob("*.parquet")
+    table.write_bytes(other.read_bytes())  # as a merge of folders: the table only
+    r = run(capsys, "intercept", p, "--runs", 3, *args, "--out", tmp_path / "A")
+    assert one_line_error(r) and "scenario.model.nominal_range_km" in r.stderr, r.stderr
+    assert len(pd.read_parquet(table)) == 2  # nothing added
