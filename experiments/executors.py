@@ -62,9 +62,10 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
                 "--scheduler needs dask.distributed (pip install 'kalman-vs-infoset[cluster]')"
             ) from None
         try:
+            _probe_scheduler(scheduler)
             client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S:g}s")
-        except (OSError, TimeoutError, ValueError, TypeError) as exc:
-            why = (str(exc).splitlines() or [type(exc).__name__])[0]
+        except Exception as exc:  # noqa: BLE001 - whatever answers there, one line
+            why = (str(exc).splitlines() or [""])[0] or type(exc).__name__
             raise InputError(f"cannot reach the Dask scheduler at {scheduler!r}: {why}") from None
         try:
             _check_workers_code(client, scheduler)
@@ -126,6 +127,45 @@ def _worker_init(parent_pid: int) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
+def _probe_scheduler(address: str, timeout_s: float | None = None) -> None:
+    """Raise unless a Dask scheduler answers the comm handshake at ``address`` within
+    ``timeout_s`` (default :data:`CONNECT_TIMEOUT_S`). ``distributed.Client`` waits for
+    the handshake without a time limit (a server that accepts and stays silent, e.g. an
+    HTTP server on the dashboard's port, hung the command), and reads an HTTP reply as a
+    frame length (it tried to allocate exabytes). The probe runs on a loop of its own,
+    in a thread, so that a caller's running event loop (a notebook) is not in the way."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    timeout_s = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+
+    async def handshake() -> None:
+        comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
+        await comm.close()
+
+    failed: list[BaseException] = []
+
+    def probe() -> None:
+        try:
+            asyncio.run(handshake())
+        except BaseException as exc:  # noqa: BLE001 - reported to the caller below
+            failed.append(exc)
+
+    thread = threading.Thread(target=probe, name="kvi-scheduler-probe", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 5.0)  # asyncio.wait_for ends it first; this is a backstop
+    if thread.is_alive():
+        raise TimeoutError(f"no handshake within {timeout_s:g} s")
+    if failed:
+        exc = failed[0]
+        if isinstance(exc, asyncio.TimeoutError | TimeoutError):
+            raise TimeoutError(f"no Dask handshake within {timeout_s:g} s (not a scheduler?)")
+        if isinstance(exc, MemoryError):  # a reply read as the length of a frame
+            raise ValueError("its reply is not Dask's protocol (not a scheduler?)")
+        raise exc
 
 
 def _check_workers_code(client, scheduler: str) -> None:

@@ -279,11 +279,13 @@ def test_a_resume_refusal_names_the_changed_field(tmp_path, capsys):
 
 def test_a_refused_scheduler_leaves_nothing_behind(short, tmp_path, capsys, monkeypatch):
     distributed = pytest.importorskip("distributed")
+    from kalman_vs_infoset.experiments import executors
 
     def unreachable(address, timeout=None):
         raise OSError(f"Timed out trying to connect to {address}")
 
     monkeypatch.setattr(distributed, "Client", unreachable)
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.5)  # port 9: nothing listens
     out = tmp_path / "out"
     for command in (["intercept"], ["compare", "--estimators", "infoset", "--noise", "random"]):
         r = run(capsys, *command, short, "--runs", 1, "--no-progress",
@@ -481,3 +483,51 @@ def test_a_table_copied_beside_another_jobs_description_is_refused(tmp_path, cap
     r = run(capsys, "intercept", p, "--runs", 3, *args, "--out", tmp_path / "A")
     assert one_line_error(r) and "scenario.model.nominal_range_km" in r.stderr, r.stderr
     assert len(pd.read_parquet(table)) == 2  # nothing added
+
+
+def _server(reply: bytes | None) -> int:
+    """A local server that answers every connection with ``reply`` and closes it, or
+    (``None``) accepts and stays silent; its port."""
+    import socket
+    import threading
+
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    sock.listen(4)
+    kept = []
+
+    def serve() -> None:
+        while True:
+            conn, _ = sock.accept()
+            if reply is None:  # reads, as an HTTP server waiting for a request's end
+                conn.recv(64)
+                kept.append(conn)  # open, silent
+            else:
+                conn.recv(64)
+                conn.sendall(reply)
+                conn.close()
+
+    threading.Thread(target=serve, daemon=True).start()
+    return sock.getsockname()[1]
+
+
+@pytest.mark.parametrize(
+    "reply",
+    [b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", None],
+    ids=["http", "silent"],
+)
+def test_a_scheduler_address_that_is_not_a_scheduler_is_one_line(
+    short, tmp_path, capsys, monkeypatch, reply
+):
+    """--scheduler at a server that is not Dask's (the dashboard's port, say): an HTTP
+    reply was read as a frame length (a MemoryError traceback) and a silent server hung
+    the command; both are refused in one line within the connect timeout."""
+    pytest.importorskip("distributed")
+    from kalman_vs_infoset.experiments import executors
+
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
+    out = tmp_path / "out"
+    r = run(capsys, "intercept", short, "--runs", 1, "--no-progress", "--scheduler",
+            f"tcp://127.0.0.1:{_server(reply)}", "--out", out)  # fmt: skip
+    assert one_line_error(r) and "not a scheduler" in r.stderr, r.stderr
+    assert not out.exists()
