@@ -188,6 +188,8 @@ def override_suffix(overrides: Sequence[str]) -> str:
     all of them (``+N_more_<hash>``): distinct override lists keep distinct names."""
     squeezed = (o.replace(" ", "") for o in overrides)
     safe = ["".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed]
+    # a value's '..' (a text with an ellipsis) would make the name a path's parent
+    safe = [o.replace("..", "_") for o in safe]
     full = "".join(f"+{o}" for o in safe)
     if len(full) <= MAX_SUFFIX:
         return full

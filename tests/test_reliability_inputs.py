@@ -94,6 +94,18 @@ def test_many_overrides_still_name_files_the_system_accepts(short, tmp_path, cap
     assert all(len(p.name.encode()) <= 255 for p in files_under(out))
 
 
+@pytest.mark.parametrize("value", ['description="wait... what"', 'reference.label="v1..v2"'])
+def test_a_text_value_with_dots_names_its_files(short, tmp_path, capsys, value):
+    """A text override holding '..' ran under a name with '..' in it, refused as a
+    "field 'name'" the user never set; the name now replaces it, and the run is made."""
+    out = tmp_path / "out"
+    r = run(capsys, "intercept", short, "--runs", 1, "--workers", 1, "--no-progress",
+            "--estimators", "ekf", "--set", value, "--out", out)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    (table,) = out.glob("*.parquet")
+    assert ".." not in table.name and table.name.startswith("short+")
+
+
 def test_a_scenario_name_too_long_for_file_names_is_refused(tmp_path, capsys):
     p = tmp_path / "s.toml"
     p.write_text(SHORT.replace('name = "short"', f'name = "{"n" * 200}"'))
