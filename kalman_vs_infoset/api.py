@@ -123,6 +123,9 @@ def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
     """The estimator and noise names (the scenario's by default), checked before any
     run: an unknown name is a ``ValueError`` naming the allowed ones, as the command
     line refuses it, not a table of failed runs."""
+    for what, name in (("estimator", estimator), ("noise", noise)):
+        if name is not None and not isinstance(name, str):  # e.g. a list of names
+            raise TypeError(f"{what} must be one name (a str), got {name!r}")
     estimator = estimator or sc.experiment.estimator
     _intercept.registration(estimator)  # the engagement's own checks, before any run
     return estimator, _intercept.check_noise(noise or sc.experiment.noise)
@@ -251,6 +254,10 @@ def run_experiment(
     runs = sc.experiment.runs if runs is None else _index(runs, "runs", 1)
     workers = None if workers is None else _index(workers, "workers", 1)  # 0 meant all CPUs
     seed = _seed(seed, sc.experiment.seed)
+    if executor is not None and not isinstance(executor, Executor):
+        raise TypeError(f"executor must be a concurrent.futures.Executor, got {executor!r}")
+    if out is not None and not str(out).strip():  # Path("") is the working directory
+        raise ValueError("out must name a folder (None: computed in memory)")
     if out is not None:
         return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
@@ -318,6 +325,8 @@ def trace(
     runs = [_index(j, "a run index", 0) for j in runs]
     if not runs:  # (two frames without columns came back)
         raise ValueError("runs must name at least one run to trace")
+    if len(set(runs)) < len(runs):  # each step came back twice
+        raise ValueError(f"runs must be distinct, got {runs}")
     sets_every = _index(sets_every, "sets_every", 1)
     steps, sets, _ = _traces.intercept_trace(sc, estimator, noise, seed, runs, sets_every)
     return steps, sets

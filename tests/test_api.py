@@ -197,6 +197,24 @@ def test_bad_input_through_the_api_is_one_clear_error(tmp_path):
         api.run_experiment("kp_fig3", "ekf", "random", runs=1, workers=1.5)
 
 
+def test_wrong_kinds_of_arguments_are_named(tmp_path, monkeypatch):
+    """Arguments of the wrong kind are named (before: "unhashable type: 'list'", an
+    AttributeError 'submit', the results written to the working directory for
+    ``out=''``, and every step twice for a run traced twice)."""
+    with pytest.raises(TypeError, match="estimator must be one name"):
+        api.run_engagement("kp_fig3", ["ekf"])
+    with pytest.raises(TypeError, match="noise must be one name"):
+        api.run_experiment("kp_fig3", "ekf", ("random",), runs=1)
+    with pytest.raises(TypeError, match="executor must be a concurrent.futures.Executor"):
+        api.run_experiment("kp_fig3", "ekf", "random", runs=1, executor=5)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match="out must name a folder"):
+        api.run_experiment("kp_fig3", "ekf", "random", runs=1, out="")
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="runs must be distinct"):
+        api.trace("kp_fig3", "ekf", "random", runs=[0, 0])
+
+
 def test_run_attitude_changes_the_noise_table_through_tables(tmp_path, capsys, monkeypatch):
     """``noise=`` names the noise, so the ``[noise]`` table (the measurement errors) was
     out of reach of the keyword overrides; ``tables={"noise": {...}}`` reaches it, and
