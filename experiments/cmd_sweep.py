@@ -106,7 +106,7 @@ def run(args) -> dict[str, Any]:
     from kalman_vs_infoset.experiments import paired, plots
     from kalman_vs_infoset.experiments.intercept_runs import run_grid
     from kalman_vs_infoset.experiments.report import summary_markdown, write_text
-    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.scenario import load_scenario, toml_value
 
     keys = _keys(args.key, args.overrides)
     key = ",".join(keys)
@@ -119,10 +119,10 @@ def run(args) -> dict[str, Any]:
     for v in args.values:
         try:
             scenarios.append(load_scenario(
-                args.scenario, [*args.overrides, *(f"{k}={json.dumps(v)}" for k in keys)]
+                args.scenario, [*args.overrides, *(f"{k}={toml_value(v)}" for k in keys)]
             ))  # fmt: skip
         except InputError as exc:
-            raise InputError(f"--values: {key} = {json.dumps(v)}: {exc}") from None
+            raise InputError(f"--values: {key} = {toml_value(v)}: {exc}") from None
     rows, frames = [], []
     for value, sc in zip(args.values, scenarios, strict=True):
         summaries, dfs = run_grid(sc, args, runs, seed, out, args.estimators, args.noise)

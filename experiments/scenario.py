@@ -9,6 +9,8 @@ file and the field, which the command line prints with exit status 2.
 from __future__ import annotations
 
 import hashlib
+import json
+import math
 import tomllib
 import warnings
 from collections.abc import Mapping, Sequence
@@ -179,6 +181,20 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> dict[str,
 #: longest override suffix of a scenario's name (the name is part of every result
 #: file's name, and a file name has at most 255 bytes)
 MAX_SUFFIX = 96
+
+
+def toml_value(value: Any) -> str:
+    """``value`` as the TOML text of a ``--set`` item: numbers, booleans, strings and
+    lists of them (numpy scalars and arrays as their lists; a tuple as a list). Not
+    JSON's text: TOML writes ``nan`` and ``inf`` where JSON writes ``NaN`` and
+    ``Infinity``."""
+    if hasattr(value, "tolist"):  # numpy scalars and arrays
+        value = value.tolist()
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return json.dumps(value)
 
 
 def override_suffix(overrides: Sequence[str]) -> str:

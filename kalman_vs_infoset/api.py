@@ -19,7 +19,6 @@ True
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from pathlib import Path
@@ -67,18 +66,9 @@ def scenarios() -> list[str]:
 
 def _sets(tables: Any) -> list[str]:
     """Keyword tables of overrides as ``--set`` items (``TABLE.KEY=<TOML value>``)."""
-    return [f"{key}={_toml(v)}" for key, v in _scenario.dotted_fields(tables).items()]
-
-
-def _toml(value: Any) -> str:
-    """A Python value as a TOML value (numbers, booleans, strings, lists of them)."""
-    if isinstance(value, np.generic | np.ndarray):  # an array: its list (as a tuple's)
-        value = value.tolist()
-    if isinstance(value, tuple):
-        value = list(value)
-    if isinstance(value, float) and not np.isfinite(value):
-        return "nan" if np.isnan(value) else ("inf" if value > 0 else "-inf")
-    return json.dumps(value)
+    return [
+        f"{key}={_scenario.toml_value(v)}" for key, v in _scenario.dotted_fields(tables).items()
+    ]
 
 
 def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenario:

@@ -176,6 +176,37 @@ def test_sweep_values_equal_as_numbers_are_refused(short, tmp_path, capsys):
     assert "twice" in err
 
 
+@pytest.mark.parametrize("values", ["[nan]", "[inf]", "[1e-5, -inf]"])
+def test_sweep_values_not_finite_are_refused_by_the_field(short, tmp_path, capsys, values):
+    """TOML's nan and inf were handed on in JSON's spelling (NaN, Infinity) and refused
+    as "not a TOML value"; the field's own bound refuses them now."""
+    err = _refused(capsys, tmp_path / "out", *SWEEP, short, "--key", "model.nu_mps2",
+                   "--values", values)  # fmt: skip
+    assert "field 'model.nu_mps2' must be a number" in err and "TOML" not in err
+
+
+def test_toml_value_writes_what_toml_reads():
+    import tomllib
+
+    import numpy as np
+    from kalman_vs_infoset.experiments.scenario import toml_value
+
+    for value in (1, 2.5, True, "a b", [1.0, float("inf")], (np.float64(-np.inf), 2),
+                  np.array([[1.0, 2.0]]), [["x"], []]):  # fmt: skip
+        back = tomllib.loads(f"v = {toml_value(value)}")["v"]
+        plain = value.tolist() if hasattr(value, "tolist") else value
+        assert json_equal(back, plain), (value, back)
+    back = tomllib.loads(f"v = {toml_value([float('nan')])}")["v"]
+    assert len(back) == 1 and back[0] != back[0]
+
+
+def json_equal(a, b) -> bool:
+    """Equal as TOML holds them (tuples are lists)."""
+    if isinstance(a, list | tuple) and isinstance(b, list | tuple):
+        return len(a) == len(b) and all(json_equal(x, y) for x, y in zip(a, b, strict=True))
+    return a == b and type(a) is type(b) or (isinstance(a, float) and a == b)
+
+
 def test_a_swept_key_also_given_with_set_is_refused(short, tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", *SWEEP, short, "--key", "model.nu_mps2",
                    "--values", "[0.5, 1.0]", "--set", "model.nu_mps2=2")  # fmt: skip
