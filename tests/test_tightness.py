@@ -256,3 +256,20 @@ def test_a_wide_box_is_compared_with_the_box_both_sets_start_from(capsys, tmp_pa
     res = json.loads(out.out.strip().splitlines()[-1])
     assert all(res["exact_inside"]) and len(res["ratio"]) == 4
     assert res["max_ratio"] <= 1.03
+
+
+def test_a_point_prior_holds_its_one_state_within_rounding(capsys, tmp_path):
+    """A prior box of one lateral state (zero widths; the vertical channel unguided):
+    at t = 0 the set and the exact set are that state's miss, -8000 m, each computed
+    through its own coordinates. The set's read 1 ulp short of it, and the comparison at
+    0 width called the exact state missing; ends computed apart agree to 4 ulps."""
+    point = ["--set", "estimator.y_km=[-8.0,-8.0]", "--set", "estimator.vy_kmps=[0.0,0.0]",
+             "--set", "estimator.x_km=[5801.3,5801.3]", "--set", "truth.y_km=[-8.0,-8.0]",
+             "--set", "truth.vy_kmps=[0.0,0.0]", "--set", "truth.x_km=[5801.3,5801.3]",
+             "--set", "truth.vx_kmps=[-58.0,-58.0]"]  # fmt: skip
+    code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "0", *point)
+    assert code == 0, out.err
+    res = json.loads(out.out.strip().splitlines()[-1])
+    assert res["exact_lo_m"][0] == res["exact_hi_m"][0] == -8000.0
+    assert abs(res["set_lo_m"][0] + 8000.0) < 1e-11 and abs(res["set_hi_m"][0] + 8000.0) < 1e-11
+    assert res["exact_inside"] == [True]
