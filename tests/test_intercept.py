@@ -336,3 +336,20 @@ def test_the_piece_split_floor_splits_fewer_pieces_next_to_the_target():
         assert eng.finish().truth_outside == 0
         most[bool(sets)] = max(pieces[-20:])
     assert most[True] < most[False], most
+
+
+def test_a_truth_much_slower_than_the_nominal_speed_is_guided_to_its_closest_approach():
+    """The step limit was twice the approach at the *nominal* closing speed: a truth
+    closing at 20 km/s in a 58 km/s model (the estimators told the true interval) had
+    guidance and the containment check end 205 s into a 290-s approach, the run reported
+    as finished (miss 57 m where guidance to the end gives about a metre). The limit now
+    takes the slowest closing speed of the truth's box."""
+    from kalman_vs_infoset.api import load_scenario, run_engagement
+
+    sc = load_scenario("kp_fig3", estimator={"closing_speed_kmps": [20.0, 20.0],
+                       "vx_kmps": [-21.0, -19.0]}, truth={"vx_kmps": [-20.0, -20.0]})  # fmt: skip
+    assert sc.max_steps >= 2 * 5801.3 / 20.0 / sc.model.dt_s
+    r = run_engagement(sc, "infoset", "random")  # (a filter assumes the nominal speed)
+    # guided until the step in which the closest approach falls
+    assert r.steps * sc.model.dt_s >= r.ca_time_s - sc.model.dt_s, (r.steps, r.ca_time_s)
+    assert r.miss_m < 10.0

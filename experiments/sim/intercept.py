@@ -237,7 +237,7 @@ class Engagement:
         self.fuel = 0.0
         self.n_imp = self.outside = self.checked = self.step_index = self.unbounded = 0
         self.issued: list[float] = []
-        self.max_steps = int(math.ceil(pos_km[0] * 1e3 / model.e / self.dt * 2)) + 10
+        self.max_steps = sc.max_steps  # (twice the longest approach: never reached)
         self.result: EngagementResult | None = None
 
     def step(self) -> bool:

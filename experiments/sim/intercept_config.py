@@ -425,7 +425,8 @@ class InterceptScenario(Table):
         if steps > MAX_STEPS:
             raise ValueError(
                 f"field 'model.dt_s' {m.dt_s} s makes a run up to {steps} steps long "
-                f"(truth.x_km up to {self.truth.x_km[1]} km at {m.closing_speed_kmps} km/s); "
+                f"(truth.x_km up to {self.truth.x_km[1]} km at {self.slowest_closing_kmps:g} "
+                "km/s); "
                 f"the limit is {MAX_STEPS} steps"
             )
         if not self._auxiliary_truth:  # (after the steps: a long run drifts far)
@@ -440,9 +441,17 @@ class InterceptScenario(Table):
                                      self.model.closing_speed_kmps)  # fmt: skip
 
     @property
+    def slowest_closing_kmps(self) -> float:
+        """The slowest closing speed a run's truth may have (or the nominal one, if
+        slower): the speed :attr:`max_steps` takes."""
+        return min(self.model.closing_speed_kmps, -max(self.truth.vx_kmps))
+
+    @property
     def max_steps(self) -> int:
-        """Most decision steps of a run: twice the nominal time to the farthest truth."""
-        x_m, e_mps = self.truth.x_km[1] * 1e3, self.model.closing_speed_kmps * 1e3
+        """Most decision steps of a run: twice the time to the farthest truth at its
+        slowest closing speed. (The nominal speed alone ended runs of a truth more than
+        twice slower half-way, reported as finished.)"""
+        x_m, e_mps = self.truth.x_km[1] * 1e3, self.slowest_closing_kmps * 1e3
         return int(math.ceil(x_m / e_mps / self.model.dt_s * 2)) + 10
 
     @property
