@@ -12,11 +12,17 @@ package's Kepler solution), and whole engagements from the faces.
 
 from __future__ import annotations
 
+import re
+from dataclasses import replace
+
 import numpy as np
 import pytest
+from harness_texts import one_line_error, run_cli
 from kalman_vs_infoset.estim.intercept.model import ChannelModel, ChannelPrior
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling, PointingLoop
+from kalman_vs_infoset.experiments.sim.sun_gravity import longest_approach_s
 from scipy.integrate import solve_ivp
 
 from kalman_vs_infoset import api
@@ -252,11 +258,22 @@ def test_the_changelog_s_before_and_after_are_the_results_files():
             assert all(abs(a[k][q] - b[k][q]) < 1e-3 for q in a[k]), k
 
 
-def test_an_end_to_end_drift_over_half_of_eps_says_which_bound_and_what_to_change():
+def test_an_end_to_end_drift_over_half_of_eps_says_which_bound_and_what_to_change(tmp_path, capsys):
     """A 1-deg attitude measurement: the impulses' share of the drift (the knowledge
-    bound times the 2000 m/s reserve, times the approach) passes half of ``eps``; the
-    run's error names the bound and the remedies (it read "range_drift_m must be in
-    [0, eps_m / 2)")."""
-    sc = _scenario("kp_fig3_attitude", {"attitude": {"meas_angle_bound_deg": 1.0}})
-    with pytest.raises(ValueError, match=r"knowledge bound [\d.]+ deg over the fuel reserve"):
-        api.run_engagement(sc, "infoset", "random")
+    bound times the 2000 m/s reserve, times the approach) passes half of ``eps``. The
+    refusal names the bound and the remedies (it read "range_drift_m must be in [0,
+    eps_m / 2)"), when the scenario is read: every run failed with it before (exit 1, a
+    table of failed runs, "rerun to run them again"); a run's own check stays."""
+    bad = r"knowledge bound [\d.]+ deg over the fuel reserve"
+    with pytest.raises(InputError, match=bad):
+        _scenario("kp_fig3_attitude", {"attitude": {"meas_angle_bound_deg": 1.0}})
+    out = tmp_path / "out"
+    r = run_cli(capsys, "intercept", "kp_fig3_attitude", "--runs", 1, "--workers", 1,
+                "--set", "attitude.meas_angle_bound_deg=0.5", "--out", out)  # fmt: skip
+    assert one_line_error(r) and re.search(bad, r.stderr), r.stderr
+    assert not out.exists()
+    sc = _scenario("kp_fig3_attitude", {})
+    loop = PointingLoop.from_config(sc.attitude, np.random.default_rng(0))
+    wide = replace(sc.channel_model(), range_drift_m=0.4999 * sc.channel_model().eps_m)
+    with pytest.raises(ValueError, match=bad):  # as each run starts
+        PointingCoupling(loop).widen(wide, sc.guidance.reserve_mps, longest_approach_s(sc))

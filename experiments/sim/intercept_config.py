@@ -47,6 +47,7 @@ from kalman_vs_infoset.experiments.sim.sun_gravity import (
     check_along_sight_drift,
     check_differential_gravity,
     least_sun_for_drift_km,
+    longest_approach_s,
 )
 from pydantic import BaseModel, Field, PrivateAttr, ValidationInfo, model_validator
 
@@ -431,7 +432,24 @@ class InterceptScenario(Table):
             )
         if not self._auxiliary_truth:  # (after the steps: a long run drifts far)
             check_along_sight_drift(m, along_sight_drift(self)[1], least_km)
+            if self.attitude is not None and m.along_sight_drift:
+                self._check_pointing_drift()
         return self
+
+    def _check_pointing_drift(self) -> None:
+        """The impulses, rotated by the pointing loop's knowledge bound, drift the range
+        too; each run checks it as it starts (``PointingCoupling.widen``, the bound of
+        its own first measurement). Checked here once, with the loop's first belief on
+        a fixed draw, so that a scenario no run can take is refused when read, not
+        recorded as every run failed."""
+        import numpy as np
+        from kalman_vs_infoset.experiments.sim.pointing import PointingCoupling, PointingLoop
+
+        assert self.attitude is not None
+        loop = PointingLoop.from_config(self.attitude, np.random.default_rng(0))
+        PointingCoupling(loop).widen(
+            self.channel_model(), self.guidance.reserve_mps, longest_approach_s(self)
+        )
 
     # -- derived ----------------------------------------------------------------------
     @property
