@@ -72,7 +72,7 @@ def draw_case(rng: np.random.Generator) -> tuple[list[str], str]:
         f"model.nu_mps2={pick(0.005, 1e-4, rng.uniform(1e-4, 0.2), rng.uniform(0.2, 1.0))}",
         f"model.bearing_bound_start_rad={b0}", f"model.bearing_bound_end_rad={b1}",
         f"model.nominal_range_km={ref}",
-        f"model.dt_s={pick(0.5, 0.25, 1.0, rng.uniform(0.05, 3.0), rng.uniform(3.0, 12.0))}",
+        f"model.dt_s={(dt := pick(0.5, 0.25, 1.0, rng.uniform(0.05, 3.0), rng.uniform(3.0, 12.0)))}",  # noqa: E501
         f"model.sun_distance_km={pick(1.496e8, 10 ** rng.uniform(6.0, 10.0))}",
         f"estimator.x_km=[{x_lo}, {x_hi}]", f"estimator.closing_speed_kmps=[{e_lo}, {e_hi}]",
         f"estimator.vx_kmps=[{-e_hi - 1.0}, {-e_lo + 1.0}]",
@@ -83,8 +83,9 @@ def draw_case(rng: np.random.Generator) -> tuple[list[str], str]:
         f"guidance.min_impulse_mps={pick(0.25, 0.0)}",
         f"range_finder.enabled={pick('true', 'false', 'false')}",
         f"range_finder.rel_bound={pick(0.05, rng.uniform(0.001, 0.5))}",
-        f"range_finder.period_s={pick(2.0, rng.uniform(0.1, 10.0))}",
-        f"range_finder.first_s={pick(1.0, rng.uniform(0.0, 40.0))}",
+        # at decision steps (the scenario check refuses other times)
+        f"range_finder.period_s={dt * max(1, round(pick(2.0, rng.uniform(0.1, 10.0)) / dt))}",
+        f"range_finder.first_s={dt * round(pick(1.0, rng.uniform(0.0, 40.0)) / dt)}",
     ]  # fmt: skip
     for axis in ("y", "z"):
         out += [f"estimator.{axis}_km=[{-y}, {y}]", f"estimator.v{axis}_kmps=[{-v}, {v}]"]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from harness_texts import SHORT, experiment, one_line_error
+from harness_texts import RANGE_FINDER, SHORT, experiment, one_line_error
 from harness_texts import run_cli as run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,6 +104,17 @@ def test_a_text_value_with_dots_names_its_files(short, tmp_path, capsys, value):
     assert r.returncode == 0, r.stderr
     (table,) = out.glob("*.parquet")
     assert ".." not in table.name and table.name.startswith("short+")
+
+
+@pytest.mark.parametrize("setting", ["range_finder.first_s=0.3", "range_finder.period_s=0.7"])
+def test_a_range_finder_off_the_decision_steps_is_refused(tmp_path, capsys, setting):
+    """The range finder measures at decision steps: a first time off them was never met
+    (no range in a whole run) and a period off them was met at a multiple of the step
+    (every 3.5 s for 0.7 s), silently; both are refused, naming the field and the step."""
+    p = tmp_path / "short.toml"
+    p.write_text(SHORT + RANGE_FINDER)
+    err = _refused(capsys, tmp_path / "out", "intercept", p, "--runs", 1, "--set", setting)
+    assert f"'{setting.split('=')[0]}'" in err and "'model.dt_s' 0.5 s" in err
 
 
 def test_a_scenario_name_too_long_for_file_names_is_refused(tmp_path, capsys):

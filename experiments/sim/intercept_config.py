@@ -383,6 +383,17 @@ class InterceptScenario(Table):
             )
         if not (g.lateral or g.vertical):
             raise ValueError("field 'guidance.lateral' or 'guidance.vertical' must be true")
+        rf = self.range_finder
+        for name in ("first_s", "period_s") if rf.enabled else ():
+            # measured at decision steps only: an off-step time was never met (first_s)
+            # or met at a multiple of the step (period_s), silently
+            k = getattr(rf, name) / m.dt_s
+            if abs(k - round(k)) > 1e-9 * max(k, 1.0):
+                raise ValueError(
+                    f"field 'range_finder.{name}' {getattr(rf, name):g} s must be a multiple "
+                    f"of the decision step 'model.dt_s' {m.dt_s:g} s (the range finder "
+                    "measures at decision steps)"
+                )
         if m.bearing_bound_start_rad > m.bearing_bound_end_rad:
             # the set's bearing strip and the range finder's off-axis bound take the bound
             # at the smallest range: sound only if it grows as the range closes
