@@ -110,8 +110,8 @@ def _jsonable(obj: Any) -> Any:
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
         return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return obj.item()
+    if isinstance(obj, np.generic):  # a numpy inf or nan too: as the float's
+        return _jsonable(obj.item())
     if isinstance(obj, np.ndarray):
         return _jsonable(obj.tolist())
     if isinstance(obj, float) and not math.isfinite(obj):
@@ -305,7 +305,7 @@ def _run(parser, module, args) -> int:
         return 2
     try:
         if args.json:
-            print(json.dumps(_jsonable(result)))
+            print(json.dumps(_jsonable(result), allow_nan=False))  # strict JSON
         else:
             render = getattr(module, "render", None)
             print(render(result) if render else _render_default(result))
