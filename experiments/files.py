@@ -30,7 +30,9 @@ def atomic_write(path: Path, write: Callable[[str], object]) -> None:
     onto ``path`` (atomic on POSIX and Windows); the file gets the permissions the umask
     gives new files.
 
-    The temporary file is hidden (``.<name>.<pid>.<random>.tmp``: Parquet readers of the
+    The temporary file is flushed to disk before the rename, and the folder after it,
+    so that a power loss leaves the old file or the new one, never an empty one. The
+    temporary file is hidden (``.<name>.<pid>.<random>.tmp``: Parquet readers of the
     folder skip names starting with a dot) and removed on any error; one left by a
     process that was killed meanwhile (``kill -9`` between the write and the rename) is
     removed by the next write of the same file, once its process is gone (a complete
@@ -46,10 +48,27 @@ def atomic_write(path: Path, write: Callable[[str], object]) -> None:
         write(tmp)
         # mkstemp makes the file 0600; a data file gets the mode any new file would
         os.chmod(tmp, 0o666 & ~_umask())
+        _sync(tmp)  # its bytes on disk before the name points at them (power loss)
         os.replace(tmp, path)
+        _sync(path.parent)  # and the rename itself
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _sync(path: str | Path) -> None:
+    """``fsync`` a file or a folder, where the system allows it (a folder cannot be
+    opened on Windows; some file systems refuse to sync one: best effort there)."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 #: what a read-only folder (or one without write permission) answers a write with

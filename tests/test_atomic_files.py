@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
+import pytest
 from kalman_vs_infoset.experiments.files import atomic_write
 
 
@@ -49,3 +51,33 @@ def test_a_failed_write_leaves_no_temporary_file(tmp_path):
     except OSError:
         pass
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_bytes_reach_the_disk_before_the_name_points_at_them(tmp_path, monkeypatch):
+    """A power loss after the rename must find the new bytes, not an empty file: the
+    temporary file is synced before ``os.replace``, the folder (the rename) after it."""
+    import os
+
+    from kalman_vs_infoset.experiments import files
+
+    if not Path("/proc/self/fd").is_dir():
+        pytest.skip("names the synced files through /proc (Linux)")
+    events: list[tuple[str, str]] = []
+    fsync, replace = os.fsync, os.replace
+
+    def synced(fd: int) -> None:
+        events.append(("fsync", os.readlink(f"/proc/self/fd/{fd}")))
+        fsync(fd)
+
+    def renamed(src, dst) -> None:
+        events.append(("replace", str(dst)))
+        replace(src, dst)
+
+    monkeypatch.setattr(os, "fsync", synced)
+    monkeypatch.setattr(os, "replace", renamed)
+    target = tmp_path / "table.parquet"
+    files.atomic_write(target, lambda tmp: Path(tmp).write_bytes(b"rows"))
+    assert [kind for kind, _ in events] == ["fsync", "replace", "fsync"]
+    assert events[0][1].startswith(str(tmp_path / ".table.parquet."))  # the temporary file
+    assert events[2][1] == str(tmp_path)  # the folder
+    assert target.read_bytes() == b"rows"
