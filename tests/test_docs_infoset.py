@@ -25,6 +25,7 @@ DERIVED = {
     r"at (\d+) km\)",
     "fine": r"\(([\d.e-]+) m at `dt = ([\d.]+) s`\)",
     "drift": r"closing speed by up to ([\d.e-]+) m/s and moves its range up to ([\d.]+) mm",
+    "inside": r"\(the guarantee; to ([\d.e-]+) of its width and (\d+) ulps of the values",
 }
 
 #: sentences on earlier releases' defects, found and fixed; each of their numbers is in
@@ -164,3 +165,12 @@ def test_the_along_sight_drift_is_kp_fig5_s_own_at_1_au():
     m = api.load_scenario("kp_fig5", model={"along_sight_drift": True}).channel_model()
     assert agrees(speed, m.closing_drift_mps)
     assert agrees(range_mm, m.range_drift_m * 1e3)
+
+
+def test_the_tolerance_of_exact_inside_is_the_command_s():
+    """'`exact_inside` ... to 1e-6 of its width and 4 ulps of the values': the
+    tightness command's constants."""
+    from kalman_vs_infoset.experiments.cmd_tightness import INSIDE_REL_TOL, ULPS_APART
+
+    rel, ulps = printed(DOC, DERIVED["inside"])
+    assert float(rel) == INSIDE_REL_TOL and int(ulps) == ULPS_APART
