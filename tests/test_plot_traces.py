@@ -1,6 +1,7 @@
 """``kvi plot`` on trace folders as commands leave them: runs traced by some estimators
 only, traces of other scenarios of one seed side by side, and damaged trace files (one
-line, exit status 2)."""
+line, exit status 2). The traces are written as ``--trace`` writes them, without the
+figures the commands draw of them."""
 
 from __future__ import annotations
 
@@ -11,13 +12,18 @@ import pandas as pd
 import pytest
 from harness_texts import SHORT, one_line_error
 from harness_texts import run_cli as run
-from kalman_vs_infoset.experiments.cli import main
+from kalman_vs_infoset.experiments.intercept_runs import results_path
+from kalman_vs_infoset.experiments.scenario import load_scenario
+from kalman_vs_infoset.experiments.traces import write_intercept_trace
 
 
-def _trace(capsys, short: Path, out: Path, *args) -> None:
-    r = run(capsys, "intercept", short, "--runs", 2, "--workers", 1, "--no-progress",
-            "--out", out, *args)  # fmt: skip
-    assert r.returncode == 0, r.stderr
+def _trace(scenario: Path, out: Path, estimator: str, runs: list[int], *sets: str) -> None:
+    """What ``kvi intercept SCENARIO --estimators E --trace RUNS --out OUT`` writes to
+    ``_traces/`` (seed 1, random errors)."""
+    sc = load_scenario(scenario, list(sets))
+    write_intercept_trace(
+        sc, estimator, "random", 1, runs, results_path(out, sc, estimator, "random", 1)
+    )
 
 
 def _figures(out: Path) -> set[str]:
@@ -29,8 +35,8 @@ def test_runs_traced_by_one_estimator_each_are_drawn_each_with_its_own(short, tm
     run failed for one estimator): each run's figure of the estimator that traced it, no
     overlay of one estimator (an IndexError before)."""
     res = tmp_path / "res"
-    _trace(capsys, short, res, "--estimators", "ekf", "--trace", 0)
-    _trace(capsys, short, res, "--estimators", "ukf", "--trace", 1)
+    _trace(short, res, "ekf", [0])
+    _trace(short, res, "ukf", [1])
     figs = tmp_path / "figs"
     r = run(capsys, "plot", res, "--no-animation", "--out", figs)
     assert r.returncode == 0, r.stderr
@@ -44,9 +50,8 @@ def test_traces_of_two_scenarios_of_one_seed_are_drawn_apart(short, tmp_path, ca
     """A scenario and its --set variant, same seed and run: a figure each, each from its
     own trace (they were drawn as one, under the first one's name, with both truths)."""
     res = tmp_path / "res"
-    _trace(capsys, short, res, "--estimators", "ekf", "--trace", 0)
-    _trace(capsys, short, res, "--estimators", "ekf", "--trace", 0,
-           "--set", "guidance.max_impulse_mps=2")  # fmt: skip
+    _trace(short, res, "ekf", [0])
+    _trace(short, res, "ekf", [0], "guidance.max_impulse_mps=2")
     figs = tmp_path / "figs"
     r = run(capsys, "plot", res, "--no-animation", "--out", figs)
     assert r.returncode == 0, r.stderr
@@ -62,10 +67,7 @@ def node_set_trace(tmp_path_factory) -> Path:
     """A node-set trace with its sets file (written once for this module's tests)."""
     folder = tmp_path_factory.mktemp("traced")
     (folder / "short.toml").write_text(SHORT)
-    code = main([str(a) for a in ("intercept", folder / "short.toml", "--runs", 1,
-                 "--workers", 1, "--no-progress", "--estimators", "infoset", "--trace", 0,
-                 "--out", folder / "res")])  # fmt: skip
-    assert code == 0
+    _trace(folder / "short.toml", folder / "res", "infoset", [0])
     (path,) = (folder / "res").rglob("*-trace.parquet")
     return path
 

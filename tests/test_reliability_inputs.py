@@ -339,7 +339,7 @@ def test_a_refused_scheduler_leaves_nothing_behind(short, tmp_path, capsys, monk
         raise OSError(f"Timed out trying to connect to {address}")
 
     monkeypatch.setattr(distributed, "Client", unreachable)
-    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.5)  # port 9: nothing listens
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.2)  # port 9: nothing listens
     out = tmp_path / "out"
     for command in (["intercept"], ["compare", "--estimators", "infoset", "--noise", "random"]):
         r = run(capsys, *command, short, "--runs", 1, "--no-progress",
@@ -579,7 +579,7 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_line(
     pytest.importorskip("distributed")
     from kalman_vs_infoset.experiments import executors
 
-    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 0.3)
     out = tmp_path / "out"
     r = run(capsys, "intercept", short, "--runs", 1, "--no-progress", "--scheduler",
             f"tcp://127.0.0.1:{_server(reply)}", "--out", out)  # fmt: skip
