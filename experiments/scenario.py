@@ -201,7 +201,10 @@ def override_suffix(overrides: Sequence[str]) -> str:
     """``+key=value`` per override, file-name safe: appended to the scenario's name so
     that results of an overridden scenario never land in the original's files. Past
     :data:`MAX_SUFFIX` characters the overrides that do not fit are named by a hash of
-    all of them (``+N_more_<hash>``): distinct override lists keep distinct names."""
+    all of them (``+N_more_<hash>``): distinct override lists keep distinct names. The
+    overrides are taken in the order of their keys (a key is set once): the same
+    overrides given in another order name the same files, and resume them."""
+    overrides = sorted(overrides, key=lambda o: (o.split("=", 1)[0].strip(), o))
     squeezed = (o.replace(" ", "") for o in overrides)
     safe = ["".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed]
     # a value's '..' (a text with an ellipsis) would make the name a path's parent

@@ -82,16 +82,30 @@ def test_many_overrides_still_name_files_the_system_accepts(short, tmp_path, cap
         "n_nodes=6", "min_live_nodes=4", "max_pieces=4", "n_bands=2", "split_bands=false",
         "tighten_rtol=0.5", "node_split_ratio=3.0")]  # fmt: skip
     suffix = override_suffix(sets)
-    assert len(suffix) <= MAX_SUFFIX and suffix.startswith("+" + sets[0])
+    assert len(suffix) <= MAX_SUFFIX and suffix.startswith("+" + sorted(sets)[0])
     assert override_suffix(sets) == suffix  # stable: a rerun resumes the same files
+    assert override_suffix(sets[::-1]) == suffix  # in any order: the same files
     assert override_suffix([*sets[:-1], "estimator.infoset.node_split_ratio=4.0"]) != suffix
-    assert override_suffix(sets[:2]) == "+" + "+".join(sets[:2])  # short: unchanged
+    assert override_suffix(sets[:2]) == "+" + "+".join(sorted(sets[:2]))  # short: unchanged
     out = tmp_path / "out"
     args = [a for kv in sets for a in ("--set", kv)]
     r = run(capsys, "intercept", short, "--runs", 1, "--workers", 1, "--no-progress",
             "--out", out, *args)  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert all(len(p.name.encode()) <= 255 for p in files_under(out))
+
+
+def test_the_same_overrides_in_another_order_resume_the_same_table(short, tmp_path, capsys):
+    """Overrides named the files in the order given: the same two in the other order
+    ran the finished runs again into a second table."""
+    out = tmp_path / "out"
+    a, b = "guidance.max_impulse_mps=5", "model.nu_mps2=0.004"
+    base = ["intercept", short, "--workers", 1, "--no-progress", "--estimators", "ekf",
+            "--out", out]  # fmt: skip
+    assert run(capsys, *base, "--runs", 1, "--set", a, "--set", b).returncode == 0
+    r = run(capsys, *base, "--runs", 2, "--set", b, "--set", a)
+    assert r.returncode == 0 and "1 run of 2 already in" in r.stderr, r.stderr
+    assert len(list(out.glob("*.parquet"))) == 1
 
 
 @pytest.mark.parametrize("value", ['description="wait... what"', 'reference.label="v1..v2"'])
