@@ -502,7 +502,7 @@ def test_an_edit_of_options_a_job_never_reads_resumes_it(short, tmp_path, capsys
     out = tmp_path / "out"
     text = short.read_text()
     args = ("intercept", short, "--estimators", "infoset,ekf", "--noise", "random,game",
-            "--out", out, "--no-progress")  # fmt: skip
+            "--workers", 1, "--out", out, "--no-progress")  # fmt: skip
     assert cli_inproc(capsys, *args, "--runs", "2").returncode == 0
     before = {p.name: _table(pd.read_parquet(p)) for p in sorted(out.glob("*.parquet"))}
     assert len(before) == 4
@@ -520,8 +520,8 @@ def test_an_edit_of_options_a_job_never_reads_resumes_it(short, tmp_path, capsys
     r = cli_inproc(capsys, *args, "--runs", "3")
     assert r.returncode == 2, r.stderr
     assert "(scenario.estimator.options.ekf.n_sigma: 3.0 in the file, 4.0 now)" in r.stderr
-    ekf = ("intercept", short, "--estimators", "ekf", "--noise", "random,game", "--out",
-           tmp_path / "ekf", "--no-progress")  # fmt: skip
+    ekf = ("intercept", short, "--estimators", "ekf", "--noise", "random,game", "--workers",
+           1, "--out", tmp_path / "ekf", "--no-progress")  # fmt: skip
     short.write_text(text)
     assert cli_inproc(capsys, *ekf, "--runs", "2").returncode == 0
     short.write_text(text.replace("n_sections = 9", "n_sections = 9\nn_nodes = 10"))
