@@ -202,8 +202,8 @@ def test_set_overrides_reach_the_typed_attitude_tables(capsys, tmp_path):
     overrides = [a for key, (_, new) in sets.items() for a in ("--set", f"{key}={new}")]
     by_set = run_json(capsys, "attitude", path, "--out", tmp_path / "a", *args, *overrides)
     by_file = run_json(capsys, "attitude", edited, "--out", tmp_path / "b", *args)
-    assert by_set["scenario"] == "smallsat_rw" + "".join(
-        f"+{key}={new}" for key, (_, new) in sets.items()
+    assert by_set["scenario"] == "smallsat_rw" + "".join(  # in the order of the keys
+        f"+{key}={new}" for key, (_, new) in sorted(sets.items())
     )
     for key in ("scenario", "wall_s", "files", "cpu_s", "worker_peak_rss_mb"):
         del by_set[key], by_file[key]

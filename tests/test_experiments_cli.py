@@ -419,7 +419,7 @@ def test_rerun_other_code_replaces_only_the_runs_of_other_code(short, tmp_path, 
 
     sc = load_scenario(short)
     out = tmp_path / "out"
-    args = ("intercept", short, "--runs", "2", "--out", out, "--no-progress")
+    args = ("intercept", short, "--runs", "2", "--out", out, "--no-progress", "--workers", "1")
     assert cli_inproc(capsys, *args).returncode == 0
     path = intercept_runs.results_path(out, sc, "infoset", "random", 11)
     meta_path = out / "_meta" / f"{path.stem}.json"
@@ -478,7 +478,7 @@ def test_a_study_extended_through_the_file_resumes(short, tmp_path, capsys):
     out = tmp_path / "out"
     text = short.read_text()
     assert "runs = 4" in text
-    args = ("intercept", short, "--out", out, "--no-progress", "--json")
+    args = ("intercept", short, "--out", out, "--no-progress", "--json", "--workers", "1")
     assert cli_inproc(capsys, *args).returncode == 0
     short.write_text('description = "now longer"\n' + text.replace("runs = 4", "runs = 5"))
     r = cli_inproc(capsys, *args)
@@ -545,7 +545,8 @@ def test_set_override_equals_the_edited_file_and_keeps_its_own_results(short, tm
     assert a == b
     out = tmp_path / "out"
     for extra in ([], ["--set", "range_finder.enabled=false"]):
-        r = cli_inproc(capsys, "intercept", short, "--out", out, "--no-progress", *extra)
+        r = cli_inproc(capsys, "intercept", short, "--out", out, "--no-progress", "--workers",
+                       "1", *extra)  # fmt: skip
         assert r.returncode == 0, r.stderr
     mine = intercept_runs.results_path(out, over, "infoset", "random", 11)
     orig = intercept_runs.results_path(out, load_scenario(short), "infoset", "random", 11)
@@ -564,7 +565,7 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     r = cli_inproc(
         capsys, "sweep", short, "--key", "model.nu_mps2", "--values", "[0.002, 0.02]",
         "--estimators", "infoset,ekf", "--noise", "random", "--runs", "2", "--out", out,
-        "--no-progress", "--json",
+        "--no-progress", "--json", "--workers", "1",
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout.strip().splitlines()[-1])
@@ -589,6 +590,7 @@ def test_sweep_is_compare_per_value_on_the_same_truths(short, tmp_path, capsys):
     r2 = cli_inproc(
         capsys, "intercept", short, "--set", "model.nu_mps2=0.02", "--estimators", "ekf",
         "--noise", "random", "--runs", "2", "--out", tmp_path / "one", "--no-progress", "--json",
+        "--workers", "1",
     )  # fmt: skip
     one = json.loads(r2.stdout.strip().splitlines()[-1])
     assert one["miss_m"] == res["rows"][3]["miss_m"]
