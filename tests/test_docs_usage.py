@@ -18,6 +18,7 @@ DERIVED = {
     "steps": r"a run longer than (\d+) (\d+)\s+steps",
     "chunk": r"(\d+) for the vectorised attitude loops",
     "worker": r"without a live worker for (\d+) s",
+    "connect": r"answers\s+Dask's handshake within (\d+) s",
     "paired": r"with their mean\s+and (\d+) % confidence interval",
     "save": r"is saved every (\d+) s while runs finish .{1,120}? loses the runs of its "
     r"last (\d+) s",
@@ -71,6 +72,8 @@ def test_the_usage_pages_limits_are_the_codes():
     assert attitude_rw.CHUNK == attitude_gyrostat.CHUNK == int(chunk)
     (wait,) = printed(DOC, DERIVED["worker"])
     assert executors.NO_WORKER_TIMEOUT_S == float(wait)
+    (connect,) = printed(DOC, DERIVED["connect"])
+    assert executors.CONNECT_TIMEOUT_S == float(connect)
     (level,) = printed(DOC, DERIVED["paired"])
     assert paired.CONFIDENCE == int(level) / 100
     every, lost = printed(DOC, DERIVED["save"])
