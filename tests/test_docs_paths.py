@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: the repository's top folders, as the docs write a path from the top
 TOPS = ("estim", "guidance", "experiments", "tests", "data", "docs", "kalman_vs_infoset")
-PATH = re.compile(r"`((?:" + "|".join(TOPS) + r")/[A-Za-z0-9_./*-]+)`")
+PATH = re.compile(r"`((?:" + "|".join(TOPS) + r")/[A-Za-z0-9_./*{},-]+)`")
 #: a module named alone (``maps.py``): some file of the repository has that name
 MODULE = re.compile(r"`([A-Za-z0-9_./-]+\.py)`")
 
@@ -24,12 +24,25 @@ def _named(page: Path, pattern: re.Pattern) -> list[tuple[int, str]]:
     ]
 
 
+def _expanded(path: str) -> list[str]:
+    """``a/{b,c}.py`` as ``a/b.py`` and ``a/c.py`` (a shell's brace expansion)."""
+    m = re.search(r"\{([^{}]*)\}", path)
+    if m is None:
+        return [path]
+    return [
+        p
+        for alt in m.group(1).split(",")
+        for p in _expanded(path[: m.start()] + alt + path[m.end() :])
+    ]
+
+
 def _missing_paths(page: Path) -> list[str]:
     out = []
-    for line, path in _named(page, PATH):
-        found = any(ROOT.glob(path)) if "*" in path else (ROOT / path).exists()
-        if not found:
-            out.append(f"{page.name}:{line}: {path}")
+    for line, named in _named(page, PATH):
+        for path in _expanded(named):
+            found = any(ROOT.glob(path)) if "*" in path else (ROOT / path).exists()
+            if not found:
+                out.append(f"{page.name}:{line}: {path}")
     return out
 
 
@@ -52,10 +65,12 @@ def test_every_module_a_page_names_alone_exists():
 def test_a_renamed_file_in_a_copy_of_a_page_fails(tmp_path):
     """The check reads what it should: a page naming a file that moved fails."""
     page = tmp_path / "models.md"
-    page.write_text("One step (`experiments/engagement.py`); the loop (`estim/nodeset/*.py`).\n")
+    page.write_text("One step (`experiments/engagement.py`); the loop (`estim/nodeset/*.py`);"
+                    " `guidance/attitude/{game,gyrostat_loop}.py`.\n")  # fmt: skip
     assert _missing_paths(page) == [
         "models.md:1: experiments/engagement.py",
         "models.md:1: estim/nodeset/*.py",
+        "models.md:1: guidance/attitude/gyrostat_loop.py",
     ]
     page.write_text("One step (`experiments/sim/intercept.py`), `estim/intercept/nodeset/*.py`.\n")
     assert _missing_paths(page) == []
