@@ -6,6 +6,7 @@ its prose is read by a row of ``CHECKS``, by a test here (``DERIVED``), is an in
 
 from __future__ import annotations
 
+import re
 import tomllib
 
 import numpy as np
@@ -305,3 +306,24 @@ def test_the_end_to_end_runs_took_a_bound_that_held():
         assert row["pointing_bound_exceeded_steps"] == int(printed_count)
         assert row["pointing_residual_over_bound_steps"] == int(printed_count)
         assert row["pointing_residual_max_deg"] <= row["pointing_knowledge_bound_deg"]
+
+
+def test_a_filter_without_the_range_box_loses_the_range_as_the_page_says():
+    """'the EKF's range estimate in the second run swings over megametres and turns
+    negative with status `ok`, its belief falls under the blind range, guidance stops and
+    the miss is kilometres': the page's own command, its second run traced."""
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    from kalman_vs_infoset.api import trace
+
+    flat = " ".join((ROOT / INT).read_text(encoding="utf-8").split())
+    command = re.search(
+        r"`(kvi intercept kp_fig5 --estimators ekf --runs 2 --trace 1 [^`]*)`", flat
+    )
+    assert command, "the example's command is gone (re-point this test)"
+    sets = [s.strip("'") for s in re.findall(r"--set ('[^']*')", command.group(1))]
+    steps, _ = trace(load_scenario("kp_fig5", sets), "ekf", "random", runs=[1], sets_every=10**6)
+    negative = steps[steps["x_est_m"] < 0]
+    assert len(negative) and (negative["status"] == "ok").any()
+    assert steps["x_est_m"].max() - steps["x_true_m"].max() > 1e6  # megametres off
+    assert steps["miss_m"].iloc[0] > 1000.0 and steps["step"].max() < 0.5 * 199
