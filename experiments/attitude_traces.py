@@ -133,6 +133,7 @@ def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq)
     assert r.states is not None and r.torques_Nm is not None and r.time_s is not None
     assert r.u_star is not None and r.disturbance_Nm is not None
     assert r.knowledge_bound_rad is not None and r.truth_inside is not None
+    assert r.estimate_quat is not None
     st = r.states[0]
     eta = error_quaternion(st[:, Q], s.q_target)
     deta = eta_v_rate(eta, st[:, X])
@@ -145,6 +146,7 @@ def trace_gyrostat(setup, controller: str, noise: str, estimator: str, seed_seq)
             "rate_degps": np.degrees(st[:, X]),
             "torque_Nm": torque,
             "momentum_Nms": st[:, PHI] * s.gyro.rotor_J_kgm2,
+            "est_error_deg": _error_rotvec_deg(r.estimate_quat[0], s.q_target),
             "eta": eta[:, :3],
             "eta_rate_per_s": deta,
             "psi": s.law.psi(eta[:, :3], deta),

@@ -114,6 +114,7 @@ class LoopResult:
     disturbance_Nm: Array | None = None  # (R, n, 3)
     knowledge_bound_rad: Array | None = None  # (R, n+1) the belief's attitude bound
     truth_inside: Array | None = None  # (R, n+1) the truth in the belief
+    estimate_quat: Array | None = None  # (R, n+1, 4) the belief's centre attitude
     #: the measurements (R, n+1, 4 / 3 / 3) and the belief's per-axis hull at each sample
     #: (EstimatorLoop.axis_hull): what experiments.attitude_exact needs
     meas_quat: Array | None = None
@@ -235,6 +236,8 @@ def simulate_turn(
         rec_u, rec_us, rec_v = (np.full((runs, n, 3), np.nan) for _ in range(3))
         rec_b, rec_in = np.full((runs, n + 1), np.nan), np.zeros((runs, n + 1), dtype=bool)
         rec_b[:, 0], rec_in[:, 0] = loop.attitude_bound_rad(belief), inside
+        rec_e = np.full((runs, n + 1, 4), np.nan)
+        rec_e[:, 0] = loop.centre(belief)[:, 0:4]
         rec_q, rec_w, rec_r = (np.full((runs, n + 1, m), np.nan) for m in (4, 3, 3))
         rec_q[:, 0], rec_w[:, 0], rec_r[:, 0] = meas.quat, meas.rate_radps, phid
         hulls = [loop.axis_hull(belief)]
@@ -273,6 +276,7 @@ def simulate_turn(
             states[:, k + 1] = state
             rec_u[:, k], rec_us[:, k], rec_v[:, k] = u, u_star, v
             rec_b[:, k + 1], rec_in[:, k + 1] = bound, inside
+            rec_e[:, k + 1] = loop.centre(belief)[:, 0:4]
             rec_q[:, k + 1], rec_w[:, k + 1], rec_r[:, k + 1] = meas.quat, meas.rate_radps, phid
             hulls.append(loop.axis_hull(belief))
 
@@ -288,6 +292,7 @@ def simulate_turn(
             disturbance_Nm=rec_v,
             knowledge_bound_rad=rec_b,
             truth_inside=rec_in,
+            estimate_quat=rec_e,
             meas_quat=rec_q,
             meas_rate_radps=rec_w,
             meas_rotor_radps=rec_r,
