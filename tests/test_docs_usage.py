@@ -19,6 +19,7 @@ DERIVED = {
     "chunk": r"(\d+) for the vectorised attitude loops",
     "worker": r"without a live worker for (\d+) s",
     "connect": r"answers\s+Dask's handshake within (\d+) s",
+    "suffix": r"past (\d+)\s+characters the overrides that do not fit",
     "paired": r"with their mean\s+and (\d+) % confidence interval",
     "save": r"is saved every (\d+) s while runs finish .{1,120}? loses the runs of its "
     r"last (\d+) s",
@@ -74,6 +75,10 @@ def test_the_usage_pages_limits_are_the_codes():
     assert executors.NO_WORKER_TIMEOUT_S == float(wait)
     (connect,) = printed(DOC, DERIVED["connect"])
     assert executors.CONNECT_TIMEOUT_S == float(connect)
+    from kalman_vs_infoset.experiments.scenario import MAX_SUFFIX
+
+    (suffix,) = printed(DOC, DERIVED["suffix"])
+    assert MAX_SUFFIX == int(suffix)
     (level,) = printed(DOC, DERIVED["paired"])
     assert paired.CONFIDENCE == int(level) / 100
     every, lost = printed(DOC, DERIVED["save"])
