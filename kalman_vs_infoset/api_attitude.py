@@ -60,7 +60,8 @@ def run_attitude(
     Returns
     -------
     pandas.DataFrame
-        One row per estimator and run: ``estimator``, ``run``, the loop's columns
+        One row per estimator and run: the job's ``scenario``, ``controller``,
+        ``estimator``, ``noise`` and ``seed``, ``run``, the loop's columns
         (``docs/results.md``: settle time, energy, final errors, ``truth_outside``, ...)
         and ``status`` (``ok``, or ``failed`` with its ``error``).
 
@@ -119,6 +120,8 @@ def run_attitude(
 
         for start in range(0, runs, loop.chunk):  # the command's batches (memory)
             chunk = list(range(start, min(start + loop.chunk, runs)))
-            rows += [{"estimator": name, "run": j, **row}
-                     for j, row in batched_task(simulate, seed, chunk)]  # fmt: skip
+            # the job's columns, as every run table has them (docs/results.md)
+            job = {"scenario": req.name, "controller": req.controller, "estimator": name,
+                   "noise": noise, "seed": seed}  # fmt: skip
+            rows += [{**job, "run": j, **row} for j, row in batched_task(simulate, seed, chunk)]
     return pd.DataFrame(rows)

@@ -86,6 +86,7 @@ def test_run_attitude_reproduces_the_command_s_rows_and_writes_nothing(tmp_path,
                           simulation={"duration_s": 5.0})  # fmt: skip
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cli"]
     assert list(df["run"]) == list(cli["run"]) == [0, 1, 2]
+    assert set(df.columns) == set(cli.columns)  # the job's columns too (they were missing)
     for key in df.columns.drop("wall_s"):
         assert df[key].tolist() == cli[key].tolist(), key
     with pytest.raises(ValueError, match="unknown attitude estimator 'ukk'"):
