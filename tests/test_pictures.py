@@ -501,3 +501,20 @@ def test_a_cdf_of_more_than_six_curves_keeps_its_legend_below_the_panels():
     nine, six = figure(3), figure(2)
     assert nine.legends and not any(ax.get_legend() for ax in nine.axes)
     assert not six.legends and all(ax.get_legend() for ax in six.axes)
+
+
+def test_values_close_together_are_ticked_without_an_offset(tmp_path):
+    """Runs whose energies differ in the sixth digit (1.0680e-2 ... 1.0689e-2): matplotlib
+    wrote the ticks as an offset, "1e-6+1.068e-2", below the axis's end, over its label;
+    the ticks now say their values and no offset is drawn."""
+    fs = figstyle
+    fs.setup()
+    fig, ax = fs.plt.subplots(figsize=(5.0, 3.5))
+    x = 1.068e-2 + np.array([0.5, 3.8, 4.2, 8.3, 8.8]) * 1e-9 * 1e3
+    ax.ecdf(x)
+    ax.set_xlabel("energy index sum M^T M dt, N^2 m^2 s")
+    fig.canvas.draw()
+    assert ax.xaxis.get_offset_text().get_text() == ""
+    labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+    assert labels and all(float(t.replace("\u2212", "-")) > 0.01 for t in labels)
+    fs.plt.close(fig)
