@@ -65,7 +65,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "fig5": (
         "kalman_vs_infoset.experiments.cmd_fig5",
-        "the seed's Fig. 5 statistics (four variants)",
+        "the intercept paper's Fig. 5 statistics (four variants)",
     ),
     "attitude": ("kalman_vs_infoset.experiments.cmd_attitude", "attitude-loop scenarios"),
     "pd-gains": (

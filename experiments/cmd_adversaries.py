@@ -34,7 +34,7 @@ RULES = ("game", "targeted", "lookahead")
 def add_arguments(p) -> None:
     options.add_common(p)
     seed = registry.reference("intercept").name  # the set the seed's game reasons with
-    options.add_estimators(p, "intercept", [seed], f"{seed}, the seed's")
+    options.add_estimators(p, "intercept", [seed], f"{seed}, the paper's")
     p.add_argument(
         "--lookahead",
         type=options.positive_int,
@@ -116,7 +116,7 @@ def run(args) -> dict[str, Any]:
 def table_markdown(result: dict[str, Any]) -> str:
     """The adversary-strength table (one line per estimator x rule)."""
     seed_fuel = result["seed_fuel_game_mps"]
-    share = f"runs >= {seed_fuel:g} m/s" if seed_fuel else "runs >= seed's fuel"
+    share = f"runs >= {seed_fuel:g} m/s" if seed_fuel else "runs >= the paper's fuel"
     head = ["estimator", "rule", "runs", "fuel mean / p50 / p90, m/s",
             "miss mean / p50 / p90, m", share, "truth outside (steps)", "failures"]  # fmt: skip
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -145,7 +145,7 @@ def render(result: dict[str, Any]) -> str:
     return (
         f"{result['scenario']}: adversary strength, {runs_text(result['runs'])}, "
         f"seed {result['seed']}"
-        f" (the seed's game: fuel {result['seed_fuel_game_mps']} m/s, miss "
+        f" (the paper's game: fuel {result['seed_fuel_game_mps']} m/s, miss "
         f"{result['seed_miss_game_m']} m)\n"
         + table_markdown(result)
         + "files:\n"

@@ -33,7 +33,7 @@ def add_arguments(p) -> None:
                    help="runs per variant (default 50)")  # fmt: skip
     p.add_argument("--seed", type=options.seed_int, help="root seed (default: the scenario's)")
     ref = seed_estimators()
-    options.add_estimators(p, "intercept", ref, f"{ref[0]}, the seed's")
+    options.add_estimators(p, "intercept", ref, f"{ref[0]}, the paper's")
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument("--out", default="results/fig5", help="output directory (default: %(default)s)")
     options.add_runner(p)

@@ -30,7 +30,9 @@ DEFAULT_FIT_ANGLES = (0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     d = gs.StudySettings()
     parser.add_argument(
-        "--angles-deg", default=None, help="comma-separated angles (deg); default: the seed's table"
+        "--angles-deg",
+        default=None,
+        help="comma-separated angles (deg); default: the paper's table",
     )
     parser.add_argument(
         "--out", default="results/pd_gains", help="figure directory (default results/pd_gains)"

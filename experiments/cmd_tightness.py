@@ -111,7 +111,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add("--seed", type=seed_int, help="seed (default: the scenario's)")
     add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
-    add("--guided", action="store_true", help="the seed's law issues impulses")
+    add("--guided", action="store_true", help="the paper's guidance law issues impulses")
     reference = registry.reference("intercept").name
     add_estimators(p, "intercept", [reference], f"{reference}; one estimator under test", most=1)
     add("--switch-s", type=_positive, default=None,
