@@ -58,3 +58,11 @@ def test_the_synopsis_shows_the_defaults_help_gives(command):
             assert stated, (command, option, "no default")
             default = stated.group(1)
         assert float(default) == float(value), (command, option)
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_help_names_the_papers_as_papers(command):
+    """Beside ``--seed`` (a random seed), "the seed's" read as one: ``--help`` says
+    "the paper's" (the docs, which explain the papers' numbering, may say seed 003)."""
+    text = _subparser(command).format_help() + build_parser(command).format_help()
+    assert not re.search(r"seed's|seed 00\d", text)
