@@ -271,3 +271,18 @@ def test_reduce_refuses_a_generator_count_that_is_not_an_integer():
     with pytest.raises(ValueError, match="max_generators must be an integer"):
         z.reduce(2.5)
     assert z.reduce(np.int64(2)).generators.shape == (2, 2)
+
+
+def test_points_deep_inside_a_flat_zonotope_far_from_the_origin_are_inside():
+    """Flat zonotopes (rank 2 in R^3) at coordinates of 1e7, points ``c + G xi`` with
+    ``|xi| <= 0.5``: HiGHS stopped on some with "numerical difficulties" (status 4),
+    read as infeasible, and ``contains`` called 6 of 3000 such points outside (these
+    draws: cases 0, 13 and 15). Each row of the programme is now scaled to its size."""
+    rng = np.random.default_rng(1)
+    for k in range(16):
+        g = rng.normal(size=(3, 6)) * 1e7
+        g[2] = g[0]
+        c = rng.normal(size=3) * 1e7
+        xi = rng.uniform(-0.5, 0.5, (100, 6))
+        if k in (0, 13, 15):
+            assert Zonotope(c, g).contains(c + xi @ g.T, method="lp").all(), k

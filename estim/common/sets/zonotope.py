@@ -215,24 +215,42 @@ class Zonotope:
         return readonly(np.linalg.svd(rows, full_matrices=True)[2][:, -1, :], copy=False)
 
     def _lp_norm(self, d: FloatArray, slack: float) -> float:
-        """``min |xi|_inf`` with ``|G xi - d| <= slack`` (``inf`` when infeasible)."""
+        """``min |xi|_inf`` with ``|G xi - d| <= slack`` (``inf`` when infeasible).
+
+        Each row ``|G_i xi - d_i| <= slack`` is divided by its own size (the same
+        constraint): at coordinates of 1e7 HiGHS stopped on flat zonotopes with
+        "numerical difficulties" (status 4), read as infeasible, and points deep inside
+        were called outside. A status other than solved or infeasible is retried with
+        the interior-point solver."""
         g = self.generators
         n, m = g.shape
         if m == 0:
             return 0.0 if np.all(np.abs(d) <= slack) else np.inf
+        size = np.maximum(np.abs(g).max(axis=1), np.maximum(np.abs(d), slack))
+        size = np.where(size > 0.0, size, 1.0)
+        g, d, row_slack = g / size[:, None], d / size, slack / size
         eye, one = np.eye(m), np.ones((m, 1))
         a_ub = np.block([[eye, -one], [-eye, -one], [g, np.zeros((n, 1))], [-g, np.zeros((n, 1))]])
-        b_ub = np.concatenate([np.zeros(2 * m), d + slack, slack - d])
+        b_ub = np.concatenate([np.zeros(2 * m), d + row_slack, row_slack - d])
         cost = np.zeros(m + 1)
         cost[-1] = 1.0
-        res = linprog(
-            cost,
-            A_ub=a_ub,
-            b_ub=b_ub,
-            bounds=[(None, None)] * m + [(0, None)],
-            options={"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10},
-        )
-        return float(res.fun) if res.status == 0 else np.inf
+        for method in ("highs", "highs-ipm"):
+            res = linprog(
+                cost,
+                A_ub=a_ub,
+                b_ub=b_ub,
+                bounds=[(None, None)] * m + [(0, None)],
+                method=method,
+                options={
+                    "primal_feasibility_tolerance": 1e-10,
+                    "dual_feasibility_tolerance": 1e-10,
+                },
+            )
+            if res.status == 0:
+                return float(res.fun)
+            if res.status == 2:  # infeasible: outside
+                return np.inf
+        return np.inf  # neither solver decided: outside, as an infeasible programme
 
     def vertices_2d(self) -> FloatArray:
         """Vertices of a planar zonotope, counter-clockwise, shape (k, 2).
