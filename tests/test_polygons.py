@@ -287,3 +287,19 @@ def test_contains_point_agrees_with_shapelys_distance(seed, kind):
             if abs(d - tol) <= 1e-9 * max(1.0, tol) or (tol == 0 and d < 1e-9):
                 continue
             assert cp.contains_point([i], q, tol) == (d <= tol), (i, q, d, tol)
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 30.0, 72.0, 117.0])
+def test_a_parallelogram_asked_for_three_vertices_keeps_four(turn_deg):
+    """Removing an edge of a parallelogram extends two parallel neighbours: rotated,
+    rounding made them meet 1e16 away, and ``simplify(max_vertices=3)`` returned a
+    triangle of area 1e17 whose edge left a vertex out (by 4e-18 in exact arithmetic).
+    Neighbours parallel to rounding are not extended: the parallelogram stays."""
+    th = np.radians(turn_deg)
+    rot = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    par = np.array([[0.0, 0.0], [3.0, 0.1], [4.0, 2.1], [1.0, 2.0]]) @ rot.T + [1e3, -50.0]
+    polys = ConvexPolygons.from_list([par])
+    out = polys.simplify(rel_area_tol=0.0, max_vertices=3)
+    assert out.counts[0] == 4
+    assert out.areas()[0] == pytest.approx(polys.areas()[0], rel=1e-12)
+    assert np.abs(out.polygon(0) - [1e3, -50.0]).max() < 10.0

@@ -226,8 +226,11 @@ def simplify_polygon(buf, m, rel_tol, max_vertices):
             dpx, dpy = buf[j, 0] - buf[p, 0], buf[j, 1] - buf[p, 1]
             dnx, dny = buf[d, 0] - buf[c, 0], buf[d, 1] - buf[c, 1]
             den = dpx * dny - dpy * dnx
-            if den <= 0.0:
-                continue  # neighbours turn by pi or more: they never meet outside
+            # neighbours that turn by pi or more never meet outside; parallel ones up to
+            # rounding (a sine under 1e-12) would meet 1e12 edges away: a rotated
+            # parallelogram asked for 3 vertices became a triangle of 1e16, not holding it
+            if den <= 1e-12 * np.hypot(dpx, dpy) * np.hypot(dnx, dny):
+                continue
             ex, ey = buf[c, 0] - buf[j, 0], buf[c, 1] - buf[j, 1]
             t = (ex * dny - ey * dnx) / den
             if t < 0.0:
