@@ -343,3 +343,29 @@ def test_a_small_ball_far_from_the_origin_holds_its_rounded_boundary(offset):
         assert ball.contains(centre + radius * u).all(), (offset, radius)
         assert not ball.contains(centre + radius * (1 + 1e-3) * u).any(), (offset, radius)
     assert Ellipsoid.ball([1e6], 1e-3).contains([1e6 + 1e-3])
+
+
+def test_a_thin_axis_is_read_beside_a_flat_one():
+    """Axes between 1e-14 and 1e-12 of the largest are thin, not flat: their points are
+    inside. With an exactly flat axis beside them the thin one was not read, and the
+    set's own points were outside, also of a set the library made itself."""
+    e = Ellipsoid(np.zeros(3), np.diag([1.0, 1e-13, 0.0]))
+    assert e.contains([0.0, 0.9 * np.sqrt(1e-13), 0.0])
+    assert not e.contains([0.0, 1.2 * np.sqrt(1e-13), 0.0])
+    assert not e.contains([0.0, 0.5 * np.sqrt(1e-13), 1e-6])  # off the flat axis
+    a = np.diag([1.0, 3e-7, 0.0])
+    mapped = Ellipsoid.ball(np.zeros(3), 1.0).affine(a)
+    u = np.random.default_rng(4).normal(size=(200, 3))
+    u *= 0.999 / np.linalg.norm(u, axis=1, keepdims=True)
+    assert mapped.contains(u @ a.T).all()
+
+
+def test_a_thin_axis_keeps_a_few_ulps_of_slack_far_from_the_origin():
+    """A boundary point one ulp out along a thin axis (width 1e-5, centre at 1e3) is
+    rounding, as along the long one: it was outside (the ulps were taken along the
+    radius, nearly all along the long axis). 1e-11 out is not rounding."""
+    c = np.array([1e3, 1e3])
+    e = Ellipsoid(c, np.diag([1.0, 1e-10]))
+    on = c + [np.cos(np.pi / 4), np.sin(np.pi / 4) * 1e-5]
+    assert e.contains(on) and e.contains(on + [0.0, 1e-13])
+    assert not e.contains(on + [0.0, 1e-11])

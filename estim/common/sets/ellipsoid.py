@@ -219,9 +219,11 @@ class Ellipsoid:
         In the eigenbasis of ``P``, ``sum z_i^2 / l_i <= (1 + tol)^2`` over the nonzero
         ``l_i`` and ``|z_i| <= tol max(sqrt(l_max), 1)`` plus a few ulps of the
         coordinates along the null directions (those under 1e-12 of ``l_max``, rounding
-        for a flat set), the point taken those few ulps closer to the centre (rounding
-        of the coordinates, as the other sets allow); or, where those ``l_i`` are
-        positive (a thin set, not a flat one), the same sum over all of them.
+        for a flat set), each coordinate ``z_i`` taken those few ulps closer to the
+        centre (rounding of the coordinates, as the other sets allow: sound, as the sum
+        grows with each ``|z_i|``); or the same sum over the null directions too where
+        their ``l_i`` are positive (thin axes, not flat ones), the flat ones held to the
+        same few ulps.
         """
         check_tol(tol)
         x = points(x, self.dim)
@@ -230,25 +232,26 @@ class Ellipsoid:
         lam_max = lam.max(initial=0.0)
         z = (pts - self.centre) @ vec
         pos = lam > _RANK_RTOL * max(lam_max, 1e-300)
-        q = np.sum(z[:, pos] ** 2 / lam[pos], axis=1)
-        z_null = z[:, ~pos]
-        off = np.sqrt(np.sum(z_null**2, axis=1))
         scale = np.sqrt(lam_max) + 1e-300
         bound = (1.0 + tol) ** 2
         # off the hull: tol times the size, and a few ulps of the coordinates (far from
         # the origin they are rounded to more than that)
         ulps = ROUND_RTOL * (np.linalg.norm(pts, axis=1) + float(np.linalg.norm(self.centre)))
         slack = tol * max(scale, 1.0) + ulps
-        # on the hull too: the point moved those ulps towards the centre (a boundary point
-        # rounded to the coordinates of a set far from the origin lies that far out)
-        radial = np.sqrt(np.sum(z[:, pos] ** 2, axis=1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            shrink = np.clip(1.0 - ulps / radial, 0.0, 1.0)
-        q = np.where(radial > 0.0, q * shrink**2, q)
-        inside = (q <= bound) & (off <= slack)
-        if np.all(lam[~pos] > _THIN_RTOL * lam_max):
-            # a set thinner than the rank threshold, not flat, holds its own thin points
-            inside |= q + np.sum(z_null**2 / lam[~pos], axis=1) <= bound
+        # on the hull too: each coordinate those ulps closer to the centre (a boundary
+        # point rounded to the coordinates of a set far from the origin lies that far
+        # out; moved along the radius instead, a thin axis kept no slack)
+        zs = np.sign(z) * np.maximum(np.abs(z) - ulps[:, None], 0.0)
+        q = np.sum(zs[:, pos] ** 2 / lam[pos], axis=1)
+        inside = (q <= bound) & (np.sqrt(np.sum(z[:, ~pos] ** 2, axis=1)) <= slack)
+        # a set thinner than the rank threshold, not flat, holds its own thin points
+        # (along every thin axis, whether or not other axes are flat)
+        thin = ~pos & (lam > _THIN_RTOL * lam_max)
+        if thin.any():
+            flat_off = np.sqrt(np.sum(z[:, ~pos & ~thin] ** 2, axis=1))
+            inside |= (q + np.sum(zs[:, thin] ** 2 / lam[thin], axis=1) <= bound) & (
+                flat_off <= slack
+            )
         return bool(inside[0]) if x.ndim == 1 else inside
 
     # -- outer bounds ----------------------------------------------------------------
