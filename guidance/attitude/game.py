@@ -224,9 +224,13 @@ def design_a_star(
     r0 = ratio(0.0)
     iterations.append((0.0, r0))
     if r0 > 1.0:
+        # the bound grows with the disturbance (the floor) and with the initial error
+        # (the rates the turn reaches): name both
         raise ValueError(
-            f"disturbance bound too large: with a* = beta*/rho the rotor torques may reach "
-            f"{r0:.3g} x alpha (beta* = {bstar:.3g} 1/s^2)"
+            f"disturbance bound too large for this turn: even with the least a* = "
+            f"beta*/rho the rotor torques may reach {r0:.3g} x alpha (beta* = {bstar:.3g} "
+            "1/s^2); a smaller disturbance bound or initial angle, larger torque limits "
+            "alpha or a larger rho"
         )
     if not np.any(e > 0):
         a = a_of(0.0)
