@@ -120,10 +120,14 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
             tau = float(d["guaranteed_time_s"].iloc[0])
             for ax in bottom:
                 ax.axvline(tau, color=fs.REFERENCE, ls="--", lw=0.9, label="guaranteed time tau")
-    bottom[0].set_yscale("log")
+    for ax, col in ((bottom[0], "angle_deg"), (bottom[2], "rate_norm_degps")):
+        values = np.concatenate([df[col].to_numpy(dtype=float) for df in traces])
+        # log where there is something to draw on one (a run that diverged at once has
+        # no positive finite value: matplotlib warned and drew an empty log axis)
+        if np.any(np.isfinite(values) & (values > 0)):
+            ax.set_yscale("log")
     bottom[0].set_ylabel("error angle, deg")
     bottom[1].set_ylabel("energy index sum M^2 dt, N^2 m^2 s")
-    bottom[2].set_yscale("log")
     bottom[2].set_ylabel("rate norm, deg/s")
     for ax in bottom:
         ax.set_xlabel("time t, s")

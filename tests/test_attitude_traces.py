@@ -54,3 +54,27 @@ def test_every_attitude_trace_has_the_common_columns(scenario, controller, overr
     assert np.all(np.isfinite(gap[:-1]))
     known = np.isfinite(gap)
     assert np.all(gap[known] <= bound[known] * (1 + 1e-6) + 1e-9)
+
+
+def test_a_run_without_a_positive_value_is_drawn_on_linear_axes():
+    """A run that diverged at once (an inertia of 1e-30) has no positive finite error
+    angle or rate: the history's log axes warned ("Data has no positive values, and
+    therefore cannot be log-scaled") and were drawn empty; they stay linear."""
+    import warnings
+
+    from kalman_vs_infoset.experiments import plots_attitude
+    from kalman_vs_infoset.experiments.traces import long_rows
+
+    n, nan = 5, np.full(5, np.nan)
+    per_axis = {k: np.full((n, 3), np.nan) for k in ("error_deg", "rate_degps", "est_error_deg")}
+    per_axis |= {"torque_Nm": np.zeros((n - 1, 3)), "momentum_Nms": np.zeros((n, 3))}
+    per_step = {"angle_deg": nan, "rate_norm_degps": nan, "energy_N2m2s": np.zeros(n),
+                "knowledge_bound_deg": nan, "truth_inside": np.ones(n, bool)}  # fmt: skip
+    df = long_rows(np.arange(n) * 0.1, per_axis, per_step, scenario="x", controller="pd",
+                   estimator="box", noise="random", seed=0, run=0)  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plots_attitude.time_histories([df])
+        fig.canvas.draw()
+    assert {ax.get_yscale() for ax in fig.axes} == {"linear"}
+    plots_attitude.fs.plt.close(fig)
