@@ -55,9 +55,21 @@ def _version() -> str:
         return "0+unknown"
 
 
+#: front-door names that live in the registry: taken from there, not through
+#: :mod:`kalman_vs_infoset.api`, because a plug-in's entry point imports them while the
+#: registry loads plug-ins, which importing ``api`` itself starts (a plug-in doing
+#: ``from kalman_vs_infoset import register_estimator``, as docs/usage.md shows, failed
+#: with a circular ImportError and was left out of the Python API)
+_REGISTRY = {"register_estimator": "register", "Registration": "Registration"}
+
+
 def __getattr__(name: str):
     if name == "__version__":
         return _version()
+    if name in _REGISTRY:
+        from kalman_vs_infoset.estim import registry
+
+        return getattr(registry, _REGISTRY[name])
     if name in _API:
         from kalman_vs_infoset import api
 

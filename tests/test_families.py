@@ -6,6 +6,7 @@ harness asks the options' hooks, never an estimator's name."""
 from __future__ import annotations
 
 import importlib
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -216,3 +217,26 @@ def test_the_harness_hooks_come_from_the_options():
     assert hooks(infoset.validate(None)).containment_margin_m((5000.0, 6000.0), 58e3, 0.5) == 0
     neutral = hooks(ToyOptions())
     assert isinstance(neutral, InterceptOptions) and neutral.kinematic_margin_table(True) == {}
+
+
+def test_a_plug_in_registering_through_the_package_name_reaches_the_python_api(tmp_path):
+    """docs/usage.md's entry point calls ``kalman_vs_infoset.register_estimator``. Read
+    first through the Python API (``import kalman_vs_infoset as kvi; kvi.estimators()``)
+    the plug-ins load while the API module itself is imported, and taking the name
+    through it failed (a circular ImportError): the plug-in was left out with a warning.
+    A fresh process, warnings as errors."""
+    import subprocess
+
+    _entry_points(tmp_path, {"toyep_front": (
+        "def register():\n"
+        "    from kalman_vs_infoset import Registration, register_estimator\n"
+        "    from kalman_vs_infoset.estim.options import NoOptions\n"
+        "    assert Registration is not None\n"
+        "    register_estimator('toyep_front', 'intercept', NoOptions, doc='front door')\n"
+    )})  # fmt: skip
+    code = "import kalman_vs_infoset as kvi; print(','.join(kvi.estimators()))"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    r = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-c", code],
+                       capture_output=True, text=True, env=env, timeout=300)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "toyep_front" in r.stdout.strip().split(",")
