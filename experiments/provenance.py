@@ -8,15 +8,17 @@ written by other sources.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
+import inspect
 import json
 import subprocess
 import sys
 from functools import cache
 from importlib import metadata
 from pathlib import Path
-from typing import TypedDict
+from typing import Any, TypedDict
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the packages whose sources decide a run's result
@@ -66,6 +68,29 @@ def code_identity() -> CodeIdentity:
     return {"version": version, "sources_sha256": h.hexdigest(), "git_commit": _git_commit()}
 
 
+def _defining_modules(factory: Any) -> set[str]:
+    """The modules whose code a factory runs: a ``functools.partial`` is its function's
+    (and its callable arguments'), a bound method its function's, a callable instance
+    its class's (a partial was identified as ``functools``: an edited plug-in resumed a
+    table of its previous version)."""
+    out: set[str] = set()
+    todo, seen = [factory], set()
+    while todo:
+        f = todo.pop()
+        if id(f) in seen:
+            continue
+        seen.add(id(f))
+        if isinstance(f, functools.partial):
+            todo += [f.func, *(a for a in (*f.args, *f.keywords.values()) if callable(a))]
+        elif inspect.ismethod(f):
+            todo += [f.__func__, type(f.__self__)]
+        elif inspect.isfunction(f) or inspect.isclass(f):
+            out.add(f.__module__)
+        elif f is not None:  # a callable instance
+            out.add(type(f).__module__)
+    return out
+
+
 def estimator_identity(problem: str, name: str) -> dict | None:
     """What identifies a plug-in estimator's code (``None`` for the package's own, which
     :func:`code_identity` covers): the modules of its factory and options outside the
@@ -79,8 +104,14 @@ def estimator_identity(problem: str, name: str) -> dict | None:
         reg = registry.get(problem, name)
     except KeyError:  # not a registered estimator: nothing beyond the package's code
         return None
-    modules = {getattr(reg.factory, "__module__", None), reg.options.__module__}
-    outside = sorted(m for m in modules if m and not m.startswith("kalman_vs_infoset."))
+    modules = {*_defining_modules(reg.factory), reg.options.__module__}
+    outside = sorted(
+        m
+        for m in modules
+        if m
+        and not m.startswith("kalman_vs_infoset.")
+        and m.split(".")[0] not in sys.stdlib_module_names
+    )
     if not outside:
         return None
     files: dict[str, Path] = {}  # by path relative to its package's folder

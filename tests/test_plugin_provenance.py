@@ -165,3 +165,23 @@ def test_runs_whose_adversary_reads_an_edited_plug_in_set_are_refused(short, tmp
                           trace_fields=orig.trace_fields)  # fmt: skip
         sys.modules.pop("refplug", None)
     assert registry.get("intercept", "infoset").factory is orig.factory
+
+
+def test_a_plug_in_built_by_a_partial_is_identified_by_its_own_module(plugin):
+    """A factory that is a ``functools.partial`` of the plug-in's function (or a bound
+    method, or a callable instance) was identified as ``functools``, whose source does
+    not change: a resume mixed two versions of the plug-in. The function's module is
+    identified, and follows its sources."""
+    import functools
+
+    module = importlib.import_module("toyplug")
+    registry.register("toyplug_partial", "intercept", registry.get("intercept", "ekf").options,
+                      functools.partial(module.build))  # fmt: skip
+    try:
+        first = estimator_identity("intercept", "toyplug_partial")
+        assert first is not None and first["modules"] == ["toyplug"]
+        plugin.write_text(PLUGIN.format(widen=2.0))
+        again = estimator_identity("intercept", "toyplug_partial")
+        assert again["sources_sha256"] != first["sources_sha256"]
+    finally:
+        registry.unregister("intercept", "toyplug_partial")
