@@ -125,8 +125,16 @@ class Belief(ABC):
     def extremes(self, fn: StateFunction) -> Extremes:
         """Min and max of ``fn`` over the belief, with their arguments.
 
-        A belief that cannot bound ``fn`` over its whole body raises ``TypeError``
-        (values at some of its points are not extremes).
+        Sound bounds of the functions guidance asks for (the intercept's
+        :mod:`~kalman_vs_infoset.estim.intercept.costs`: the miss forecast and the
+        zero-effort miss; the attitude's ``RateComponent``). Another function a belief
+        either refuses (``TypeError``: values at some of its points are not extremes;
+        the node set and the attitude sets do), or answers as its class documents: the
+        intercept's slab and point sections at their boundary points (exact for
+        functions linear in ``(alpha, w)`` and monotone in ``x`` over polygons,
+        zonotopes and boxes, inner over ellipsoids), the particle filter over its
+        particles, a Kalman filter over its n-sigma ellipsoid. A plug-in should refuse
+        what it cannot bound.
         """
 
     def trace_fields(self) -> dict[str, float]:
