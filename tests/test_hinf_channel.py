@@ -153,3 +153,26 @@ def test_theta_is_validated():
     for bad in (-0.1, 1.0, float("nan")):
         with pytest.raises(ValueError, match="theta"):
             HInfinityChannelEstimator(MODEL, theta=bad)
+
+
+@pytest.mark.parametrize("weight", ["zem", "state"])
+def test_a_prior_of_zero_width_is_filtered_like_the_kalman_filters_do(weight):
+    """A point prior (a box of zero width, which ``ChannelPrior`` accepts): after one
+    step the covariance is the rank-one disturbance's, singular to rounding, and the
+    second bearing ended in "S must be positive semidefinite" where the EKF and UKF go
+    on. Its correlation is made definite by a ridge of 1e-12; the estimate stays on the
+    truth, which moves by the model."""
+    from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.estim.intercept.model import ChannelPrior, ChannelSetting
+
+    model = ChannelModel()
+    prior = ChannelPrior((-8e3, -8e3), (0.0, 0.0), (5801.3e3, 5801.3e3), (58e3, 58e3))
+    truth = model.from_cartesian(-8e3, 0.0, 5801.3e3, -58e3)
+    est = registry.get("intercept", "hinf").build({"weight": weight},
+                                                  ChannelSetting(model, (58e3, 58e3)))  # fmt: skip
+    belief = est.update(est.initial(prior), Bearing(float(truth[0])))
+    for _ in range(5):
+        belief, truth = est.predict(belief, 0.5), model.step(truth, 0.5)
+        belief = est.update(belief, Bearing(float(truth[0])))
+        assert np.all(np.isfinite(belief.mean)) and np.all(np.isfinite(belief.cov))
+    assert abs(belief.mean[0] - truth[0]) < 1e-9 and abs(belief.mean[2] - truth[2]) < 1e-3

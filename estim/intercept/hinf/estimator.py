@@ -100,6 +100,8 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 WEIGHTS = ("zem", "state")
+#: added to the diagonal of a correlation matrix singular to rounding (hinf_update)
+RIDGE = 1e-12
 #: row of L for weight="zem": the zero-effort miss w of (alpha, w, x)
 _ZEM = 1
 
@@ -200,13 +202,17 @@ class HInfinityChannelEstimator(Estimator[GaussianBelief, ChannelPrior]):
         )
 
     # -- the update itself -----------------------------------------------------------
-    def weight_matrix(self, cov: FloatArray, live: NDArray[np.bool_]) -> FloatArray:
+    def weight_matrix(
+        self, cov: FloatArray, live: NDArray[np.bool_], corr: FloatArray | None = None
+    ) -> FloatArray:
         """``Sbar = L^T (L P L^T)^-1 L`` in the coordinates scaled by ``sqrt(P_ii)``
-        (rows and columns of the ``live`` coordinates only)."""
+        (rows and columns of the ``live`` coordinates only; ``corr``: their correlation
+        matrix, if already formed)."""
         n = int(live.sum())
         if self.weight == "state":  # L = I: Sbar = P^-1, the inverse correlation matrix
-            d = np.sqrt(np.diag(cov)[live])
-            corr = cov[np.ix_(live, live)] / np.outer(d, d)
+            if corr is None:
+                d = np.sqrt(np.diag(cov)[live])
+                corr = cov[np.ix_(live, live)] / np.outer(d, d)
             inv = np.linalg.inv(corr)
             return 0.5 * (inv + inv.T)
         out = np.zeros((n, n))
@@ -234,7 +240,13 @@ class HInfinityChannelEstimator(Estimator[GaussianBelief, ChannelPrior]):
         corr = 0.5 * (corr + corr.T)
         hs = (h[live] * d)[None, :]
         n = len(d)
-        sbar = self.weight_matrix(cov, live)
+        sbar = self.weight_matrix(cov, live, corr)
+        if np.linalg.eigvalsh(corr)[0] <= 0.0 or np.linalg.eigvalsh(sbar)[0] < 0.0:
+            # a covariance singular to rounding (a prior of zero width, then the rank-one
+            # disturbance of a step): its correlation is not invertible, and the core
+            # refused it; a correlation made definite by a trace of 1e-12 is
+            corr = corr + RIDGE * np.eye(n)
+            sbar = self.weight_matrix(cov, live, corr)
         core = HInfinityModel(
             F=np.eye(n),
             H=hs,
