@@ -267,6 +267,11 @@ def _main(argv: Sequence[str] | None) -> int:
                 notice.uninstall()
 
 
+def _line(exc: BaseException) -> str:
+    """An error's message on one line (a plug-in's validator may break its own)."""
+    return " ".join(part.strip() for part in str(exc).splitlines() if part.strip())
+
+
 def _run(parser, module, args) -> int:
     where = f"{parser.prog} {args.command}"
     try:
@@ -277,7 +282,7 @@ def _run(parser, module, args) -> int:
             reraise_stop(exc)
             raise
     except InputError as exc:
-        print(f"{where}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {_line(exc)}", file=sys.stderr)
         return 2
     except OSError as exc:  # an output or input path the system refuses
         at = f" ({exc.filename})" if exc.filename else ""
@@ -291,7 +296,7 @@ def _run(parser, module, args) -> int:
         print(f"{where}: interrupted; finished runs are saved; rerun to resume", file=sys.stderr)
         return 130
     except LinearProgramFailed as exc:  # valid input, a program no method solved
-        print(f"{where}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {_line(exc)}", file=sys.stderr)
         return 1
     except RuntimeError as exc:  # WorkerLost, when the command uses the runner
         executors = sys.modules.get("kalman_vs_infoset.experiments.executors")

@@ -312,6 +312,8 @@ def trace(
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
     seed = _seed(seed, sc.experiment.seed)
+    if isinstance(runs, str) or not isinstance(runs, Sequence | np.ndarray):
+        raise TypeError(f"runs must be a sequence of run indices (e.g. [0, 3]), got {runs!r}")
     runs = [_index(j, "a run index", 0) for j in runs]
     if not runs:  # (two frames without columns came back)
         raise ValueError("runs must name at least one run to trace")

@@ -90,6 +90,8 @@ def run_attitude(
 
     runs = _index(runs, "runs", 1)
     seed = _seed(seed, 0)
+    if estimator is not None and not isinstance(estimator, str):  # e.g. a list
+        raise TypeError(f"estimator must be one name (a str), got {estimator!r}")
     if estimator is not None:
         try:
             registry.get("attitude", estimator)

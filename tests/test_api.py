@@ -214,6 +214,10 @@ def test_wrong_kinds_of_arguments_are_named(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(ValueError, match="runs must be distinct"):
         api.trace("kp_fig3", "ekf", "random", runs=[0, 0])
+    with pytest.raises(TypeError, match="runs must be a sequence of run indices"):
+        api.trace("kp_fig3", "ekf", "random", runs=5)  # 'int' object is not iterable
+    with pytest.raises(TypeError, match="estimator must be one name"):
+        api.run_attitude("smallsat_rw", estimator=["box", "ukf"])
 
 
 def test_run_attitude_changes_the_noise_table_through_tables(tmp_path, capsys, monkeypatch):

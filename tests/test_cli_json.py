@@ -30,3 +30,19 @@ def test_values_that_are_not_finite_are_null_at_any_depth_and_of_any_type():
         "fine": [3, 2.5, True, "text"],
     }
     assert not math.isnan(back["fine"][1])
+
+
+def test_an_error_message_of_several_lines_is_printed_on_one(monkeypatch, capsys):
+    """Bad input is one line, also when a message (a plug-in options validator's, say)
+    breaks its own text over several: it was printed over two."""
+    from kalman_vs_infoset.experiments import cmd_scenarios
+    from kalman_vs_infoset.experiments.cli import main
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    def refuse(args):
+        raise InputError("table 'estimator.fussy': pair must be increasing\n  second line")
+
+    monkeypatch.setattr(cmd_scenarios, "run", refuse)
+    assert main(["scenarios"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "increasing second line" in err

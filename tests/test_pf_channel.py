@@ -152,3 +152,18 @@ def test_impulse_moves_the_lateral_velocity_exactly():
     free, kicked = est.predict(b, DT), est.predict(b, DT, 2.0)
     np.testing.assert_allclose(kicked.particles[:, 1] - free.particles[:, 1], 2.0, atol=1e-12)
     np.testing.assert_allclose(kicked.particles[:, 0] - free.particles[:, 0], 2.0 * DT, atol=1e-9)
+
+
+def test_the_cached_rows_of_a_particle_belief_are_read_only():
+    """Beliefs are values: the rows a particle belief caches were writable, and a write
+    into them changed that belief's extremes."""
+    from kalman_vs_infoset.estim import registry
+    from kalman_vs_infoset.estim.intercept.model import ChannelModel, ChannelPrior, ChannelSetting
+
+    model = ChannelModel()
+    est = registry.get("intercept", "pf").build(
+        {"n_particles": 200}, ChannelSetting(model, (58e3, 58e3))
+    )
+    belief = est.initial(ChannelPrior((-1e3, 1e3), (-10.0, 10.0), (5.7e6, 5.9e6), (58e3, 58e3)))
+    with pytest.raises(ValueError, match="read-only"):
+        belief.rows[0, 0] = 1.0

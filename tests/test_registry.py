@@ -136,6 +136,8 @@ def _intercept_contract(est: Estimator) -> None:
             est.predict(b1, dt_s, control)
     with pytest.raises(ValueError, match="impulse must be"):
         Impulse(np.nan, 0.1)
+    with pytest.raises(TypeError, match="an impulse is a number"):  # "3" read as 3 m/s
+        est.predict(b1, 0.5, "3")
     # predicting past the blind range ends the belief, reported by its status (a set
     # without measurements may say it diverged on the way)
     b = b3

@@ -169,6 +169,15 @@ def test_estimator_options_that_are_not_tables_are_refused(short, tmp_path, caps
     assert "'estimator.options'" in err and "[estimator.<name>]" in err
 
 
+@pytest.mark.parametrize("name", ["ekf", "infoset"])
+def test_an_estimator_table_given_a_value_is_refused_as_not_a_table(short, tmp_path, capsys, name):
+    """``--set estimator.ekf=7`` was refused as "unknown key 'estimator.ekf'", listing
+    the fields, though the key is the estimator's table."""
+    err = _refused(capsys, tmp_path / "out", "intercept", short, "--runs", "1",
+                   "--set", f"estimator.{name}=7")  # fmt: skip
+    assert f"field 'estimator.{name}' must be a table" in err and "unknown" not in err
+
+
 def test_estimator_options_given_as_tables_still_reach_their_estimator(short):
     from kalman_vs_infoset.experiments.scenario import load_scenario
 

@@ -31,6 +31,7 @@ Miss forecast for free motion (seed 003 section 5)::
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
@@ -176,6 +177,9 @@ def impulse_parts(control: float | Impulse) -> tuple[float, float]:
     (ValueError for a number that is not finite)."""
     if isinstance(control, Impulse):
         return float(control.k_mps), float(control.uncertainty_mps)
+    if isinstance(control, str | bytes) or not isinstance(control, numbers.Real):
+        # float("3") read a text as 3 m/s
+        raise TypeError(f"an impulse is a number (m/s) or an Impulse, got {control!r}")
     k = float(control)
     if not math.isfinite(k):
         raise ValueError(f"an impulse must be finite, got {k}")

@@ -180,6 +180,12 @@ class EstimatorTable(Table):
         options = {k: dict(v) for k, v in given.items()}
         for key in [k for k, v in data.items() if isinstance(v, dict)]:
             options.setdefault(key, {}).update(data.pop(key))
+        names = set(registry.names("intercept"))
+        for key in [k for k in data if k in names]:  # not a table: not "an unknown key"
+            raise ValueError(
+                f"field 'estimator.{key}' must be a table of the estimator's options "
+                f"([estimator.{key}] in the file, --set estimator.{key}.OPTION=VALUE)"
+            )
         for key, targets in legacy_options().items():
             if key in data:
                 now = " and ".join(f"'estimator.{name}.{option}'" for name, option in targets)

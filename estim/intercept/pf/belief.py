@@ -32,6 +32,8 @@ from kalman_vs_infoset.estim.intercept.model import ChannelModel, channel_state
 from kalman_vs_infoset.estim.intercept.pf.filter import ParticleSet
 from numpy.typing import ArrayLike, NDArray
 
+from kalman_vs_infoset.numerics.arrays import readonly
+
 FloatArray = NDArray[np.float64]
 
 #: columns of a particle
@@ -95,8 +97,9 @@ class ParticleBelief(Belief):
 
     @cached_property
     def rows(self) -> FloatArray:
-        """``(alpha, omega, x)`` of every particle."""
-        return particle_rows(self.cloud.particles, self.model)
+        """``(alpha, omega, x)`` of every particle (read-only, as the belief: a write
+        into the cached rows changed its extremes)."""
+        return readonly(particle_rows(self.cloud.particles, self.model), copy=False)
 
     @cached_property
     def moments(self) -> GaussianBelief:
