@@ -139,11 +139,15 @@ def _probe_scheduler(address: str, timeout_s: float | None = None) -> None:
     import asyncio
 
     from distributed.comm import connect
+    from distributed.security import Security
 
     timeout_s = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+    # the connection arguments the client takes from Dask's configuration (TLS
+    # certificates: without them a tls:// scheduler was refused)
+    args = Security().get_connection_args("client")
 
     async def handshake() -> None:
-        comm = await asyncio.wait_for(connect(address, timeout=timeout_s), timeout_s)
+        comm = await asyncio.wait_for(connect(address, timeout=timeout_s, **args), timeout_s)
         await comm.close()
 
     failed: list[BaseException] = []

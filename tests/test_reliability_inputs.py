@@ -608,3 +608,30 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_line(
             f"tcp://127.0.0.1:{_server(reply)}", "--out", out)  # fmt: skip
     assert one_line_error(r) and "not a scheduler" in r.stderr, r.stderr
     assert not out.exists()
+
+
+def test_the_scheduler_probe_connects_as_the_client_does(monkeypatch):
+    """The probe's handshake takes the connection arguments the Dask client takes from
+    its configuration (TLS certificates): without them a tls:// scheduler was refused
+    ("TLS expects a ssl_context argument")."""
+    distributed = pytest.importorskip("distributed")
+    from distributed import comm as dask_comm
+    from distributed import security
+    from kalman_vs_infoset.experiments import executors
+
+    seen: dict = {}
+
+    class Comm:
+        async def close(self) -> None:
+            seen["closed"] = True
+
+    async def connect(address, timeout=None, **kwargs):
+        seen.update(address=address, **kwargs)
+        return Comm()
+
+    context = object()
+    args = {"ssl_context": context, "require_encryption": True}
+    monkeypatch.setattr(dask_comm, "connect", connect)
+    monkeypatch.setattr(security.Security, "get_connection_args", lambda self, role: args)
+    executors._probe_scheduler("tls://127.0.0.1:8786", timeout_s=2.0)
+    assert seen["ssl_context"] is context and seen["closed"] and distributed
