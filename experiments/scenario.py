@@ -203,8 +203,13 @@ def override_suffix(overrides: Sequence[str]) -> str:
     :data:`MAX_SUFFIX` characters the overrides that do not fit are named by a hash of
     all of them (``+N_more_<hash>``): distinct override lists keep distinct names. The
     overrides are taken in the order of their keys (a key is set once): the same
-    overrides given in another order name the same files, and resume them."""
-    overrides = sorted(overrides, key=lambda o: (o.split("=", 1)[0].strip(), o))
+    overrides given in another order name the same files, and resume them. Where one
+    key holds another (a table and one of its fields), the later one wins, so their
+    order is kept."""
+    keys = [o.split("=", 1)[0].strip() for o in overrides]
+    nested = any(b.startswith(a + ".") for a in keys for b in keys)
+    if not nested:
+        overrides = sorted(overrides, key=lambda o: (o.split("=", 1)[0].strip(), o))
     squeezed = (o.replace(" ", "") for o in overrides)
     safe = ["".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed]
     # a value's '..' (a text with an ellipsis) would make the name a path's parent

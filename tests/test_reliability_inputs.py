@@ -87,6 +87,9 @@ def test_many_overrides_still_name_files_the_system_accepts(short, tmp_path, cap
     assert override_suffix(sets[::-1]) == suffix  # in any order: the same files
     assert override_suffix([*sets[:-1], "estimator.infoset.node_split_ratio=4.0"]) != suffix
     assert override_suffix(sets[:2]) == "+" + "+".join(sorted(sets[:2]))  # short: unchanged
+    # a table and one of its fields: the later wins, so the order given names the file
+    table, field = "guidance={max_impulse_mps=2.0}", "guidance.max_impulse_mps=5.0"
+    assert override_suffix([table, field]) != override_suffix([field, table])
     out = tmp_path / "out"
     args = [a for kv in sets for a in ("--set", kv)]
     r = run(capsys, "intercept", short, "--runs", 1, "--workers", 1, "--no-progress",
