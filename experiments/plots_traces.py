@@ -93,7 +93,12 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
     steps = [df for df in frames if "channel" in df]
     if not steps:
         return files
-    paper = paper if paper is not None else _paper_from_json(paths[0])
+    # each scenario's own printed numbers (its results' description): the traces of a
+    # scenario's --set variant may carry another reference
+    first_path = {}
+    for path, frame in zip(paths, frames, strict=True):
+        if "channel" in frame:
+            first_path.setdefault(str(frame["scenario"].iloc[0]), path)
     df = pd.concat(steps, ignore_index=True)
     if "seed" not in df:
         df = df.assign(seed=None)
@@ -101,7 +106,8 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
     # apart: their runs share numbers, not truths
     for (name, seed), group in df.groupby(["scenario", "seed"], dropna=False, sort=True):
         tag = "" if pd.isna(seed) else f"-s{int(seed)}"
-        files += _step_figures(group, str(name), tag, out, paper)
+        marks = paper if paper is not None else _paper_from_json(first_path[str(name)])
+        files += _step_figures(group, str(name), tag, out, marks)
     for path in paths:
         files += _set_figures(path, out, animation)
     return files

@@ -111,6 +111,11 @@ def _tables(folder: Path) -> list[Path]:
     return files or found
 
 
+def _scenario_of(description: dict[str, Any]) -> Any:
+    """What makes two tables of one name the same job: the job and its scenario."""
+    return [description.get(k) for k in ("scenario", "estimator", "noise", "controller", "seed")]
+
+
 def load_results(folder: str | Path) -> pd.DataFrame:
     """Every run of a results folder (or one results table) in one DataFrame.
 
@@ -158,12 +163,18 @@ def load_results(folder: str | Path) -> pd.DataFrame:
         if not {"run", "status"} <= set(df.columns):
             continue  # a summary table beside the runs
         # a table of the same name at the top and in runs/ holds the runs of one job
-        # (run j is seeded alike in both): each run is read once, the top's first
-        seen = runs_read.setdefault(f.name, set())
+        # (run j is seeded alike in both) when it describes the same scenario: each run
+        # is read once, the top's first; one of another scenario (the file edited
+        # between the commands) is read whole, its description under runs/<name>
+        described = read_metadata(f)
+        key = f.name
+        if key in meta and _scenario_of(meta[key]) != _scenario_of(described):
+            key = f"{f.parent.name}/{f.name}"
+        seen = runs_read.setdefault(key, set())
         df = df[~df["run"].isin(seen)]
         seen.update(int(r) for r in df["run"])
         frames.append(df)
-        meta.setdefault(f.name, read_metadata(f))
+        meta.setdefault(key, described)
     out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     out.attrs["metadata"] = meta
     return out

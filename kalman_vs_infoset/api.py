@@ -246,7 +246,7 @@ def run_experiment(
     seed = _seed(seed, sc.experiment.seed)
     if executor is not None and not isinstance(executor, Executor):
         raise TypeError(f"executor must be a concurrent.futures.Executor, got {executor!r}")
-    if out is not None and not str(out).strip():  # Path("") is the working directory
+    if out is not None and not str(out).strip():  # the command line refuses --out ''
         raise ValueError("out must name a folder (None: computed in memory)")
     if out is not None:
         return intercept_runs.run_experiment(

@@ -266,3 +266,23 @@ def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(t
         "kp_fig3-ekf-random-s3.parquet",
         "kp_fig3-ukf-random-s3.parquet",
     ]
+
+
+def test_load_results_keeps_apart_tables_of_one_name_and_another_scenario(tmp_path):
+    """A table of one name at the top and in ``runs/`` is one job only when it describes
+    the same scenario: edited between the two commands (here ``nu``), both tables' runs
+    are read, each with its description (they were merged by name, the second's runs
+    under the first's description)."""
+    out = tmp_path / "results"
+    sc = api.load_scenario("kp_fig3")
+    edited = sc.model_copy(update={"model": sc.model.model_copy(update={"nu_mps2": 0.004})})
+    api.run_experiment(sc, "ekf", "random", runs=2, seed=3, out=out)
+    api.run_experiment(edited, "ekf", "random", runs=2, seed=3, out=out / "runs")
+    loaded = api.load_results(out)
+    assert len(loaded) == 4
+    assert sorted(loaded.attrs["metadata"]) == [
+        "kp_fig3-ekf-random-s3.parquet",
+        "runs/kp_fig3-ekf-random-s3.parquet",
+    ]
+    nus = {m["scenario"]["model"]["nu_mps2"] for m in loaded.attrs["metadata"].values()}
+    assert nus == {sc.model.nu_mps2, 0.004}

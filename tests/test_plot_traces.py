@@ -132,3 +132,25 @@ def test_an_animation_stopped_mid_write_leaves_the_one_before_it(traced, tmp_pat
         plots_sets.animate(sets, 0, gif, max_frames=3)
     assert gif.read_bytes() == before
     assert [p.name for p in out.iterdir()] == ["set.gif"]
+
+
+def test_each_scenario_is_marked_with_its_own_printed_numbers(short, tmp_path, monkeypatch):
+    """The paper's marks were read from the first trace's results and drawn on every
+    scenario's figures; a scenario's --set variant may carry another reference."""
+    from kalman_vs_infoset.experiments import plots_traces
+
+    res = tmp_path / "res"
+    _trace(short, res, "ekf", [0])
+    _trace(short, res, "ekf", [0], "reference.miss_random_m=7.0")
+    monkeypatch.setattr(plots_traces, "_paper_from_json", lambda path: {"from": path.name})
+    drawn = {}
+
+    def figures(df, name, tag, out, paper):
+        drawn[name] = paper
+        return []
+
+    monkeypatch.setattr(plots_traces, "_step_figures", figures)
+    plots_traces.plot_files(sorted(res.rglob("*-trace.parquet")), out=tmp_path, animation=False)
+    assert len(drawn) == 2
+    for name, marks in drawn.items():
+        assert marks["from"].startswith(name + "-ekf-random-s1")
