@@ -95,7 +95,7 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
         return files
     # each scenario's own printed numbers (its results' description): the traces of a
     # scenario's --set variant may carry another reference
-    first_path = {}
+    first_path: dict[str, Path] = {}
     for path, frame in zip(paths, frames, strict=True):
         if "channel" in frame:
             first_path.setdefault(str(frame["scenario"].iloc[0]), path)
