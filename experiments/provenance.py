@@ -15,7 +15,6 @@ import inspect
 import json
 import subprocess
 import sys
-from functools import cache
 from importlib import metadata
 from pathlib import Path
 from typing import Any, TypedDict
@@ -44,7 +43,7 @@ class CodeIdentity(TypedDict):
     git_commit: str | None
 
 
-@cache
+@functools.cache
 def code_identity() -> CodeIdentity:
     """Package version, SHA-256 over the sources of :data:`PACKAGES`, and the git
     commit of the package's own sources when known (:func:`_git_commit`; informational:
