@@ -3,7 +3,10 @@ count or the scheduler, and an interrupted run resumes to identical results."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import shutil
 from dataclasses import replace
 
 import pandas as pd
@@ -36,6 +39,25 @@ def _attitude(capsys, scenario, out, *extra) -> tuple[int, dict | None]:
     return code, json.loads(text[-1]) if code == 0 else None
 
 
+@pytest.fixture(scope="module")
+def one_worker(tmp_path_factory):
+    """The ``--workers 1`` run of the tiny turn (``(out, result)``), the reference that
+    four tests compared their own runs with: computed once for the module (identical
+    each time: the same scenario, seed and runs)."""
+    folder = tmp_path_factory.mktemp("one_worker")
+    scenario = folder / "tiny_rw.toml"
+    scenario.write_text(TINY_RW)
+    out = folder / "out"
+    with contextlib.redirect_stdout(io.StringIO()) as stdout:
+        code = main(
+            ["attitude", str(scenario), "--noise", "random", "--estimators", "box", "--runs",
+             str(RUNS), "--seed", "3", "--out", str(out), "--json", "--no-progress",
+             "--workers", "1"]
+        )  # fmt: skip
+    assert code == 0
+    return out, json.loads(stdout.getvalue().strip().splitlines()[-1])
+
+
 def _table(out) -> pd.DataFrame:
     (path,) = out.glob("*.parquet")
     assert path.name == "tiny_rw-pd-box-random-s3.parquet"
@@ -52,19 +74,19 @@ def _summary(result: dict) -> dict:
     }
 
 
-def test_attitude_results_do_not_depend_on_the_worker_count(scenario, tmp_path, capsys):
-    c1, one = _attitude(capsys, scenario, tmp_path / "one", "--workers", "1")
+def test_attitude_results_do_not_depend_on_the_worker_count(scenario, tmp_path, capsys, one_worker):
+    one_out, one = one_worker
     c2, two = _attitude(capsys, scenario, tmp_path / "two", "--workers", "2")
-    assert c1 == c2 == 0 and one["failures"] == 0
-    pd.testing.assert_frame_equal(_table(tmp_path / "one"), _table(tmp_path / "two"))
+    assert c2 == 0 and one["failures"] == 0
+    pd.testing.assert_frame_equal(_table(one_out), _table(tmp_path / "two"))
     assert _summary(one) == _summary(two)
-    assert sorted(_table(tmp_path / "one")["run"]) == list(range(RUNS))
+    assert sorted(_table(one_out)["run"]) == list(range(RUNS))
 
 
 def test_interrupted_attitude_run_resumes_to_identical_results(
-    scenario, tmp_path, capsys, monkeypatch
+    scenario, tmp_path, capsys, monkeypatch, one_worker
 ):
-    _, fresh = _attitude(capsys, scenario, tmp_path / "fresh", "--workers", "1")
+    fresh_out, fresh = one_worker
     real, calls = attitude_rw.task, []
 
     def interrupted(*args, **kw):
@@ -80,18 +102,20 @@ def test_interrupted_attitude_run_resumes_to_identical_results(
     monkeypatch.setattr(attitude_rw, "LOOP", replace(attitude_rw.LOOP, task=real))
     code, resumed = _attitude(capsys, scenario, tmp_path / "resumed", "--workers", "1")
     assert code == 0
-    pd.testing.assert_frame_equal(_table(tmp_path / "fresh"), _table(tmp_path / "resumed"))
+    pd.testing.assert_frame_equal(_table(fresh_out), _table(tmp_path / "resumed"))
     assert _summary(fresh) == _summary(resumed)
 
 
 @pytest.mark.xdist_group("dask")
-def test_attitude_on_a_dask_local_cluster_is_identical(scenario, tmp_path, capsys, dask_cluster):
-    _, local = _attitude(capsys, scenario, tmp_path / "local", "--workers", "1")
+def test_attitude_on_a_dask_local_cluster_is_identical(
+    scenario, tmp_path, capsys, dask_cluster, one_worker
+):
+    local_out, local = one_worker
     code, dask = _attitude(
         capsys, scenario, tmp_path / "dask", "--scheduler", dask_cluster.scheduler_address
     )
     assert code == 0
-    pd.testing.assert_frame_equal(_table(tmp_path / "local"), _table(tmp_path / "dask"))
+    pd.testing.assert_frame_equal(_table(local_out), _table(tmp_path / "dask"))
     assert _summary(local) == _summary(dask)
     # the cluster's workers are not the command's processes: their CPU time is not counted
     assert local["cpu_s"] > 0.0 and dask["cpu_s"] is None and dask["worker_peak_rss_mb"] is None
@@ -166,7 +190,7 @@ def test_the_attitude_cdf_says_its_scenario_and_the_runs_that_never_settled(tmp_
 
 
 def test_an_edit_of_another_estimators_options_resumes_the_attitude_runs(
-    scenario, tmp_path, capsys
+    scenario, tmp_path, capsys, one_worker
 ):
     """An attitude loop's estimator reads only its own ``[estimator_options.<name>]``
     table: the box's runs resume after a UKF table is added to the file (they were
@@ -174,8 +198,8 @@ def test_an_edit_of_another_estimators_options_resumes_the_attitude_runs(
     refused after an edit of the box's own table."""
     out = tmp_path / "out"
     text = scenario.read_text()
-    code, _ = _attitude(capsys, scenario, out, "--workers", "1")
-    assert code == 0
+    # the finished runs of this scenario: a copy of the module's run of it
+    shutil.copytree(one_worker[0], out)
     before = _table(out)
     scenario.write_text(text + "[estimator_options.ukf]\ngate_prob = 0.99\n")
     code, _ = _attitude(capsys, scenario, out, "--workers", "1")

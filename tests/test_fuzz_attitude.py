@@ -2,9 +2,32 @@
 
 import fuzz_attitude
 import pandas as pd
+import pytest
 
 
-def test_the_search_runs_every_set_family_and_finds_no_fault(capsys):
+@pytest.fixture(scope="module")
+def _frames() -> dict:
+    return {}
+
+
+@pytest.fixture
+def runs_once(_frames, monkeypatch):
+    """``api.run_attitude`` computed once a call for the module: the three searches of
+    case 14 below run the same six runs (the same arguments, so the same frames)."""
+    from kalman_vs_infoset import api
+
+    real = api.run_attitude
+
+    def once(scenario, **kwargs):
+        key = repr((scenario, sorted(kwargs.items())))
+        if key not in _frames:
+            _frames[key] = real(scenario, **kwargs)
+        return _frames[key].copy()
+
+    monkeypatch.setattr(api, "run_attitude", once)
+
+
+def test_the_search_runs_every_set_family_and_finds_no_fault(capsys, runs_once):
     assert fuzz_attitude.set_estimators() == ["box", "zonotope", "ellipsoid"]
     # case 14: smallsat_rw, random noise, a 0.2-s period: under a CPU-second
     assert fuzz_attitude.main(["--seconds", "60", "--seed", "14", "--cases", "1"]) == 0
@@ -15,7 +38,7 @@ def test_the_search_runs_every_set_family_and_finds_no_fault(capsys):
     )
 
 
-def test_the_exact_interval_outside_a_hull_is_a_fault(capsys, monkeypatch):
+def test_the_exact_interval_outside_a_hull_is_a_fault(capsys, monkeypatch, runs_once):
     """A set whose hull misses part of the exact interval (here every hull shrunk by 0.1 %
     about its centre) is reported, case and family named."""
     from test_attitude_tightness import shrink_hulls
@@ -50,7 +73,7 @@ def test_a_gyrodine_case_sets_its_top_level_fields_and_its_controller():
     assert any(line.startswith("noise.game_disturbance_Nm=") for line in lines)
 
 
-def test_a_comparison_that_raises_is_a_fault_and_the_search_goes_on(capsys, monkeypatch):
+def test_a_comparison_that_raises_is_a_fault_and_the_search_goes_on(capsys, monkeypatch, runs_once):
     """An exception in a case's exact comparison (one stopped the search of seed 8800 at
     its case 8886, the counts and the case lost) is that case's fault, named; the next
     cases run."""
