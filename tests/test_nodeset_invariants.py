@@ -27,6 +27,7 @@ from nodeset_schedules import (
     DENT_TOL,
     ROOT,
     SIGNS,
+    assert_convex_once,
     corner_state,
     run_schedule,
     switch_times,
@@ -368,3 +369,34 @@ def test_kernel_stays_within_its_buffers_under_numba_bounds_checking(tmp_path, k
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert json.loads(proc.stdout.strip().splitlines()[-1]) == {"replayed": len(keep)}
+
+
+@pytest.mark.parametrize(
+    ("bad", "said"),
+    [
+        ([[0, 0], [2, 0], [1, 0.5], [2, 2], [0, 2]], "reflex vertex"),
+        ([[0, 0], [0, 1], [1, 1], [1, 0]], "winds -1.000 times"),
+        ([[1, 0], [0, 1], [-1, 0], [0, -1]] * 2, "winds 2.000 times"),
+    ],
+    ids=["reflex", "clockwise", "twice"],
+)
+def test_the_convexity_check_of_the_schedules_is_not_vacuous(bad, said):
+    """``assert_convex_once`` (the check after every operation above) passes convex
+    slices and an empty one, and names a dented, a clockwise or a twice-wound slice
+    wherever it sits in the batch (first, between, last)."""
+    from types import SimpleNamespace
+
+    from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
+
+    def belief(*polys):
+        arrays = [np.asarray(p, dtype=float).reshape(-1, 2) for p in polys]
+        off = np.r_[0, np.cumsum([len(a) for a in arrays])].astype(np.int64)
+        # (the internal constructor: the public one refuses a non-convex polygon)
+        return SimpleNamespace(polygons=ConvexPolygons._make(np.concatenate(arrays), off))
+
+    square, triangle = [[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 0], [2, 0], [1, 1]]
+    assert_convex_once(belief(square, [], triangle), "convex")  # passes: no AssertionError
+    for at, polys in enumerate([(bad, square), (square, [], bad, triangle), (square, bad)]):
+        node = [0, 2, 1][at]
+        with pytest.raises(AssertionError, match=f"node {node} .*{said}"):
+            assert_convex_once(belief(*polys), "case")
