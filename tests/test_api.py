@@ -3,6 +3,7 @@ the command line to the last digit (the same seeding function, the same rows).""
 
 import doctest
 import importlib
+import shutil
 import sys
 from pathlib import Path
 
@@ -18,6 +19,27 @@ from kalman_vs_infoset import api
 
 #: columns that differ between two computations of the same run (timing)
 TIMING = ["wall_s"]
+
+
+@pytest.fixture(scope="module")
+def fig3_tables(tmp_path_factory):
+    """What ``run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=...)`` writes
+    for the EKF and the UKF, computed once for the tests of reading folders (each copies
+    them where a command would have written them: they were computed nine times)."""
+    out = tmp_path_factory.mktemp("fig3_tables")
+    for est in ("ekf", "ukf"):
+        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out)
+    return out
+
+
+def _written(tables: Path, out: Path, estimators=("ekf", "ukf")) -> None:
+    """``out`` as after ``run_experiment(..., out=out)`` of ``estimators`` (the table and
+    its description in ``_meta``), from the copies in ``tables``."""
+    (out / "_meta").mkdir(parents=True, exist_ok=True)
+    for est in estimators:
+        stem = f"kp_fig3-{est}-random-s3"
+        shutil.copy2(tables / f"{stem}.parquet", out / f"{stem}.parquet")
+        shutil.copy2(tables / "_meta" / f"{stem}.json", out / "_meta" / f"{stem}.json")
 
 
 def test_the_package_root_re_exports_the_front_door_lazily():
@@ -115,13 +137,12 @@ def test_in_memory_run_experiment_equals_the_files_and_writes_nothing(tmp_path, 
     assert mem["y0_km"].nunique() == 3  # three different truths
 
 
-def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path):
+def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path, fig3_tables):
     """``pd.read_parquet(folder)`` and ``load_results(folder)`` give every run of every
     table of an intercept folder (traces and descriptions are in ``_`` folders); the
     metadata holds the resolved scenario and the code identity."""
     out = tmp_path / "out"
-    for est in ("ekf", "ukf"):
-        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out)
+    _written(fig3_tables, out)  # run_experiment of the EKF and the UKF, runs=2, seed=3
     assert main(["intercept", "kp_fig3", "--estimators", "ekf", "--seed", "3", "--runs", "2",
                  "--out", str(out), "--trace", "0", "--no-progress"]) == 0  # fmt: skip
     assert (out / "_traces").is_dir() and (out / "_meta").is_dir()
@@ -139,7 +160,7 @@ def test_a_results_folder_reads_in_one_call_with_its_scenario(tmp_path):
     assert len(meta["code"]["sources_sha256"]) == 64
 
 
-def test_load_results_reads_each_run_once_beside_or_above_a_combined_table(tmp_path):
+def test_load_results_reads_each_run_once_beside_or_above_a_combined_table(tmp_path, fig3_tables):
     """A command's combined table (``report.write_tables``: compare and fig5 above their
     ``runs/``, adversaries beside its runs' tables) holds the runs' rows again:
     ``load_results`` of the folder reads the runs' own tables, each run once (it read an
@@ -147,9 +168,8 @@ def test_load_results_reads_each_run_once_beside_or_above_a_combined_table(tmp_p
     from kalman_vs_infoset.experiments.report import write_tables
 
     beside, above = tmp_path / "beside", tmp_path / "above"
-    for est in ("ekf", "ukf"):
-        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=beside)
-        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=above / "runs")
+    for folder in (beside, above / "runs"):  # the EKF's and UKF's runs=2, seed=3
+        _written(fig3_tables, folder)
     combined = pd.concat([pd.read_parquet(p) for p in sorted(beside.glob("*.parquet"))])
     write_tables(combined, beside / "kp_fig3-adversaries")
     write_tables(combined, above / "kp_fig3-compare")
@@ -241,7 +261,9 @@ def test_run_attitude_changes_the_noise_table_through_tables(tmp_path, capsys, m
     assert (df["mean_knowledge_bound_deg"] > 5 * plain["mean_knowledge_bound_deg"]).all()
 
 
-def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(tmp_path):
+def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(
+    tmp_path, fig3_tables
+):
     """``intercept`` and ``compare`` default to one folder: the first's table at its top,
     the second's in ``runs/`` beside its combined table. Every run of both is read (the
     top's tables hid ``runs/``), and a table of one name in both places (one job, run
@@ -250,8 +272,7 @@ def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(t
 
     out = tmp_path / "results"
     api.run_experiment("kp_fig3", "ekf", "game", runs=2, seed=3, out=out)
-    for est in ("ekf", "ukf"):
-        api.run_experiment("kp_fig3", est, "random", runs=2, seed=3, out=out / "runs")
+    _written(fig3_tables, out / "runs")  # the EKF's and UKF's runs=2, seed=3
     api.run_experiment("kp_fig3", "ekf", "game", runs=3, seed=3, out=out / "runs")
     below = pd.concat([pd.read_parquet(p) for p in sorted((out / "runs").glob("*.parquet"))])
     write_tables(below, out / "kp_fig3-compare")
@@ -268,7 +289,7 @@ def test_load_results_reads_the_runs_of_every_command_that_wrote_to_one_folder(t
     ]
 
 
-def test_load_results_keeps_apart_tables_of_one_name_and_another_scenario(tmp_path):
+def test_load_results_keeps_apart_tables_of_one_name_and_another_scenario(tmp_path, fig3_tables):
     """A table of one name at the top and in ``runs/`` is one job only when it describes
     the same scenario: edited between the two commands (here ``nu``), both tables' runs
     are read, each with its description (they were merged by name, the second's runs
@@ -276,7 +297,7 @@ def test_load_results_keeps_apart_tables_of_one_name_and_another_scenario(tmp_pa
     out = tmp_path / "results"
     sc = api.load_scenario("kp_fig3")
     edited = sc.model_copy(update={"model": sc.model.model_copy(update={"nu_mps2": 0.004})})
-    api.run_experiment(sc, "ekf", "random", runs=2, seed=3, out=out)
+    _written(fig3_tables, out, ["ekf"])  # run_experiment(sc, "ekf", "random", 2, seed=3)
     api.run_experiment(edited, "ekf", "random", runs=2, seed=3, out=out / "runs")
     loaded = api.load_results(out)
     assert len(loaded) == 4

@@ -39,6 +39,16 @@ def short(tmp_path):
     return p
 
 
+@pytest.fixture(scope="module")
+def four_runs(tmp_path_factory):
+    """``run_experiment`` of ``SHORT``, infoset, random noise, 4 runs, seed 11, one
+    worker: the reference of two tests, computed once (it was computed in each)."""
+    d = tmp_path_factory.mktemp("four_runs")
+    (d / "short.toml").write_text(SHORT)
+    sc = load_scenario(d / "short.toml")
+    return run_experiment(sc, "infoset", "random", 4, 11, d / "out", workers=1, progress=False)
+
+
 def test_fig3_random_and_game_acceptance_seed003_fig3(tmp_path, capsys):
     """Fig. 3 with random noise misses by <= 10 m with 150..400 m/s of fuel;
     game noise costs more fuel; the truth never leaves the set, no empty set."""
@@ -146,10 +156,10 @@ def _table(df):
     return df[cols].sort_values("run").reset_index(drop=True)
 
 
-def test_same_results_with_one_and_two_workers_and_same_seed(short, tmp_path):
+def test_same_results_with_one_and_two_workers_and_same_seed(short, tmp_path, four_runs):
     """The same table with 1 or 2 workers and 1 or 3 runs a task (``chunk``)."""
     sc = load_scenario(short)
-    a = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "a", workers=1, progress=False)
+    a = four_runs  # workers=1, chunk 1
     b = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "b", workers=2, progress=False)
     c = run_experiment(
         sc, "infoset", "random", 4, 11, tmp_path / "c", workers=1, progress=False, chunk=3
@@ -183,7 +193,7 @@ def test_same_results_on_a_dask_local_cluster(short, tmp_path, monkeypatch, dask
 
 
 def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
-    short, tmp_path, monkeypatch, capsys
+    short, tmp_path, monkeypatch, capsys, four_runs
 ):
     sc = load_scenario(short)
     calls = []
@@ -216,8 +226,7 @@ def test_interrupted_experiment_resumes_without_redoing_or_losing_runs(
     )
     # the first two rows are the stored ones (wall times unchanged: not recomputed)
     np.testing.assert_array_equal(done["wall_s"][:2], first.sort_values("run")["wall_s"])
-    fresh = run_experiment(sc, "infoset", "random", 4, 11, tmp_path / "f", 1, progress=False)
-    pd.testing.assert_frame_equal(_table(done), _table(fresh))
+    pd.testing.assert_frame_equal(_table(done), _table(four_runs))  # an uninterrupted run
 
 
 _REAL_ENGAGEMENT = intercept_runs.timed_engagement

@@ -154,38 +154,52 @@ def test_a_run_failing_otherwise_under_a_memory_limit_says_it_had_one():
     assert dict(limited(task, RunLimits(cpu_s=5.0), [0, 1, 2]))[0]["error"].endswith("set")
 
 
-#: a run that ends its process the way OpenBLAS does when an allocation fails (exit 1,
-#: no exception), run through the command with a memory limit and one worker
-_EXITING_RUN = """
-import os, sys
-from kalman_vs_infoset.experiments import intercept_runs
-from kalman_vs_infoset.experiments.cli import main
-def task(sc, estimator, noise, seed, runs):
+def _exits_its_process(sc, estimator, noise, seed, runs):
+    """A run that ends its process the way OpenBLAS does when an allocation fails (exit
+    1, no exception). Module level: the pool's worker unpickles it."""
+    import os
+
     os._exit(1)  # a library giving up, in the process that runs the run
-intercept_runs._intercept_chunk = task
-code = main(["intercept", sys.argv[1], "--runs", "1", "--workers", "1", "--no-progress",
-             "--estimators", "ekf", "--run-memory-limit-mb", "500", "--out", sys.argv[2]])
-print("command returned", code)
-"""
 
 
-def test_a_memory_limited_run_never_crashes_the_command(tmp_path):
+def _command_with_an_exiting_run(scenario: str, out: str) -> None:
+    """That run through the command, with a memory limit and one worker. Run in a forked
+    child of the test process (as a separate process before, without its interpreter's
+    start and imports): a run that ended the command's own process ends only the child."""
+    from kalman_vs_infoset.experiments.cli import main
+
+    intercept_runs._intercept_chunk = _exits_its_process  # in the child only
+    code = main(["intercept", scenario, "--runs", "1", "--workers", "1", "--no-progress",
+                 "--estimators", "ekf", "--run-memory-limit-mb", "500", "--out", out])  # fmt: skip
+    print("command returned", code)
+
+
+def test_a_memory_limited_run_never_crashes_the_command(tmp_path, capfd):
     """Under a limit too small for a run's first imports, CPython itself crashed within
     ``import scipy.stats`` (filterpy's): a segmentation fault of the whole command
     (``kvi compare ... --workers 1 --run-memory-limit-mb 2``). The libraries the runs
     import are loaded before the limit, and a limited run is run in a worker process,
     never in the command's: a run that ends its process ends a worker, which the command
     reports (exit status 1), and runs that fail under the limit name it."""
+    import multiprocessing
     import subprocess
 
     from harness_texts import SHORT
 
     scenario = tmp_path / "short.toml"
     scenario.write_text(SHORT, encoding="utf-8")
-    proc = subprocess.run([sys.executable, "-c", _EXITING_RUN, str(scenario), str(tmp_path / "a")],
-                          capture_output=True, text=True, timeout=300)  # fmt: skip
-    assert "command returned 1" in proc.stdout, (proc.returncode, proc.stderr[-2000:])
-    assert "lost to a dead worker" in proc.stderr.strip().splitlines()[-1]
+    capfd.readouterr()  # the child's output only (its writes go to the captured fds)
+    child = multiprocessing.get_context("fork").Process(
+        target=_command_with_an_exiting_run, args=(str(scenario), str(tmp_path / "a"))
+    )
+    child.start()
+    child.join(timeout=300)
+    if child.is_alive():
+        child.kill()
+        pytest.fail("the command still runs after 300 s")
+    out, err = capfd.readouterr()
+    assert "command returned 1" in out, (child.exitcode, err[-2000:])
+    assert "lost to a dead worker" in err.strip().splitlines()[-1]
     args = [sys.executable, "-m", "kalman_vs_infoset", "compare", str(scenario), "--runs", "1",
             "--workers", "1", "--no-progress", "--estimators", "ukf,box", "--noise", "random",
             "--run-memory-limit-mb", "2", "--out", str(tmp_path / "out")]  # fmt: skip

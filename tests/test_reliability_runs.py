@@ -19,6 +19,7 @@ import pytest
 from harness_texts import SHORT, SLOW_RW, TINY_RW, as_from_a_terminal, one_line_error
 from harness_texts import run_cli as run
 from kalman_vs_infoset.experiments import executors, intercept_runs
+from kalman_vs_infoset.experiments.cli import main
 from kalman_vs_infoset.experiments.files import exclusive
 from kalman_vs_infoset.experiments.limits import RunLimits, limited
 
@@ -36,6 +37,30 @@ def _same_runs(a: pd.DataFrame, b: pd.DataFrame) -> None:
     """Two tables equal run by run (the run time aside)."""
     a, b = (t.drop(columns="wall_s").sort_values("run").reset_index(drop=True) for t in (a, b))
     pd.testing.assert_frame_equal(a, b)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """``uninterrupted(n)``: the table an uninterrupted ``kvi intercept short --runs n
+    --workers 1`` writes. Run j's row does not depend on ``n`` (its seed is the j-th
+    child of the root seed; two writers of 12 and 16 runs fill one table): the first
+    ``n`` rows of the largest table made so far, so that the tests' references (16, a
+    few and 3 runs) are computed once."""
+    made: dict[int, pd.DataFrame] = {}
+
+    def table(runs: int) -> pd.DataFrame:
+        if max(made, default=0) < runs:
+            out = tmp_path_factory.mktemp("uninterrupted")
+            scenario = out / "short.toml"
+            scenario.write_text(SHORT)
+            argv = ["intercept", scenario, "--runs", runs, "--workers", 1, "--no-progress",
+                    "--out", out / "out"]  # fmt: skip
+            assert main([str(a) for a in argv]) == 0
+            made[runs] = _table(out / "out")
+        t = made[max(made)]
+        return t[t["run"] < runs]
+
+    return table
 
 
 def _wait_for(predicate, timeout_s: float = 120.0) -> None:
@@ -76,7 +101,7 @@ def _stopped(proc: subprocess.Popen, sig: int, timeout_s: float = 60.0) -> tuple
 
 # -- one writer per table -------------------------------------------------------------
 @linux
-def test_two_writers_on_one_out_lose_no_run(short, tmp_path, capsys):
+def test_two_writers_on_one_out_lose_no_run(short, tmp_path, uninterrupted):
     """A: 12 runs; B, started while A writes: 16 runs. Every run of the larger count is
     in the table exactly once, as an uninterrupted run of 16 computes it."""
     out = tmp_path / "out"
@@ -94,11 +119,7 @@ def test_two_writers_on_one_out_lose_no_run(short, tmp_path, capsys):
     df = _table(out)
     assert sorted(df["run"]) == list(range(16)) and (df["status"] == "ok").all()
     assert list(out.glob("*.lock")) == []  # the lock goes with its holder
-    ref = tmp_path / "ref"
-    r = run(capsys, "intercept", short, "--runs", 16, "--workers", 1, "--no-progress",
-            "--out", ref)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    _same_runs(df, _table(ref))
+    _same_runs(df, uninterrupted(16))
 
 
 @linux
@@ -120,7 +141,7 @@ def test_a_second_writer_waits_for_the_lock_and_says_so(short, tmp_path):
 # -- signals -------------------------------------------------------------------------
 @linux
 def test_sigterm_saves_finished_runs_and_a_rerun_matches_an_uninterrupted_run(
-    short, tmp_path, capsys
+    short, tmp_path, capsys, uninterrupted
 ):
     out = tmp_path / "out"
     proc = _popen(_intercept(short, out, 10_000))
@@ -139,11 +160,7 @@ def test_sigterm_saves_finished_runs_and_a_rerun_matches_an_uninterrupted_run(
     r = run(capsys, "intercept", short, "--runs", runs, "--workers", 1, "--no-progress",
             "--out", out)  # fmt: skip
     assert r.returncode == 0, r.stderr
-    ref = tmp_path / "ref"
-    r = run(capsys, "intercept", short, "--runs", runs, "--workers", 1, "--no-progress",
-            "--out", ref)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    _same_runs(_table(out), _table(ref))
+    _same_runs(_table(out), uninterrupted(runs))
 
 
 @linux
@@ -194,7 +211,9 @@ def _fails_on_run_1(real, error):
     return engagement
 
 
-def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monkeypatch):
+def test_failed_runs_exit_1_and_run_again_on_rerun(
+    short, tmp_path, capsys, monkeypatch, uninterrupted
+):
     out = tmp_path / "out"
     args = ["intercept", short, "--runs", 3, "--workers", 1, "--no-progress", "--out", out]
     real = intercept_runs.run_engagement
@@ -209,9 +228,7 @@ def test_failed_runs_exit_1_and_run_again_on_rerun(short, tmp_path, capsys, monk
     r = run(capsys, *args)
     assert r.returncode == 0, r.stderr
     assert "running 1 failed runs again" in r.stderr
-    ref = tmp_path / "ref"
-    assert run(capsys, *args[:-1], ref).returncode == 0
-    _same_runs(_table(out), _table(ref))
+    _same_runs(_table(out), uninterrupted(3))
 
 
 def test_memory_error_is_not_recorded_as_a_failed_run(short, tmp_path, capsys, monkeypatch):
@@ -247,21 +264,24 @@ def _spin_wrapped(*args, **kwargs):
         ) from exc
 
 
+@pytest.fixture(scope="module")
+def warm_run_s(uninterrupted) -> float:
+    """A first run in a fresh process imports and loads what the later ones reuse (it
+    took more than the 0.3 s limit on a clean clone): done outside the limit, once for
+    the module (it was made again for each test using it); the wall time of its second
+    run, which the first has warmed."""
+    return float(uninterrupted(2).sort_values("run")["wall_s"].iloc[1])
+
+
 @linux
 @pytest.mark.parametrize("stall", [_spin, _spin_wrapped], ids=["python", "in-a-kernel"])
 def test_a_run_over_the_cpu_limit_is_recorded_as_failed(
-    stall, short, tmp_path, capsys, monkeypatch
+    stall, short, tmp_path, capsys, monkeypatch, warm_run_s
 ):
     """Run 1 never ends; the row says RunTimeout (not SystemError, when the timeout
     fired inside a compiled kernel) and the other runs are kept."""
-    # a first run in a fresh process imports and loads what the later ones reuse (it
-    # took more than the 0.3 s limit on a clean clone): done once, outside the limit
-    warm = run(capsys, "intercept", short, "--runs", 2, "--workers", 1, "--no-progress",
-               "--out", tmp_path / "warm")  # fmt: skip
-    assert warm.returncode == 0, warm.stderr
     # the limit: ten times a warm run's wall time (at least its CPU time), at least 0.3 s
     # (a fixed 0.3 s failed the runs that should pass on a host several times slower)
-    warm_run_s = float(_table(tmp_path / "warm").sort_values("run")["wall_s"].iloc[1])
     limit_s = max(0.3, 10.0 * warm_run_s)
     real = intercept_runs.run_engagement
 
