@@ -193,7 +193,10 @@ def add_noise(
 
 
 def parse_runs(text: str) -> list[int]:
-    """``--trace 0,3`` -> ``[0, 3]`` (non-negative run ids, no repeats)."""
+    """``--trace 0,3`` -> ``[0, 3]`` (non-negative run ids, no repeats); ``none`` ->
+    ``[]`` (no run, where a command traces one by default)."""
+    if str(text).strip().lower() == "none":
+        return []
     items = [t.strip() for t in str(text).split(",")]
     try:
         runs = [int(t) for t in items]  # an empty item ("0,,3") is not a run id
@@ -202,7 +205,7 @@ def parse_runs(text: str) -> list[int]:
     if not runs or min(runs) < 0 or len(set(runs)) != len(runs) or len(runs) > MAX_TRACED:
         raise argparse.ArgumentTypeError(
             f"expected a comma-separated list of distinct run ids >= 0 (at most {MAX_TRACED}), "
-            f"e.g. 0,3; got {text!r}"
+            f"e.g. 0,3, or 'none'; got {text!r}"
         )
     return runs
 
@@ -215,7 +218,8 @@ def add_trace(p: argparse.ArgumentParser, default: str = "") -> None:
         type=parse_runs,
         default=None,
         metavar="RUNS",
-        help=f"record the per-step history of these runs (e.g. 0,3; at most {MAX_TRACED}) as "
+        help=f"record the per-step history of these runs (e.g. 0,3; at most {MAX_TRACED}; 'none': "
+        "no run) as "
         "<results>-trace.parquet in the _traces folder beside the run tables, and draw "
         "their figures" + (f" (default: {default})" if default else ""),
     )

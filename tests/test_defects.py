@@ -230,14 +230,19 @@ def test_j_duplicates_are_refused(short, tmp_path, capsys, args):
 
 # -- k ------------------------------------------------------------------------------
 def test_k_attitude_results_of_two_seeds_live_side_by_side(tiny_rw, tmp_path, capsys):
+    """(Seed 1's single run untraced with ``--trace none``: one history figure fewer,
+    and the option's own check: a single run is traced by default.)"""
     out = tmp_path / "out"
-    for seed in (1, 2):
-        r = run(capsys, "attitude", tiny_rw, "--seed", seed, "--out", out, "--noise", "random")
+    for seed, trace in ((1, ["--trace", "none"]), (2, [])):
+        r = run(capsys, "attitude", tiny_rw, "--seed", seed, "--out", out, "--noise", "random",
+                *trace)  # fmt: skip
         assert r.returncode == 0, r.stderr
     # the run tables (a single run is also traced: its history lies beside its table)
     tables = [pd.read_parquet(p) for p in files_under(out)
               if p.suffix == ".parquet" and not p.name.endswith("-trace.parquet")]  # fmt: skip
     assert sorted(int(s) for df in tables for s in df["seed"]) == [1, 2]
+    traced = [p.name for p in files_under(out) if p.name.endswith("-trace.parquet")]
+    assert len(traced) == 1 and traced[0].endswith("-s2-trace.parquet"), traced
 
 
 # -- l ------------------------------------------------------------------------------

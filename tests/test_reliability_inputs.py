@@ -638,3 +638,17 @@ def test_the_scheduler_probe_connects_as_the_client_does(monkeypatch):
     monkeypatch.setattr(security.Security, "get_connection_args", lambda self, role: args)
     executors._probe_scheduler("tls://127.0.0.1:8786", timeout_s=2.0)
     assert seen["ssl_context"] is context and seen["closed"] and distributed
+
+
+def test_trace_takes_run_ids_or_none_and_refuses_a_mix(capsys):
+    """``--trace none`` is no run (a single attitude run is traced by default); a mix of
+    ``none`` and ids, a repeat or a negative id is refused in one line."""
+    import argparse
+
+    from kalman_vs_infoset.experiments.options import parse_runs
+
+    assert parse_runs("none") == [] and parse_runs(" None ") == []
+    assert parse_runs("0,3") == [0, 3]
+    for bad in ("none,1", "1,1", "-1", "", "0,,3"):
+        with pytest.raises(argparse.ArgumentTypeError, match="or 'none'"):
+            parse_runs(bad)
