@@ -85,6 +85,9 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
         return []
     out = Path(out) if out is not None else paths[0].parent
     frames = [_read(p) for p in paths]
+    # every input read and checked before the first figure: a damaged or incomplete
+    # sets file is refused before any figure is drawn (they were drawn, then refused)
+    set_tables = [_read_sets(p) for p in paths]
     files: list[Path] = []
     for path, df in zip(paths, frames, strict=True):
         if "axis" in df:
@@ -108,8 +111,9 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
         tag = "" if pd.isna(seed) else f"-s{int(seed)}"
         marks = paper if paper is not None else _paper_from_json(first_path[str(name)])
         files += _step_figures(group, str(name), tag, out, marks)
-    for path in paths:
-        files += _set_figures(path, out, animation)
+    for path, steps_df, sets in zip(paths, frames, set_tables, strict=True):
+        if sets is not None:
+            files += _set_figures(path, steps_df, sets, out, animation)
     return files
 
 
@@ -138,14 +142,22 @@ def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> li
     return files
 
 
-def _set_figures(path: Path, out: Path, animation: bool) -> list[Path]:
-    from kalman_vs_infoset.experiments import plots_sets
-
+def _read_sets(path: Path) -> pd.DataFrame | None:
+    """The sets file beside the trace ``path``, checked (None when there is none)."""
     sets_path = path.with_name(path.name.replace("-trace.parquet", "-trace-sets.parquet"))
     if not sets_path.exists():
-        return []
-    sets, steps = _read_table(sets_path, "the sets of a trace"), _read(path)
+        return None
+    sets = _read_table(sets_path, "the sets of a trace")
     _missing(sets, sets_path, SET_COLUMNS, "the sets of a trace")
+    return sets
+
+
+def _set_figures(
+    path: Path, steps: pd.DataFrame, sets: pd.DataFrame, out: Path, animation: bool
+) -> list[Path]:
+    """The set figures of the trace ``path`` (its steps ``steps``, its sets ``sets``)."""
+    from kalman_vs_infoset.experiments import plots_sets
+
     stem = path.name.replace("-trace.parquet", "")
     files: list[Path] = []
     for run in sorted(sets["run"].unique()):

@@ -87,6 +87,7 @@ def test_a_damaged_sets_file_is_one_line(traced, tmp_path, capsys, damage):
     sets.write_bytes(b"not parquet" if damage == "junk" else data[: len(data) // 2])
     r = run(capsys, "plot", traced, "--no-animation", "--out", tmp_path / "figs")
     assert one_line_error(r) and sets.name in r.stderr, r.stderr
+    assert _drawn(tmp_path / "figs") == []  # refused before the first figure
 
 
 @pytest.mark.parametrize("column", ["t_s", "scenario", "forecast_lo_m", "zem_true_m"])
@@ -101,6 +102,11 @@ def test_sets_without_a_column_their_figures_read_are_one_line(traced, tmp_path,
     pd.read_parquet(sets).drop(columns="zem_m").to_parquet(sets)
     r = run(capsys, "plot", traced, "--no-animation", "--out", tmp_path / "figs")
     assert one_line_error(r) and "'zem_m'" in r.stderr, r.stderr
+    assert _drawn(tmp_path / "figs") == []
+
+
+def _drawn(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.rglob("*") if p.is_file()) if folder.exists() else []
 
 
 def test_a_trace_without_steps_is_one_line(traced, tmp_path, capsys):
