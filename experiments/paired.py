@@ -21,7 +21,9 @@ correction (``scipy.stats.wilcoxon``). Differences within :data:`TIE_RTOL` of th
 largest are one value: settle times on a control grid differ by exactly equal steps
 that the subtraction rounds apart.
 Heavy tails (a filter that loses the target in a few runs) widen the t interval; the
-median, the share and the signed-rank test do not depend on them.
+median, the share and the signed-rank test do not depend on them. Runs that all repeat
+one engagement (the same values on both sides for every metric: a fixed truth under a
+deterministic adversary) are one pair, not ``n`` independent ones (``distinct_runs``).
 """
 
 from __future__ import annotations
@@ -138,13 +140,29 @@ def paired_rows(
         mine = part.set_index(keys)
         both = mine.index.intersection(ref.index)
         row: dict[str, Any] = {by: value, "noise": noise}
-        for m in metrics:
-            a = mine.loc[both, m].to_numpy(dtype=float)
-            b = ref.loc[both, m].to_numpy(dtype=float)
+        pairs = {m: (mine.loc[both, m].to_numpy(dtype=float),
+                     ref.loc[both, m].to_numpy(dtype=float)) for m in metrics}  # fmt: skip
+        # runs that repeat one engagement (a fixed truth and a deterministic adversary)
+        # are one observation, not n independent ones: no interval, no test from them
+        one = _replicas(pairs.values())
+        for m, (a, b) in pairs.items():
             finite = np.isfinite(a) & np.isfinite(b)
-            row[m] = {"runs": int(finite.sum()), **paired_stats(a[finite] - b[finite], confidence)}
+            d = a[finite] - b[finite]
+            distinct = min(len(d), 1) if one else len(d)
+            row[m] = {"runs": int(finite.sum()), "distinct_runs": distinct,
+                      **paired_stats(d[:distinct], confidence)}  # fmt: skip
         rows.append(row)
     return rows
+
+
+def _replicas(pairs) -> bool:
+    """Whether every paired run (two or more) gives the same values as the first, on
+    both sides and for every metric: the runs repeat one engagement."""
+    pairs = list(pairs)
+    if not pairs or len(pairs[0][0]) < 2:
+        return False
+    return all(np.array_equal(x, np.full_like(x, x[0]), equal_nan=True)
+               for a, b in pairs for x in (a, b))  # fmt: skip
 
 
 def reference_of(problem: str, estimators: Sequence[str]) -> str:
@@ -222,7 +240,7 @@ def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
         return "-" if v is None else format(v, fmt)
 
     for r in paired["rows"]:
-        runs = [str(r[c[0]]["runs"]) for c in columns]
+        runs = [_runs_text(r[c[0]]) for c in columns]
         cells = [str(r[k]) for k in labels]
         cells.append(runs[0] if len(set(runs)) == 1 else " / ".join(runs))
         for m, _, _, fmt in columns:
@@ -232,3 +250,10 @@ def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
             cells += [num(s["larger_share"], ".2f"), num(s["wilcoxon_p"], ".2g")]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _runs_text(metric: dict[str, Any]) -> str:
+    """A metric's paired runs, and how many of them are distinct when they repeat one
+    engagement (``4 (one engagement)``)."""
+    runs, distinct = metric["runs"], metric.get("distinct_runs", metric["runs"])
+    return str(runs) if distinct == runs else f"{runs} (one engagement)"

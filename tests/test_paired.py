@@ -195,7 +195,10 @@ def test_swapping_the_roles_negates_the_differences(pairs):
     x, y = ab["miss_m"], ba["miss_m"]
     assert x["mean"] == pytest.approx(-y["mean"], abs=1e-9)
     assert x["median"] == pytest.approx(-y["median"], abs=1e-9)
-    assert x["ci"] == pytest.approx([-y["ci"][1], -y["ci"][0]], abs=1e-9)
+    # (no interval either way when the pairs repeat one engagement: all equal)
+    assert (x["ci"] is None) == (y["ci"] is None) == (len(set(pairs)) == 1)
+    if x["ci"] is not None:
+        assert x["ci"] == pytest.approx([-y["ci"][1], -y["ci"][0]], abs=1e-9)
     d = np.subtract(a, b)
     assert x["larger_share"] == np.mean(d > 0) and y["larger_share"] == np.mean(d < 0)
     assert (x["wilcoxon_p"] is None) == (y["wilcoxon_p"] is None)
@@ -238,3 +241,28 @@ def test_signed_rank_p_of_subnormal_differences_is_that_of_larger_ones(tiny):
     assert paired_stats(np.array([1.0, -1.0, 2.0]))["wilcoxon_p"] == pytest.approx(0.75)
     d = np.array([tiny, -tiny, 2 * tiny])
     assert paired_stats(d)["wilcoxon_p"] == pytest.approx(0.75)
+
+
+def test_runs_that_repeat_one_engagement_are_one_pair_not_n():
+    """A fixed truth under a deterministic adversary repeats one engagement in every run
+    (``kvi compare kp_fig3 --noise game``): four identical pairs printed a zero-width
+    interval and p = 0.12 (fifty: p = 2e-15) as if they were independent. They are one
+    observation: no interval, a test of one pair, and the table says so; runs that
+    differ in any metric or on either side stay independent pairs."""
+    same = _table({"infoset": [2.0] * 4, "ekf": [5.0] * 4})
+    (row,) = paired_rows(same, "infoset")
+    for m in ("miss_m", "fuel_mps"):
+        assert row[m]["runs"] == 4 and row[m]["distinct_runs"] == 1
+        assert row[m]["ci"] is None and row[m]["wilcoxon_p"] == 1.0
+    assert row["miss_m"]["mean"] == 3.0 and row["miss_m"]["larger_share"] == 1.0
+    paired = {"reference": "infoset", "confidence": 0.95, "metrics": ["miss_m", "fuel_mps"],
+              "rows": [row]}  # fmt: skip
+    assert "| ekf | random | 4 (one engagement) |" in paired_markdown(paired)
+    # the reference's runs differ: four independent pairs
+    (row,) = paired_rows(_table({"infoset": [2.0, 2.0, 2.0, 2.5], "ekf": [5.0] * 4}), "infoset")
+    assert row["miss_m"]["distinct_runs"] == 4 and row["miss_m"]["ci"] is not None
+    # the same misses, another fuel in one run: independent too
+    differ = same.copy()
+    differ.loc[(differ["estimator"] == "ekf") & (differ["run"] == 3), "fuel_mps"] = 51.0
+    (row,) = paired_rows(differ, "infoset")
+    assert row["miss_m"]["distinct_runs"] == 4 and row["miss_m"]["wilcoxon_p"] < 1.0
