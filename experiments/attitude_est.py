@@ -23,6 +23,15 @@ PANELS = (
 )
 
 
+def _never_settled(df: pd.DataFrame, col: str) -> tuple[int, int]:
+    """Of the runs a CDF curve is drawn over (finished, with a value of ``col``), those
+    whose value is ``+inf`` (never settled), and their number."""
+    ok = df[df["status"] == "ok"] if "status" in df else df
+    values = ok[col].to_numpy(dtype=float) if col in ok else np.empty(0)
+    values = values[~np.isnan(values)]
+    return int(np.sum(values == np.inf)), int(values.size)
+
+
 def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
     """CDF figures (PNG, SVG) of the runs' rows, one curve per controller x estimator x
     noise (the tables themselves are the runner's)."""
@@ -39,10 +48,12 @@ def write_figure(out_dir: Path, stem: str, df: pd.DataFrame) -> list[str]:
         ax.set_xlabel(label)
         ax.set_ylabel(plots.CDF_LABEL)
         ax.set_ylim(0, 1.02)
-        unsettled = int((~np.isfinite(df[col].to_numpy(dtype=float))).sum())
-        if col == "settle_time_s" and unsettled:  # their curves end below 1: say why
-            why = ("no run settled" if unsettled == len(df) else
-                   f"{unsettled} of {len(df)} runs never settled:\ncurves end below 1")  # fmt: skip
+        # the runs drawn (finished, with a value: failed and diverged runs are not) that
+        # never settled (+inf): their curves end below 1, said here
+        unsettled, drawn = _never_settled(df, col)
+        if col == "settle_time_s" and unsettled:
+            why = ("no run settled" if unsettled == drawn else
+                   f"{unsettled} of {drawn} runs never settled:\ncurves end below 1")  # fmt: skip
             ax.text(0.02, 0.97, why, transform=ax.transAxes, va="top", fontsize=7)
         vals = df[col].to_numpy(dtype=float)
         vals = vals[np.isfinite(vals)]

@@ -142,11 +142,15 @@ def table_markdown(result: dict[str, Any]) -> str:
 
 
 def render(result: dict[str, Any]) -> str:
+    fuel, miss = result["seed_fuel_game_mps"], result["seed_miss_game_m"]
+    # a scenario without the paper's numbers (no [reference] table) says nothing of them
+    paper = [f"fuel {fuel} m/s"] if fuel is not None else []
+    paper += [f"miss {miss} m"] if miss is not None else []
     return (
         f"{result['scenario']}: adversary strength, {runs_text(result['runs'])}, "
         f"seed {result['seed']}"
-        f" (the paper's game: fuel {result['seed_fuel_game_mps']} m/s, miss "
-        f"{result['seed_miss_game_m']} m)\n"
+        + (f" (the paper's game: {', '.join(paper)})" if paper else "")
+        + "\n"
         + table_markdown(result)
         + "files:\n"
         + "\n".join("  " + f for f in result["files"])

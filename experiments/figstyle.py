@@ -36,6 +36,7 @@ matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
 import matplotlib.pyplot as plt  # noqa: E402
 from kalman_vs_infoset.experiments.files import derived_write  # noqa: E402
 from matplotlib import ticker  # noqa: E402
+from matplotlib.font_manager import FontProperties  # noqa: E402
 
 #: Okabe & Ito (2008), "Color Universal Design"
 OKABE_ITO = {
@@ -215,6 +216,41 @@ def plain_log_labels(fig) -> None:
                     fmt.__class__ = _PlainLogFormatter  # same state, plain __call__
 
 
+#: a tick label's character, as a share of its font size (DejaVu Sans digits: 0.64)
+_CHAR_EM = 0.64
+
+
+def thin_crowded_ticks(fig) -> None:
+    """Fewer ticks on the linear x axes whose labels would run into each other.
+
+    Without an offset (``axes.formatter.useoffset``) values that differ in the sixth
+    digit are written whole (``0.0106805``), and matplotlib's default locator places
+    its ticks by the axis's length, not by their labels' width: on a third of a wide
+    figure eight such labels overlapped. After the layout (the axes' final widths), the
+    labels' width is estimated from their characters, with half a character between
+    them; where they would not fit, the same steps with fewer bins."""
+    fig_w_pt = fig.get_figwidth() * 72.0
+    for ax in fig.axes:
+        axis = ax.xaxis
+        if hasattr(ax, "get_zlim") or axis.get_scale() != "linear":
+            continue
+        if type(axis.get_major_locator()) is not ticker.AutoLocator:
+            continue  # a locator the figure chose itself
+        lo, hi = sorted(ax.get_xlim())  # (autoscaled to the data drawn, if not yet)
+        slack = 1e-9 * (hi - lo)
+        ticks = [t for t in axis.get_major_locator()() if lo - slack <= t <= hi + slack]
+        labels = axis.get_major_formatter().format_ticks(ticks)
+        if len(labels) < 3:
+            continue
+        rc = FontProperties(size=plt.rcParams["xtick.labelsize"]).get_size_in_points()
+        size = max((lab.get_size() for lab in axis.get_ticklabels()), default=rc)
+        widest = (max(len(s) for s in labels) + 0.5) * _CHAR_EM * size
+        room = ax.get_position().width * fig_w_pt
+        if widest * len(labels) > room:
+            bins = max(int(room // widest) - 1, 1)
+            axis.set_major_locator(ticker.MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]))
+
+
 def _lay_out_once(fig, dpi: float) -> None:
     """Run the figure's layout engine once, at the saving resolution, and remove it.
 
@@ -251,6 +287,7 @@ def save(
     out = []
     try:
         _lay_out_once(fig, dpi)
+        thin_crowded_ticks(fig)
         for ext in formats:
             p = stem.parent / f"{stem.name}.{ext}"
             # the temporary file's name ends in .tmp: the format is given, not guessed

@@ -22,14 +22,18 @@ from typing import Any, TypedDict
 ROOT = Path(__file__).resolve().parents[1]
 #: the packages whose sources decide a run's result
 PACKAGES = ("estim", "guidance", "experiments")
-#: presentation only (command line, tables, figures, file writing): not hashed, so
-#: a new plot does not refuse a resume
+#: presentation only (command line, tables, figures, summary statistics, file
+#: writing): not hashed, so a new plot or a summary's fix does not refuse a resume
+#: (none of them is imported by the code that computes a run's row)
 PRESENTATION = (
     "cli.py",
     "__main__.py",
     "cmd_*.py",
     "plots.py",
+    "plots_*.py",
+    "figstyle.py",
     "report.py",
+    "stats.py",
     "files.py",
     "paired.py",
 )

@@ -7,7 +7,9 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from kalman_vs_infoset.experiments.errors import stat_text
 from kalman_vs_infoset.experiments.files import derived_write
+from kalman_vs_infoset.experiments.stats import KEYS
 
 
 def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) -> str:
@@ -27,8 +29,9 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
     for r in rows:
         m, f = r["miss_m"], r["fuel_mps"]
         cells = [str(r[k]) for k in label_keys] + [str(r["runs"])]
-        cells.append(f"{m['mean']:.2f} / {m['p50']:.2f} / {m['p90']:.2f} / {m['max']:.2f}")
-        cells.append(f"{f['mean']:.1f} / {f['p50']:.1f} / {f['p90']:.1f} / {f['max']:.1f}")
+        # "-" where no run gave a value (every run failed), as the attitude tables say
+        cells.append(" / ".join(stat_text(m[k], ".2f") for k in KEYS))
+        cells.append(" / ".join(stat_text(f[k], ".1f") for k in KEYS))
         cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r.get("diverged", 0))]
         cells.append(str(r["failures"]))
         cells += [str(r.get("pointing_premise_failed_steps", "-"))] if premise else []

@@ -218,3 +218,18 @@ def test_an_impulse_limit_error_names_the_scenario_fields(tmp_path, capsys):
             "1", "--out", tmp_path / "g")  # fmt: skip
     assert one_line_error(r), r.stderr
     assert "field 'guidance.min_impulse_mps' must be <= 'guidance.max_impulse_mps'" in r.stderr
+
+
+def test_the_adversaries_header_names_only_the_papers_numbers_it_has(monkeypatch):
+    """A scenario without a ``[reference]`` table printed "the paper's game: fuel None
+    m/s, miss None m"; each number is said when the scenario has it."""
+    from kalman_vs_infoset.experiments import cmd_adversaries as ca
+
+    monkeypatch.setattr(ca, "table_markdown", lambda result: "")
+    base = {"scenario": "tiny", "runs": 2, "seed": 1, "files": []}
+    first = lambda fuel, miss: ca.render(  # noqa: E731
+        {**base, "seed_fuel_game_mps": fuel, "seed_miss_game_m": miss}
+    ).splitlines()[0]
+    assert first(None, None) == "tiny: adversary strength, 2 runs, seed 1"
+    assert first(521.7, None).endswith("seed 1 (the paper's game: fuel 521.7 m/s)")
+    assert first(521.7, 9.5).endswith("(the paper's game: fuel 521.7 m/s, miss 9.5 m)")

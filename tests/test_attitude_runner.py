@@ -187,6 +187,20 @@ def test_the_attitude_cdf_says_its_scenario_and_the_runs_that_never_settled(tmp_
     assert fig._suptitle.get_text().startswith("tiny: 2 runs per curve, seed 3; curves:")
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert "2 of 4 runs never settled:\ncurves end below 1" in texts
+    # failed and diverged runs (NaN: no curve reaches them) are not "never settled":
+    # two runs drawn, all settled, no note (it said "2 of 4 runs never settled")
+    figs.clear()
+    nan = float("nan")
+    runs = ((nan, "failed", 0), (nan, "ok", 1), (12.0, "ok", 0), (13.0, "ok", 0))
+    rows = [{**r, "settle_time_s": s, "status": st, "diverged": dv}
+            for r, (s, st, dv) in zip(rows, runs, strict=True)]  # fmt: skip
+    attitude_est.write_figure(tmp_path, "tiny-pd-box+ukf-random-s3", pd.DataFrame(rows))
+    assert [t.get_text() for t in figs[0].axes[0].texts] == []
+    rows[3]["settle_time_s"] = float("inf")
+    figs.clear()
+    attitude_est.write_figure(tmp_path, "tiny-pd-box+ukf-random-s3", pd.DataFrame(rows))
+    texts = [t.get_text() for t in figs[0].axes[0].texts]
+    assert texts == ["1 of 2 runs never settled:\ncurves end below 1"]
 
 
 def test_an_edit_of_another_estimators_options_resumes_the_attitude_runs(

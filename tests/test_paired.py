@@ -223,12 +223,20 @@ def test_fig5_variants_are_paired_per_estimator():
 
 
 def test_the_paired_summaries_do_not_refuse_a_resume():
-    """paired.py summarises stored runs: it is presentation, outside the code hash that
-    decides whether stored runs are resumed."""
+    """paired.py, stats.py and the figures summarise stored runs: presentation, outside
+    the code hash that decides whether stored runs are resumed; and no code that
+    computes a run's row (the estimators, guidance, the simulations) imports them."""
+    import re
+
     from kalman_vs_infoset.experiments import provenance
 
-    assert any(provenance.ROOT.joinpath("experiments/paired.py").match(p)
-               for p in provenance.PRESENTATION)  # fmt: skip
+    for name in ("paired.py", "stats.py", "figstyle.py", "plots_intercept.py"):
+        assert any(provenance.ROOT.joinpath("experiments", name).match(p)
+                   for p in provenance.PRESENTATION), name  # fmt: skip
+    shown = re.compile(r"experiments(?:\.| import )(?:stats|paired|report|figstyle|plots)\b")
+    for folder in ("estim", "guidance", "experiments/sim"):
+        for f in provenance.ROOT.joinpath(folder).rglob("*.py"):
+            assert not shown.search(f.read_text()), f
 
 
 @pytest.mark.parametrize("tiny", [5e-324, 1e-310, 2.2e-308])

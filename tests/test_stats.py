@@ -5,6 +5,7 @@ percentile for finite samples and against the rule's limit when samples are infi
 from fractions import Fraction
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
@@ -82,3 +83,37 @@ def test_the_intercept_summary_keeps_a_value_that_is_not_finite():
     )  # fmt: skip
     out = summarise(df, load_scenario("kp_fig3"), "ekf", "random", 3, 0.0)
     assert math.isnan(out["miss_m"]["mean"]) and out["fuel_mps"]["mean"] == 2.0
+
+
+def test_a_run_with_an_unbounded_set_enters_the_knowledge_bound_statistics():
+    """An attitude run whose set was the whole space on a step has an infinite mean
+    knowledge bound: it makes p90 and max infinite (it was left out: mean 0.6, max 0.7
+    over three runs, one unbounded); a NaN (no value) is left out."""
+    from kalman_vs_infoset.experiments.stats import estimator_counts
+
+    table = pd.DataFrame({"truth_outside": [0] * 4, "empty_steps": [0] * 4,
+                          "unbounded_steps": [0, 0, 40, 0],
+                          "mean_knowledge_bound_deg": [0.5, 0.7, np.inf, np.nan]})  # fmt: skip
+    out = estimator_counts(table)
+    assert out["unbounded_steps"] == 40
+    stats = out["mean_knowledge_bound_deg"]
+    assert stats["mean"] == np.inf and stats["max"] == np.inf and stats["p90"] == np.inf
+    assert stats["p50"] == 0.7  # the middle of 0.5, 0.7, inf
+    finite = estimator_counts(table.iloc[[0, 1]])["mean_knowledge_bound_deg"]
+    assert finite["mean"] == 0.6 and finite["max"] == 0.7
+
+
+def test_the_intercept_table_says_dash_where_no_run_gave_a_value():
+    """Every run failed: the intercept table printed "nan / nan / nan / nan" where the
+    attitude tables print "-"; values keep their formats, ``inf`` stays ``inf``."""
+    from kalman_vs_infoset.experiments.report import summary_markdown
+
+    none = summary_stats([])
+    row = {"estimator": "ekf", "runs": 2, "miss_m": none, "fuel_mps": none,
+           "truth_outside": 0, "empty_set": 0, "diverged": 0, "failures": 2}  # fmt: skip
+    line = summary_markdown([row], ["estimator"]).splitlines()[2]
+    assert line == "| ekf | 2 | - / - / - / - | - / - / - / - | 0 | 0 | 0 | 2 |"
+    row["miss_m"], row["fuel_mps"] = summary_stats([1.0, 2.0, np.inf], finite_only=False), {
+        "mean": 150.04, "p50": 150.0, "p90": 150.0, "max": 151.0}  # fmt: skip
+    line = summary_markdown([row], ["estimator"]).splitlines()[2]
+    assert "| inf / 2.00 / inf / inf | 150.0 / 150.0 / 150.0 / 151.0 |" in line
