@@ -167,3 +167,31 @@ def test_the_cached_rows_of_a_particle_belief_are_read_only():
     belief = est.initial(ChannelPrior((-1e3, 1e3), (-10.0, 10.0), (5.7e6, 5.9e6), (58e3, 58e3)))
     with pytest.raises(ValueError, match="read-only"):
         belief.rows[0, 0] = 1.0
+
+
+def test_no_draw_of_the_filter_repeats_a_runs_own_stream():
+    """Run ``j`` of a command draws its truth and errors from ``SeedSequence(seed,
+    spawn_key=(j,))`` (``runner.run_seed``); the filter's draw ``k`` drew from
+    ``SeedSequence(filter seed, spawn_key=(k,))``, so with ``--seed`` equal to the
+    filter's seed (both 0 by default) its draw ``j`` was run ``j``'s stream. Its keys
+    start above every run index now: no draw of the first hundred repeats the first
+    uniforms of any run's stream or of its first child streams, for seeds 0 and 7."""
+    from kalman_vs_infoset.experiments.options import MAX_RUNS
+    from kalman_vs_infoset.experiments.runner import run_seed
+
+    for seed in (0, 7):
+        est = ParticleChannelEstimator(MODEL, seed=seed)
+        b = est.initial(PRIOR)
+        filt = set()
+        for _ in range(100):
+            filt.add(tuple(est.rng(b).uniform(size=4)))
+            b = est.predict(b, 0.0)
+        runs = set()
+        for j in range(100):
+            runs.add(tuple(np.random.default_rng(run_seed(seed, j)).uniform(size=4)))
+            for child in run_seed(seed, j).spawn(2):
+                runs.add(tuple(np.random.default_rng(child).uniform(size=4)))
+        assert len(filt) == 100 and not filt & runs
+    from kalman_vs_infoset.estim.intercept.pf.estimator import STREAM_KEY
+
+    assert STREAM_KEY > MAX_RUNS

@@ -66,7 +66,7 @@ class ParticleBelief(Belief):
         Updates rejected so far.
     draws : int
         Random operations so far: the next one draws from the Generator of
-        ``SeedSequence(seed, spawn_key=(draws,))`` (beliefs stay values: the same
+        ``SeedSequence(seed, spawn_key=(STREAM_KEY, draws))`` (beliefs stay values: the same
         belief predicted twice gives the same cloud).
     """
 

@@ -43,7 +43,11 @@ EKF's ``R``; the linear-Gaussian test uses it).
 
 Randomness. The estimator holds a ``seed`` (an option, fixed by default, so runs are
 reproducible); the belief counts its random operations (``draws``) and each draws from
-``default_rng(SeedSequence(seed, spawn_key=(draws,)))``. No generator is stored: the
+``default_rng(SeedSequence(seed, spawn_key=(STREAM_KEY, draws)))``: the key's first
+element is beyond every run index, so no draw repeats a run's own stream (run ``j``
+draws its truth and errors from ``SeedSequence(seed, spawn_key=(j,))``: with the keys
+``(draws,)``, a command run with ``--seed`` equal to the filter's seed gave draw ``j``
+of the filter the stream of run ``j``). No generator is stored: the
 same belief predicted twice gives the same cloud, which the adversaries that search over
 the pursuer's updates rely on. Every run and channel starts from the same stream;
 their clouds differ through their data.
@@ -81,6 +85,9 @@ FloatArray = NDArray[np.float64]
 
 #: relative margin of the bounded likelihoods (the generators' errors sit 1e-9 inside)
 MARGIN = 1e-9
+#: first element of the filter's spawn keys: above every run index (at most 10**6), so
+#: the filter's streams are never a run's own (module docstring)
+STREAM_KEY = 2**62 + 0x7066
 
 
 @dataclass(frozen=True)
@@ -145,7 +152,9 @@ class ParticleChannelEstimator(Estimator[ParticleBelief, ChannelPrior]):
     def rng(self, belief: ParticleBelief | None) -> np.random.Generator:
         """The Generator of the belief's next random operation (module docstring)."""
         draws = 0 if belief is None else belief.draws
-        return np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(draws,)))
+        return np.random.default_rng(
+            np.random.SeedSequence(self.seed, spawn_key=(STREAM_KEY, draws))
+        )
 
     # -- Estimator interface ---------------------------------------------------------
     def initial(self, prior: ChannelPrior) -> ParticleBelief:
