@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
-from kalman_vs_infoset.experiments.errors import InputError, runs_text
+from kalman_vs_infoset.experiments.errors import InputError, runs_text, stat_text
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -125,8 +125,9 @@ def table_markdown(result: dict[str, Any]) -> str:
         at = r["runs_at_seed_fuel"]
         cells = [
             r["estimator"], r["rule"], str(r["runs"]),
-            f"{f['mean']:.1f} / {f['p50']:.1f} / {f['p90']:.1f}",
-            f"{m['mean']:.2f} / {m['p50']:.2f} / {m['p90']:.2f}",
+            # "-" where no run gave a value (every run failed)
+            " / ".join(stat_text(f[k], ".1f") for k in ("mean", "p50", "p90")),
+            " / ".join(stat_text(m[k], ".2f") for k in ("mean", "p50", "p90")),
             "n/a" if np.isnan(at) else f"{at:.0%}",
             str(r["truth_outside"]), str(r["failures"]),
         ]  # fmt: skip

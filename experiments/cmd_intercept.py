@@ -12,8 +12,9 @@ import time
 from typing import Any
 
 from kalman_vs_infoset.experiments import options
-from kalman_vs_infoset.experiments.errors import runs_text
+from kalman_vs_infoset.experiments.errors import runs_text, stat_text
 from kalman_vs_infoset.experiments.noise import NOISES
+from kalman_vs_infoset.experiments.stats import KEYS
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -62,10 +63,9 @@ def _summary(r: dict[str, Any]) -> list[str]:
     return [
         f"{r['scenario']}: {r['estimator']} / {r['noise']} noise, "
         f"{runs_text(r['runs'])}, seed {r['seed']}",
-        f"  miss  m   mean {m['mean']:.2f}  p50 {m['p50']:.2f}  p90 {m['p90']:.2f}  "
-        f"max {m['max']:.2f}",
-        f"  fuel m/s  mean {f['mean']:.1f}  p50 {f['p50']:.1f}  p90 {f['p90']:.1f}  "
-        f"max {f['max']:.1f}",
+        # "-" where no run gave a value (every run failed)
+        "  miss  m   " + "  ".join(f"{k} {stat_text(m[k], '.2f')}" for k in KEYS),
+        "  fuel m/s  " + "  ".join(f"{k} {stat_text(f[k], '.1f')}" for k in KEYS),
         f"  truth outside belief: {r['truth_outside']} steps; empty set: "
         f"{runs_text(r['empty_set'])}; diverged: {runs_text(r['diverged'])}; "
         f"failures: {r['failures']}",

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")  # files only; no display needed (CI, clusters)
 import matplotlib.pyplot as plt  # noqa: E402
@@ -226,10 +227,13 @@ def thin_crowded_ticks(fig) -> None:
     Without an offset (``axes.formatter.useoffset``) values that differ in the sixth
     digit are written whole (``0.0106805``), and matplotlib's default locator places
     its ticks by the axis's length, not by their labels' width: on a third of a wide
-    figure eight such labels overlapped. After the layout (the axes' final widths), the
-    labels' width is estimated from their characters, with half a character between
-    them; where they would not fit, the same steps with fewer bins."""
+    figure eight such labels overlapped. After the layout (the axes' final widths),
+    each label's width is estimated from its characters (half a character more as a
+    gap); where two neighbours would meet, the same steps with fewer bins, down to
+    the most ticks that keep them apart (the tick nearest the middle alone, at the
+    least)."""
     fig_w_pt = fig.get_figwidth() * 72.0
+    rc = FontProperties(size=plt.rcParams["xtick.labelsize"]).get_size_in_points()
     for ax in fig.axes:
         axis = ax.xaxis
         if hasattr(ax, "get_zlim") or axis.get_scale() != "linear":
@@ -237,18 +241,40 @@ def thin_crowded_ticks(fig) -> None:
         if type(axis.get_major_locator()) is not ticker.AutoLocator:
             continue  # a locator the figure chose itself
         lo, hi = sorted(ax.get_xlim())  # (autoscaled to the data drawn, if not yet)
-        slack = 1e-9 * (hi - lo)
-        ticks = [t for t in axis.get_major_locator()() if lo - slack <= t <= hi + slack]
-        labels = axis.get_major_formatter().format_ticks(ticks)
-        if len(labels) < 3:
+        if not hi > lo:
             continue
-        rc = FontProperties(size=plt.rcParams["xtick.labelsize"]).get_size_in_points()
         size = max((lab.get_size() for lab in axis.get_ticklabels()), default=rc)
-        widest = (max(len(s) for s in labels) + 0.5) * _CHAR_EM * size
-        room = ax.get_position().width * fig_w_pt
-        if widest * len(labels) > room:
-            bins = max(int(room // widest) - 1, 1)
-            axis.set_major_locator(ticker.MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]))
+        view = (lo, hi, ax.get_position().width * fig_w_pt, size, axis.get_major_formatter())
+        if _labels_apart(axis.get_major_locator(), *view):
+            continue
+        n = len(_ticks_within(axis.get_major_locator(), lo, hi))
+        steps = [1, 2, 2.5, 5, 10]
+        for bins in range(n - 1, 0, -1):
+            thinner = ticker.MaxNLocator(nbins=bins, steps=steps, min_n_ticks=1)
+            if _labels_apart(thinner, *view):
+                break
+        else:  # not even two labels fit
+            ticks = _ticks_within(ticker.MaxNLocator(nbins=1, steps=steps), lo, hi)
+            middle = min(ticks, key=lambda t: abs(t - 0.5 * (lo + hi)), default=0.5 * (lo + hi))
+            thinner = ticker.FixedLocator([middle])
+        axis.set_major_locator(thinner)
+
+
+def _ticks_within(locator, lo: float, hi: float) -> list[float]:
+    """``locator``'s ticks over ``[lo, hi]`` that lie on the axis (to rounding)."""
+    slack = 1e-9 * (hi - lo)
+    return [float(t) for t in locator.tick_values(lo, hi) if lo - slack <= t <= hi + slack]
+
+
+def _labels_apart(locator, lo: float, hi: float, room_pt: float, size: float, fmt) -> bool:
+    """Whether the labels of ``locator``'s ticks on an axis ``room_pt`` long, of font
+    size ``size``, stay apart (each estimated from its characters)."""
+    ticks = _ticks_within(locator, lo, hi)
+    if len(ticks) < 2:
+        return True
+    half = np.array([(len(t) + 0.5) * _CHAR_EM * size / 2 for t in fmt.format_ticks(ticks)])
+    gaps = np.diff(ticks) / (hi - lo) * room_pt
+    return bool(np.all(gaps >= half[:-1] + half[1:]))
 
 
 def _lay_out_once(fig, dpi: float) -> None:

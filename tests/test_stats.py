@@ -117,3 +117,22 @@ def test_the_intercept_table_says_dash_where_no_run_gave_a_value():
         "mean": 150.04, "p50": 150.0, "p90": 150.0, "max": 151.0}  # fmt: skip
     line = summary_markdown([row], ["estimator"]).splitlines()[2]
     assert "| inf / 2.00 / inf / inf | 150.0 / 150.0 / 150.0 / 151.0 |" in line
+
+
+def test_the_intercept_summary_and_the_adversaries_table_say_dash_for_no_value(monkeypatch):
+    """Every run failed: the text summary of ``kvi intercept`` and the adversaries table
+    printed ``nan``; they print "-" as the other tables do (values keep their format)."""
+    from kalman_vs_infoset.experiments import cmd_adversaries, cmd_intercept
+
+    none = summary_stats([])
+    row = {"scenario": "s", "estimator": "ekf", "noise": "game", "runs": 2, "seed": 1,
+           "miss_m": none, "fuel_mps": summary_stats([150.04, 151.0]), "truth_outside": 0,
+           "empty_set": 0, "diverged": 0, "failures": 2}  # fmt: skip
+    lines = cmd_intercept._summary(row)
+    assert lines[1] == "  miss  m   mean -  p50 -  p90 -  max -"
+    assert lines[2] == "  fuel m/s  mean 150.5  p50 150.5  p90 150.9  max 151.0"
+    table = cmd_adversaries.table_markdown(
+        {"seed_fuel_game_mps": None, "lookahead_steps": 1, "lookahead_candidates": 3,
+         "candidates": 3, "rows": [{**row, "rule": "game", "runs_at_seed_fuel": np.nan}]}
+    )  # fmt: skip
+    assert "| ekf | game | 2 | 150.5 / 150.5 / 150.9 | - / - / - | n/a | 0 | 2 |" in table
