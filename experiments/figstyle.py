@@ -249,6 +249,7 @@ def thin_crowded_ticks(fig) -> None:
             continue
         n = len(_ticks_within(axis.get_major_locator(), lo, hi))
         steps = [1, 2, 2.5, 5, 10]
+        thinner: ticker.Locator
         for bins in range(n - 1, 0, -1):
             thinner = ticker.MaxNLocator(nbins=bins, steps=steps, min_n_ticks=1)
             if _labels_apart(thinner, *view):
