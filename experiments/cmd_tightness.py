@@ -319,7 +319,8 @@ def render(result: dict[str, Any]) -> str:
         lines.append(
             f"{t:6.1f} | {result['set_lo_m'][i]:10.2f} {result['set_hi_m'][i]:10.2f} | "
             f"{result['exact_lo_m'][i]:10.2f} {result['exact_hi_m'][i]:10.2f} | "
-            f"{result['truth_w_m'][i]:10.2f} | {result['ratio'][i]:5.3f} | "
+            # (no ratio when the exact interval has no width: "-")
+            f"{result['truth_w_m'][i]:10.2f} | {stat_text(result['ratio'][i], '5.3f'):>5s} | "
             f"{str(result['exact_inside'][i]):6s} | {result['lp_s'][i]:5.1f}"
         )
     top = stat_text(result["max_ratio"], ".4f")  # "-": no time compared

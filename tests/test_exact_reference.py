@@ -210,3 +210,41 @@ def test_a_range_measurement_bounds_the_range_at_its_time():
     assert TRUTH["x0"] <= hi <= d_m / (1 - b) + e * hist.times_s[2] + 1e-6
     lo0, hi0 = ExactChannelSet(SMALL, SMALL_BOX, hist).x0_interval(e)["outer"]
     assert hi - lo < 0.8 * (hi0 - lo0)
+
+
+def test_inner_values_are_found_when_the_optimum_and_the_centre_are_refused(monkeypatch):
+    """The relaxed optimum may break a range bound by the LP's own tolerance (6e-8 m,
+    kp_fig5_range seed 701 at 60 s), which the exact check refuses; where the cell's
+    centre was outside a thin set too, no inner value was found, the cells were halved
+    to zero width and the LP budget spent, the inner end left 0.9 m inside the exact
+    one. Here both are refused in every cell, and so are the seeds (the inner values
+    must come from the cells): points moved inwards from the optimum give them, and
+    both sides close their gap within the budget, on the unpatched interval."""
+    hist, _ = _small_history(3)
+    ref = ExactChannelSet(SMALL, SMALL_BOX, hist).extremes()
+    trying: list = [None]  # the candidate being tried, while it is refused
+    in_cells = [False]
+    real_candidates = ExactChannelSet._inner_candidates
+    real_fixed = ExactChannelSet.fixed
+
+    def candidates(self, cell, s_opt, e_opt):
+        in_cells[0] = True
+        for i, pt in enumerate(real_candidates(self, cell, s_opt, e_opt)):
+            trying[0] = pt if i < 2 else None  # the relaxed optimum and the centre
+            yield pt
+        trying[0] = None
+
+    def fixed(self, x0_m, e_mps, obj=None):
+        if not in_cells[0] or trying[0] == (x0_m, e_mps):
+            return None
+        return real_fixed(self, x0_m, e_mps, obj)
+
+    monkeypatch.setattr(ExactChannelSet, "_inner_candidates", candidates)
+    monkeypatch.setattr(ExactChannelSet, "fixed", fixed)
+    exact = ExactChannelSet(SMALL, SMALL_BOX, hist)
+    got = exact.extremes()
+    assert in_cells[0] and exact.n_lp < 3000
+    gap = max(0.01, 1e-4 * (ref.inner_hi - ref.inner_lo))
+    assert got.outer_hi - got.inner_hi <= gap and got.inner_lo - got.outer_lo <= gap
+    assert got.inner_lo == pytest.approx(ref.inner_lo, abs=2 * gap)
+    assert got.inner_hi == pytest.approx(ref.inner_hi, abs=2 * gap)

@@ -273,3 +273,8 @@ def test_a_point_prior_holds_its_one_state_within_rounding(capsys, tmp_path):
     assert res["exact_lo_m"][0] == res["exact_hi_m"][0] == -8000.0
     assert abs(res["set_lo_m"][0] + 8000.0) < 1e-11 and abs(res["set_hi_m"][0] + 8000.0) < 1e-11
     assert res["exact_inside"] == [True]
+    # no ratio at zero width: the text says "-" (formatting None raised a TypeError)
+    from kalman_vs_infoset.experiments.cmd_tightness import render
+
+    assert res["ratio"] == [None]
+    assert "|     - | True   |" in render(res).splitlines()[2]
