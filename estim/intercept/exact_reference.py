@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import heapq
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -398,7 +399,9 @@ class ExactChannelSet:
                     heapq.heappush(heap, (-got[0], count, kid, got[1], ref))
         return max(best[0], -heap[0][0]) if heap else best[0]
 
-    def _inner_candidates(self, cell: Cell, s_opt: float, e_opt: float):
+    def _inner_candidates(
+        self, cell: Cell, s_opt: float, e_opt: float
+    ) -> Iterator[tuple[float, float]]:
         """Points ``(x0, e)`` of the cell whose exact LP may give an inner value, in
         order: the relaxed optimum, the cell's centre, then points moved from the
         optimum towards the centre by :data:`INWARD` of the way. The relaxed optimum
