@@ -14,8 +14,10 @@ omega x^2 / e_nom``, the exact one (inner values attained by consistent trajecto
 certificate beside them), ``ratio`` = estimator width / exact inner width (an upper bound of the
 true ratio; ``ratio_outer`` uses the outer width, a lower bound), ``exact_inside`` (the
 exact inner interval within the estimator's, to 1e-6 of its width and 4 ulps of the
-values, each side rounded apart: false means the estimator misses a consistent state)
-and the truth's ``w``.
+values, each side rounded apart: false means the estimator misses a consistent state),
+``exact_outer_inside`` (the outer certificate within it too: true proves that no
+consistent state is missed; where only the inner interval is inside, an estimator's
+end lies in the reference's own gap, at most its tolerance wide) and the truth's ``w``.
 """
 
 from __future__ import annotations
@@ -54,7 +56,8 @@ INSIDE_REL_TOL = 1e-6
 ULPS_APART = 4
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
-          "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp", "n_simplified", "reason")  # fmt: skip
+          "exact_outer_inside", "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp",
+          "n_simplified", "reason")  # fmt: skip
 
 
 def _times(text: str) -> list[float]:
@@ -206,12 +209,15 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     ends = (ext.min_value, ext.max_value, ref.inner_lo, ref.inner_hi)
     tol = INSIDE_REL_TOL * set_w + ULPS_APART * float(np.spacing(max(map(abs, ends))))
     inside = ref.inner_lo >= ext.min_value - tol and ref.inner_hi <= ext.max_value + tol
+    # the outer certificate inside too: a proof that no consistent state is missed
+    proven = ref.outer_lo >= ext.min_value - tol and ref.outer_hi <= ext.max_value + tol
     rec.update(
         set_lo_m=ext.min_value, set_hi_m=ext.max_value, exact_lo_m=ref.inner_lo,
         exact_hi_m=ref.inner_hi, exact_outer_lo_m=ref.outer_lo, exact_outer_hi_m=ref.outer_hi,
         ratio=set_w / inner if inner > 0 else None,
         ratio_outer=set_w / outer if outer > 0 else None,
         exact_inside=bool(inside),
+        exact_outer_inside=bool(proven),
         exact_x0_lo_m=ref.x0_interval_m[0], exact_x0_hi_m=ref.x0_interval_m[1],
         lp_s=ref.wall_s, n_lp=ref.n_lp,
     )  # fmt: skip

@@ -25,7 +25,7 @@ DERIVED = {
     r"at (\d+) km\)",
     "fine": r"\(([\d.e-]+) m at `dt = ([\d.]+) s`\)",
     "drift": r"closing speed by up to ([\d.e-]+) m/s and moves its range up to ([\d.]+) mm",
-    "inside": r"\(the guarantee; to ([\d.e-]+) of its width and (\d+) ulps of the values",
+    "inside": r"inside the set's \(to ([\d.e-]+) of its width and (\d+) ulps of the values",
 }
 
 #: sentences on earlier releases' defects, found and fixed; each of their numbers is in

@@ -44,6 +44,17 @@ def test_tightness_reports_the_exact_interval_inside_the_set(capsys, tmp_path, s
     assert res["times_s"] == [float(t) for t in extra[1].split(",")]
     assert all(res["exact_inside"]) and len(res["exact_inside"]) == len(res["times_s"])
     assert all(r >= 1 - 1e-6 for r in res["ratio"]) and res["max_ratio"] == max(res["ratio"])
+    # the outer certificate inside the set (the proof; it implies exact_inside), by the
+    # command's own tolerance
+    from kalman_vs_infoset.experiments.cmd_tightness import INSIDE_REL_TOL, ULPS_APART
+
+    for i, proven in enumerate(res["exact_outer_inside"]):
+        lo, hi = res["set_lo_m"][i], res["set_hi_m"][i]
+        ends = (lo, hi, res["exact_lo_m"][i], res["exact_hi_m"][i])
+        tol = INSIDE_REL_TOL * (hi - lo) + ULPS_APART * float(np.spacing(max(map(abs, ends))))
+        assert proven == (lo - tol <= res["exact_outer_lo_m"][i]
+                          and res["exact_outer_hi_m"][i] <= hi + tol)  # fmt: skip
+        assert res["exact_inside"][i] or not proven
     for i, w in enumerate(res["truth_w_m"]):  # the truth is consistent: in the exact set
         assert res["exact_outer_lo_m"][i] <= res["exact_lo_m"][i] < res["exact_hi_m"][i]
         assert res["exact_hi_m"][i] <= res["exact_outer_hi_m"][i]
