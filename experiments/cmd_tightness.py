@@ -17,7 +17,9 @@ exact inner interval within the estimator's, to 1e-6 of its width and 4 ulps of 
 values, each side rounded apart: false means the estimator misses a consistent state),
 ``exact_outer_inside`` (the outer certificate within it too: true proves that no
 consistent state is missed; where only the inner interval is inside, an estimator's
-end lies in the reference's own gap, at most its tolerance wide) and the truth's ``w``.
+end lies in the reference's own gap, at most its tolerance wide), ``exact_converged``
+(that gap within ``max(0.01 m, 1e-4 of the width)`` on both sides; false: the
+reference spent its LP budget first) and the truth's ``w``.
 """
 
 from __future__ import annotations
@@ -52,11 +54,13 @@ if TYPE_CHECKING:
 COMPILED_KERNELS = True
 
 INSIDE_REL_TOL = 1e-6
+#: the exact reference's gap between its inner and outer ends (of the inner width, m)
+EXACT_REL_TOL, EXACT_ABS_TOL_M = 1e-4, 0.01
 #: ulps of the values by which two ends computed apart may differ and still agree
 ULPS_APART = 4
 FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m",
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
-          "exact_outer_inside", "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp",
+          "exact_outer_inside", "exact_converged", "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp",
           "n_simplified", "reason")  # fmt: skip
 
 
@@ -193,7 +197,9 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
         np.array(hist["t"]), np.array(hist["a"]), np.array([*hist["k"], 0.0]), np.array(hist["d"])
     )
     try:
-        ref = ExactChannelSet(model, prior, history).extremes()
+        ref = ExactChannelSet(model, prior, history).extremes(
+            rel_tol=EXACT_REL_TOL, abs_tol=EXACT_ABS_TOL_M
+        )
     except InconsistentHistory:
         rec["reason"] = "exact set empty (the data contradict the model)"
         return rec
@@ -211,6 +217,9 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     inside = ref.inner_lo >= ext.min_value - tol and ref.inner_hi <= ext.max_value + tol
     # the outer certificate inside too: a proof that no consistent state is missed
     proven = ref.outer_lo >= ext.min_value - tol and ref.outer_hi <= ext.max_value + tol
+    # the reference closed its gap on both sides (else it spent its LP budget first)
+    gap = max(EXACT_ABS_TOL_M, EXACT_REL_TOL * inner)
+    closed = ref.outer_hi - ref.inner_hi <= gap and ref.inner_lo - ref.outer_lo <= gap
     rec.update(
         set_lo_m=ext.min_value, set_hi_m=ext.max_value, exact_lo_m=ref.inner_lo,
         exact_hi_m=ref.inner_hi, exact_outer_lo_m=ref.outer_lo, exact_outer_hi_m=ref.outer_hi,
@@ -218,6 +227,7 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
         ratio_outer=set_w / outer if outer > 0 else None,
         exact_inside=bool(inside),
         exact_outer_inside=bool(proven),
+        exact_converged=bool(closed),
         exact_x0_lo_m=ref.x0_interval_m[0], exact_x0_hi_m=ref.x0_interval_m[1],
         lp_s=ref.wall_s, n_lp=ref.n_lp,
     )  # fmt: skip

@@ -43,6 +43,7 @@ def test_tightness_reports_the_exact_interval_inside_the_set(capsys, tmp_path, s
     assert all(k in res for k in FIELDS)
     assert res["times_s"] == [float(t) for t in extra[1].split(",")]
     assert all(res["exact_inside"]) and len(res["exact_inside"]) == len(res["times_s"])
+    assert all(res["exact_converged"])
     assert all(r >= 1 - 1e-6 for r in res["ratio"]) and res["max_ratio"] == max(res["ratio"])
     # the outer certificate inside the set (the proof; it implies exact_inside), by the
     # command's own tolerance
@@ -289,3 +290,20 @@ def test_a_point_prior_holds_its_one_state_within_rounding(capsys, tmp_path):
 
     assert res["ratio"] == [None]
     assert "|     - | True   |" in render(res).splitlines()[2]
+
+
+def test_a_reference_that_spent_its_lp_budget_says_so(capsys, tmp_path, monkeypatch):
+    """The reference stops at its LP budget with a gap between its inner and outer ends
+    (one row of the published corpus had; CHANGELOG): ``exact_converged`` is false
+    there, true when the gap closed (here a budget of 4 LPs against the default)."""
+    from kalman_vs_infoset.estim.intercept.exact_reference import ExactChannelSet
+
+    real = ExactChannelSet.extremes
+    monkeypatch.setattr(ExactChannelSet, "extremes",
+                        lambda self, *a, **kw: real(self, *a, **kw, max_lp=4))  # fmt: skip
+    code, out = _run(capsys, FIG3, "--json", "--out", tmp_path, "--times", "5")
+    assert code == 0, out.err
+    res = json.loads(out.out.strip().splitlines()[-1])
+    gap = max(res["exact_outer_hi_m"][0] - res["exact_hi_m"][0],
+              res["exact_lo_m"][0] - res["exact_outer_lo_m"][0])  # fmt: skip
+    assert gap > 0.01 and res["exact_converged"] == [False]
