@@ -120,10 +120,10 @@ def run_attitude(
         def simulate(seeds, name=name):
             return loop.task(setup, req.controller, noise, name, seeds)
 
+        # the job's columns, as every run table has them (docs/results.md)
+        job = {"scenario": req.name, "controller": req.controller, "estimator": name,
+               "noise": noise, "seed": seed}  # fmt: skip
         for start in range(0, runs, loop.chunk):  # the command's batches (memory)
             chunk = list(range(start, min(start + loop.chunk, runs)))
-            # the job's columns, as every run table has them (docs/results.md)
-            job = {"scenario": req.name, "controller": req.controller, "estimator": name,
-                   "noise": noise, "seed": seed}  # fmt: skip
             rows += [{**job, "run": j, **row} for j, row in batched_task(simulate, seed, chunk)]
     return pd.DataFrame(rows)
