@@ -214,9 +214,13 @@ def _evaluate(model, prior, est, belief, hist, truth_w) -> dict[str, Any]:
     # inside an exact end it holds (the rule of the sets' own ``contains``)
     ends = (ext.min_value, ext.max_value, ref.inner_lo, ref.inner_hi)
     tol = INSIDE_REL_TOL * set_w + ULPS_APART * float(np.spacing(max(map(abs, ends))))
-    inside = ref.inner_lo >= ext.min_value - tol and ref.inner_hi <= ext.max_value + tol
+
+    def within(lo: float, hi: float) -> bool:
+        return lo >= ext.min_value - tol and hi <= ext.max_value + tol
+
+    inside = within(ref.inner_lo, ref.inner_hi)
     # the outer certificate inside too: a proof that no consistent state is missed
-    proven = ref.outer_lo >= ext.min_value - tol and ref.outer_hi <= ext.max_value + tol
+    proven = within(ref.outer_lo, ref.outer_hi)
     # the reference closed its gap on both sides (else it spent its LP budget first)
     gap = max(EXACT_ABS_TOL_M, EXACT_REL_TOL * inner)
     closed = ref.outer_hi - ref.inner_hi <= gap and ref.inner_lo - ref.outer_lo <= gap
