@@ -29,6 +29,7 @@ from kalman_vs_infoset.estim.attitude.ukf.estimator import (
     residual_x,
     state_add,
 )
+from kalman_vs_infoset.estim.base import Status
 from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.spatial.transform import Rotation
 
@@ -115,7 +116,7 @@ def test_box_never_loses_the_truth(seed, rate_scale, at_bounds, dt_s):
         belief = est.update(
             est.predict(belief, dt_s, known), _measure_at(state.as_vector(), model, signs())
         )
-        assert not belief.is_empty
+        assert belief.status == Status.OK  # admissible data: no contradiction
         assert belief.contains(state.as_vector()[None, 0:7])
         angle = (Rotation.from_quat(belief.centre()[0, 0:4]).inv() * state.rotation).magnitude()
         assert angle <= belief.attitude_bound_rad()[0] + 1e-12
@@ -171,13 +172,15 @@ def test_box_inadmissible_measurement_is_a_reported_empty_status():
     new = est.update(
         est.predict(belief, 0.01, AttitudeControl.zero(1)), AttitudeMeasurement(far, x[:, 4:7])
     )
-    assert new.is_empty and int(new.n_empty[0]) == 1
-    assert new.contains(np.concatenate([far, x[0, 4:7]])[None])  # restarted from the data
+    # reported, and restarted from the data: a set that holds states (finite centre)
+    assert new.status == Status.CONTRADICTION and int(new.n_empty[0]) == 1
+    assert not new.is_empty and np.all(np.isfinite(new.centre()))
+    assert new.contains(np.concatenate([far, x[0, 4:7]])[None])
     ok = est.update(
         est.predict(new, 0.01, AttitudeControl.zero(1)),
         AttitudeMeasurement(far, x[:, 4:7]),
     )
-    assert not ok.is_empty and int(ok.n_empty[0]) == 1
+    assert ok.status == Status.OK and int(ok.n_empty[0]) == 1
 
 
 def _random_ukf_belief(rng, runs=1):

@@ -34,6 +34,7 @@ from kalman_vs_infoset.estim.attitude.sets.zonotope import (
     reduce_girard,
     zonotope_inside,
 )
+from kalman_vs_infoset.estim.base import Status
 from kalman_vs_infoset.estim.common.sets import Ellipsoid, Zonotope
 from kalman_vs_infoset.guidance.attitude.plant import AttitudeState, RigidBody, propagate
 from scipy.spatial.transform import Rotation
@@ -413,7 +414,7 @@ def test_set_never_loses_the_truth_and_is_inside_the_box(name, seed, rate_scale,
         meas = _measure_at(state.as_vector(), model, signs())
         belief = est.update(est.predict(belief, dt_s, known), meas)
         box = box_est.update(box_est.predict(box, dt_s, known), meas)
-        assert not belief.is_empty
+        assert belief.status == Status.OK  # admissible data: no contradiction
         assert belief.contains(state.as_vector()[None, 0:7])
         np.testing.assert_array_equal(belief.box.e_r, box.e_r)  # the box estimator's own
         hc, hr = belief.hull()
@@ -433,10 +434,12 @@ def test_inadmissible_measurement_is_a_reported_empty_status(name):
     far = Rotation.from_rotvec([20 * MODEL.meas_angle_bound_rad[0], 0, 0]).as_quat()
     step = AttitudeControl.zero(1)
     new = est.update(est.predict(belief, 0.01, step), AttitudeMeasurement(far, x[:, 4:7]))
-    assert new.is_empty and int(new.n_empty[0]) == 1
-    assert new.contains(np.concatenate([far, x[0, 4:7]])[None])  # restarted from the data
+    # reported, and restarted from the data: a set that holds states (finite centre)
+    assert new.status == Status.CONTRADICTION and int(new.n_empty[0]) == 1
+    assert not new.is_empty and np.all(np.isfinite(new.centre()))
+    assert new.contains(np.concatenate([far, x[0, 4:7]])[None])
     ok = est.update(est.predict(new, 0.01, step), AttitudeMeasurement(far, x[:, 4:7]))
-    assert not ok.is_empty and int(ok.n_empty[0]) == 1
+    assert ok.status == Status.OK and int(ok.n_empty[0]) == 1
 
 
 # -- tightness against the box --------------------------------------------------------

@@ -206,12 +206,15 @@ class EmptyRunCounts:
 
     @property
     def is_empty(self) -> bool:
-        return bool(np.any(self.last_empty))
+        """Never: an update whose intersection is empty restarts the run's set from the
+        measurement's box, which holds states (``status`` reports the contradiction, as
+        the intercept sets' kept set does)."""
+        return False
 
     @property
     def status(self) -> Status:
         """``CONTRADICTION`` when some run's last update was empty, else ``OK``."""
-        return Status.CONTRADICTION if self.is_empty else Status.OK
+        return Status.CONTRADICTION if bool(np.any(self.last_empty)) else Status.OK
 
     @property
     def contradictions(self) -> int:
