@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import usage
+from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import run_limits
 from kalman_vs_infoset.experiments.progress import step_progress
@@ -27,6 +28,7 @@ from kalman_vs_infoset.experiments.sim.estimator_tables import tables_kept
 from kalman_vs_infoset.experiments.sim.intercept import (
     Engagement,
     EngagementResult,
+    build_estimator,
     estimators_read,
 )
 from kalman_vs_infoset.experiments.sim.intercept_config import InterceptScenario
@@ -174,6 +176,7 @@ def run_grid(
     """Every estimator x noise on the same seeds (paired runs): summaries and run tables,
     in the order estimator-major. ``args`` holds the runner's options
     (:func:`experiments.options.add_runner`)."""
+    check_plug_ins(sc, estimators)
     rows, frames = [], []
     for est in estimators:
         for noise in noises:
@@ -191,6 +194,30 @@ def run_grid(
             rows.append(row)
             frames.append(df)
     return rows, frames
+
+
+def check_plug_ins(sc: InterceptScenario, estimators: Sequence[str]) -> None:
+    """Build each plug-in estimator of ``estimators`` once, on each channel of ``sc``
+    with the scenario's options and prior: one whose factory (or ``initial``) raises
+    is refused here in one line (:class:`InputError`, exit status 2), where every
+    run would otherwise fail with the same error. The runs' own channel model may still
+    differ (an attitude loop widens it), so a run can fail later. The package's own
+    estimators are not built: their options models validate what they accept, and
+    building them here would load their compiled kernels in this process."""
+    from kalman_vs_infoset.experiments.provenance import estimator_identity
+
+    for name in estimators:
+        if estimator_identity("intercept", name) is None:  # the package's own
+            continue
+        for channel in sc.channels:
+            try:
+                build_estimator(name, sc, sc.channel_model(), channel)
+            except Exception as exc:
+                said = f"{type(exc).__name__}: {exc}".splitlines()[0]
+                raise InputError(
+                    f"estimator {name!r} cannot be built for {sc.name} (options "
+                    f"[estimator.{name}], {channel} channel): {said}"
+                ) from None
 
 
 def miss_floor_m(sc: InterceptScenario) -> float:

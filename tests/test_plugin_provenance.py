@@ -185,3 +185,47 @@ def test_a_plug_in_built_by_a_partial_is_identified_by_its_own_module(plugin):
         assert again["sources_sha256"] != first["sources_sha256"]
     finally:
         registry.unregister("intercept", "toyplug_partial")
+
+
+PICKY_PLUGIN = """
+from toy_estimators import ToyEstimator, ToyOptions
+
+
+def build(options, setting):
+    if options.widen < 2.0:
+        raise ValueError(f"widen {options.widen} is too small for this channel")
+    return ToyEstimator(setting.model, options.widen)
+"""
+
+
+def test_a_plug_in_refusing_the_scenario_s_options_is_refused_before_any_run(
+    tmp_path, monkeypatch, capsys
+):
+    """A plug-in whose factory raises for the options given failed every run, one
+    error line a run (ten thousand lines for a large study), with exit status 1. Now
+    the command builds each plug-in once per channel first and refuses it in one line
+    (exit status 2) before it writes anything; with options the factory accepts, the
+    same command runs."""
+    from harness_texts import one_line_error, run_cli
+
+    folder = tmp_path / "plug"
+    folder.mkdir()
+    (folder / "toypicky.py").write_text(PICKY_PLUGIN)
+    monkeypatch.syspath_prepend(str(folder))
+    module = importlib.import_module("toypicky")
+    options = importlib.import_module("toy_estimators").ToyOptions
+    registry.register("toypicky", "intercept", options, module.build)
+    try:
+        out = tmp_path / "out"
+        args = ("intercept", "kp_fig3", "--estimators", "toypicky", "--runs", "2",
+                "--workers", "1", "--no-progress", "--trace", "none", "--out", out)  # fmt: skip
+        r = run_cli(capsys, *args)
+        assert one_line_error(r), r.stderr
+        assert "'toypicky'" in r.stderr and "ValueError: widen 1.0 is too small" in r.stderr
+        assert "[estimator.toypicky]" in r.stderr and "lateral channel" in r.stderr
+        assert not out.exists()
+        ok = run_cli(capsys, *args, "--set", "estimator.toypicky.widen=2.0")
+        assert ok.returncode == 0, ok.stderr
+    finally:
+        registry.unregister("intercept", "toypicky")
+        sys.modules.pop("toypicky", None)
