@@ -21,6 +21,7 @@ from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     CONTROLLERS,
     SEED_ENERGY_N2M2S,
+    estimator_loop,
     lower_bound_energy_N2m2s,
     one_run,
 )
@@ -115,4 +116,5 @@ LOOP = AttitudeLoop(
     task=task,
     summarise=summarise,
     trace=trace_cmg,
+    estimator=estimator_loop,
 )

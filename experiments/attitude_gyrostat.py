@@ -30,7 +30,7 @@ from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.divergence import diverged_rows, diverged_runs, resolved
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
-from kalman_vs_infoset.experiments.sim.gyrostat import simulate_turn
+from kalman_vs_infoset.experiments.sim.gyrostat import estimator_loop, simulate_turn
 from kalman_vs_infoset.experiments.sim.gyrostat_config import (  # noqa: F401 - initial_quaternion re-exported
     GyrostatScenario,
     GyrostatSetup,
@@ -143,6 +143,11 @@ def run(source, scenario, controller, noise, runs, seed, estimator=None) -> dict
     return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
 
 
+def build_estimator(setup: GyrostatSetup, noise: str, estimator: str):
+    """The runs' estimator (every noise's alike)."""
+    return estimator_loop(setup.gyro, setup.beta_Nm, setup.cfg, estimator)
+
+
 LOOP = AttitudeLoop(
     name="three-rotor gyrostat",
     controllers=("game",),
@@ -151,4 +156,5 @@ LOOP = AttitudeLoop(
     task=task,
     summarise=summarise,
     trace=trace_gyrostat,
+    estimator=build_estimator,
 )

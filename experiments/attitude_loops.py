@@ -29,6 +29,8 @@ Task = Callable[..., list[dict[str, Any]]]
 Summarise = Callable[..., dict[str, Any]]
 #: trace(setup, controller, noise, estimator, seed_seq) -> long-format rows of one run
 Trace = Callable[..., "pd.DataFrame"]
+#: estimator(setup, noise, name) -> the runs' estimator, built as a run builds it
+BuildEstimator = Callable[[Any, str, str], Any]
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,9 @@ class AttitudeLoop:
         The validation, the runs of a chunk, the JSON of docs/models.md §3.1 from the
         finished rows, and one run replayed with recording
         (:mod:`experiments.attitude_traces`).
+    estimator
+        The runs' estimator from the set-up, the noise and the estimator's name, as a
+        run builds it (:func:`check_plug_ins` builds plug-ins with it up front).
     """
 
     name: str
@@ -56,6 +61,7 @@ class AttitudeLoop:
     task: Task
     summarise: Summarise
     trace: Trace
+    estimator: BuildEstimator
 
 
 #: controller -> the module declaring its :class:`AttitudeLoop` as ``LOOP``
@@ -94,3 +100,25 @@ def same_loop(a: str, b: str) -> bool:
 def controllers_like(controller: str) -> str:
     """The controllers of ``controller``'s simulation, quoted (messages)."""
     return ", ".join(repr(k) for k, v in LOOPS.items() if v == LOOPS[controller])
+
+
+def check_plug_ins(loop: AttitudeLoop, setups: Mapping[str, Any], estimators) -> None:
+    """Build each plug-in estimator of ``estimators`` once for each noise's set-up, as
+    the runs build it: one that raises (options its factory refuses, say) is refused
+    here in one line (:class:`InputError`, exit status 2), where every run would fail
+    with the same error. The package's own estimators are not built up front (their
+    options models validate what they accept)."""
+    from kalman_vs_infoset.experiments.provenance import estimator_identity
+
+    for name in estimators:
+        if estimator_identity("attitude", name) is None:  # the package's own
+            continue
+        for noise, setup in setups.items():
+            try:
+                loop.estimator(setup, noise, name)
+            except Exception as exc:
+                said = f"{type(exc).__name__}: {exc}".splitlines()[0]
+                raise InputError(
+                    f"estimator {name!r} cannot be built for the {loop.name} runs (options "
+                    f"[estimator_options.{name}], noise {noise}): {said}"
+                ) from None

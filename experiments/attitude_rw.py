@@ -19,7 +19,11 @@ from kalman_vs_infoset.experiments.attitude_loops import AttitudeLoop
 from kalman_vs_infoset.experiments.attitude_traces import trace_rw
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
-from kalman_vs_infoset.experiments.sim.attitude_rw import make_controller, simulate_runs
+from kalman_vs_infoset.experiments.sim.attitude_rw import (
+    estimator_loop,
+    make_controller,
+    simulate_runs,
+)
 from kalman_vs_infoset.experiments.sim.attitude_rw_config import RwScenario
 from kalman_vs_infoset.experiments.sim.divergence import diverged_runs, resolved
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
@@ -136,6 +140,11 @@ def run(source, scenario, controller, noise, runs, seed, estimator=None) -> dict
     return run_here(LOOP, source, scenario, controller, noise, runs, seed, estimator)
 
 
+def build_estimator(config: RwScenario, noise: str, estimator: str):
+    """The runs' estimator (every noise's alike)."""
+    return estimator_loop(config, estimator)
+
+
 LOOP = AttitudeLoop(
     name="reaction wheels",
     controllers=CONTROLLERS,
@@ -144,4 +153,5 @@ LOOP = AttitudeLoop(
     task=task,
     summarise=summarise,
     trace=trace_rw,
+    estimator=build_estimator,
 )

@@ -20,7 +20,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 from kalman_vs_infoset.experiments import options, usage
-from kalman_vs_infoset.experiments.attitude_loops import LOOPS
+from kalman_vs_infoset.experiments.attitude_loops import LOOPS, check_plug_ins
 from kalman_vs_infoset.experiments.attitude_request import AttitudeRequest, request
 from kalman_vs_infoset.experiments.errors import runs_text, stat_text
 from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
@@ -75,6 +75,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     loop, controller, seed = req.loop, req.controller, req.seed
     # every noise's set-up is validated before the first run
     setups = {n: loop.prepare(req.source, dict(req.scenario), controller, n) for n in req.noises}
+    check_plug_ins(loop, setups, req.estimators)  # a plug-in that cannot be built: one line
     scenario = json.loads(json.dumps(dict(req.scenario), default=str))
     results, frames, files, histories = [], [], [], []
     for est in req.estimators:

@@ -229,3 +229,27 @@ def test_a_plug_in_refusing_the_scenario_s_options_is_refused_before_any_run(
     finally:
         registry.unregister("intercept", "toypicky")
         sys.modules.pop("toypicky", None)
+
+
+@pytest.mark.parametrize("scenario", ["smallsat_rw", "resurs_p", "gyrostat_game"])
+def test_an_attitude_plug_in_that_cannot_be_built_is_refused_before_any_run(
+    scenario, tmp_path, capsys
+):
+    """The same for each attitude simulation (reaction wheels, gyrodines, gyrostat): the
+    loop builds a plug-in as its runs do, once a noise, and refuses it in one line."""
+    from harness_texts import one_line_error, run_cli
+    from toy_estimators import ToyAttitudeOptions
+
+    def build(options, model):
+        raise ValueError(f"no estimator for J = {model.inertia_kgm2.diagonal()[0]:.3g} kg m^2")
+
+    registry.register("toyattpicky", "attitude", ToyAttitudeOptions, build)
+    try:
+        out = tmp_path / "out"
+        r = run_cli(capsys, "attitude", scenario, "--estimators", "toyattpicky", "--runs", "1",
+                    "--workers", "1", "--no-progress", "--out", out)  # fmt: skip
+    finally:
+        registry.unregister("attitude", "toyattpicky")
+    assert one_line_error(r), r.stderr
+    assert "'toyattpicky'" in r.stderr and "ValueError: no estimator for J = " in r.stderr
+    assert "[estimator_options.toyattpicky]" in r.stderr and not out.exists()

@@ -138,6 +138,12 @@ def estimator_model(setup: TurnSetup, noise: str = "random") -> AttitudeModel:
     )
 
 
+def estimator_loop(setup: TurnSetup, noise: str, estimator: str | None) -> EstimatorLoop:
+    """The runs' estimator: ``estimator`` (None: the exact one) on :func:`estimator_model`,
+    with the set-up's options tables."""
+    return EstimatorLoop(estimator, estimator_model(setup, noise), setup.estimator_options)
+
+
 def simulate_turn(
     setup: TurnSetup,
     controller: str,
@@ -176,8 +182,8 @@ def simulate_turn(
     body, cluster = setup.body, setup.cluster
     j, j_inv = body.inertia_kgm2, body.inertia_inv
     noisy = rng is not None
-    model = estimator_model(setup, noise)
-    loop = EstimatorLoop(estimator, model, setup.estimator_options)
+    loop = estimator_loop(setup, noise, estimator)
+    model = loop.model
     d_bound = model.disturbance_bound_Nm
 
     beta = setup.beta0_rad.copy()

@@ -120,6 +120,12 @@ def estimator_model(config: RwScenario) -> AttitudeModel:
     )
 
 
+def estimator_loop(config: RwScenario, estimator: str | None) -> EstimatorLoop:
+    """The runs' estimator: ``estimator`` (None: the exact one) on :func:`estimator_model`,
+    with the scenario's options tables."""
+    return EstimatorLoop(estimator, estimator_model(config), config.estimator_options)
+
+
 def simulate_runs(
     config: RwScenario,
     controller: str,
@@ -181,8 +187,8 @@ def simulate_runs(
     period = sim.control_period_s
     x0 = initial_states(config, rngs)
     n = len(rngs)
-    model = estimator_model(config)
-    loop = EstimatorLoop(estimator, model, config.estimator_options)
+    loop = estimator_loop(config, estimator)
+    model = loop.model
     d = config.noise.disturbance_Nm
     const_dist = (
         np.stack([r.uniform(-d, d, 3) for r in rngs]) if noise == "random" else np.zeros((n, 3))

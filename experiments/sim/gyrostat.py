@@ -178,6 +178,12 @@ def gyrostat_model(gyro: Gyrostat, beta_Nm: ArrayLike, cfg: LoopConfig) -> Attit
     )
 
 
+def estimator_loop(gyro: Gyrostat, beta_Nm: ArrayLike, cfg: LoopConfig, estimator: str | None):
+    """The runs' estimator: ``estimator`` (None: the exact one) on :func:`gyrostat_model`,
+    with the loop's options tables."""
+    return EstimatorLoop(estimator, gyrostat_model(gyro, beta_Nm, cfg), cfg.estimator_options)
+
+
 def simulate_turn(
     gyro: Gyrostat,
     law: GameLaw,
@@ -205,8 +211,8 @@ def simulate_turn(
     q_t = np.asarray(q_target, dtype=float) / np.linalg.norm(q_target)
     n = int(np.ceil(cfg.horizon_s / cfg.period_s))
     h, dt = cfg.period_s, cfg.period_s / cfg.substeps
-    model = gyrostat_model(gyro, beta, cfg)
-    loop = EstimatorLoop(estimator, model, cfg.estimator_options)
+    loop = estimator_loop(gyro, beta, cfg, estimator)
+    model = loop.model
     noisy = max(cfg.meas_angle_rad, cfg.meas_rate_radps, cfg.meas_rotor_radps) > 0
     a_mom, j_rot, b_mom = gyro.A_kgm2, gyro.rotor_J_kgm2, gyro.body_moments_kgm2
 
