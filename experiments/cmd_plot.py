@@ -69,10 +69,12 @@ def run(args) -> dict[str, Any]:
         if p not in paths:
             paths.append(p)
     # the figures are this command's only output: a folder it cannot write is refused
-    # before any drawing (not skipped figure by figure)
+    # before any drawing (not skipped figure by figure), and made only once the traces
+    # are read and checked (a refused trace leaves no empty folder)
     out = options.out_folder(args.out, paths[0].parent)
-    options.writable_folder(out, "--out" if args.out else "the traces' folder")
-    files = plot_files(paths, out=out, animation=not args.no_animation)
+    flag = "--out" if args.out else "the traces' folder"
+    files = plot_files(paths, out=out, animation=not args.no_animation,
+                       before_drawing=lambda: options.writable_folder(out, flag))  # fmt: skip
     return {"traces": [str(p) for p in paths], "files": [str(f) for f in files]}
 
 

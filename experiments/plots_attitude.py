@@ -121,7 +121,10 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
             for ax in bottom:
                 ax.axvline(tau, color=fs.REFERENCE, ls="--", lw=0.9, label="guaranteed time tau")
     for ax, col in ((bottom[0], "angle_deg"), (bottom[2], "rate_norm_degps")):
-        values = np.concatenate([df[col].to_numpy(dtype=float) for df in traces])
+        # the rows drawn (axis 1's)
+        values = np.concatenate(
+            [df.loc[df["axis"] == 1, col].to_numpy(dtype=float) for df in traces]
+        )
         # log where there is something to draw on one (a run that diverged at once has
         # no positive finite value: matplotlib warned and drew an empty log axis)
         if np.any(np.isfinite(values) & (values > 0)):

@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import figstyle as fs
 from kalman_vs_infoset.experiments.errors import InputError
@@ -45,6 +46,22 @@ def _missing(df: pd.DataFrame, path: Path, needed, what: str) -> None:
         )
 
 
+def _damaged(df: pd.DataFrame, path: Path, what: str, names=(), numbers=()) -> None:
+    """One line naming the first column of ``names`` with an empty cell, or of
+    ``numbers`` with a value that is not a finite number, if any (a trace the package
+    wrote has none: a damaged file, refused before the first figure)."""
+    for col in names:
+        if df[col].isna().any():
+            raise InputError(f"{path}: {what} with an empty {col!r} (rewrite it with --trace)")
+    for col in numbers:
+        values = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float)
+        if not np.isfinite(values).all():
+            raise InputError(
+                f"{path}: {what} whose {col!r} holds a value that is not a finite number "
+                "(rewrite it with --trace)"
+            )
+
+
 def _read(path: Path) -> pd.DataFrame:
     df = _read_table(path, "a trace")
     if not ({"run", "step"} <= set(df.columns) and ({"channel", "axis"} & set(df.columns))):
@@ -53,6 +70,12 @@ def _read(path: Path) -> pd.DataFrame:
         _missing(df, path, STEP_COLUMNS, "an intercept trace")
     if not len(df):
         raise InputError(f"{path}: a trace without steps (nothing to draw)")
+    what = "an intercept trace" if "channel" in df else "an attitude trace"
+    labels = ("scenario", "estimator", "noise", "channel") if "channel" in df else ()
+    _damaged(df, path, what, names=labels, numbers=("run", "step", "t_s"))
+    if "axis" in df and not (df["axis"] == 1).any():  # its figures draw axis 1's rows
+        raise InputError(f"{path}: an attitude trace without the rows of axis 1 (rewrite it "
+                         "with --trace)")  # fmt: skip
     return df
 
 
@@ -76,8 +99,12 @@ def _noises(df: pd.DataFrame) -> list[str]:
     return sorted(present, key=lambda n: NOISE_ORDER.index(n) if n in NOISE_ORDER else 99)
 
 
-def plot_files(paths, paper=None, out: Path | None = None, animation: bool = True) -> list[Path]:
-    """Draw every figure of the traces ``paths``; returns the files written."""
+def plot_files(
+    paths, paper=None, out: Path | None = None, animation: bool = True, before_drawing=None
+) -> list[Path]:
+    """Draw every figure of the traces ``paths``; returns the files written.
+    ``before_drawing()`` runs once every input is read and checked (``kvi plot`` makes
+    and probes its ``--out`` there, so a refused input leaves no folder behind)."""
     from kalman_vs_infoset.experiments import plots_attitude
 
     paths = [Path(p) for p in paths]
@@ -88,6 +115,8 @@ def plot_files(paths, paper=None, out: Path | None = None, animation: bool = Tru
     # every input read and checked before the first figure: a damaged or incomplete
     # sets file is refused before any figure is drawn (they were drawn, then refused)
     set_tables = [_read_sets(p) for p in paths]
+    if before_drawing is not None:
+        before_drawing()
     files: list[Path] = []
     for path, df in zip(paths, frames, strict=True):
         if "axis" in df:
@@ -149,6 +178,9 @@ def _read_sets(path: Path) -> pd.DataFrame | None:
         return None
     sets = _read_table(sets_path, "the sets of a trace")
     _missing(sets, sets_path, SET_COLUMNS, "the sets of a trace")
+    # the vertices of polygons: finite wherever the package wrote them
+    numbers = ("run", "step", "t_s", "x_m", "alpha_rad", "zem_m")
+    _damaged(sets, sets_path, "the sets of a trace", ("phase", "channel", "estimator"), numbers)
     return sets
 
 

@@ -87,7 +87,53 @@ def test_a_damaged_sets_file_is_one_line(traced, tmp_path, capsys, damage):
     sets.write_bytes(b"not parquet" if damage == "junk" else data[: len(data) // 2])
     r = run(capsys, "plot", traced, "--no-animation", "--out", tmp_path / "figs")
     assert one_line_error(r) and sets.name in r.stderr, r.stderr
-    assert _drawn(tmp_path / "figs") == []  # refused before the first figure
+    assert not (tmp_path / "figs").exists()  # refused before the folder is made
+
+
+@pytest.mark.parametrize(
+    ("sets_file", "column", "value"),
+    [(False, "t_s", float("nan")), (False, "t_s", float("inf")), (False, "scenario", None),
+     (False, "estimator", None), (True, "alpha_rad", float("nan")), (True, "x_m", float("-inf")),
+     (True, "phase", None)],
+)  # fmt: skip
+def test_a_damaged_value_is_one_line_before_any_figure_or_folder(
+    traced, tmp_path, capsys, sets_file, column, value
+):
+    """A value the package never writes (an empty label, a time or a vertex that is not a
+    finite number) drew figures up to a traceback (NaN axis limits of the 3-D set, a
+    KeyError for an empty scenario), and the command made its ``--out`` before reading
+    the traces, leaving an empty folder behind every refusal."""
+    path = traced.with_name(traced.name.replace("-trace", "-trace-sets")) if sets_file else traced
+    df = pd.read_parquet(path)
+    df[column] = df[column].astype(object if value is None else float)
+    df.loc[df.index[len(df) // 2], column] = value
+    df.to_parquet(path)
+    r = run(capsys, "plot", traced, "--no-animation", "--out", tmp_path / "figs")
+    assert one_line_error(r) and path.name in r.stderr and repr(column) in r.stderr, r.stderr
+    assert not (tmp_path / "figs").exists()
+
+
+def test_an_attitude_trace_without_the_rows_it_draws_is_one_line(tmp_path, capsys):
+    """The history figure draws axis 1's rows: a trace without them (a damaged ``axis``
+    column) ended in a traceback of the log scale."""
+    import numpy as np
+    from kalman_vs_infoset.experiments.traces import long_rows
+
+    n = 4
+    per_axis = {k: np.ones((n, 3)) for k in ("error_deg", "rate_degps", "est_error_deg")}
+    per_axis |= {"torque_Nm": np.zeros((n - 1, 3)), "momentum_Nms": np.zeros((n, 3))}
+    per_step = {"angle_deg": np.ones(n), "rate_norm_degps": np.ones(n),
+                "energy_N2m2s": np.zeros(n), "knowledge_bound_deg": np.ones(n),
+                "truth_inside": np.ones(n, bool)}  # fmt: skip
+    df = long_rows(np.arange(n) * 0.1, per_axis, per_step, scenario="x", controller="pd",
+                   estimator="box", noise="random", seed=0, run=0)  # fmt: skip
+    good, bad = tmp_path / "good-trace.parquet", tmp_path / "bad-trace.parquet"
+    df.to_parquet(good)
+    df.assign(axis=df["axis"] + 10).to_parquet(bad)
+    assert run(capsys, "plot", good, "--out", tmp_path / "ok").returncode == 0
+    r = run(capsys, "plot", bad, "--out", tmp_path / "figs")
+    assert one_line_error(r) and "axis 1" in r.stderr, r.stderr
+    assert not (tmp_path / "figs").exists()
 
 
 @pytest.mark.parametrize("column", ["t_s", "scenario", "forecast_lo_m", "zem_true_m"])
