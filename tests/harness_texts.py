@@ -130,3 +130,19 @@ def cli_inproc(capsys, *args) -> subprocess.CompletedProcess:
         code = exc.code
     out = capsys.readouterr()
     return subprocess.CompletedProcess(args, code, out.out, out.err)
+
+
+def small_attitude_trace(n: int = 4):
+    """A valid attitude trace of ``n`` steps (every error, rate and bound 1), as
+    ``--trace`` writes one (:func:`experiments.traces.long_rows`): for the plot
+    command's tests, without running a loop."""
+    import numpy as np
+    from kalman_vs_infoset.experiments.traces import long_rows
+
+    per_axis = {k: np.ones((n, 3)) for k in ("error_deg", "rate_degps", "est_error_deg")}
+    per_axis |= {"torque_Nm": np.zeros((n - 1, 3)), "momentum_Nms": np.zeros((n, 3))}
+    per_step = {"angle_deg": np.ones(n), "rate_norm_degps": np.ones(n),
+                "energy_N2m2s": np.zeros(n), "knowledge_bound_deg": np.ones(n),
+                "truth_inside": np.ones(n, bool)}  # fmt: skip
+    return long_rows(np.arange(n) * 0.1, per_axis, per_step, scenario="x", controller="pd",
+                     estimator="box", noise="random", seed=0, run=0)  # fmt: skip

@@ -116,17 +116,9 @@ def test_a_damaged_value_is_one_line_before_any_figure_or_folder(
 def test_an_attitude_trace_without_the_rows_it_draws_is_one_line(tmp_path, capsys):
     """The history figure draws axis 1's rows: a trace without them (a damaged ``axis``
     column) ended in a traceback of the log scale."""
-    import numpy as np
-    from kalman_vs_infoset.experiments.traces import long_rows
+    from harness_texts import small_attitude_trace
 
-    n = 4
-    per_axis = {k: np.ones((n, 3)) for k in ("error_deg", "rate_degps", "est_error_deg")}
-    per_axis |= {"torque_Nm": np.zeros((n - 1, 3)), "momentum_Nms": np.zeros((n, 3))}
-    per_step = {"angle_deg": np.ones(n), "rate_norm_degps": np.ones(n),
-                "energy_N2m2s": np.zeros(n), "knowledge_bound_deg": np.ones(n),
-                "truth_inside": np.ones(n, bool)}  # fmt: skip
-    df = long_rows(np.arange(n) * 0.1, per_axis, per_step, scenario="x", controller="pd",
-                   estimator="box", noise="random", seed=0, run=0)  # fmt: skip
+    df = small_attitude_trace()
     good, bad = tmp_path / "good-trace.parquet", tmp_path / "bad-trace.parquet"
     df.to_parquet(good)
     df.assign(axis=df["axis"] + 10).to_parquet(bad)

@@ -78,13 +78,16 @@ def test_a_runs_table_that_cannot_be_saved_is_still_an_error(short, tmp_path, ca
 
 def test_plot_refuses_a_folder_it_cannot_write_before_drawing(tmp_path, capsys, monkeypatch):
     """``plot``'s only output is figures: a folder the system refuses (here every new
-    file there: EROFS) is refused in one line, exit 2, before any trace is read (it
+    file there: EROFS) is refused in one line, exit 2, before any figure is drawn (it
     printed the figures' names with exit status 0, none written); a file as ``--out`` is
-    "not a directory", as for every command."""
+    "not a directory", as for every command. (The traces are read and checked first, so
+    that a refused trace leaves no folder behind: this one is a valid attitude trace.)"""
     import tempfile
 
+    from harness_texts import small_attitude_trace
+
     trace = tmp_path / "a-trace.parquet"
-    trace.write_bytes(b"not read: the folder is refused first")
+    small_attitude_trace().to_parquet(trace)
     (tmp_path / "file").write_text("x")
     r = cli_inproc(capsys, "plot", trace, "--out", tmp_path / "file")
     assert r.returncode == 2 and r.stderr.strip().endswith("--out " + str(tmp_path / "file")
