@@ -56,18 +56,6 @@ CONTROLLERS = ("pd", "lqr", "game", "energy", "euler")
 CMG = ("energy", "euler")
 
 
-def _times(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        values = []
-    if not values or not all(math.isfinite(v) and v > 0 for v in values):
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated positive times in s, got {text!r}"
-        )
-    return sorted(set(values))
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help=options.SCENARIO_HELP)
     p.add_argument("--controller", default=None, choices=CONTROLLERS,
@@ -78,7 +66,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=options.seed_int, default=0,
                    help="root seed, as for kvi attitude (run 0; default 0)")  # fmt: skip
     options.add_estimators(p, "attitude", list(SET_FAMILIES), ",".join(SET_FAMILIES))
-    p.add_argument("--times", type=_times, default=[0.1, 1.0, 5.0, 20.0],
+    p.add_argument("--times", type=options.times_s(positive=True), default=[0.1, 1.0, 5.0, 20.0],
                    help="comma-separated times, s, multiples of the control period "
                    "(default 0.1,1,5,20)")  # fmt: skip
     p.add_argument("--out", help="output directory (default: results/attitude_tightness)")

@@ -78,7 +78,7 @@ from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.bench_process import first_run_compile, help_cpu_s, throughput
-from kalman_vs_infoset.experiments.options import positive_int
+from kalman_vs_infoset.experiments.options import MAX_RUNS, int_in
 
 # the scenarios, simulations and runner are imported where they are timed or run, not
 # to declare the arguments (kvi bench --help stays light)
@@ -87,8 +87,10 @@ from kalman_vs_infoset.experiments.options import positive_int
 COMPILED_KERNELS = True
 
 
-#: the defaults of --steps, --repeat and --mc-runs, and --quick's
+#: the defaults of --steps, --repeat and --mc-runs, and --quick's; the most each takes
+#: (the steps of an approach are far fewer; a hundred repetitions already take hours)
 STEPS, REPEAT, MC_RUNS = 120, 3, 8
+MAX_STEPS, MAX_REPEAT = 100_000, 100
 QUICK_STEPS, QUICK_MC_RUNS = 5, 2
 
 
@@ -108,18 +110,18 @@ def add_arguments(p) -> None:
     p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
     p.add_argument(
         "--steps",
-        type=positive_int,
+        type=int_in(1, MAX_STEPS),
         help=f"estimator steps timed (default: {STEPS}; --quick: {QUICK_STEPS})",
     )
     p.add_argument(
         "--repeat",
-        type=positive_int,
+        type=int_in(1, MAX_REPEAT),
         help="repetitions of each timing: the median of the step, engagement and approach "
         f"costs, the best of the throughputs (default: {REPEAT}; --quick: 1)",
     )
     p.add_argument(
         "--mc-runs",
-        type=positive_int,
+        type=int_in(1, MAX_RUNS),
         help=f"Monte Carlo runs for the throughput (default: {MC_RUNS}; --quick: {QUICK_MC_RUNS})",
     )
     p.add_argument(

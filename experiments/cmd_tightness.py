@@ -42,6 +42,7 @@ from kalman_vs_infoset.experiments.options import (
     add_estimators,
     out_folder,
     seed_int,
+    times_s,
 )
 
 if TYPE_CHECKING:
@@ -62,18 +63,6 @@ FIELDS = ("set_lo_m", "set_hi_m", "exact_lo_m", "exact_hi_m", "exact_outer_lo_m"
           "exact_outer_hi_m", "truth_w_m", "ratio", "ratio_outer", "exact_inside",
           "exact_outer_inside", "exact_converged", "exact_x0_lo_m", "exact_x0_hi_m", "lp_s", "n_lp",
           "n_simplified", "reason")  # fmt: skip
-
-
-def _times(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        values = []
-    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated non-negative times in s, got {text!r}"
-        )
-    return sorted(set(values))
 
 
 #: the switch noise's default switch time (s)
@@ -116,7 +105,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="bearing errors (default: %(default)s)",
     )
     add("--seed", type=seed_int, help="seed (default: the scenario's)")
-    add("--times", type=_times, default=[10.0, 30.0, 60.0, 90.0, 95.0],
+    add("--times", type=times_s(positive=False), default=[10.0, 30.0, 60.0, 90.0, 95.0],
         help="comma-separated times, s (default 10,30,60,90,95)")  # fmt: skip
     add("--guided", action="store_true", help="the paper's guidance law issues impulses")
     reference = registry.reference("intercept").name

@@ -59,6 +59,21 @@ def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
 positive_int = _int_at_least(1, "positive")
 
 
+def int_in(lo: int, hi: int) -> Callable[[str], int]:
+    """An argparse ``type``: an integer in ``[lo, hi]``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = lo - 1
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"expected an integer in [{lo}, {hi}], got {text!r}")
+        return value
+
+    return parse
+
+
 def runs_int(text: str) -> int:
     """A run count: an integer in [1, 10^6] (the runner holds the run indices)."""
     value = positive_int(text)
@@ -117,6 +132,36 @@ def split_list(text: str, allowed: Sequence[str], what: str) -> list[str]:
     if twice:  # each would be run and tabled twice
         raise ValueError(f"{', '.join(twice)} given twice in {text!r}")
     return items
+
+
+#: the largest time a --times list takes (s): far beyond any scenario's horizon, and far
+#: from where a time over the step overflows
+MAX_TIME_S = 1e6
+
+
+def times_s(positive: bool) -> Callable[[str], list[float]]:
+    """An argparse ``type``: a comma list of times in s, sorted: each a number in ``[0,
+    MAX_TIME_S]`` (``(0, ...]`` if ``positive``), none empty or given twice."""
+    least = "positive" if positive else "non-negative"
+
+    def parse(text: str) -> list[float]:
+        parts = [t.strip() for t in str(text).split(",")]
+        try:
+            values = [float(t) for t in parts]
+        except ValueError:
+            values = []
+        ok = [v == v and (v > 0 if positive else v >= 0) and v <= MAX_TIME_S for v in values]
+        if not values or not all(ok):
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated {least} times in s, at most "
+                f"{MAX_TIME_S:.0f}; got {text!r}"
+            )
+        twice = sorted({v for v in values if values.count(v) > 1})
+        if twice:
+            raise argparse.ArgumentTypeError(f"{twice[0]:g} s given twice in {text!r}")
+        return sorted(values)
+
+    return parse
 
 
 def list_of(allowed: Sequence[str], what: str = "names") -> Callable[[str], list[str]]:

@@ -275,6 +275,31 @@ def test_tightness_times_after_every_run_are_refused(short, tmp_path, capsys):
     assert "--times" in err and "after the end" in err
 
 
+@pytest.mark.parametrize("command", ["tightness", "attitude-tightness"])
+@pytest.mark.parametrize(
+    ("times", "said"),
+    [("1e308", "at most 1000000"), ("1e7", "at most 1000000"), ("10,10", "10 s given twice"),
+     ("10,", "got '10,'"), (",", "got ','"), ("nan", "got 'nan'"), ("-1", "got '-1'")],
+)  # fmt: skip
+def test_a_bad_times_list_is_one_line(tmp_path, capsys, command, times, said):
+    """``--times`` of both tightness commands: a time so large that it overflowed the
+    step count (``OverflowError``, exit 1), an empty item or a time given twice (both
+    silently dropped) are refused in one line, exit status 2, as the other lists are."""
+    scenario = "kp_fig3" if command == "tightness" else "smallsat_rw"
+    err = _refused(capsys, tmp_path / "out", command, scenario, "--times", times)
+    assert "--times" in err and said in err
+
+
+def test_bench_counts_are_bounded_before_any_timing(tmp_path, capsys):
+    """``kvi bench --repeat 100000000`` timed for hours without a word, and a too large
+    ``--mc-runs`` was refused after seconds of timing, under the name ``--runs``."""
+    for flag, value, bound in (("--repeat", "100000000", "[1, 100]"),
+                               ("--mc-runs", "2000000", "[1, 1000000]"),
+                               ("--steps", "0", "[1, 100000]")):  # fmt: skip
+        r = run(capsys, "bench", "--quick", flag, value)
+        assert one_line_error(r) and f"argument {flag}" in r.stderr and bound in r.stderr
+
+
 def test_paper_figures_only_empty_is_refused(tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", "paper-figures", "--only", "",
                    "--scenarios", ROOT / "data/scenarios")  # fmt: skip
