@@ -211,7 +211,11 @@ def override_suffix(overrides: Sequence[str]) -> str:
     if not nested:
         overrides = sorted(overrides, key=lambda o: (o.split("=", 1)[0].strip(), o))
     squeezed = (o.replace(" ", "") for o in overrides)
-    safe = ["".join(c if c.isalnum() or c in "._=-," else "_" for c in o) for o in squeezed]
+    # ASCII only: the names allow ASCII letters and digits (an "é" was kept, then refused)
+    safe = [
+        "".join(c if (c.isascii() and c.isalnum()) or c in "._=-," else "_" for c in o)
+        for o in squeezed
+    ]
     # a value's '..' (a text with an ellipsis) would make the name a path's parent
     safe = [o.replace("..", "_") for o in safe]
     full = "".join(f"+{o}" for o in safe)
@@ -229,7 +233,9 @@ def override_suffix(overrides: Sequence[str]) -> str:
 
 def default_name(path: str | Path) -> str:
     """The file's stem made result-file safe (an explicit ``name`` is checked instead)."""
-    stem = "".join(c if c.isalnum() or c in "._=+,-" else "_" for c in Path(path).stem)
+    stem = "".join(
+        c if (c.isascii() and c.isalnum()) or c in "._=+,-" else "_" for c in Path(path).stem
+    )
     stem = stem.replace("..", "_").lstrip(".") or "scenario"
     return stem if SAFE_NAME.match(stem) else "scenario"
 

@@ -73,6 +73,31 @@ def test_the_truths_default_closing_velocity_is_the_speeds_the_estimators_assume
     assert given.estimator.vx_kmps == (-59.0, -57.0)
 
 
+@pytest.mark.parametrize("override", ['description="é – ü/ö"', 'reference.source="Müller (2003)"'])
+def test_a_free_text_override_with_letters_beyond_ascii_is_taken(override):
+    """``--set 'description="é"'`` was refused with a message about the field ``name``,
+    which the user never set: the name's suffix kept ``é`` (a letter to ``str.isalnum``),
+    then the name check (ASCII letters and digits) refused it."""
+    import re
+
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+
+    sc = load_scenario("kp_fig3", [override])
+    assert re.fullmatch(r"[A-Za-z0-9_.,=+-]+", sc.name) and sc.name.startswith("kp_fig3+")
+    key, value = override.split("=", 1)
+    table, _, field = key.rpartition(".")
+    got = getattr(getattr(sc, table) if table else sc, field)
+    assert got == value.strip('"')
+
+
+def test_a_file_name_with_letters_beyond_ascii_names_its_results_after_itself():
+    """A scenario file's stem with an ``é`` fell back to the generic name ``scenario``
+    (every such file then shared it); its other letters now stay."""
+    from kalman_vs_infoset.experiments.scenario import default_name
+
+    assert default_name("/x/szénario fig5.toml") == "sz_nario_fig5"
+
+
 def test_many_overrides_still_name_files_the_system_accepts(short, tmp_path, capsys):
     """Seven --set overrides once made a result file's name longer than 255 bytes ("File
     name too long", exit 2); past 96 characters the suffix names the rest by a hash."""
