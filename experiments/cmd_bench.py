@@ -78,7 +78,7 @@ from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.bench_process import first_run_compile, help_cpu_s, throughput
-from kalman_vs_infoset.experiments.options import MAX_RUNS, int_in
+from kalman_vs_infoset.experiments.options import MAX_RUNS, int_in, non_empty
 
 # the scenarios, simulations and runner are imported where they are timed or run, not
 # to declare the arguments (kvi bench --help stays light)
@@ -107,7 +107,8 @@ def counts(args) -> tuple[int, int, int]:
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
+    p.add_argument("--scenarios", type=non_empty,
+                   help="folder of the scenario files (default: the bundled ones)")  # fmt: skip
     p.add_argument(
         "--steps",
         type=int_in(1, MAX_STEPS),

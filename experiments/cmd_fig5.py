@@ -34,7 +34,8 @@ def add_arguments(p) -> None:
     p.add_argument("--seed", type=options.seed_int, help="root seed (default: the scenario's)")
     ref = seed_estimators()
     options.add_estimators(p, "intercept", ref, f"{ref[0]}, the paper's")
-    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
+    p.add_argument("--scenarios", type=options.non_empty,
+                   help="folder of the scenario files (default: the bundled ones)")  # fmt: skip
     p.add_argument("--out", default="results/fig5", help="output directory (default: %(default)s)")
     options.add_runner(p)
     # both variants take them (e.g. a node-set option); the files' stem names them

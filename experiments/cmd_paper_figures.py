@@ -34,7 +34,7 @@ from typing import Any
 
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.files import atomic_write
-from kalman_vs_infoset.experiments.options import out_folder, positive_int
+from kalman_vs_infoset.experiments.options import non_empty, out_folder, positive_int
 
 #: the figures run engagements (the command line announces a compilation of the kernels)
 COMPILED_KERNELS = True
@@ -127,7 +127,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "are drawn, their numbers are not the paper runs' (Resurs-P's turn does not "
         "complete at the coarse 0.5-s step)",
     )
-    p.add_argument("--scenarios", help="folder of the scenario files (default: the bundled ones)")
+    p.add_argument("--scenarios", type=non_empty,
+                   help="folder of the scenario files (default: the bundled ones)")  # fmt: skip
 
 
 def _groups(only: str | None) -> list[str]:

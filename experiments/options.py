@@ -59,6 +59,14 @@ def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
 positive_int = _int_at_least(1, "positive")
 
 
+def non_empty(text: str) -> str:
+    """An argparse ``type``: a text that is not blank (an empty ``--scheduler`` ran
+    locally, an empty ``--scenarios`` read the bundled scenarios, both without a word)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a value, got an empty text")
+    return text
+
+
 def int_in(lo: int, hi: int) -> Callable[[str], int]:
     """An argparse ``type``: an integer in ``[lo, hi]``."""
 
@@ -298,7 +306,7 @@ def add_runner(p: argparse.ArgumentParser) -> None:
     """Where the runs go: ``--workers``, ``--scheduler``, ``--no-progress``, the limit and
     ``--rerun-other-code``."""
     p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
-    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786)")
+    p.add_argument("--scheduler", type=non_empty, help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     add_limit(p)
     p.add_argument(

@@ -325,6 +325,19 @@ def test_bench_counts_are_bounded_before_any_timing(tmp_path, capsys):
         assert one_line_error(r) and f"argument {flag}" in r.stderr and bound in r.stderr
 
 
+@pytest.mark.parametrize(
+    "args",
+    [("intercept", "kp_fig3", "--scheduler", ""), ("fig5", "--scheduler", " "),
+     ("fig5", "--scenarios", ""), ("bench", "--quick", "--scenarios", ""),
+     ("paper-figures", "--scenarios", "")],
+)  # fmt: skip
+def test_an_empty_scheduler_or_scenario_folder_is_refused(capsys, args):
+    """An empty ``--scheduler`` ran the runs locally and an empty ``--scenarios`` read
+    the bundled scenarios, both without a word: a value left out of a script."""
+    r = run(capsys, *args)
+    assert one_line_error(r) and "expected a value, got an empty text" in r.stderr, r.stderr
+
+
 def test_paper_figures_only_empty_is_refused(tmp_path, capsys):
     err = _refused(capsys, tmp_path / "out", "paper-figures", "--only", "",
                    "--scenarios", ROOT / "data/scenarios")  # fmt: skip
