@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import InputError, built_or_refused
 
 if TYPE_CHECKING:  # the traces are tables; the command line imports this table to parse
     import pandas as pd
@@ -108,17 +108,10 @@ def check_plug_ins(loop: AttitudeLoop, setups: Mapping[str, Any], estimators) ->
     here in one line (:class:`InputError`, exit status 2), where every run would fail
     with the same error. The package's own estimators are not built up front (their
     options models validate what they accept)."""
-    from kalman_vs_infoset.experiments.provenance import estimator_identity
+    from kalman_vs_infoset.experiments.provenance import plug_ins
 
-    for name in estimators:
-        if estimator_identity("attitude", name) is None:  # the package's own
-            continue
+    for name in plug_ins("attitude", estimators):
         for noise, setup in setups.items():
-            try:
-                loop.estimator(setup, noise, name)
-            except Exception as exc:
-                said = f"{type(exc).__name__}: {exc}".splitlines()[0]
-                raise InputError(
-                    f"estimator {name!r} cannot be built for the {loop.name} runs (options "
-                    f"[estimator_options.{name}], noise {noise}): {said}"
-                ) from None
+            what = f"estimator {name!r} cannot be built for the {loop.name} runs (options "
+            what += f"[estimator_options.{name}], noise {noise})"
+            built_or_refused(what, loop.estimator, setup, noise, name)

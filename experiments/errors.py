@@ -15,8 +15,11 @@ stop (:func:`stops_deferred`), and the waiting loop raises it within its poll pe
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any, TypeVar
+
+T = TypeVar("T")
 
 
 def runs_text(n: int) -> str:
@@ -35,6 +38,15 @@ class InputError(Exception):
 
     The message is one line naming the file, the field and what is allowed.
     """
+
+
+def built_or_refused(what: str, build: Callable[..., T], *args: Any) -> T:
+    """``build(*args)``, or :class:`InputError` of one line, ``what`` and the error's first
+    line: a plug-in built up front, whose error would otherwise fail every run."""
+    try:
+        return build(*args)
+    except Exception as exc:
+        raise InputError(f"{what}: {type(exc).__name__}: {exc}".splitlines()[0]) from None
 
 
 class Terminated(KeyboardInterrupt):

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from kalman_vs_infoset.experiments import usage
-from kalman_vs_infoset.experiments.errors import InputError
+from kalman_vs_infoset.experiments.errors import built_or_refused
 from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import run_limits
 from kalman_vs_infoset.experiments.progress import step_progress
@@ -204,20 +204,13 @@ def check_plug_ins(sc: InterceptScenario, estimators: Sequence[str]) -> None:
     differ (an attitude loop widens it), so a run can fail later. The package's own
     estimators are not built: their options models validate what they accept, and
     building them here would load their compiled kernels in this process."""
-    from kalman_vs_infoset.experiments.provenance import estimator_identity
+    from kalman_vs_infoset.experiments.provenance import plug_ins
 
-    for name in estimators:
-        if estimator_identity("intercept", name) is None:  # the package's own
-            continue
+    for name in plug_ins("intercept", estimators):
         for channel in sc.channels:
-            try:
-                build_estimator(name, sc, sc.channel_model(), channel)
-            except Exception as exc:
-                said = f"{type(exc).__name__}: {exc}".splitlines()[0]
-                raise InputError(
-                    f"estimator {name!r} cannot be built for {sc.name} (options "
-                    f"[estimator.{name}], {channel} channel): {said}"
-                ) from None
+            what = f"estimator {name!r} cannot be built for {sc.name} (options "
+            what += f"[estimator.{name}], {channel} channel)"
+            built_or_refused(what, build_estimator, name, sc, sc.channel_model(), channel)
 
 
 def miss_floor_m(sc: InterceptScenario) -> float:

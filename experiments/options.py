@@ -43,17 +43,23 @@ MAX_TRACED = 20
 SCENARIO_HELP = "a bundled scenario's name (`kvi scenarios` lists them) or a scenario TOML file"
 
 
-def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
+def _int_where(lo: int, hi: float, expected: str) -> Callable[[str], int]:
+    """An argparse ``type``: an integer in ``[lo, hi]``, else "expected ``expected``"."""
+
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = lo - 1
-        if value < lo:
-            raise argparse.ArgumentTypeError(f"expected a {what} integer, got {text!r}")
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
         return value
 
     return parse
+
+
+def _int_at_least(lo: int, what: str) -> Callable[[str], int]:
+    return _int_where(lo, float("inf"), f"a {what} integer")
 
 
 positive_int = _int_at_least(1, "positive")
@@ -69,17 +75,7 @@ def non_empty(text: str) -> str:
 
 def int_in(lo: int, hi: int) -> Callable[[str], int]:
     """An argparse ``type``: an integer in ``[lo, hi]``."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = lo - 1
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"expected an integer in [{lo}, {hi}], got {text!r}")
-        return value
-
-    return parse
+    return _int_where(lo, hi, f"an integer in [{lo}, {hi}]")
 
 
 def runs_int(text: str) -> int:

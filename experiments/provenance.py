@@ -139,6 +139,11 @@ def estimator_identity(problem: str, name: str) -> dict | None:
     }
 
 
+def plug_ins(problem: str, names) -> list[str]:
+    """The plug-in estimators (not the package's own) among ``names`` of ``problem``."""
+    return [n for n in names if estimator_identity(problem, n) is not None]
+
+
 def plugins_identity() -> dict[str, dict]:
     """:func:`estimator_identity` of every registered plug-in estimator, by
     ``problem/name`` (run on each Dask worker, so that a worker with another version of
