@@ -34,6 +34,8 @@ TRACE_SUFFIXES = ("-trace.parquet", "-trace-sets.parquet")
 #: the Parquet key marking a command's combined table (compare, fig5, adversaries: the
 #: rows of the runs' own tables, gathered; :func:`report.write_tables`)
 COMBINED_KEY = b"kalman_vs_infoset_combined"
+#: the Parquet key of the columns and their types as written (:func:`check_columns`)
+COLUMNS_KEY = b"kalman_vs_infoset_columns"
 
 
 def sidecar_path(table: Path) -> Path:
@@ -57,6 +59,7 @@ def write_table(
     marked as a command's combined table if ``combined`` (:data:`COMBINED_KEY`)."""
     table = pa.Table.from_pandas(df, preserve_index=False)
     kv = dict(table.schema.metadata or {})
+    kv[COLUMNS_KEY] = json.dumps(_columns(table.schema)).encode()
     if meta is not None:
         kv[METADATA_KEY] = json.dumps(meta, default=str).encode()
     if combined:
@@ -65,6 +68,35 @@ def write_table(
     # a combined table is derived from the runs' tables: not written in a read-only folder
     writer = derived_write if combined else atomic_write
     writer(Path(path), lambda tmp: pq.write_table(table, tmp))
+
+
+def _columns(schema: pa.Schema) -> list[list[str]]:
+    return [[f.name, str(f.type)] for f in schema]
+
+
+def check_columns(path: Path) -> None:
+    """Refuse (one line) a table whose columns are not those it was written with: a
+    file changed by another tool since the package wrote it (a number column turned to
+    text ended a resume in a traceback: the summary could not convert it, or the save
+    could not put it beside the new runs' numbers). A table without the record (an
+    earlier release's, or one rewritten by pandas, which drops it) is not checked."""
+    schema = pq.read_schema(path)
+    recorded = (schema.metadata or {}).get(COLUMNS_KEY)
+    if recorded is None:
+        return
+    try:
+        written = {name: kind for name, kind in json.loads(recorded)}
+    except (ValueError, TypeError):
+        written = {}
+    now = dict(_columns(schema))
+    for name in sorted(written.keys() | now.keys()):
+        if written.get(name) != now.get(name):
+            was, is_ = written.get(name, "none"), now.get(name, "none")
+            raise InputError(
+                f"{path}: its columns are not those this package wrote (column {name!r}: "
+                f"{was} written, {is_} now; the file was changed since); delete it to "
+                "compute its runs again"
+            )
 
 
 def read_metadata(path: str | Path) -> dict[str, Any]:

@@ -48,6 +48,7 @@ from kalman_vs_infoset.experiments.options import MAX_RUNS, MAX_SEED  # with the
 from kalman_vs_infoset.experiments.progress import progress_bar, steps_shown
 from kalman_vs_infoset.experiments.provenance import code_identity, estimator_identity
 from kalman_vs_infoset.experiments.results import (
+    check_columns,
     existing_sidecar,
     read_metadata,
     sidecar_path,
@@ -155,6 +156,7 @@ def _read_table(path: Path) -> dict[int, dict[str, Any]]:
             f"{path}: cannot read previous results ({type(exc).__name__}); delete {path} "
             "to compute its runs again"
         ) from None
+    check_columns(path)  # changed since written: one line, not a traceback later
     if not {"run", "status"} <= set(df.columns):
         raise InputError(
             f"{path}: not a results table (no 'run' and 'status' columns); use another "

@@ -404,6 +404,31 @@ def test_a_foreign_table_with_a_bad_run_column_is_refused(short, tmp_path, capsy
     assert pq.name in r.stderr and "'run'" in r.stderr
 
 
+def test_a_table_whose_column_types_were_changed_is_refused_on_resume(short, tmp_path, capsys):
+    """A results table changed by another tool so that a number column holds text (its
+    own description kept, as a pyarrow edit keeps it) ended a resume in a traceback: the
+    summary could not convert the text, or, with runs to add, the save could not put it
+    beside their numbers. The table records its columns' types when written; a resume
+    that finds others refuses it in one line, before any run."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    (path,) = out.glob("*.parquet")
+    assert run(capsys, *args).returncode == 0  # untouched: resumed
+    table = pq.read_table(path)
+    i = table.schema.get_field_index("miss_m")
+    edited = table.set_column(i, "miss_m", pa.array(["x"] * len(table)))
+    pq.write_table(edited.replace_schema_metadata(table.schema.metadata), path)
+    for runs in (1, 2):  # everything done, or a run to add
+        r = run(capsys, *args[:3], runs, *args[4:])
+        assert one_line_error(r), r.stderr
+        assert path.name in r.stderr and "'miss_m'" in r.stderr and "delete it" in r.stderr
+    assert len(pq.read_table(path)) == 1  # no run added
+
+
 def test_a_resume_refusal_names_the_changed_field(tmp_path, capsys):
     """A field that changes what a run gives is named with both values. (The
     description and the [experiment] table do not change a run: a resume takes them,
