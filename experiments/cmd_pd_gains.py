@@ -76,7 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _angles(text: str | None, table: dict[float, float]) -> list[tuple[str, float]]:
     if text is None:
         return [(f"{a:g}", a) for a in sorted(table)]
-    out = []
+    out: list[tuple[str, float]] = []
     for item in text.split(","):
         item = item.strip()
         try:
@@ -87,6 +87,8 @@ def _angles(text: str | None, table: dict[float, float]) -> list[tuple[str, floa
             ) from None
         if not 0 < value <= 90:
             raise InputError(f"--angles-deg: {item} must be in (0, 90] degrees")
+        if any(value == v for _, v in out):  # its row would be computed and tabled twice
+            raise InputError(f"--angles-deg: {item} given twice in {text!r}")
         out.append((item, value))
     if not out:
         raise InputError("--angles-deg: empty list")

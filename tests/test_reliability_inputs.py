@@ -359,6 +359,14 @@ def test_pd_gains_options_that_never_end_are_refused(tmp_path, capsys, option):
     assert option[0] in err
 
 
+@pytest.mark.parametrize("angles", ["10,10", "10,10.0", "5, 5"])
+def test_pd_gains_refuses_an_angle_given_twice(tmp_path, capsys, angles):
+    """An angle given twice was computed and tabled twice, where every other list of
+    the command line refuses a repeated item."""
+    err = _refused(capsys, tmp_path / "out", "pd-gains", "--angles-deg", angles)
+    assert "--angles-deg" in err and "given twice" in err
+
+
 @pytest.mark.parametrize(
     "args",
     [
