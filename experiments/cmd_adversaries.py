@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.experiments import options
-from kalman_vs_infoset.experiments.errors import InputError, runs_text, stat_text
+from kalman_vs_infoset.experiments.errors import InputError, runs_text, stats_text
 
 #: the runs use the compiled kernels (the command line announces their compilation)
 COMPILED_KERNELS = True
@@ -126,8 +126,8 @@ def table_markdown(result: dict[str, Any]) -> str:
         cells = [
             r["estimator"], r["rule"], str(r["runs"]),
             # "-" where no run gave a value (every run failed)
-            " / ".join(stat_text(f[k], ".1f") for k in ("mean", "p50", "p90")),
-            " / ".join(stat_text(m[k], ".2f") for k in ("mean", "p50", "p90")),
+            stats_text(f, ".1f", ("mean", "p50", "p90")),
+            stats_text(m, ".2f", ("mean", "p50", "p90")),
             "n/a" if np.isnan(at) else f"{at:.0%}",
             str(r["truth_outside"]), str(r["failures"]),
         ]  # fmt: skip

@@ -78,7 +78,7 @@ from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.intercept.costs import MissForecast
 from kalman_vs_infoset.estim.intercept.model import Bearing
 from kalman_vs_infoset.experiments.bench_process import first_run_compile, help_cpu_s, throughput
-from kalman_vs_infoset.experiments.options import MAX_RUNS, int_in, non_empty
+from kalman_vs_infoset.experiments.options import int_in, non_empty, runs_int
 
 # the scenarios, simulations and runner are imported where they are timed or run, not
 # to declare the arguments (kvi bench --help stays light)
@@ -122,7 +122,7 @@ def add_arguments(p) -> None:
     )
     p.add_argument(
         "--mc-runs",
-        type=int_in(1, MAX_RUNS),
+        type=runs_int,
         help=f"Monte Carlo runs for the throughput (default: {MC_RUNS}; --quick: {QUICK_MC_RUNS})",
     )
     p.add_argument(

@@ -33,6 +33,12 @@ def stat_text(value: float | None, fmt: str) -> str:
     return "-" if value is None or value != value else format(value, fmt)
 
 
+def stats_text(stats: dict[str, float | None], fmt: str, keys) -> str:
+    """The statistics ``keys`` of ``stats`` as a table cell, ``mean / p50 / ...``
+    (:func:`stat_text` each)."""
+    return " / ".join(stat_text(stats[k], fmt) for k in keys)
+
+
 class InputError(Exception):
     """Bad user input: a missing file, bad TOML, an unknown key, a value out of range.
 

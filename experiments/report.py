@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-from kalman_vs_infoset.experiments.errors import stat_text
+from kalman_vs_infoset.experiments.errors import stats_text
 from kalman_vs_infoset.experiments.files import derived_write
 from kalman_vs_infoset.experiments.stats import KEYS
 
@@ -30,8 +30,7 @@ def summary_markdown(rows: Sequence[dict[str, Any]], label_keys: Sequence[str]) 
         m, f = r["miss_m"], r["fuel_mps"]
         cells = [str(r[k]) for k in label_keys] + [str(r["runs"])]
         # "-" where no run gave a value (every run failed), as the attitude tables say
-        cells.append(" / ".join(stat_text(m[k], ".2f") for k in KEYS))
-        cells.append(" / ".join(stat_text(f[k], ".1f") for k in KEYS))
+        cells += [stats_text(m, ".2f", KEYS), stats_text(f, ".1f", KEYS)]
         cells += [str(r["truth_outside"]), str(r["empty_set"]), str(r.get("diverged", 0))]
         cells.append(str(r["failures"]))
         cells += [str(r.get("pointing_premise_failed_steps", "-"))] if premise else []

@@ -197,6 +197,13 @@ def toml_value(value: Any) -> str:
     return json.dumps(value)
 
 
+def _name_safe(text: str, keep: str) -> str:
+    """``text`` with every character but ASCII letters, digits and those of ``keep``
+    made ``_``: what a scenario's name allows (a letter such as "é" is one to
+    ``str.isalnum``, and was kept, then refused by the name check)."""
+    return "".join(c if (c.isascii() and c.isalnum()) or c in keep else "_" for c in text)
+
+
 def override_suffix(overrides: Sequence[str]) -> str:
     """``+key=value`` per override, file-name safe: appended to the scenario's name so
     that results of an overridden scenario never land in the original's files. Past
@@ -211,11 +218,7 @@ def override_suffix(overrides: Sequence[str]) -> str:
     if not nested:
         overrides = sorted(overrides, key=lambda o: (o.split("=", 1)[0].strip(), o))
     squeezed = (o.replace(" ", "") for o in overrides)
-    # ASCII only: the names allow ASCII letters and digits (an "é" was kept, then refused)
-    safe = [
-        "".join(c if (c.isascii() and c.isalnum()) or c in "._=-," else "_" for c in o)
-        for o in squeezed
-    ]
+    safe = [_name_safe(o, "._=-,") for o in squeezed]
     # a value's '..' (a text with an ellipsis) would make the name a path's parent
     safe = [o.replace("..", "_") for o in safe]
     full = "".join(f"+{o}" for o in safe)
@@ -233,9 +236,7 @@ def override_suffix(overrides: Sequence[str]) -> str:
 
 def default_name(path: str | Path) -> str:
     """The file's stem made result-file safe (an explicit ``name`` is checked instead)."""
-    stem = "".join(
-        c if (c.isascii() and c.isalnum()) or c in "._=+,-" else "_" for c in Path(path).stem
-    )
+    stem = _name_safe(Path(path).stem, "._=+,-")
     stem = stem.replace("..", "_").lstrip(".") or "scenario"
     return stem if SAFE_NAME.match(stem) else "scenario"
 
