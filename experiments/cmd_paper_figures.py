@@ -135,9 +135,15 @@ def _groups(only: str | None) -> list[str]:
     figures, drawers = _tables()
     if only is None:
         return list(drawers)
-    wanted = [w.strip() for w in only.split(",") if w.strip()]
+    parts = [w.strip() for w in only.split(",")]
+    wanted = [w for w in parts if w]
     if not wanted:  # would draw nothing and say so with exit status 0
         raise InputError(f"--only {only!r}: name at least one figure or group")
+    # as the other lists: an empty name or one given twice is a typo, not a request
+    twice = sorted({w for w in wanted if wanted.count(w) > 1})
+    if len(wanted) < len(parts) or twice:
+        what = f"{', '.join(twice)} given twice" if twice else "an empty name"
+        raise InputError(f"--only {only!r}: {what}")
     groups = []
     for w in wanted:
         if w in figures:

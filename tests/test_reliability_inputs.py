@@ -338,10 +338,22 @@ def test_an_empty_scheduler_or_scenario_folder_is_refused(capsys, args):
     assert one_line_error(r) and "expected a value, got an empty text" in r.stderr, r.stderr
 
 
-def test_paper_figures_only_empty_is_refused(tmp_path, capsys):
-    err = _refused(capsys, tmp_path / "out", "paper-figures", "--only", "",
+@pytest.mark.parametrize(
+    ("only", "said"),
+    [
+        ("", "at least one"),
+        ("kp_fig4,,lqr", "an empty name"),
+        ("lqr,kp_fig4,lqr", "lqr given twice"),
+    ],
+    ids=["empty", "empty-name", "twice"],
+)
+def test_paper_figures_only_empty_or_repeated_is_refused(tmp_path, capsys, only, said):
+    """An empty ``--only``, an empty name in it or a name given twice (drawn once before,
+    without a word, where the other lists refuse them) is refused before any figure."""
+    err = _refused(capsys, tmp_path / "out", "paper-figures", "--only", only,
                    "--scenarios", ROOT / "data/scenarios")  # fmt: skip
-    assert "--only" in err
+    assert "--only" in err and said in err
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize(
