@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from kalman_vs_infoset.experiments.errors import stat_text
 
 #: per problem, the metrics compared: (column of the per-run table, printed name, unit,
 #: format of the printed values)
@@ -236,18 +237,16 @@ def paired_markdown(paired: dict[str, Any], problem: str = "intercept") -> str:
                  f"share of larger {name}", "Wilcoxon p"]  # fmt: skip
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
-    def num(v, fmt: str) -> str:
-        return "-" if v is None else format(v, fmt)
-
     for r in paired["rows"]:
         runs = [_runs_text(r[c[0]]) for c in columns]
         cells = [str(r[k]) for k in labels]
         cells.append(runs[0] if len(set(runs)) == 1 else " / ".join(runs))
         for m, _, _, fmt in columns:
             s = r[m]
-            ci = "-" if s["ci"] is None else f"{s['ci'][0]:{fmt}}, {s['ci'][1]:{fmt}}"
-            cells.append(f"{num(s['mean'], fmt)} [{ci}] / {num(s['median'], fmt)}")
-            cells += [num(s["larger_share"], ".2f"), num(s["wilcoxon_p"], ".2g")]
+            # "-" for a statistic no run gave (None, or NaN), as the summaries print it
+            ci = "-" if s["ci"] is None else ", ".join(stat_text(v, fmt) for v in s["ci"])
+            cells.append(f"{stat_text(s['mean'], fmt)} [{ci}] / {stat_text(s['median'], fmt)}")
+            cells += [stat_text(s["larger_share"], ".2f"), stat_text(s["wilcoxon_p"], ".2g")]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

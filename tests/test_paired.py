@@ -180,6 +180,21 @@ def test_the_markdown_prints_every_row_and_dashes_for_missing():
     assert "| ekf | random | 1 | 0.50 [-] / 0.50 |" in text  # one pair: no interval
 
 
+def test_the_markdown_prints_a_dash_for_a_nan_statistic_as_the_summaries_do():
+    """A statistic that is NaN (no run gave it; e.g. a comparison read back from a JSON
+    written by another tool) prints as ``-``, as ``errors.stat_text`` prints it in the
+    summaries, not as ``nan``."""
+    nan = float("nan")
+    stats = {"runs": 3, "mean": nan, "ci": [nan, 1.0], "median": 0.5, "larger_share": nan,
+             "wilcoxon_p": nan}  # fmt: skip
+    row = {"estimator": "ekf", "noise": "random", "miss_m": stats}
+    text = paired_markdown(
+        {"reference": "infoset", "confidence": 0.95, "metrics": ["miss_m"], "rows": [row]}
+    )
+    assert "nan" not in text.lower()
+    assert "| ekf | random | 3 | - [-, 1.00] / 0.50 | - | - |" in text
+
+
 @settings(max_examples=40, deadline=None)
 # (up to 8 pairs: with ties, scipy's signed-rank test enumerates 2^n sign patterns)
 @given(st.lists(st.tuples(st.floats(0, 100), st.floats(0, 100)), min_size=2, max_size=8))
