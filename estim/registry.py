@@ -152,10 +152,23 @@ def declare(
     """
     if problem not in PROBLEMS:
         raise ValueError(f"problem must be one of {PROBLEMS}, got {problem!r}")
-    if not name or not name.replace("_", "").replace("-", "").isalnum():
+    if not isinstance(name, str) or not name.replace("_", "").replace("-", "").isalnum():
         raise ValueError(f"estimator names are letters, digits, '_' and '-'; got {name!r}")
     if not (isinstance(options, type) and issubclass(options, BaseModel)):
         raise TypeError("options must be a pydantic model class")
+    # checked here, not at the first run or listing: a rank of "5" broke every later
+    # listing (str < int), a factory of 3 failed every run, a str of trace fields
+    # became its letters
+    if factory is not None and not callable(factory):
+        raise TypeError(f"factory must be callable (options, setting), got {factory!r}")
+    if not isinstance(rank, int) or isinstance(rank, bool):
+        raise TypeError(f"rank must be an integer, got {rank!r}")
+    for what, names in (("roles", roles), ("trace_fields", trace_fields)):
+        if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+            raise TypeError(f"{what} must be a tuple of names (str), got {names!r}")
+    for what, text in (("doc", doc), ("label", label), ("colour", colour)):
+        if not isinstance(text, str):
+            raise TypeError(f"{what} must be a str, got {text!r}")
     if factory is None:
         if not callable(getattr(options, "build", None)):
             raise TypeError("give a factory, or an options model with build(setting)")
@@ -281,16 +294,28 @@ def registrations(problem: str) -> tuple[Registration, ...]:
     return tuple(sorted(regs, key=lambda r: r.rank))
 
 
+class UnknownEstimator(KeyError, ValueError):
+    """An estimator name that is not registered: a ``KeyError`` (a lookup that failed)
+    and a ``ValueError`` (a bad argument, as the library's other unknown names raise);
+    ``str()`` is the message itself, without ``KeyError``'s quotes."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
 def get(problem: str, name: str) -> Registration:
-    """The registration of ``name``; KeyError naming the allowed names otherwise
-    (ValueError for a problem not in :data:`PROBLEMS`)."""
+    """The registration of ``name``; :class:`UnknownEstimator` (a ``KeyError`` and a
+    ``ValueError``) naming the allowed names otherwise (ValueError for a problem not in
+    :data:`PROBLEMS`)."""
     _known(problem)
     _load()
     try:
         return _REGISTRY[(problem, name)]
-    except KeyError:
+    except (KeyError, TypeError):  # TypeError: an unhashable name (a list of names)
         allowed = ", ".join(names(problem))
-        raise KeyError(f"unknown {problem} estimator '{name}' (allowed: {allowed})") from None
+        raise UnknownEstimator(
+            f"unknown {problem} estimator {name!r} (allowed: {allowed})"
+        ) from None
 
 
 def reference(problem: str) -> Registration:

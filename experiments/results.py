@@ -118,7 +118,15 @@ def read_metadata(path: str | Path) -> dict[str, Any]:
     except (OSError, pa.ArrowInvalid) as exc:
         raise InputError(f"{path}: not a readable Parquet file ({type(exc).__name__})") from None
     raw = kv.get(METADATA_KEY)
-    return json.loads(raw) if raw else {}
+    if not raw:
+        return {}
+    try:
+        meta = json.loads(raw)
+    except ValueError:  # JSONDecodeError, or bytes that are not UTF-8
+        meta = None
+    if not isinstance(meta, dict):  # not what this package writes: another tool's edit
+        raise InputError(f"{path}: its description ({METADATA_KEY!r} metadata) is damaged")
+    return meta
 
 
 def _combined(path: Path) -> bool:
@@ -207,6 +215,8 @@ def load_results(folder: str | Path) -> pd.DataFrame:
         seen.update(int(r) for r in df["run"])
         frames.append(df)
         meta.setdefault(key, described)
-    out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if not frames:  # only summaries (or other tables): as wrong a place as an empty one
+        raise InputError(f"{folder}: no results table (one with 'run' and 'status' columns)")
+    out = pd.concat(frames, ignore_index=True)
     out.attrs["metadata"] = meta
     return out

@@ -116,17 +116,24 @@ def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
     for what, name in (("estimator", estimator), ("noise", noise)):
         if name is not None and not isinstance(name, str):  # e.g. a list of names
             raise TypeError(f"{what} must be one name (a str), got {name!r}")
+        # an empty name ran the scenario's default under no word (None asks for it)
+        if name is not None and not name.strip():
+            raise ValueError(f"{what} must name one (None: the scenario's), got {name!r}")
     estimator = estimator or sc.experiment.estimator
     _intercept.registration(estimator)  # the engagement's own checks, before any run
     return estimator, _intercept.check_noise(noise or sc.experiment.noise)
 
 
-def _index(value: Any, name: str, least: int) -> int:
-    """An integer argument (:func:`runner.is_integer`) >= ``least``."""
+def _index(value: Any, name: str, least: int, most: int = runner.MAX_RUNS) -> int:
+    """An integer argument (:func:`runner.is_integer`) in ``[least, most]``: by default at
+    most the command line's run count (a count of ``2**40`` ran for hours without a word,
+    or failed in a bare ``MemoryError``)."""
     if not runner.is_integer(value):
         raise TypeError(f"{name} must be an integer, got {value!r}")
     if value < least:
         raise ValueError(f"{name} must be at least {least}, got {value}")
+    if value > most:
+        raise ValueError(f"{name} must be at most {most}, got {value}")
     return int(value)
 
 
@@ -135,9 +142,7 @@ def _seed(value: Any, scenario_seed: int) -> int:
     (the results tables hold it as int64); named as the argument, not the CLI flag."""
     if value is None:
         return scenario_seed
-    seed = _index(value, "seed", 0)
-    if seed > runner.MAX_SEED:
-        raise ValueError(f"seed must be at most {runner.MAX_SEED}, got {seed}")
+    seed = _index(value, "seed", 0, runner.MAX_SEED)
     return seed
 
 
@@ -183,7 +188,7 @@ def run_engagement(
     """
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
-    run = _index(run, "run", 0)
+    run = _index(run, "run", 0, runner.MAX_RUNS - 1)  # the last index a command runs
     seed = _seed(seed, sc.experiment.seed)
     rng = np.random.default_rng(runner.run_seed(seed, run))
     return _intercept.run_engagement(sc, estimator, noise, rng)
@@ -246,8 +251,13 @@ def run_experiment(
     seed = _seed(seed, sc.experiment.seed)
     if executor is not None and not isinstance(executor, Executor):
         raise TypeError(f"executor must be a concurrent.futures.Executor, got {executor!r}")
+    if out is not None and not isinstance(out, str | Path):
+        raise TypeError(f"out must be a folder's path (str or pathlib.Path), got {out!r}")
     if out is not None and not str(out).strip():  # the command line refuses --out ''
         raise ValueError("out must name a folder (None: computed in memory)")
+    if scheduler is not None and not (isinstance(scheduler, str) and scheduler.strip()):
+        # an empty address ran the runs locally without a word
+        raise ValueError(f"scheduler must be a Dask scheduler's address, got {scheduler!r}")
     if out is not None:
         return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
@@ -314,7 +324,7 @@ def trace(
     seed = _seed(seed, sc.experiment.seed)
     if isinstance(runs, str) or not isinstance(runs, Sequence | np.ndarray):
         raise TypeError(f"runs must be a sequence of run indices (e.g. [0, 3]), got {runs!r}")
-    runs = [_index(j, "a run index", 0) for j in runs]
+    runs = [_index(j, "a run index", 0, runner.MAX_RUNS - 1) for j in runs]
     if not runs:  # (two frames without columns came back)
         raise ValueError("runs must name at least one run to trace")
     if len(set(runs)) < len(runs):  # each step came back twice
