@@ -22,6 +22,7 @@ from kalman_vs_infoset.estim.attitude.model import (
     AttitudeMeasurement,
     AttitudeModel,
     AttitudePrior,
+    RateComponent,
 )
 from kalman_vs_infoset.estim.attitude.sets import ellipsoid as ell
 from kalman_vs_infoset.estim.attitude.sets.ellipsoid import EllipsoidAttitudeEstimator
@@ -440,6 +441,42 @@ def test_inadmissible_measurement_is_a_reported_empty_status(name):
     assert new.contains(np.concatenate([far, x[0, 4:7]])[None])
     ok = est.update(est.predict(new, 0.01, step), AttitudeMeasurement(far, x[:, 4:7]))
     assert ok.status == Status.OK and int(ok.n_empty[0]) == 1
+
+
+@pytest.mark.parametrize("name", ["box", *sorted(ESTIMATORS)])
+def test_a_contradiction_far_away_restarts_as_tight_as_the_measurement(name):
+    """A measurement 90 deg and 1 rad/s from the set (inadmissible: it contradicts the
+    model) restarts the run from the measurement's box about the measured attitude: a
+    set as narrow as a first measurement's. About the old reference the BCH enclosure of
+    so distant a measurement restarted at 2.7 rad a side; the next prediction was the
+    whole space, and extremes came back infinite with NaN arguments."""
+    est = BoxAttitudeEstimator(MODEL) if name == "box" else ESTIMATORS[name](MODEL)
+    x = np.array([[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])
+    belief = est.initial(AttitudePrior(AttitudeMeasurement(x[:, 0:4], x[:, 4:7])))
+    far_q = Rotation.from_rotvec([0.0, 0.0, np.pi / 2]).as_quat()[None]
+    far_w = np.array([[1.0, 1.0, 1.0]])
+    step = AttitudeControl.zero(1)
+    new = est.update(est.predict(belief, 0.1, step), AttitudeMeasurement(far_q, far_w))
+    assert new.status == Status.CONTRADICTION and int(new.n_empty[0]) == 1
+    first = est.initial(AttitudePrior(AttitudeMeasurement(far_q, far_w)))
+    # as narrow as the measurement's own box (the first measurement's set), to rounding
+    bound, own = new.attitude_bound_rad()[0], first.attitude_bound_rad()[0]
+    assert bound <= own * (1 + 1e-9) + 1e-15 and bound < 10 * MODEL.meas_angle_bound_rad.max()
+    # the data's state inside; then a prediction is bounded and holds its motion
+    assert new.contains(np.concatenate([far_q[0], far_w[0]])[None])
+    body = RigidBody(MODEL.inertia_kgm2)
+    truth = propagate(body, AttitudeState(far_q[0], far_w[0], np.zeros(3)), np.zeros(3), 0.1)
+    after = est.predict(new, 0.1, step)
+    assert np.all(np.isfinite(after.attitude_bound_rad()))
+    assert after.contains(truth.as_vector()[None, 0:7])
+    # and as narrow as the first measurement's set predicted alike (its rate's extremes)
+    widths = []
+    for b in (after, est.predict(first, 0.1, step)):
+        rate = b.extremes(RateComponent(0))
+        lo, hi = np.ravel(rate.min_value)[0], np.ravel(rate.max_value)[0]
+        assert np.isfinite(lo) and np.isfinite(hi) and lo <= truth.w_radps[0] <= hi
+        widths.append(hi - lo)
+    assert widths[0] <= widths[1] * (1 + 1e-6)
 
 
 # -- tightness against the box --------------------------------------------------------

@@ -449,31 +449,44 @@ class BoxAttitudeEstimator(Estimator[BoxAttitudeBelief, AttitudePrior]):
         q_ref = qmul(belief.q_ref, qexp(c))
         return _with(belief, q_ref=q_ref, e_c=ec, e_r=er, w_c=w1c, w_r=w1r)
 
+    def meet(self, belief: BoxAttitudeBelief, measurement: AttitudeMeasurement):
+        """``(q_ref, lo, hi, empty)``: the box met with the measurement's box, before the
+        re-centring, as ``[e, w]`` bounds (6 a run) about ``q_ref``. A lost run (its box
+        the whole space) and a run whose intersection is empty (the data contradict the
+        model) restart from the measurement's box about the measured attitude itself:
+        about the old reference, a measurement far from it is enclosed by BCH terms
+        that grow with the distance (a contradiction 90 deg away restarted at 2.7 rad a
+        side, and the next prediction was the whole space). The set estimators meet the
+        box the same way (:func:`..sets.maps.meet_measurement`)."""
+        lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
+        q_ref = np.where(lost[:, None], measurement.quat, belief.q_ref)
+        e_c = np.where(lost[:, None], 0.0, belief.e_c)
+        mec, mer, mwc, mwr = self.measurement_box(q_ref, measurement)
+        own = np.concatenate([e_c - belief.e_r, belief.w_c - belief.w_r], -1)
+        lo = np.maximum(own, np.concatenate([mec - mer, mwc - mwr], -1))
+        own = np.concatenate([e_c + belief.e_r, belief.w_c + belief.w_r], -1)
+        hi = np.minimum(own, np.concatenate([mec + mer, mwc + mwr], -1))
+        empty = np.any(lo > hi, axis=-1)
+        if np.any(empty):  # restart about the measured attitude (the lost runs already are)
+            q_ref = np.where(empty[:, None], measurement.quat, q_ref)
+            mec, mer, mwc, mwr = self.measurement_box(q_ref, measurement)
+            lo = np.where(empty[:, None], np.concatenate([mec - mer, mwc - mwr], -1), lo)
+            hi = np.where(empty[:, None], np.concatenate([mec + mer, mwc + mwr], -1), hi)
+        return q_ref, lo, hi, empty
+
     def update(self, belief: BoxAttitudeBelief, measurement: Any) -> BoxAttitudeBelief:
         """Intersect with the measurement's box; empty -> restart from it (status counted)."""
         if not isinstance(measurement, AttitudeMeasurement):
             raise TypeError("measurement must be an AttitudeMeasurement")
         check_runs(belief.runs, measurement.runs, "measurement")
-        lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
-        if np.any(lost):  # "any state": re-reference at the measurement
-            q_ref = np.where(lost[:, None], measurement.quat, belief.q_ref)
-            belief = _with(belief, q_ref=q_ref, e_c=np.where(lost[:, None], 0.0, belief.e_c))
-        mec, mer, mwc, mwr = self.measurement_box(belief.q_ref, measurement)
-        e_lo = np.maximum(belief.e_c - belief.e_r, mec - mer)
-        e_hi = np.minimum(belief.e_c + belief.e_r, mec + mer)
-        w_lo = np.maximum(belief.w_c - belief.w_r, mwc - mwr)
-        w_hi = np.minimum(belief.w_c + belief.w_r, mwc + mwr)
-        empty = np.any(e_lo > e_hi, axis=-1) | np.any(w_lo > w_hi, axis=-1)
-        e_lo = np.where(empty[:, None], mec - mer, e_lo)
-        e_hi = np.where(empty[:, None], mec + mer, e_hi)
-        w_lo = np.where(empty[:, None], mwc - mwr, w_lo)
-        w_hi = np.where(empty[:, None], mwc + mwr, w_hi)
+        q_ref, lo, hi, empty = self.meet(belief, measurement)
         new = _with(
             belief,
-            e_c=0.5 * (e_lo + e_hi),
-            e_r=0.5 * (e_hi - e_lo),
-            w_c=0.5 * (w_lo + w_hi),
-            w_r=0.5 * (w_hi - w_lo),
+            q_ref=q_ref,
+            e_c=0.5 * (lo[:, :3] + hi[:, :3]),
+            e_r=0.5 * (hi[:, :3] - lo[:, :3]),
+            w_c=0.5 * (lo[:, 3:] + hi[:, 3:]),
+            w_r=0.5 * (hi[:, 3:] - lo[:, 3:]),
             n_empty=belief.n_empty + empty,
             last_empty=empty,
         )

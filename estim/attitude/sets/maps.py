@@ -137,18 +137,8 @@ def _inflated(A, b, rho, hc, hr, abs_r: float) -> FloatArray:
 
 
 def meet_measurement(box: BoxAttitudeEstimator, belief: BoxAttitudeBelief, meas):
-    """``(lo, hi, empty)`` of the box's update before it re-centres (as
-    :meth:`BoxAttitudeEstimator.update`: lost runs re-referenced at the measurement,
-    an empty intersection replaced by the measurement box)."""
-    lost = ~np.all(np.isfinite(belief.e_r), axis=-1)
-    q_ref = np.where(lost[:, None], meas.quat, belief.q_ref)
-    e_c = np.where(lost[:, None], 0.0, belief.e_c)
-    mec, mer, mwc, mwr = box.measurement_box(q_ref, meas)
-    lo = np.maximum(np.concatenate([e_c - belief.e_r, belief.w_c - belief.w_r], -1),
-                    np.concatenate([mec - mer, mwc - mwr], -1))  # fmt: skip
-    hi = np.minimum(np.concatenate([e_c + belief.e_r, belief.w_c + belief.w_r], -1),
-                    np.concatenate([mec + mer, mwc + mwr], -1))  # fmt: skip
-    empty = np.any(lo > hi, axis=-1)
-    mlo = np.concatenate([mec - mer, mwc - mwr], -1)
-    mhi = np.concatenate([mec + mer, mwc + mwr], -1)
-    return np.where(empty[:, None], mlo, lo), np.where(empty[:, None], mhi, hi), empty
+    """``(lo, hi, empty)`` of the box's update before it re-centres
+    (:meth:`BoxAttitudeEstimator.meet`: lost and contradicted runs restarted from the
+    measurement's box about the measured attitude, the frame the box's update takes)."""
+    _, lo, hi, empty = box.meet(belief, meas)
+    return lo, hi, empty
