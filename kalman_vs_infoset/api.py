@@ -65,10 +65,27 @@ def scenarios() -> list[str]:
 
 
 def _sets(tables: Any) -> list[str]:
-    """Keyword tables of overrides as ``--set`` items (``TABLE.KEY=<TOML value>``)."""
-    return [
-        f"{key}={_scenario.toml_value(v)}" for key, v in _scenario.dotted_fields(tables).items()
-    ]
+    """Keyword tables of overrides as ``--set`` items (``TABLE.KEY=<TOML value>``); a
+    value a scenario file cannot hold (``None``, a path, an object) is a ``TypeError``
+    naming its key (``None`` was refused as the command line's ``'null'``)."""
+    items = _scenario.dotted_fields(tables)
+    for key, value in items.items():
+        if not _toml_like(value):
+            raise TypeError(
+                f"{key}={value!r}: a scenario value is a number, a bool, a str or a list "
+                "of them"
+            )
+    return [f"{key}={_scenario.toml_value(v)}" for key, v in items.items()]
+
+
+def _toml_like(value: Any) -> bool:
+    """Whether ``value`` is what a scenario file holds: numbers, booleans, strings and
+    lists of them (numpy scalars and arrays as their lists, a tuple as a list)."""
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, list | tuple):
+        return all(_toml_like(v) for v in value)
+    return isinstance(value, bool | int | float | str)
 
 
 def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenario:

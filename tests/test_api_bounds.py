@@ -142,3 +142,17 @@ def test_the_package_s_own_registrations_pass_the_checks():
     registry loads them all on the first listing)."""
     assert {"infoset", "ekf", "ukf", "box", "ellipsoid", "zonotope"} <= set(api.estimators())
     assert {"box", "ukf", "perfect"} <= set(api.estimators("attitude"))
+
+
+@pytest.mark.parametrize("value", [None, {1, 2}, object()], ids=["none", "set", "object"])
+def test_an_override_a_scenario_cannot_hold_is_named_without_the_command_line(value):
+    """``model={"nu_mps2": None}`` was refused as the command line's ``--set
+    'model.nu_mps2=null'``; a path or an object raised ``json``'s "not JSON
+    serializable". A value a scenario file cannot hold is a ``TypeError`` naming its key."""
+    for call in (
+        lambda: api.load_scenario("kp_fig3", model={"nu_mps2": value}),
+        lambda: api.run_attitude("smallsat_rw", tables={"noise": {"meas_angle_deg": value}}),
+    ):
+        with pytest.raises(TypeError, match="a scenario value is a number") as err:
+            call()
+        assert "--set" not in str(err.value)
