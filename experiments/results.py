@@ -183,6 +183,8 @@ def load_results(folder: str | Path) -> pd.DataFrame:
     >>> len(df), next(iter(df.attrs["metadata"].values()))["scenario"]["name"]
     (2, 'kp_fig3')
     """
+    if not isinstance(folder, str | Path):  # None raised os.fspath's TypeError
+        raise TypeError(f"folder must be a results folder's or table's path, got {folder!r}")
     folder = Path(folder)
     if folder.is_file():
         files = [folder]

@@ -72,8 +72,7 @@ def _sets(tables: Any) -> list[str]:
     for key, value in items.items():
         if not _toml_like(value):
             raise TypeError(
-                f"{key}={value!r}: a scenario value is a number, a bool, a str or a list "
-                "of them"
+                f"{key}={value!r}: a scenario value is a number, a bool, a str or a list of them"
             )
     return [f"{key}={_scenario.toml_value(v)}" for key, v in items.items()]
 
@@ -119,6 +118,8 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenar
     >>> sc.name
     'kp_fig5+experiment.runs=4+model.nu_mps2=0.01'
     """
+    if not isinstance(name_or_path, str | Path):  # None raised os.fspath's TypeError
+        raise TypeError(f"name_or_path must be a scenario's name or path, got {name_or_path!r}")
     return _scenario.load_scenario(name_or_path, _sets(overrides), via="keyword overrides")
 
 

@@ -89,6 +89,8 @@ def run_attitude(
     from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
     runs = _index(runs, "runs", 1)
+    if tables is not None and not isinstance(tables, Mapping):  # "'list' object is not a mapping"
+        raise TypeError(f"tables must map table names to their fields, got {tables!r}")
     seed = _seed(seed, 0)
     if estimator is not None and not isinstance(estimator, str):  # e.g. a list
         raise TypeError(f"estimator must be one name (a str), got {estimator!r}")

@@ -156,3 +156,15 @@ def test_an_override_a_scenario_cannot_hold_is_named_without_the_command_line(va
         with pytest.raises(TypeError, match="a scenario value is a number") as err:
             call()
         assert "--set" not in str(err.value)
+
+
+def test_arguments_of_the_wrong_kind_are_named():
+    """``load_scenario(None)`` and ``load_results(None)`` raised os.fspath's "expected
+    str, bytes or os.PathLike object", ``run_attitude(tables=[1])`` "'list' object is not
+    a mapping": neither named the argument."""
+    with pytest.raises(TypeError, match="name_or_path must be a scenario's name or path"):
+        api.load_scenario(None)
+    with pytest.raises(TypeError, match="folder must be a results folder's or table's path"):
+        api.load_results(None)
+    with pytest.raises(TypeError, match="tables must map table names to their fields"):
+        api.run_attitude("smallsat_rw", tables=[1])
