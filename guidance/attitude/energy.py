@@ -119,7 +119,11 @@ def given_system(
 class EnergySavingConfig:
     """Parameters of the energy-saving law (seed 000, section 4; docs/models.md §2.1).
 
-    Covariances are given by their diagonals (radians, rad/s, N m).
+    Covariances are given by their diagonals (radians, rad/s, N m), non-negative.
+    In each of the six components ``state_var`` (``K_X``) or ``meas_var`` (``K_eps``)
+    must be positive: the gain (2.4) inverts ``S = A K_X A^T + C K_xi C^T +
+    (B-D) K_U (B-D)^T + K_eps``, and a component zero in both leaves ``S`` singular
+    (the control term has rank 3 and ``C_i`` may be singular, so neither can stand in).
     """
 
     dt_s: float = 0.1
@@ -143,6 +147,19 @@ class EnergySavingConfig:
             v = np.asarray(getattr(self, name), dtype=float)
             if v.shape != (6,) or np.any(v < 0) or not np.all(np.isfinite(v)):
                 raise ValueError(f"{name} must be six non-negative numbers")
+        # S >= A K_X A^T + K_eps, A = [[E, dt E], [0, G]], G = E + dt J^-1 [K x]. With a
+        # positive K_X or K_eps in each component, a null vector of that sum has a zero
+        # angle part, and a rate part zero where K_eps > 0 and zero under G^T where
+        # K_X > 0: none but 0 while dt |J^-1 K| << 1 (G near E), i.e. whenever the
+        # discrete model resolves the motion. A component zero in both is left to the
+        # control term (rank 3) and C_i K_xi C_i^T (C_i singular where f2_i = 1 + dt f1_i)
+        both_zero = (np.asarray(self.state_var) == 0) & (np.asarray(self.meas_var) == 0)
+        if both_zero.any():
+            which = np.flatnonzero(both_zero).tolist()
+            raise ValueError(
+                "state_var or meas_var must be positive in each component (else the gain's "
+                f"matrix is singular); both are zero in components {which}"
+            )
         if not (self.control_var0_N2m2 > 0 and np.isfinite(self.control_var0_N2m2)):
             raise ValueError("control_var0_N2m2 must be positive and finite")
         u0 = np.asarray(self.u0_Nm, dtype=float)

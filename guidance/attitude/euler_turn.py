@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PPoly
 from scipy.spatial.transform import Rotation
@@ -101,6 +102,8 @@ class EulerTurnTracker:
 
     ``error0_rotvec_rad`` is the initial attitude error (body relative to target) as a
     rotation vector; the Euler axis is its direction and ``theta0`` its norm.
+    ``inertia_kgm2`` must be a finite symmetric positive definite 3x3 matrix, as for
+    :class:`~kalman_vs_infoset.guidance.attitude.plant.RigidBody` (ValueError otherwise).
     """
 
     inertia_kgm2: NDArray[np.float64]
@@ -121,7 +124,9 @@ class EulerTurnTracker:
         gains = (self.natural_freq_radps, self.damping)
         if not (min(gains) > 0 and np.isfinite(gains).all()):
             raise ValueError("natural_freq_radps and damping must be positive and finite")
-        object.__setattr__(self, "inertia_kgm2", np.array(self.inertia_kgm2, dtype=float))
+        # RigidBody's check: a negative or zero J flips or zeroes the torque, NaN gives NaN
+        inertia = RigidBody(self.inertia_kgm2).inertia_kgm2
+        object.__setattr__(self, "inertia_kgm2", inertia)
         object.__setattr__(self, "axis", phi0 / theta0)
         prof = EulerAxisProfile(theta0, self.duration_s, self.accel_time_s, self.jerk_time_s)
         object.__setattr__(self, "profile", prof)

@@ -27,7 +27,7 @@ from typing import Literal
 
 import numpy as np
 from kalman_vs_infoset.estim.base import Belief
-from kalman_vs_infoset.guidance.attitude.plant import RigidBody
+from kalman_vs_infoset.guidance.attitude.plant import RigidBody, positive_finite
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics.rotations import cross, error_quaternion
@@ -60,7 +60,7 @@ class QuaternionPD:
     body : RigidBody
         Inertia ``J`` used both as ``K_w = K_q`` and in the compensation term.
     k_q, k_w : float
-        Gains (1/s^2, 1/s).
+        Gains (1/s^2, 1/s), positive finite numbers.
     quaternion_term : {"vector", "twice"}
         Whether ``k_q`` multiplies ``qbar`` or ``2 qbar`` (module docstring).
     q_target : array (4,)
@@ -74,8 +74,8 @@ class QuaternionPD:
     q_target: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
-        if not (self.k_q > 0 and self.k_w > 0 and np.isfinite([self.k_q, self.k_w]).all()):
-            raise ValueError(f"k_q and k_w must be positive and finite, got {self.k_q}, {self.k_w}")
+        positive_finite(self.k_q, "k_q")
+        positive_finite(self.k_w, "k_w")
         term_scale(self.quaternion_term)
         qt = np.asarray(self.q_target, dtype=float)
         if qt.shape != (4,) or not np.isclose(np.linalg.norm(qt), 1.0):
@@ -111,9 +111,16 @@ def regime_boundaries(
     ``phi20 = L_max^2 / (2 J M_max) + 2 arcsin(k_w L_max / (k_q J))`` (momentum limit
     reached, eq. (23)). With ``"twice"`` ``k_q`` stands for ``2 k_q``. An arcsin
     argument above 1 means the limit is never reached: ``inf``.
+
+    The gains, the inertia and both limits must be positive finite numbers
+    (ValueError otherwise): a zero divides, a negative one gives a negative angle,
+    and a limit that does not exist has no boundary to give.
     """
-    kq = k_q * term_scale(quaternion_term)
-    j = inertia_kgm2
+    kq = positive_finite(k_q, "k_q") * term_scale(quaternion_term)
+    k_w = positive_finite(k_w, "k_w")
+    j = positive_finite(inertia_kgm2, "inertia_kgm2")
+    torque_max_Nm = positive_finite(torque_max_Nm, "torque_max_Nm")
+    momentum_max_Nms = positive_finite(momentum_max_Nms, "momentum_max_Nms")
 
     def two_asin(arg: float) -> float:
         return 2.0 * float(np.arcsin(arg)) if arg <= 1.0 else np.inf
@@ -156,10 +163,37 @@ def settle_time(
 ) -> float:
     """First sample time from which ``angle < tol`` and ``rate < tol`` hold to the end.
 
-    Returns ``inf`` when the criterion fails at the last sample (not settled).
+    Parameters
+    ----------
+    time_s : array_like (n,)
+        Sample times (finite), n >= 1.
+    angle_deg, rate_degps : array_like (n,)
+        Error angle and rate at those samples. NaN is refused (ValueError): a NaN
+        compares false with the tolerance and would read as settled.
+    angle_tol_deg, rate_tol_degps : float
+        The tolerances, positive.
+
+    Returns
+    -------
+    float
+        ``inf`` when the criterion fails at the last sample (not settled).
     """
     t = np.asarray(time_s, dtype=float)
-    bad = (np.asarray(angle_deg) >= angle_tol_deg) | (np.asarray(rate_degps) >= rate_tol_degps)
+    angle = np.asarray(angle_deg, dtype=float)
+    rate = np.asarray(rate_degps, dtype=float)
+    if t.ndim != 1 or t.size == 0:
+        raise ValueError(f"time_s must be a non-empty 1-D array, got shape {t.shape}")
+    for name, arr in (("angle_deg", angle), ("rate_degps", rate)):
+        if arr.shape != t.shape:
+            raise ValueError(f"{name} must have the shape of time_s {t.shape}, got {arr.shape}")
+        if np.isnan(arr).any():
+            raise ValueError(f"{name} must not contain NaN (a NaN sample is not a settled one)")
+    if not np.isfinite(t).all():
+        raise ValueError("time_s must be finite")
+    for name, tol in (("angle_tol_deg", angle_tol_deg), ("rate_tol_degps", rate_tol_degps)):
+        if not tol > 0:  # inf is allowed (no criterion on that quantity); NaN is not
+            raise ValueError(f"{name} must be positive, got {tol!r}")
+    bad = (angle >= angle_tol_deg) | (rate >= rate_tol_degps)
     if bad[-1]:
         return np.inf
     idx = np.flatnonzero(bad)
@@ -169,10 +203,23 @@ def settle_time(
 def rest_to_rest_initial_state(
     axis: ArrayLike, angle_deg: float, q_target: ArrayLike = (0.0, 0.0, 0.0, 1.0)
 ) -> FloatArray:
-    """Plant state at rest turned by ``angle_deg`` about ``axis`` from the target (eq. (11))."""
+    """Plant state at rest turned by ``angle_deg`` about ``axis`` from the target (eq. (11)).
+
+    ``axis`` must be a non-zero 3-vector of finite norm (it is normalised) and
+    ``angle_deg`` a finite number (ValueError otherwise).
+    """
     from scipy.spatial.transform import Rotation  # here: the gain study's options stay light
 
     axis = np.asarray(axis, dtype=float)
+    # checked here: scipy would report a zero or NaN axis as "zero norm quaternions"
+    norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
+    if not (norm > 0 and np.isfinite(norm)):
+        raise ValueError(f"axis must be a non-zero 3-vector of finite norm, got {axis.tolist()}")
+    angle = np.asarray(angle_deg)
+    if angle.ndim != 0 or angle.dtype.kind not in "iuf":
+        raise TypeError(f"angle_deg must be a number, got {angle_deg!r}")
+    if not np.isfinite(angle):
+        raise ValueError(f"angle_deg must be finite, got {angle_deg!r}")
     rot = Rotation.from_quat(q_target) * Rotation.from_rotvec(
         np.radians(angle_deg) * axis / np.linalg.norm(axis)
     )

@@ -39,6 +39,37 @@ def _checked(a: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.floa
     return readonly(arr)
 
 
+def positive_finite(value: object, name: str) -> float:
+    """``value`` as a float, refused unless it is a positive finite real number.
+
+    Parameters
+    ----------
+    value : object
+        The number to check (a Python or numpy real scalar, or a 0-d array).
+    name : str
+        The argument's name, as the messages say it.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    TypeError
+        ``value`` is not a real number (a string, None, a bool, an array).
+    ValueError
+        ``value`` is zero, negative, infinite or NaN.
+    """
+    arr = np.asarray(value)
+    # "1" or True would pass float() and compare as numbers: a wrong type, said as one
+    if arr.ndim != 0 or arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must be a positive finite number, got {value!r}")
+    number = float(arr)
+    if not (number > 0 and np.isfinite(number)):
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return number
+
+
 @dataclass(frozen=True)
 class RigidBody:
     """Rigid-body inertia (kg m^2 = N m s^2), symmetric positive definite."""
@@ -122,11 +153,12 @@ def propagate(
     """Hold ``torque_Nm`` (and ``ext_torque_Nm``) constant over ``dt_s``; return the new state.
 
     Integrates with ``solve_ivp`` (DOP853); the quaternion is renormalised at the end.
+    ``dt_s`` must be a positive finite number (ValueError otherwise).
     """
     from scipy.integrate import solve_ivp
 
-    if not dt_s > 0:
-        raise ValueError(f"dt_s must be positive, got {dt_s}")
+    # an infinite step never ends: solve_ivp keeps stepping towards t = inf
+    dt_s = positive_finite(dt_s, "dt_s")
     m_u = np.asarray(torque_Nm, dtype=float)
     m_ext = np.asarray(ext_torque_Nm, dtype=float)
     if not (np.isfinite(m_u).all() and np.isfinite(m_ext).all()):

@@ -23,12 +23,18 @@ clipping the torque to ``(h - L_max)/T <= M_u <= (h + L_max)/T``.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
-from kalman_vs_infoset.guidance.attitude.plant import LoopDiverged, RigidBody, advance_checked
+from kalman_vs_infoset.guidance.attitude.plant import (
+    LoopDiverged,
+    RigidBody,
+    advance_checked,
+    positive_finite,
+)
 from numpy.typing import ArrayLike, NDArray
 
 from kalman_vs_infoset.numerics import integrate
@@ -138,9 +144,17 @@ def simulate_closed_loop(
     commanded torque passes through :meth:`ReactionWheels.limit` and is held while
     ``substeps`` RK4 steps integrate the plant. ``ext_torque(t, x, torque)`` gives an
     external (disturbance) torque held over the same period.
+
+    ``duration_s`` and ``control_period_s`` must be positive finite numbers and
+    ``substeps`` an integer >= 1 (ValueError, or TypeError for a wrong type).
     """
-    if not control_period_s > 0 or not duration_s > 0 or substeps < 1:
-        raise ValueError("duration_s, control_period_s must be positive and substeps >= 1")
+    # an infinite duration has no step count, an infinite period no time axis
+    duration_s = positive_finite(duration_s, "duration_s")
+    control_period_s = positive_finite(control_period_s, "control_period_s")
+    if isinstance(substeps, bool) or not isinstance(substeps, numbers.Integral):
+        raise TypeError(f"substeps must be an integer >= 1, got {substeps!r}")
+    if substeps < 1:
+        raise ValueError(f"substeps must be an integer >= 1, got {substeps!r}")
     n = int(round(duration_s / control_period_s))
     x = np.array(x0, dtype=float)
     dt = control_period_s / substeps
