@@ -22,6 +22,7 @@ kernels' outputs are built without either (``ConvexPolygons._make``: the hot pat
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -43,6 +44,28 @@ def _no_nan(name: str, values: FloatArray) -> FloatArray:
     if np.isnan(values).any():
         raise ValueError(f"{name} must not be NaN")
     return values
+
+
+#: The largest ``max_vertices`` of :meth:`ConvexPolygons.simplify`: the kernel's int64
+#: (2**70 failed in numba's typing; any cap above a polygon's count is no cap anyway).
+MAX_VERTICES_CAP = int(np.iinfo(np.int64).max)
+
+
+def _vertex_cap(value: object) -> int:
+    """``max_vertices`` as an int in ``[3, MAX_VERTICES_CAP]``: an integer, or a float
+    of integral value (``3.0``); ``ValueError`` for anything else (a bool, ``None``,
+    NaN, infinity, ``3.5``, a string)."""
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)):
+        cap = int(value)
+    elif isinstance(value, (float, np.floating)) and float(value).is_integer():
+        cap = int(value)
+    else:
+        cap = None
+    if cap is None or not 3 <= cap <= MAX_VERTICES_CAP:
+        raise ValueError(
+            f"max_vertices must be an integer >= 3 and at most 2**63 - 1, got {value!r}"
+        )
+    return cap
 
 
 def _offsets(counts: IntArray) -> IntArray:
@@ -251,7 +274,10 @@ class ConvexPolygons:
 
     def polygon(self, i: int) -> FloatArray:
         """The vertices of polygon ``i`` (negative ``i`` counts from the end, as for a
-        list; ``IndexError`` outside ``range(-n, n)``)."""
+        list; ``IndexError`` outside ``range(-n, n)``, ``TypeError`` for an index that
+        is not an integer: ``1.5`` and ``True`` quietly read polygon 1)."""
+        if not isinstance(i, numbers.Integral) or isinstance(i, (bool, np.bool_)):
+            raise TypeError(f"polygon index must be an integer, got {i!r}")
         j = int(i)
         if not -self.n <= j < self.n:
             raise IndexError(f"polygon index {i} out of range for {self.n} polygons")
@@ -382,25 +408,40 @@ class ConvexPolygons:
         ``rel_area_tol`` times the polygon's area -- or unconditionally while the
         polygon has more than ``max_vertices`` vertices (greedy, cheapest edge
         first). The added area is invariant under the affine prediction maps, so
-        the tolerance is too. ``ValueError`` for ``max_vertices`` under 3 or a
-        negative or non-finite ``rel_area_tol``.
+        the tolerance is too. ``ValueError`` for a ``max_vertices`` that is not an
+        integer from 3 to ``2**63 - 1`` (:data:`MAX_VERTICES_CAP`) or a negative or
+        non-finite ``rel_area_tol``.
         """
         if not (np.isfinite(rel_area_tol) and rel_area_tol >= 0):
             raise ValueError(f"rel_area_tol must be finite and >= 0, got {rel_area_tol!r}")
-        if int(max_vertices) != max_vertices or max_vertices < 3:
-            raise ValueError(f"max_vertices must be an integer >= 3, got {max_vertices!r}")
+        cap = _vertex_cap(max_vertices)
         if len(self.xy) == 0:
             return self
-        xy, off = _k.simplify(self.xy, self.offsets, float(rel_area_tol), int(max_vertices))
+        xy, off = _k.simplify(self.xy, self.offsets, float(rel_area_tol), cap)
         return ConvexPolygons._make(xy, off)
 
     def select(self, mask_or_index: ArrayLike) -> ConvexPolygons:
-        """Keep the polygons chosen by a boolean mask or an index array (order kept)."""
+        """Keep the polygons chosen by a boolean mask or an index array (order kept).
+
+        An empty sequence (``[]``, which numpy reads as floats) selects no polygons;
+        ``ValueError`` for an index that is not one-dimensional, ``TypeError`` for one
+        that is neither boolean nor integer, ``IndexError`` for a mask of another length
+        or an index outside ``range(-n, n)`` (numpy's)."""
         idx = np.asarray(mask_or_index)
+        if idx.ndim != 1:
+            raise ValueError(
+                f"mask_or_index must be a 1-D boolean mask or index array, got shape {idx.shape}"
+            )
         if idx.dtype == bool:
             if idx.shape != (self.n,):  # (a shorter mask kept its first polygons)
                 raise IndexError(f"a mask of {idx.shape} for {self.n} polygons")
             idx = np.flatnonzero(idx)
+        elif idx.dtype.kind not in "iu":
+            if idx.size:
+                raise TypeError(
+                    f"mask_or_index must be a boolean mask or integer indices, got {idx.dtype}"
+                )
+            idx = np.zeros(0, dtype=np.int64)  # [] (read as floats): no polygons
         counts = self.counts[idx]
         if len(idx) > 1:
             # the usual selections (a mask, a split, an insert) are a few runs of

@@ -20,13 +20,33 @@ class EmptyIntersectionError(ValueError):
 
 
 def vector(x: ArrayLike, n: int | None = None, name: str = "vector") -> FloatArray:
-    """A finite 1-D float copy of ``x`` (of length ``n`` when given)."""
-    v = np.array(x, dtype=float).reshape(-1)
+    """A finite 1-D float copy of ``x`` (of length ``n`` when given; a number is a vector
+    of length 1). ``ValueError`` for an array of two or more dimensions (a ``(2, 2)``
+    bound was flattened into a 4-D box) and for an empty one (a set of dimension 0:
+    its operations failed deep in numpy or scipy)."""
+    v = np.array(x, dtype=float)
+    if v.ndim > 1:
+        raise ValueError(f"{name} must be one-dimensional (shape (n,)), got shape {v.shape}")
+    v = v.reshape(-1)
     if n is not None and v.size != n:
         raise ValueError(f"{name} must have length {n}, got {v.size}")
+    if v.size == 0:
+        raise ValueError(f"{name} must have at least one coordinate (dimension >= 1), got none")
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be finite")
     return v
+
+
+def directions(d: ArrayLike, n: int) -> FloatArray:
+    """``d`` as finite float directions of dimension ``n`` (shape (n,) or (k, n)), for a
+    support function: the same checks as :func:`vector` for one direction (a NaN
+    direction gave a NaN support, another length a numpy matmul error)."""
+    a = np.asarray(d, dtype=float)
+    if a.ndim not in (1, 2) or a.shape[-1] != n:
+        raise ValueError(f"d must have shape ({n},) or (k, {n}), got {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError("d must be finite")
+    return a
 
 
 def check_tol(tol: float) -> None:
@@ -46,10 +66,13 @@ def points(x: ArrayLike, n: int) -> FloatArray:
 
 
 def matrix(m: ArrayLike, rows: int | None, cols: int | None, name: str) -> FloatArray:
-    """A finite 2-D float copy of ``m`` with the given shape (``None``: any)."""
+    """A finite 2-D float copy of ``m`` with the given shape (``None``: any number of
+    columns, or of rows but at least one)."""
     a = np.array(m, dtype=float)
     if a.ndim != 2 or (rows is not None and a.shape[0] != rows):
         raise ValueError(f"{name} must be a 2-D array with {rows} rows, got shape {a.shape}")
+    if rows is None and a.shape[0] == 0:  # an image of dimension 0
+        raise ValueError(f"{name} must have at least one row, got shape {a.shape}")
     if cols is not None and a.shape[1] != cols:
         raise ValueError(f"{name} must have {cols} columns, got shape {a.shape}")
     if not np.all(np.isfinite(a)):

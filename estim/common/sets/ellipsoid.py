@@ -68,6 +68,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     FloatArray,
     check_tol,
     clip_slab,
+    directions,
     flat_along,
     halfspace_bound,
     matrix,
@@ -91,6 +92,30 @@ _RANK_RTOL = 1e-12
 _THIN_RTOL = 1e-14
 #: a.P a under this fraction of |a|^2 tr P is rounding (the ellipsoid is flat along a)
 FLAT_G_RTOL = 1e-13
+#: the scales (largest diagonal entry of ``P``, largest ``|a_i|``) within which a strip
+#: update is computed as given; beyond them it is computed on the problem rescaled by
+#: powers of two (exact), whose squares and products neither overflow nor underflow
+_SCALE_P = (2.0**-200, 2.0**200)
+_SCALE_A = (2.0**-100, 2.0**100)
+#: the radii whose square, a ball's shape, is a normal float
+_BALL_RADIUS = (float(np.sqrt(np.finfo(float).tiny)), float(np.sqrt(np.finfo(float).max)))
+
+
+class _OutOfRange(ValueError):
+    """A result whose shape or centre is beyond the floating-point range."""
+
+
+def _fro(x: FloatArray) -> float:
+    """The Frobenius norm of ``x`` without overflow or underflow of its squares (numpy's
+    is ``inf`` for entries above 1e154 and 0 below 1e-162, which made the rounding
+    covers infinite, then NaN, or nothing): the same value as numpy's where that one is
+    safely in range, otherwise ``s |x / s|`` with ``s`` the largest entry."""
+    with np.errstate(over="ignore", under="ignore"):
+        v = float(np.linalg.norm(x))
+    if 1e-150 < v < 1e150:
+        return v
+    s = float(np.abs(x).max(initial=0.0))
+    return s * float(np.linalg.norm(x / s)) if s > 0.0 else 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,6 +125,7 @@ class Ellipsoid:
     Parameters
     ----------
     centre : array_like, shape (n,)
+        ``n >= 1`` (``ValueError`` for an empty centre or one of two or more dimensions).
     shape : array_like, shape (n, n)
         Symmetric positive semidefinite; symmetrised on construction.
     """
@@ -110,9 +136,12 @@ class Ellipsoid:
     def __post_init__(self) -> None:
         c = vector(self.centre, name="centre")
         p = matrix(self.shape, c.size, c.size, "shape")
-        p = 0.5 * (p + p.T)
-        lam = np.linalg.eigvalsh(p) if c.size else np.zeros(0)
-        if lam.size and lam[0] < -1e-10 * max(1.0, lam[-1]):
+        with np.errstate(over="ignore"):
+            sym = 0.5 * (p + p.T)
+        # halves first where the sum overflows (entries near the float maximum)
+        p = sym if np.isfinite(sym).all() else 0.5 * p + 0.5 * p.T
+        lam = np.linalg.eigvalsh(p)
+        if lam[0] < -1e-10 * max(1.0, lam[-1]):
             raise ValueError(f"shape must be positive semidefinite (eigenvalue {lam[0]:.3g})")
         object.__setattr__(self, "centre", readonly(c, copy=False))
         object.__setattr__(self, "shape", readonly(p, copy=False))
@@ -128,11 +157,24 @@ class Ellipsoid:
     # -- construction ------------------------------------------------------------
     @classmethod
     def ball(cls, centre: ArrayLike, radius: float) -> Ellipsoid:
-        """The ball ``|x - c| <= radius`` (``P = radius^2 I``; ``radius`` finite, ``>= 0``)."""
+        """The ball ``|x - c| <= radius`` (``P = radius^2 I``; ``radius`` finite, ``>= 0``).
+
+        ``ValueError`` for a radius above about 1.3e154, whose square overflows (it
+        raised ``OverflowError``). Below about 1.5e-154 the square is not a normal float
+        and is rounded up by one of its ulps, so that the ball holds the one asked for
+        (under 1e-162 it became its centre).
+        """
         c = vector(centre, name="centre")
         radius = float(radius)
         if not (np.isfinite(radius) and radius >= 0.0):
             raise ValueError(f"a ball needs a finite radius >= 0, got {radius}")
+        if radius > _BALL_RADIUS[1]:
+            raise ValueError(
+                f"a ball's radius must be at most {_BALL_RADIUS[1]:.3g} (its square, the "
+                f"shape, a float), got {radius:.3g}"
+            )
+        if 0.0 < radius < _BALL_RADIUS[0]:  # a subnormal square, rounded to its spacing
+            return cls(c, np.nextafter(radius * radius, np.inf) * np.eye(c.size))
         return cls(c, radius**2 * np.eye(c.size))
 
     @classmethod
@@ -175,22 +217,27 @@ class Ellipsoid:
         ``delta`` to every eigenvalue makes the result hold the exact image. Without it
         a thin image (an ill-conditioned ``A``: eigenvalues 3e-10 apart) left mapped
         points of the ellipsoid 7e-7 outside it in ``q``; ``delta`` is about ``1e-15``
-        of the image's scale.
+        of the image's scale. ``ValueError`` when the image is beyond the floating-point
+        range.
         """
         a = matrix(a, None, self.dim, "A")
-        c = a @ self.centre + (0.0 if b is None else vector(b, a.shape[0], "b"))
-        abs_a = np.abs(a)
-        bound = abs_a @ np.abs(self.shape) @ abs_a.T
-        delta = (2 * self.dim + 2) * np.finfo(float).eps * float(np.linalg.norm(bound))
-        return Ellipsoid._make(c, a @ self.shape @ a.T + delta * np.eye(a.shape[0]))
+        b_vec = 0.0 if b is None else vector(b, a.shape[0], "b")
+        with np.errstate(over="ignore", invalid="ignore"):  # _finite refuses an overflow
+            c = a @ self.centre + b_vec
+            abs_a = np.abs(a)
+            bound = abs_a @ np.abs(self.shape) @ abs_a.T
+            delta = (2 * self.dim + 2) * np.finfo(float).eps * _fro(bound)
+            p = a @ self.shape @ a.T + delta * np.eye(a.shape[0])
+        return _finite(c, p, "the image")
 
     def translate(self, b: ArrayLike) -> Ellipsoid:
         """``E(c + b, P)``."""
         return Ellipsoid._make(self.centre + vector(b, self.dim, "b"), self.shape.copy())
 
     def support(self, d: ArrayLike) -> FloatArray | float:
-        """``h(d) = max_{x in E} d.x = c.d + sqrt(d^T P d)``; ``d`` of shape (n,) or (k, n)."""
-        d = np.asarray(d, dtype=float)
+        """``h(d) = max_{x in E} d.x = c.d + sqrt(d^T P d)``; ``d`` of shape (n,) or (k, n),
+        finite (``ValueError``)."""
+        d = directions(d, self.dim)
         quad = np.einsum("...i,ij,...j->...", d, self.shape, d)
         out = d @ self.centre + np.sqrt(np.clip(quad, 0.0, None))
         return float(out) if out.ndim == 0 else out
@@ -223,11 +270,14 @@ class Ellipsoid:
         centre (rounding of the coordinates, as the other sets allow: sound, as the sum
         grows with each ``|z_i|``); or the same sum over the null directions too where
         their ``l_i`` are positive (thin axes, not flat ones), the flat ones held to the
-        same few ulps.
+        same few ulps. A point with a coordinate that is not finite is not in it.
         """
         check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
+        finite = np.isfinite(pts).all(axis=1)
+        if not finite.all():  # not in it (as for the box and the zonotope), without
+            pts = np.where(finite[:, None], pts, self.centre)  # NaN warnings on the way
         lam, vec = self._eig
         lam_max = lam.max(initial=0.0)
         z = (pts - self.centre) @ vec
@@ -252,6 +302,7 @@ class Ellipsoid:
             inside |= (q + np.sum(zs[:, thin] ** 2 / lam[thin], axis=1) <= bound) & (
                 flat_off <= slack
             )
+        inside &= finite
         return bool(inside[0]) if x.ndim == 1 else inside
 
     # -- outer bounds ----------------------------------------------------------------
@@ -260,19 +311,30 @@ class Ellipsoid:
 
         ``criterion="trace"``: ``p = sqrt(tr P1 / tr P2)``. ``criterion="volume"``: the
         minimum-volume member (needs ``P1`` or ``P2`` nonsingular, otherwise falls back
-        to the trace choice). Another family: ``TypeError``.
+        to the trace choice, as it does when the relative eigenvalues are beyond the
+        floating-point range). Another family: ``TypeError``. ``ValueError`` when the
+        sum is beyond the floating-point range.
         """
         if not isinstance(other, Ellipsoid):
             raise TypeError(f"minkowski_sum takes an Ellipsoid, got {type(other).__name__}")
         if other.dim != self.dim:
             raise ValueError("ellipsoids of different dimensions")
-        c = self.centre + other.centre
         p1, p2 = self.shape, other.shape
-        t1, t2 = np.trace(p1), np.trace(p2)
+        with np.errstate(over="ignore", invalid="ignore"):  # refused below, by name
+            c = self.centre + other.centre
+            t1, t2 = np.trace(p1), np.trace(p2)
+        if not (np.isfinite(t1) and np.isfinite(t2)):
+            raise _OutOfRange(
+                f"the sum is beyond the floating-point range (traces {t1:.3g} and {t2:.3g})"
+            )
         c_scale = np.abs(self.centre) + np.abs(other.centre)
         if t1 <= 0.0 or t2 <= 0.0:  # a point: the sum is the other ellipsoid, shifted
-            return _covered(c, p1 + p2, float(np.linalg.norm(p1 + p2)), c_scale)
-        p = np.sqrt(t1 / t2)
+            with np.errstate(over="ignore", invalid="ignore"):
+                return _covered(c, p1 + p2, _fro(p1 + p2), c_scale)
+        with np.errstate(over="ignore", under="ignore"):
+            p = np.sqrt(t1 / t2)
+        if not 1e-150 < p < 1e150:  # the ratio of the traces over- or underflowed
+            p = np.sqrt(t1) / np.sqrt(t2)  # (a ball of 1 plus one of 1e-155: NaN)
         if criterion == "volume":
             p = _volume_sum_parameter(p1, p2, self.rank, other.rank, p)
         elif criterion != "trace":
@@ -280,15 +342,19 @@ class Ellipsoid:
         w1, w2 = 1.0 + 1.0 / p, 1.0 + p
         # the sum of the centres and of the scaled shapes is rounded: a thin sum (two
         # intervals 2e-5 wide at 1e3) left its extreme points 5e-9 outside in q
-        p_scale = w1 * float(np.linalg.norm(p1)) + w2 * float(np.linalg.norm(p2))
-        return _covered(c, w1 * p1 + w2 * p2, p_scale, c_scale)
+        with np.errstate(over="ignore", invalid="ignore"):  # _covered refuses an overflow
+            p_scale = w1 * _fro(p1) + w2 * _fro(p2)
+            return _covered(c, w1 * p1 + w2 * p2, p_scale, c_scale)
 
     def intersect_strip(
         self, a: ArrayLike, b: float, r: float, criterion: Criterion = "volume"
     ) -> Ellipsoid:
         """An ellipsoid containing ``E ∩ {x : |a.x - b| <= r}`` (Fogel & Huang 1982).
 
-        Raises :class:`EmptyIntersectionError` when the strip misses ``E``.
+        Raises :class:`EmptyIntersectionError` when the strip misses ``E``. At extreme
+        scales the update is computed on the problem rescaled by powers of two (exact);
+        when its result is beyond the floating-point range, ``E`` itself (which holds
+        the intersection) is returned.
         """
         lo, hi = strip_bounds(b, r)
         return self._intersect_slab(vector(a, self.dim, "a"), lo, hi, criterion)
@@ -345,8 +411,54 @@ class Ellipsoid:
         return Ellipsoid._make(centre, (t_r + t_err) ** 2 * np.outer(v, v))
 
     def _intersect_slab(self, a: FloatArray, lo: float, hi: float, criterion: str) -> Ellipsoid:
+        """:meth:`_update`, on the problem rescaled by powers of two (exact) when ``P``
+        or ``a`` is far from 1: at ``P = 1e300 I`` the products ``P a a^T P`` and the
+        norms of the covers overflowed and the result was NaN. A result beyond the
+        floating-point range (it can be larger than ``E`` across ``a``) gives ``E``."""
         if criterion not in ("volume", "trace"):
             raise ValueError(f"unknown criterion {criterion!r}")
+        s_p = float(np.diag(self.shape).max())
+        s_a = float(np.abs(a).max())
+        k_a = k = 0
+        s_c = float(np.abs(self.centre).max())
+        if s_a > 0.0 and (not _SCALE_A[0] <= s_a <= _SCALE_A[1] or s_a * s_c > 2.0**800):
+            k_a = int(np.frexp(s_a)[1])  # a.x in [lo, hi] is the same slab for a / 2^k_a
+        if s_p > 0.0 and not _SCALE_P[0] <= s_p <= _SCALE_P[1]:
+            k = int(np.frexp(s_p)[1]) // 2  # x = 2^k x': P = 4^k P', c = 2^k c'
+        e = self
+        if k or k_a:
+            c = np.ldexp(self.centre, -k)
+            if np.isfinite(c).all():
+                e = Ellipsoid._make(c, np.ldexp(self.shape, -2 * k))
+            else:  # the centre far beyond the size: kept as it is
+                k = 0
+            a = np.ldexp(a, -k_a)
+            lo, hi = (float(np.ldexp(v, -(k + k_a))) for v in (lo, hi))
+        try:
+            out = e._update(a, lo, hi, criterion)
+        except EmptyIntersectionError:
+            if not (k or k_a):
+                raise
+            # the message in the given units, not the rescaled ones
+            ends = np.ldexp(np.array([lo, hi, *e.extremes(a)]), k + k_a)
+            raise EmptyIntersectionError(
+                "slab [{:.6g}, {:.6g}] misses the set's range [{:.6g}, {:.6g}]".format(*ends)
+            ) from None
+        if out is e:
+            return self
+        out_c, out_p = out.centre, out.shape
+        if k:  # back to the given scale (symmetric already; may overflow, checked below)
+            with np.errstate(over="ignore"):
+                out_c, out_p = np.ldexp(out_c, k), np.ldexp(out_p, 2 * k)
+            out = object.__new__(Ellipsoid)
+            object.__setattr__(out, "centre", readonly(out_c, copy=False))
+            object.__setattr__(out, "shape", readonly(out_p, copy=False))
+        if not (np.isfinite(out.centre).all() and np.isfinite(out.shape).all()):
+            return self  # beyond the floating-point range: E holds the intersection
+        return out
+
+    def _update(self, a: FloatArray, lo: float, hi: float, criterion: str) -> Ellipsoid:
+        """The strip update (see the module's docstring) at the scale given."""
         c, p = self.centre, self.shape
         pa = p @ a
         g = max(float(a @ pa), 0.0)
@@ -406,14 +518,33 @@ def _covered(c: FloatArray, p: FloatArray, p_scale: float, c_scale: FloatArray) 
     by at most :data:`ROUND_RTOL` ``p_scale`` per entry (``+ delta I``, Weyl, as
     :meth:`Ellipsoid.affine`) and whose computed centre ``c`` by :data:`ROUND_RTOL`
     ``c_scale`` per coordinate (the Minkowski sum with a ball of that radius, the
-    minimum-trace member of Schweppe's family)."""
+    minimum-trace member of Schweppe's family). ``ValueError`` when the result is
+    beyond the floating-point range."""
     n = c.size
     p = p + (n * ROUND_RTOL * p_scale) * np.eye(n)
-    rad2 = float(np.sum((ROUND_RTOL * c_scale) ** 2))
+    c_rad = ROUND_RTOL * c_scale
+    rad2 = float(np.sum(c_rad**2))
     tr = float(np.trace(p))
-    if rad2 > 0.0 and tr > 0.0:
-        q = np.sqrt(tr / (n * rad2))
-        p = (1.0 + 1.0 / q) * p + ((1.0 + q) * rad2) * np.eye(n)
+    if tr > 0.0 and c_rad.any():
+        ratio = tr / (n * rad2) if rad2 > 0.0 else np.inf
+        if rad2 > 1e-290 and ratio < 1e290:
+            q = np.sqrt(ratio)
+            p = (1.0 + 1.0 / q) * p + ((1.0 + q) * rad2) * np.eye(n)
+        else:  # the squares under- or overflow: the same member, (1 + q) rad^2 = rad^2 +
+            # rad sqrt(tr / n), from the radius (a set of 1e-140 at 1e-140: NaN)
+            rad, root = _fro(c_rad), np.sqrt(tr) / np.sqrt(n)
+            p = (1.0 + rad / root) * p + (rad * (rad + root)) * np.eye(n)
+    return _finite(c, p, "the result")
+
+
+def _finite(c: FloatArray, p: FloatArray, what: str) -> Ellipsoid:
+    """``E(c, p)``, or ``ValueError`` (:class:`_OutOfRange`) naming the scale when ``c`` or
+    ``p`` is beyond the floating-point range (it was returned as NaN or infinite)."""
+    if not (np.isfinite(p).all() and np.isfinite(c).all()):
+        raise _OutOfRange(
+            f"{what} is beyond the floating-point range (its shape's scale exceeds "
+            f"{np.finfo(float).max:.3g}, or its centre's does): rescale the problem"
+        )
     return Ellipsoid._make(c, p)
 
 
@@ -485,12 +616,18 @@ def _trace_rho(tr: float, mn: float, gn: float, eps: float) -> float:
 def _volume_sum_parameter(p1, p2, rank1: int, rank2: int, fallback: float) -> float:
     n = p1.shape[0]
     if rank2 == n:
-        lam = eigh(p1, p2, eigvals_only=True)
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            lam = eigh(p1, p2, eigvals_only=True)
         flip = False
     elif rank1 == n:
-        lam = eigh(p2, p1, eigvals_only=True)
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            lam = eigh(p2, p1, eigvals_only=True)
         flip = True
     else:
+        return fallback
+    if not (np.isfinite(lam).all() and lam.max() < 1e290):
+        # relative eigenvalues beyond the float range (a ball of 1 plus one of 1e-155:
+        # 1e310): the trace choice, sound as any member
         return fallback
     lam = np.clip(lam, 0.0, None)
     lo, hi = np.sqrt(lam.min()), np.sqrt(lam.max())

@@ -38,6 +38,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     FloatArray,
     check_tol,
     clip_slab,
+    directions,
     halfspace_bound,
     matrix,
     points,
@@ -130,8 +131,8 @@ class Box:
         return Box._make(self.lo + other.lo, self.hi + other.hi)
 
     def support(self, d: ArrayLike) -> FloatArray | float:
-        """``h(d) = m.d + h.|d|``; ``d`` of shape (n,) or (k, n)."""
-        d = np.asarray(d, dtype=float)
+        """``h(d) = m.d + h.|d|``; ``d`` of shape (n,) or (k, n), finite (``ValueError``)."""
+        d = directions(d, self.dim)
         out = d @ self.centre + np.abs(d) @ self.radius
         return float(out) if np.ndim(out) == 0 else out
 

@@ -55,6 +55,7 @@ from kalman_vs_infoset.estim.common.sets._common import (
     FloatArray,
     check_tol,
     clip_slab,
+    directions,
     flat_along,
     halfspace_bound,
     matrix,
@@ -77,6 +78,8 @@ class Zonotope:
     Parameters
     ----------
     centre : array_like, shape (n,)
+        ``n >= 1`` (``ValueError`` for an empty centre or one of two or more dimensions,
+        as for the box and the ellipsoid).
     generators : array_like, shape (n, m)
         One generator per column; ``m`` may be 0.
     """
@@ -144,8 +147,9 @@ class Zonotope:
         return Zonotope._make(self.centre + other.centre, g)
 
     def support(self, d: ArrayLike) -> FloatArray | float:
-        """``h(d) = c.d + sum_j |g_j.d|``; ``d`` of shape (n,) or (k, n)."""
-        d = np.asarray(d, dtype=float)
+        """``h(d) = c.d + sum_j |g_j.d|``; ``d`` of shape (n,) or (k, n), finite
+        (``ValueError``)."""
+        d = directions(d, self.dim)
         out = d @ self.centre + np.abs(d @ self.generators).sum(axis=-1)
         return float(out) if np.ndim(out) == 0 else out
 
@@ -174,12 +178,19 @@ class Zonotope:
         iff ``t <= 1 + tol`` (``s`` the largest row sum of ``|G|``), solved by HiGHS to
         feasibility tolerances of 1e-10 (its default 1e-7 read vertices of flat zonotopes
         1e-8 outside); points outside the interval hull are rejected without it.
+
+        A point with a coordinate that is not finite is not in it, as for the box and
+        the ellipsoid (an infinite one made the programme's bounds infinite, which
+        linprog refuses, and a zonotope of no generators held it by its own slack).
         """
         if method not in ("auto", "lp", "facets"):
             raise ValueError(f"method must be 'auto', 'lp' or 'facets', got {method!r}")
         check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
+        finite = np.isfinite(pts).all(axis=1)
+        if not finite.all():  # answered below; the centre stands in for them meanwhile
+            pts = np.where(finite[:, None], pts, self.centre)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
         # and a few ulps of the coordinates: far from the origin (1e7) they are rounded
         # to more than tol times the zonotope's size
@@ -198,6 +209,7 @@ class Zonotope:
             inside = np.all((pts >= lo - slack[:, None]) & (pts <= hi + slack[:, None]), axis=1)
             for i in np.flatnonzero(inside):
                 inside[i] = self._lp_norm(pts[i] - self.centre, slack[i]) <= 1.0 + tol
+        inside &= finite
         return bool(inside[0]) if x.ndim == 1 else inside
 
     @cached_property
