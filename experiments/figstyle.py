@@ -278,6 +278,29 @@ def _labels_apart(locator, lo: float, hi: float, room_pt: float, size: float, fm
     return bool(np.all(gaps >= half[:-1] + half[1:]))
 
 
+def fit_suptitle(fig, room: float = 0.98) -> None:
+    """Wrap the lines of a suptitle wider than ``room`` of its figure at word breaks
+    (long titles, with ``[--quick]`` appended, were cut at both edges of the figure):
+    each line is refilled to a character count scaled by how much too wide it is, and
+    measured again."""
+    import textwrap
+
+    title = getattr(fig, "_suptitle", None)  # (Figure.get_suptitle returns the text only)
+    if title is None or not title.get_text():
+        return
+    renderer = fig.canvas.get_renderer()
+    width = room * fig.bbox.width
+    for _ in range(6):  # proportional estimates converge in a step or two
+        extent = title.get_window_extent(renderer).width
+        if extent <= width:
+            return
+        lines = title.get_text().split("\n")
+        longest = max(len(line) for line in lines)
+        chars = max(20, int(longest * width / extent) - 1)
+        wrapped = [textwrap.fill(line, chars) if len(line) > chars else line for line in lines]
+        title.set_text("\n".join(wrapped))
+
+
 def _lay_out_once(fig, dpi: float) -> None:
     """Run the figure's layout engine once, at the saving resolution, and remove it.
 
@@ -313,6 +336,8 @@ def save(
     stem = Path(stem)
     out = []
     try:
+        fig.set_dpi(dpi)  # (measured at the saving resolution, as the layout below)
+        fit_suptitle(fig)
         _lay_out_once(fig, dpi)
         thin_crowded_ticks(fig)
         for ext in formats:

@@ -45,7 +45,9 @@ def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
     with a value (``+inf`` is a value: never settled), then the failed runs and the
     runs without a value (NaN) that it leaves out, when there are any (the curve reached
     1 over the others while the label counted the whole group), of which those of runs
-    whose closed loop diverged (an attitude table's ``diverged``) by that name."""
+    whose closed loop diverged (an attitude table's ``diverged``) by that name; runs
+    that diverged and still have a value (an intercept's miss and fuel) are counted in
+    ``n``, "of which k diverged"."""
     failed = int((rows["status"] != "ok").sum()) if "status" in rows else 0
     ok = rows[rows["status"] == "ok"] if "status" in rows else rows
     # (a table whose every run failed has no column of results)
@@ -55,7 +57,11 @@ def curve(ax, name: str, rows: pd.DataFrame, col: str, **style) -> None:
     known = "diverged" in ok and col in ok
     diverged = ok["diverged"].to_numpy(dtype=float) > 0 if known else np.zeros_like(nan)
     missing, gone = int(np.sum(nan & ~diverged)), int(np.sum(nan & diverged))
+    # an intercept run that diverged has values (a miss of kilometres, no fuel): drawn,
+    # but said, or its curve reads as an ordinary result
+    drawn_diverged = int(np.sum(~nan & diverged))
     notes = [f"n={len(values) - missing - gone}"]
+    notes[0] += f" of which {drawn_diverged} diverged" if drawn_diverged else ""
     notes += [f"{failed} failed"] if failed else []
     notes += [f"{gone} diverged"] if gone else []
     notes += [f"{missing} without a value"] if missing else []

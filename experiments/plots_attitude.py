@@ -103,7 +103,8 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
     for df in traces:
         d = df[df["axis"] == 1]
         style = _style(df)
-        bottom[0].plot(d["t_s"], d["angle_deg"], **style, label=_label(df, "error angle"))
+        # the same run's line on every panel: one legend entry (its panels say what)
+        bottom[0].plot(d["t_s"], d["angle_deg"], **style, label=_label(df))
         kb = d["knowledge_bound_deg"].to_numpy(dtype=float)
         if np.nanmax(kb, initial=0.0) > 1e-9:  # a perfect, noiseless belief has none
             bottom[0].plot(
@@ -114,8 +115,8 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
                 ls=":",
                 label=_label(df, "knowledge bound of the belief"),
             )
-        bottom[1].plot(d["t_s"], d["energy_N2m2s"], **style, label=_label(df, "energy so far"))
-        bottom[2].plot(d["t_s"], d["rate_norm_degps"], **style, label=_label(df, "rate norm"))
+        bottom[1].plot(d["t_s"], d["energy_N2m2s"], **style, label=_label(df))
+        bottom[2].plot(d["t_s"], d["rate_norm_degps"], **style, label=_label(df))
         if "guaranteed_time_s" in d:
             tau = float(d["guaranteed_time_s"].iloc[0])
             for ax in bottom:
@@ -129,9 +130,14 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
         # no positive finite value: matplotlib warned and drew an empty log axis)
         if np.any(np.isfinite(values) & (values > 0)):
             ax.set_yscale("log")
-    bottom[0].set_ylabel("error angle, deg")
-    bottom[1].set_ylabel("energy index sum M^2 dt, N^2 m^2 s")
-    bottom[2].set_ylabel("rate norm, deg/s")
+            # a zero (a turn from rest starts at rate 0) leaves the log axis unseen
+            zero = np.any(values <= 0.0)
+            what = "error angle, deg" if col == "angle_deg" else "rate norm, deg/s"
+            ax.set_ylabel(what + ("\n(log; zeros not drawn)" if zero else ""))
+        else:
+            ax.set_ylabel("error angle, deg" if col == "angle_deg" else "rate norm, deg/s")
+    # two lines: one ran into the panel above (the energy index Z of the CDFs, M^T M)
+    bottom[1].set_ylabel("energy so far\n(sum M^T M dt), N^2 m^2 s")
     for ax in bottom:
         ax.set_xlabel("time t, s")
     for ax in axes[: len(rows)].flat:  # the time axis is shared: labelled once, below

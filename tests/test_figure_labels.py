@@ -1,0 +1,102 @@
+"""What the figures say, read from the matplotlib objects: a review of every figure the
+commands draw found runs that diverged drawn as ordinary results, a reference line
+called a floor that runs fall below, the paper's marks called "seed", suptitles cut at
+both edges, an axis label running into the panel above and a log axis whose zeros
+vanish without a word. Each test fails without its fix."""
+
+import numpy as np
+import pandas as pd
+from harness_texts import small_attitude_trace
+from kalman_vs_infoset.experiments import figstyle as fs
+from kalman_vs_infoset.experiments import plots, plots_attitude
+from kalman_vs_infoset.experiments.cli import main
+
+
+def _legend_texts(fig) -> list[str]:
+    texts = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    for ax in fig.axes:
+        if ax.get_legend():
+            texts += [t.get_text() for t in ax.get_legend().get_texts()]
+    return texts
+
+
+def test_a_cdf_says_how_many_drawn_runs_diverged():
+    """An intercept run that diverged has a miss (kilometres) and a fuel (0): its curve
+    was labelled "(n=3)" like any other; the label now says how many of them diverged."""
+    rows = [{"estimator": "box", "noise": "random", "miss_m": 7000.0 + j, "fuel_mps": 0.0,
+             "status": "ok", "diverged": j < 2} for j in range(3)]  # fmt: skip
+    rows += [{"estimator": "infoset", "noise": "random", "miss_m": 1.0 + j, "fuel_mps": 100.0,
+              "status": "ok", "diverged": False} for j in range(3)]  # fmt: skip
+    fig = plots.cdf_figure(pd.DataFrame(rows), ["estimator", "noise"], "t")
+    texts = _legend_texts(fig)
+    box = [t for t in texts if t.startswith(fs.words("box"))]
+    info = [t for t in texts if t.startswith(fs.words("infoset"))]
+    assert box and all("n=3 of which 2 diverged" in t for t in box), texts
+    assert info and not any("diverged" in t for t in info)
+    fs.plt.close(fig)
+
+
+def test_fig5_marks_the_paper_and_the_miss_scale_in_words(tmp_path):
+    """The marks read "seed Fig. 3 random" (taken for a random seed) and "bearing floor"
+    (runs end below it: it is a scale); the title named the estimator by its registry
+    name. They read as paper-figures writes them."""
+    captured = {}
+    real = plots.cdf_figure
+
+    def spy(table, by, title, marks, *a, **k):
+        captured.update(title=title, marks=marks)
+        return real(table, by, title, marks, *a, **k)
+
+    plots.cdf_figure = spy
+    try:
+        assert main(["fig5", "--runs", "1", "--out", str(tmp_path), "--workers", "1",
+                     "--no-progress"]) == 0  # fmt: skip
+    finally:
+        plots.cdf_figure = real
+    labels = [lab for marks in captured["marks"].values() for _, lab in marks]
+    assert "paper Fig. 3 (one engagement), random errors" in labels
+    assert "bearing-limited miss scale" in labels
+    assert not any(lab.startswith("seed") or "floor" in lab for lab in labels)
+    assert fs.words("infoset") in captured["title"] and "Seed 003" not in captured["title"]
+
+
+def test_a_suptitle_wider_than_its_figure_is_wrapped_at_word_breaks(tmp_path):
+    """A suptitle of 120 characters on a figure 6 inches wide was cut at both edges;
+    saved, every line of it lies within the figure, and its words are all there."""
+    fig, axes = fs.figure(1, 1, size=(6.0, 3.0))
+    axes[0, 0].plot([0, 1], [0, 1])
+    words = " ".join(f"word{i}" for i in range(20))
+    fig.suptitle(words)
+    fs.fit_suptitle(fig)
+    renderer = fig.canvas.get_renderer()
+    box = fig._suptitle.get_window_extent(renderer)
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width
+    assert fig._suptitle.get_text().split() == words.split()
+    assert "\n" in fig._suptitle.get_text()
+    short = fs.figure(1, 1, size=(6.0, 3.0))[0]
+    short.suptitle("a short title")
+    fs.fit_suptitle(short)
+    assert short._suptitle.get_text() == "a short title"  # left as it is
+    fs.save(fig, tmp_path / "wide")
+    fs.plt.close(short)
+
+
+def test_attitude_histories_label_the_energy_in_two_lines_and_say_log_zeros():
+    """The energy panel's label ("energy index sum M^2 dt, ...", longer than the panel)
+    ran into the label above it and wrote M^2 where the CDFs write M^T M; a rate norm of
+    0 at the start vanished off the log axis without a word; and each run was in the
+    legend three times ("...: error angle", "...: energy so far", "...: rate norm")."""
+    trace = small_attitude_trace(4)
+    trace.loc[(trace["axis"] == 1) & (trace["t_s"] == 0.0), "rate_norm_degps"] = 0.0
+    fig = plots_attitude.time_histories([trace], "t")
+    bottom = fig.axes[-3:]
+    energy = bottom[1].get_ylabel()
+    assert "M^T M" in energy and "\n" in energy and "N^2 m^2 s" in energy
+    assert "zeros not drawn" in bottom[2].get_ylabel() and bottom[2].get_yscale() == "log"
+    assert "zeros not drawn" not in bottom[0].get_ylabel()  # no zero angle there
+    texts = _legend_texts(fig)
+    run = fs.words("box", "random")
+    assert texts.count(run) == 1 and not any(t.startswith(run + ":") and "bound" not in t
+                                             for t in texts)  # fmt: skip
+    fs.plt.close(fig)
+    assert np.isfinite(trace["t_s"]).all()
