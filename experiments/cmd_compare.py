@@ -58,7 +58,7 @@ def run(args) -> dict[str, Any]:
     files = write_tables(table, stem)
     floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
     marks = {
-        "miss_m": [(miss_floor_m(sc), "bearing floor")],
+        "miss_m": [(miss_floor_m(sc), "bearing-limited miss scale")],
         "fuel_mps": [(floor, "perfect info (mean)")] if floor is not None else [],
     }
     fig = plots.cdf_figure(

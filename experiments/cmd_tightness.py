@@ -297,14 +297,15 @@ def _write(result: dict[str, Any], stem: Path) -> list[Path]:
     ax.set_xlabel("time, s")
     ax.set_ylabel("zero-effort miss w minus the truth's, m")
     ax_r.set_xlabel("time, s")
-    ax_r.set_ylabel("width ratio (estimator / exact)")
+    ax_r.set_ylabel("width ratio (estimator / exact), -")
     for a in (ax, ax_r):
         a.grid(True, alpha=0.3)
         if rows:  # (no time with a ratio: nothing drawn, no legend to warn about)
             a.legend(fontsize=8, loc="best")
-    fig.suptitle(
-        f"{result['scenario']}: {result['estimator']} vs exact set, {result['noise']} "
-        f"noise, seed {result['seed']}" + (", guided" if result["guided"] else ""),
+    fig.suptitle(  # the estimator and the noise in words, as the legends name them
+        f"{result['scenario']}: {figstyle.words(result['estimator'])} against the exact "
+        f"set, {figstyle.NOISE_WORDS.get(result['noise'], result['noise'])}, seed "
+        f"{result['seed']}" + (", guided" if result["guided"] else ""),
         fontsize=10,
     )
     paths = figstyle.save(fig, stem, dpi=130)

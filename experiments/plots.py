@@ -170,7 +170,7 @@ def sweep_figure(table: pd.DataFrame, key: str, title: str, xlabel: str | None =
         if col == "miss_m" and (table[f"{col}_mean"] > 0).all():
             ax.set_yscale("log")
         ax.set_xlabel(xlabel or key)
-        ax.set_ylabel(ylabel.replace(",", " (mean over runs),", 1))
+        ax.set_ylabel(f"mean {ylabel}")  # (over the runs of a point: the title's count)
     fs.legend(axes[0, 1], fontsize=7, loc="best", ncol=2)
     fig.suptitle(title, fontsize=10)
     return fig

@@ -333,7 +333,7 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
       N + "kp_fig3/ours_miss_fuel/game/0", N + "kp_fig3/paper_miss_fuel/game/0")),
     # docs/intercept.md: Fig. 5 (``make run``)
     (INT, r"Perfect-information fuel \(mean over runs\) ([\d.]+) m/s; "
-     r"bearing-limited miss floor ([\d.]+) m", FIG5, ("fuel_perfect_info_mps", "miss_floor_m")),
+     r"bearing-limited miss scale ([\d.]+) m", FIG5, ("fuel_perfect_info_mps", "miss_floor_m")),
     # docs/intercept.md: the paper's whole closing-speed interval D (kvi intercept kp_fig5 --set)
     (INT, r"mean miss ([\d.]+) m \(random\), ([\d.]+) m \(game\), ([\d.]+) m \(bias\), fuel "
      r"([\d.]+) / ([\d.]+) / ([\d.]+) m/s, no step outside, no set diverged", WIDE + "random.json",

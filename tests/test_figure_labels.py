@@ -100,3 +100,45 @@ def test_attitude_histories_label_the_energy_in_two_lines_and_say_log_zeros():
                                              for t in texts)  # fmt: skip
     fs.plt.close(fig)
     assert np.isfinite(trace["t_s"]).all()
+
+
+def test_tightness_sweep_and_compare_labels_carry_units_and_words(tmp_path, monkeypatch):
+    """The tightness figure's ratio axis had no unit and its title the registry name
+    ("infoset vs exact set, game noise"); the sweep's fuel axis read "fuel (sum of
+    |impulses|) (mean over runs), m/s"; compare's miss mark was "bearing floor"."""
+    from kalman_vs_infoset.experiments import cmd_tightness
+
+    saved = []
+    monkeypatch.setattr(fs, "save", lambda fig, stem, **k: saved.append(fig) or [])
+    result = {"scenario": "kp_fig3", "estimator": "infoset", "noise": "game", "seed": 3,
+              "guided": True, "times_s": [10.0], "set_lo_m": [-2.0], "set_hi_m": [2.0],
+              "exact_lo_m": [-1.0], "exact_hi_m": [1.0], "truth_w_m": [0.0],
+              "ratio": [2.0]}  # fmt: skip
+    monkeypatch.setattr(cmd_tightness, "atomic_write", lambda *a, **k: None, raising=False)
+    try:
+        cmd_tightness._write(result, tmp_path / "t")
+    except (IndexError, TypeError):  # (its JSON path list: not what is checked here)
+        pass
+    (fig,) = saved
+    assert fig.axes[1].get_ylabel().endswith(", -")
+    title = fig._suptitle.get_text()
+    assert fs.words("infoset") in title and "game errors" in title and "vs exact" not in title
+    table = pd.DataFrame({"value": ["1", "10"], "estimator": ["ekf", "ekf"],
+                          "noise": ["random", "random"], "miss_m_mean": [1.0, 2.0],
+                          "fuel_mps_mean": [3.0, 4.0]})  # fmt: skip
+    sweep = plots.sweep_figure(table, "k", "t")
+    assert [ax.get_ylabel() for ax in sweep.axes[:2]] == [
+        "mean miss distance, m", "mean fuel (sum of |impulses|), m/s"]  # fmt: skip
+    fs.plt.close("all")
+    marks = {}
+    real = plots.cdf_figure
+
+    def spy(table, by, title, given, *a, **k):
+        marks.update(given)
+        return real(table, by, title, given, *a, **k)
+
+    monkeypatch.setattr(plots, "cdf_figure", spy)
+    argv = ["compare", "kp_fig3", "--estimators", "ekf,ukf", "--noise", "random", "--runs",
+            "1", "--workers", "1", "--no-progress", "--out", str(tmp_path / "c")]  # fmt: skip
+    assert main(argv) == 0
+    assert [label for _, label in marks["miss_m"]] == ["bearing-limited miss scale"]
