@@ -308,7 +308,7 @@ def write_figures(
     kline = np.linspace(smap.k_w[0], smap.k_w[-1], 200)
     ax.plot(kline, baseline_kq(kline, smap.settings.quaternion_term), "w--",
             label="dashed: $k_\\omega^2 = 2 k_q$ (eq. 9, critical damping)")  # fmt: skip
-    ax.plot([2.625], [1.375], "k*", ms=12, label="seed: $k_q$=1.375, $k_\\omega$=2.625")
+    ax.plot([2.625], [1.375], "k*", ms=12, label="paper: $k_q$=1.375, $k_\\omega$=2.625")
     ax.fill([], [], facecolor="white", edgecolor="0.5",
             label="white: not settled within the horizon")  # fmt: skip
     ax.set_ylim(smap.k_q[0], smap.k_q[-1])
@@ -328,7 +328,7 @@ def write_figures(
     # Fig. 14: f0 against the seed's table and fits
     fig, ax = plt.subplots(figsize=(6, 4))
     ta = np.array(sorted(table))
-    ax.plot(ta, [table[a] for a in ta], "k*", ms=6, label="seed table")
+    ax.plot(ta, [table[a] for a in ta], "k*", ms=6, label="paper's table")
     oa = np.array(sorted(f0_by_angle))
     ax.plot(oa, [f0_by_angle[a] for a in oa], "x", color="#CC79A7",
             label="ours (efficient-curve fit)")  # fmt: skip
@@ -336,10 +336,15 @@ def write_figures(
     ax.plot(grid, gs.f0_model(np.radians(grid), **fit), "-", color="#CC79A7", lw=1,
             label="our fit of eq. (28)")  # fmt: skip
     s = term_scale(settings.quaternion_term)
+    # eq. (28) takes the angle in rad; drawn divided by the quaternion term's scale s
+    # (the law's k_q s qbar), as before, with the term named instead of "rad, / 2"
+    halved = f" / {s:g} (quaternion term {settings.quaternion_term!r})" if s != 1 else ""
     ax.plot(grid, gs.f0_model(np.radians(grid), **gs.SEED_FIT_EQ28) / s, "k--", lw=1,
-            label=f"seed eq. (28), rad, / {s:g}")  # fmt: skip
+            label=f"paper's eq. (28){halved}")  # fmt: skip
     ax.set_xlabel("$\\varphi_0$, deg")
     ax.set_ylabel("$f_0$ ($k_q = f_0 k_\\omega^2$), -")
+    ax.set_title("Efficient gain ratio $f_0$ against the turn angle (paper's Fig. 14)",
+                 fontsize=9)  # fmt: skip
     ax.legend(fontsize=8)
     fig.tight_layout()
     paths += _save(fig, out, "fig14_f0")
@@ -352,7 +357,7 @@ def write_figures(
     ax.plot(angles, times["baseline"], "--", color="#6E6E6E",
             label="rule (10): $k_q = k_\\omega^2/2$ (vector part)")  # fmt: skip
     ax.plot(angles, times["fitted"], "-", color="#CC79A7", label="rule (29), our fit")
-    ax.plot(angles, times["seed_eq29"], "k:", label="rule (29), seed coefficients")
+    ax.plot(angles, times["seed_eq29"], "k:", label="rule (29), the paper's coefficients")
     ax.set_xlabel("$\\varphi_0$, deg")
     ax.set_ylabel("settle time, s")
     ax.set_title(f"$k_\\omega$ = {k_w:g} 1/s, no wheel limits", fontsize=9)

@@ -142,3 +142,23 @@ def test_tightness_sweep_and_compare_labels_carry_units_and_words(tmp_path, monk
             "1", "--workers", "1", "--no-progress", "--out", str(tmp_path / "c")]  # fmt: skip
     assert main(argv) == 0
     assert [label for _, label in marks["miss_m"]] == ["bearing-limited miss scale"]
+
+
+def test_the_gain_study_figures_have_titles_and_say_paper_not_seed(tmp_path, monkeypatch):
+    """Fig. 14's redrawing had no title, and its labels read "seed table", "seed eq.
+    (28), rad, / 2" (a seed is a random seed to most readers)."""
+    from kalman_vs_infoset.experiments import cmd_pd_gains
+
+    drawn = {}
+    monkeypatch.setattr(
+        cmd_pd_gains, "_save", lambda fig, out, name: drawn.update({name: fig}) or []
+    )
+    argv = ["pd-gains", "--angles-deg", "1,5", "--grid-step", "0.2", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    assert set(drawn) == {"fig10_settle_map", "fig14_f0", "fig15_settle_vs_angle"}
+    for name, fig in drawn.items():
+        (ax,) = [a for a in fig.axes if a.get_legend()]
+        assert ax.get_title(), name
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert not any(lab.lower().startswith("seed") or "seed " in lab for lab in labels), labels
+    fs.plt.close("all")
