@@ -360,7 +360,8 @@ def _fig13(ctx, curves, f0, table) -> None:
     ax = axes[0, 0]
     cmap = fs.plt.get_cmap("viridis")
     for i, (a, (kw, kq, _)) in enumerate(curves.items()):
-        colour = cmap(i / max(1, len(curves) - 1))
+        # viridis up to 0.85: its light yellow end was all but invisible on white
+        colour = cmap(0.85 * i / max(1, len(curves) - 1))
         ax.plot(kw, kq, ".", ms=3, color=colour, label=f"phi0 = {a:g} deg: efficient (ours)")
         grid = np.linspace(0.1, 3.0, 100)
         ax.plot(grid, f0[a] * grid**2, color=colour, lw=1.0,

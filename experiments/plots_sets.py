@@ -40,6 +40,17 @@ def _sections(d: pd.DataFrame, closing_speed_mps: float | None = None):
         yield x_m / 1e3, s["alpha_rad"].to_numpy() * 1e3, third
 
 
+def run_words(df: pd.DataFrame, run: int) -> str:
+    """Which run a trace's rows ``df`` are, in words for a title: the estimator and the
+    noise (:func:`~kalman_vs_infoset.experiments.figstyle.words`), the seed when the
+    rows carry it, and the run: ``"information set, random errors, seed 5, run 0"``."""
+    est = str(df["estimator"].iloc[0])
+    noise = str(df["noise"].iloc[0]) if "noise" in df else None
+    seed = df["seed"].iloc[0] if "seed" in df else None
+    at = "" if seed is None or pd.isna(seed) else f", seed {int(seed)}"
+    return f"{fs.words(est, noise)}{at}, run {run}"
+
+
 def _snapshot(sets: pd.DataFrame, run: int, step: int, phase: str, channel=None):
     d = sets[(sets["run"] == run) & (sets["step"] == step) & (sets["phase"] == phase)]
     if channel is not None:
@@ -198,7 +209,9 @@ def slices(sets: pd.DataFrame, run: int, steps_df=None, times=None, channel=None
     # one legend below the panels: early sets fill their whole panel, where a legend
     # inside would hide the truth
     fs.figure_legend(fig, axes.flat[: len(chosen)], fontsize=8)
-    fig.suptitle(f"{sets['scenario'].iloc[0]}: the set projected on (bearing, miss), run {run}")
+    fig.suptitle(
+        f"{sets['scenario'].iloc[0]}: the set projected on (bearing, miss), {run_words(sets, run)}"
+    )
     return fig
 
 
@@ -211,7 +224,7 @@ def _draw_2d(ax, d: pd.DataFrame, colour: str, est: str) -> None:
         edgecolors=colour,
         alpha=0.35,
         linewidths=0.7,
-        label=f"{est}: sections at their ranges",
+        label=f"{fs.words(est)}: sections at their ranges",
     )
     ax.add_collection(coll)
     ax.autoscale_view()
@@ -249,7 +262,7 @@ def animate(
         tr = _truth(steps_df, run, int(step), channel)
         if tr is not None:
             ax.plot([tr[1]], [tr[2] * 1e3], "o", color=fs.TRUTH, ms=4, label="truth")
-        ax.set_title(f"{est}, run {run}: t = {float(d['t_s'].iloc[0]):g} s")
+        ax.set_title(f"{fs.words(est)}, run {run}: t = {float(d['t_s'].iloc[0]):g} s")
         fs.legend(ax, loc="upper right")
         return ()
 

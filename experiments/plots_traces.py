@@ -121,7 +121,8 @@ def plot_files(
     for path, df in zip(paths, frames, strict=True):
         if "axis" in df:
             stem = out / path.name.replace("-trace.parquet", "-history")
-            files += fs.save(plots_attitude.time_histories([g for _, g in df.groupby("run")]), stem)
+            runs = [g for _, g in df.groupby("run")]
+            files += fs.save(plots_attitude.time_histories(runs, _attitude_title(df)), stem)
     steps = [df for df in frames if "channel" in df]
     if not steps:
         return files
@@ -144,6 +145,22 @@ def plot_files(
         if sets is not None:
             files += _set_figures(path, steps_df, sets, out, animation)
     return files
+
+
+def _attitude_title(df: pd.DataFrame) -> str:
+    """The title of an attitude trace's time histories, in words (as ``kvi attitude``
+    titles them, with the trace's estimator and noise): one figure per trace file, so
+    the title says whose it is."""
+    first = df.iloc[0]
+    controller = f", {first['controller']} controller" if "controller" in df else ""
+    runs = sorted(int(r) for r in df["run"].unique())
+    which = ", ".join(str(r) for r in runs)
+    noise = str(first["noise"]) if "noise" in df else None
+    seed = first["seed"] if "seed" in df else None
+    at = "" if seed is None or pd.isna(seed) else f" (seed {int(seed)})"
+    return (f"{first['scenario']}{controller}: time histories, "
+            f"{fs.words(str(first['estimator']), noise)}, "
+            f"run{'s' if len(runs) > 1 else ''} {which}{at}")  # fmt: skip
 
 
 def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> list[Path]:
@@ -198,7 +215,10 @@ def _set_figures(
         if len(prior):  # t = 1 s when recorded (the seed's Fig. 4), else the last prior step
             at = prior[prior["t_s"] == 1.0]
             step = int((at if len(at) else prior)["step"].max())
-            fig = plots_sets.stacked_3d(s, int(run), step, steps, title=f"{stem}, run {run}")
+            # words, not the file stem: scenario, estimator, noise, seed and run
+            title = (f"{s['scenario'].iloc[0]}: the set before and after the measurements, "
+                     f"{plots_sets.run_words(s, int(run))}")  # fmt: skip
+            fig = plots_sets.stacked_3d(s, int(run), step, steps, title=title)
             files += fs.save(fig, out / f"{stem}-run{run}-set3d")
         files += fs.save(plots_sets.slices(s, int(run), steps), out / f"{stem}-run{run}-slices")
         if animation:
