@@ -164,12 +164,17 @@ def figure_legend(fig, axes: Iterable, **kw) -> None:
     for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(lab, h)
-    if seen:
-        fig.legend(
-            list(seen.values()),
-            list(seen),
-            **{"loc": "outside lower center", "ncol": min(4, len(seen)), **kw},
-        )
+    if not seen:
+        return
+    opts = {"loc": "outside lower center", "ncol": min(4, len(seen)), **kw}
+    renderer = fig.canvas.get_renderer()
+    # fewer columns while it is wider than the figure (long labels, four columns: cut
+    # at both edges)
+    for ncol in range(int(opts["ncol"]), 0, -1):
+        leg = fig.legend(list(seen.values()), list(seen), **{**opts, "ncol": ncol})
+        if ncol == 1 or leg.get_window_extent(renderer).width <= 0.98 * fig.bbox.width:
+            return
+        leg.remove()
 
 
 def paper_line(ax, value: float, text: str, axis: str = "y", who: str = "paper") -> None:

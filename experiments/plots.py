@@ -18,8 +18,9 @@ from kalman_vs_infoset.experiments.figstyle import plt  # noqa: F401 - re-export
 
 PANELS = (("miss_m", "miss distance, m"), ("fuel_mps", "fuel (sum of |impulses|), m/s"))
 CDF_LABEL = "fraction of runs (CDF), -"
-#: above this many curves the legend goes below the panels (4 columns): with nine
-#: (3 estimators x 3 noises) a legend inside the fuel panel covered two filters' curves
+#: above this many legend entries in a panel (curves and reference marks) the legend
+#: goes below the panels (4 columns): with nine curves (3 estimators x 3 noises) a
+#: legend inside the fuel panel covered two filters' curves
 CROWDED_CURVES = 6
 
 
@@ -104,7 +105,10 @@ def cdf_figure(
     """
     ok = df[df["status"] == "ok"] if "status" in df else df
     n_curves = df.groupby(list(group_cols)).ngroups if len(df) else 0
-    crowded = n_curves > CROWDED_CURVES
+    # the entries of a panel's legend: its curves and its reference marks (fig5's four
+    # curves and three marks put a legend inside the fuel panel, over the game curves)
+    n_marks = max((len(v) for v in (references or {}).values()), default=0)
+    crowded = n_curves + n_marks > CROWDED_CURVES
     rows = -(-(n_curves + 2 * len(references or {})) // 4)  # legend rows below, 4 columns
     fig, axes = fs.figure(1, 2, size=(11, 4.4 + (0.17 * rows if crowded else 0.0)))
     variants = sorted(df["variant"].unique()) if "variant" in df else []

@@ -162,3 +162,37 @@ def test_the_gain_study_figures_have_titles_and_say_paper_not_seed(tmp_path, mon
         labels = [t.get_text() for t in ax.get_legend().get_texts()]
         assert not any(lab.lower().startswith("seed") or "seed " in lab for lab in labels), labels
     fs.plt.close("all")
+
+
+def test_curves_and_marks_together_put_the_legend_below_the_panels():
+    """Fig. 5's four curves and three reference marks a panel made a legend of seven
+    entries inside the fuel panel, over the game runs' curves: a panel's curves and
+    marks together decide, and the legend goes below both panels."""
+    rows = [{"variant": v, "noise": n, "miss_m": 1.0 + j, "fuel_mps": 100.0 + j,
+             "status": "ok"} for v in ("a", "b") for n in ("random", "game")
+            for j in range(3)]  # fmt: skip
+    marks = {"miss_m": [(4.3, "paper r"), (9.5, "paper g"), (1.15, "scale")],
+             "fuel_mps": [(244.7, "paper r"), (521.7, "paper g"), (44.8, "perfect")]}  # fmt: skip
+    fig = plots.cdf_figure(pd.DataFrame(rows), ["variant", "noise"], "t", marks)
+    assert fig.legends and not any(ax.get_legend() for ax in fig.axes)
+    fs.plt.close(fig)
+    few = plots.cdf_figure(
+        pd.DataFrame(rows), ["variant", "noise"], "t", {"miss_m": marks["miss_m"][:1]}
+    )
+    assert not few.legends and all(ax.get_legend() for ax in few.axes)  # 5 entries: inside
+    fs.plt.close(few)
+
+
+def test_a_figure_legend_wider_than_its_figure_takes_fewer_columns():
+    """Four columns of long labels (fig5's reference marks) made a legend wider than the
+    figure, cut at both edges; it takes fewer columns until it fits."""
+    fig, axes = fs.figure(1, 2, size=(11.0, 4.4))
+    for i in range(11):
+        axes[0, i % 2].plot(
+            [0, 1], [i, i], label=f"paper Fig. 3 (one engagement), mark {i}: 24{i}.7"
+        )
+    fs.figure_legend(fig, axes[0], fontsize=7, ncol=4)
+    (leg,) = fig.legends
+    box = leg.get_window_extent(fig.canvas.get_renderer())
+    assert box.width <= fig.bbox.width and leg._ncols < 4
+    fs.plt.close(fig)
