@@ -275,7 +275,7 @@ class Ellipsoid:
         check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
-        finite = np.isfinite(pts).all(axis=1)
+        finite = np.asarray(np.isfinite(pts).all(axis=1))  # (an array: mypy)
         if not finite.all():  # not in it (as for the box and the zonotope), without
             pts = np.where(finite[:, None], pts, self.centre)  # NaN warnings on the way
         lam, vec = self._eig

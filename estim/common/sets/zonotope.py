@@ -188,7 +188,7 @@ class Zonotope:
         check_tol(tol)
         x = points(x, self.dim)
         pts = np.atleast_2d(x)
-        finite = np.isfinite(pts).all(axis=1)
+        finite = np.asarray(np.isfinite(pts).all(axis=1))  # (an array: mypy)
         if not finite.all():  # answered below; the centre stands in for them meanwhile
             pts = np.where(finite[:, None], pts, self.centre)
         scale = max(float(np.abs(self.generators).sum(axis=1).max(initial=0.0)), 1.0)
