@@ -218,7 +218,8 @@ def _zoom(ctx, name, df, settle_s, title, log=False, points=None, note=None) -> 
         ax.axhline(0.01, color=fs.REFERENCE, lw=0.9, label="tolerance 0.01 deg")
     ax.set_xlabel("time t, s")
     ax.set_ylabel("error angle, deg")
-    fs.legend(ax, loc="upper right")
+    # centre right: in the upper right it covered the numbers 1-5 along the top
+    fs.legend(ax, loc="center right")
     fig.suptitle(title)
     ctx.save(fig, name)
 

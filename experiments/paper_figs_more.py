@@ -57,7 +57,7 @@ def akimov_fig8(ctx) -> dict[str, Any]:
             pd_.k_q, pd_.k_w, j, wh.torque_max_Nm, wh.momentum_max_Nms, pd_.quaternion_term
         )
     )
-    fig, axes = fs.figure(1, 1, size=(7.6, 4.6))
+    fig, axes = fs.figure(1, 1, size=(7.6, 5.4))  # (the legend below)
     ax = axes[0, 0]
     lo, hi = 0.1, 180.0
     for (a, b), name, colour in (
@@ -71,7 +71,10 @@ def akimov_fig8(ctx) -> dict[str, Any]:
     a_arr = np.array(list(peaks))
     ax.plot(a_arr, [peaks[a][0] for a in a_arr], "o-", color=fs.estimator_colour(exact_estimator()),
             label="exact state: peak |torque| / M_max")  # fmt: skip
-    ax.plot(a_arr, [peaks[a][1] for a in a_arr], "s--", color=fs.OKABE_ITO["blue"],
+    # the same estimator (colour), another quantity (marker and line): the blue said
+    # "information set" on every other figure
+    ax.plot(a_arr, [peaks[a][1] for a in a_arr], "s--",
+            color=fs.estimator_colour(exact_estimator()),
             label="exact state: peak |wheel momentum| / L_max")  # fmt: skip
     ax.axvline(phi10, color=fs.REFERENCE, lw=1.0,
                label=f"eq. (24): phi10 = {phi10:.2f} deg, phi20 = {phi20:.1f} deg")  # fmt: skip
@@ -83,7 +86,8 @@ def akimov_fig8(ctx) -> dict[str, Any]:
     ax.set_ylim(0.0, 1.25)
     ax.set_xlabel("initial angle phi0, deg")
     ax.set_ylabel("peak over the turn / limit, -")
-    fs.legend(ax, loc="center left", fontsize=6.5)
+    # below the panel: at the centre left it covered the torque's rise through regime I
+    fs.figure_legend(fig, [ax], fontsize=6.5, ncol=2)
     fig.suptitle(
         f"akimov_fig8: the three regimes of the initial angle (k_q = {pd_.k_q:g}, "
         f"k_w = {pd_.k_w:g}, J = {j:g} kg m^2,\nM_max = {wh.torque_max_Nm:g} N m, "
