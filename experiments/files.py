@@ -129,7 +129,11 @@ def exclusive(path: Path, what: str) -> Iterator[None]:
     told = False
     fd: int | None  # None: the file system cannot lock
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666 & ~_umask())
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666 & ~_umask())
+        except OSError as exc:  # said of the folder: the lock's name is ours, not the user's
+            why = f"{exc.strerror or exc}: cannot write a file in this folder"
+            raise OSError(exc.errno, why, str(path.parent)) from None
         try:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

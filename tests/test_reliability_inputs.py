@@ -760,3 +760,13 @@ def test_trace_takes_run_ids_or_none_and_refuses_a_mix(capsys):
     for bad in ("none,1", "1,1", "-1", "", "0,,3"):
         with pytest.raises(argparse.ArgumentTypeError, match="or 'none'"):
             parse_runs(bad)
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="a folder no file can be made in")
+def test_an_out_folder_that_takes_no_file_is_named_not_the_lock(short, capsys):
+    """``--out /proc`` (a folder where no file can be made) said "No such file or
+    directory (/proc/.short-ekf-random-s3.parquet.lock)": the package's own lock file.
+    The line names the folder given."""
+    r = run(capsys, "intercept", short, "--estimators", "ekf", "--runs", "1", "--out", "/proc")
+    assert one_line_error(r), r.stderr
+    assert "cannot write a file in this folder (/proc)" in r.stderr and ".lock" not in r.stderr
