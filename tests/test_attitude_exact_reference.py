@@ -57,6 +57,9 @@ EPS = 1e-7
 #: (second order: 1e-5 of a perturbation of their size, the last test) and the first-order
 #: change of frame between the set's reference and the truth (the same order)
 REL_TOL = 1e-4
+#: the LP solver's feasibility tolerances (absolute; HiGHS's smallest): its default 1e-7
+#: let an optimum pass its constraints by more than REL_TOL of a rate's width
+LP_TOLERANCES = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
 
 def _delta(xt: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -159,8 +162,12 @@ def exact_reference(seed: int, steps: int, times: tuple[int, ...], record: dict 
         lo, hi = np.empty(6), np.empty(6)
         for i in range(6):
             for sign, store in ((1.0, lo), (-1.0, hi)):
+                # HiGHS's default feasibility tolerance (1e-7, absolute) is the size of
+                # these rates' bounds' last thousandths: an optimum 5.8e-8 rad/s past its
+                # own rate constraint read as a box narrower than the exact set (make fuzz
+                # seed 1207201); at 1e-10 the solver's slack is 3e-6 of the widths
                 res = linprog(sign * m[i, :n_z], A_ub=lhs, b_ub=rhs, bounds=limits,
-                              method="highs")  # fmt: skip
+                              method="highs", options=LP_TOLERANCES)  # fmt: skip
                 assert res.status == 0, res.message  # the truth itself is feasible
                 store[i] = sign * res.fun
         row = {"step": k + 1, "lo": lo, "hi": hi}
