@@ -150,9 +150,7 @@ def _figures(req: AttitudeRequest, table: pd.DataFrame, histories: list) -> list
 
         # words, not the file stem (the legend names each traced run's estimator and noise)
         runs = sorted({int(h["run"].iloc[0]) for h in histories if "run" in h})
-        which = ", ".join(str(r) for r in runs) or "0"
-        title = (f"{req.name}, {req.controller} controller: time histories, "
-                 f"run{'s' if len(runs) > 1 else ''} {which} (seed {req.seed})")  # fmt: skip
+        title = plots_attitude.history_title(req.name, req.controller, runs, req.seed)
         fig = plots_attitude.time_histories(histories, title)
         files += [str(f) for f in figstyle.save(fig, req.out / f"{stem}-history")]
     return files

@@ -86,6 +86,18 @@ def _limits(df: pd.DataFrame, column: str) -> str | None:
     return "momentum_max_Nms" if column == "momentum_Nms" else None
 
 
+def history_title(scenario: str, controller: str | None, runs: Sequence[int], seed=None,
+                  who: str = "") -> str:  # fmt: skip
+    """The time histories' title in words (``kvi attitude``'s and ``kvi plot``'s): the
+    scenario, the controller, ``who`` (an estimator and noise) when one trace is drawn,
+    the runs and the seed."""
+    which = ", ".join(str(r) for r in runs) or "0"
+    head = scenario + (f", {controller} controller" if controller else "")
+    seed_text = "" if seed is None else f" (seed {seed})"
+    return (f"{head}: time histories, {who + ', ' if who else ''}"
+            f"run{'s' if len(runs) > 1 else ''} {which}{seed_text}")  # fmt: skip
+
+
 def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
     """The attitude command's figure of one or more traced runs (module docstring)."""
     first = traces[0]

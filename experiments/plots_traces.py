@@ -151,16 +151,17 @@ def _attitude_title(df: pd.DataFrame) -> str:
     """The title of an attitude trace's time histories, in words (as ``kvi attitude``
     titles them, with the trace's estimator and noise): one figure per trace file, so
     the title says whose it is."""
+    from kalman_vs_infoset.experiments import plots_attitude
+
     first = df.iloc[0]
-    controller = f", {first['controller']} controller" if "controller" in df else ""
-    runs = sorted(int(r) for r in df["run"].unique())
-    which = ", ".join(str(r) for r in runs)
     noise = str(first["noise"]) if "noise" in df else None
     seed = first["seed"] if "seed" in df else None
-    at = "" if seed is None or pd.isna(seed) else f" (seed {int(seed)})"
-    return (f"{first['scenario']}{controller}: time histories, "
-            f"{fs.words(str(first['estimator']), noise)}, "
-            f"run{'s' if len(runs) > 1 else ''} {which}{at}")  # fmt: skip
+    return plots_attitude.history_title(
+        str(first["scenario"]), str(first["controller"]) if "controller" in df else None,
+        sorted(int(r) for r in df["run"].unique()),
+        None if seed is None or pd.isna(seed) else int(seed),
+        fs.words(str(first["estimator"]), noise),
+    )  # fmt: skip
 
 
 def _step_figures(df: pd.DataFrame, name: str, tag: str, out: Path, paper) -> list[Path]:

@@ -41,9 +41,7 @@ def directions(d: ArrayLike, n: int) -> FloatArray:
     """``d`` as finite float directions of dimension ``n`` (shape (n,) or (k, n)), for a
     support function: the same checks as :func:`vector` for one direction (a NaN
     direction gave a NaN support, another length a numpy matmul error)."""
-    a = np.asarray(d, dtype=float)
-    if a.ndim not in (1, 2) or a.shape[-1] != n:
-        raise ValueError(f"d must have shape ({n},) or (k, {n}), got {a.shape}")
+    a = points(d, n, "d")
     if not np.isfinite(a).all():
         raise ValueError("d must be finite")
     return a
@@ -55,13 +53,13 @@ def check_tol(tol: float) -> None:
         raise ValueError(f"tol must be finite and >= 0, got {tol!r}")
 
 
-def points(x: ArrayLike, n: int) -> FloatArray:
+def points(x: ArrayLike, n: int, name: str = "points") -> FloatArray:
     """``x`` as float points of dimension ``n`` (shape (n,) or (k, n)), for a containment
     test: a point of another dimension is an error, not broadcast against the set. NaN
     is kept (never inside: every comparison with it is false)."""
     a = np.asarray(x, dtype=float)
     if a.ndim not in (1, 2) or a.shape[-1] != n:
-        raise ValueError(f"points must have shape ({n},) or (k, {n}), got {a.shape}")
+        raise ValueError(f"{name} must have shape ({n},) or (k, {n}), got {a.shape}")
     return a
 
 
