@@ -60,6 +60,7 @@ def intercept_job(
         # another estimator's options table decides none of these runs, nor its code
         decides=partial(tables_kept, "intercept", ("estimator", "options"), read),
         reads=read - {estimator},
+        text=frozenset({"final_status"}),
     )
 
 

@@ -74,15 +74,18 @@ def _columns(schema: pa.Schema) -> list[list[str]]:
     return [[f.name, str(f.type)] for f in schema]
 
 
-def check_columns(path: Path) -> None:
+def check_columns(path: Path, text: frozenset[str] = frozenset()) -> None:
     """Refuse (one line) a table whose columns are not those it was written with: a
     file changed by another tool since the package wrote it (a number column turned to
     text ended a resume in a traceback: the summary could not convert it, or the save
     could not put it beside the new runs' numbers). A table without the record (an
-    earlier release's, or one rewritten by pandas, which drops it) is not checked."""
+    earlier release's, or one rewritten by pandas, which drops it) is checked for the
+    same edit by the columns the package writes as text, ``text``: any other column of
+    text is refused."""
     schema = pq.read_schema(path)
     recorded = (schema.metadata or {}).get(COLUMNS_KEY)
     if recorded is None:
+        _check_text_columns(path, schema, text)
         return
     try:
         written = {name: kind for name, kind in json.loads(recorded)}
@@ -96,6 +99,17 @@ def check_columns(path: Path) -> None:
                 f"{path}: its columns are not those this package wrote (column {name!r}: "
                 f"{was} written, {is_} now; the file was changed since); delete it to "
                 "compute its runs again"
+            )
+
+
+def _check_text_columns(path: Path, schema: pa.Schema, text: frozenset[str]) -> None:
+    """:func:`check_columns` of a table without its columns' record: text only in the
+    columns ``text``."""
+    for f in schema:
+        if f.name not in text and (pa.types.is_string(f.type) or pa.types.is_large_string(f.type)):
+            raise InputError(
+                f"{path}: its column {f.name!r} holds text where this package writes "
+                "numbers (the file was changed since); delete it to compute its runs again"
             )
 
 

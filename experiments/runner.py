@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 from kalman_vs_infoset.experiments.errors import InputError, check_stop, runs_text
 from kalman_vs_infoset.experiments.executors import (  # noqa: F401 - re-exported
     WorkerLost,
@@ -92,6 +93,9 @@ class Job:
     #: other registered estimators whose code decides the runs (the game adversary's
     #: information set): a plug-in among them is recorded and checked as the job's own
     reads: frozenset[str] = frozenset()
+    #: columns of text a row holds besides ``status``, ``error`` and the text of
+    #: ``base`` (a resumed table rewritten by another tool is checked against them)
+    text: frozenset[str] = frozenset()
 
     @property
     def desc(self) -> str:
@@ -125,7 +129,16 @@ def check_runs(runs: int) -> int:
 
 def _write_rows(path: Path, rows: list[dict[str, Any]], meta: dict[str, Any]) -> None:
     df = _typed(pd.DataFrame(rows), rows).sort_values("run").reset_index(drop=True)
-    write_table(path, df, meta)  # the description travels in the Parquet metadata too
+    try:
+        write_table(path, df, meta)  # the description travels in the Parquet metadata too
+    except (pa.ArrowTypeError, pa.ArrowInvalid) as exc:
+        # previous rows of other types than the new ones (a table changed by another
+        # tool that check_columns could not tell): one line; the table stays as it was
+        said = str(exc.args[0] if exc.args else exc).splitlines()[0]
+        raise InputError(
+            f"{path}: the new runs cannot be saved beside its previous rows ({said}); "
+            "delete it to compute its runs again"
+        ) from None
 
 
 def _typed(df: pd.DataFrame, rows: list[dict[str, Any]]) -> pd.DataFrame:
@@ -147,7 +160,7 @@ def _typed(df: pd.DataFrame, rows: list[dict[str, Any]]) -> pd.DataFrame:
     return df
 
 
-def _read_table(path: Path) -> dict[int, dict[str, Any]]:
+def _read_table(path: Path, job: Job) -> dict[int, dict[str, Any]]:
     """The rows of a results table by run, or one line naming the file and the remedy."""
     try:
         df = pd.read_parquet(path)
@@ -156,7 +169,9 @@ def _read_table(path: Path) -> dict[int, dict[str, Any]]:
             f"{path}: cannot read previous results ({type(exc).__name__}); delete {path} "
             "to compute its runs again"
         ) from None
-    check_columns(path)  # changed since written: one line, not a traceback later
+    # changed since written: one line, not a traceback later
+    words = {k for k, v in job.base.items() if isinstance(v, str)} | {"status", "error"}
+    check_columns(path, frozenset(words) | job.text)
     if not {"run", "status"} <= set(df.columns):
         raise InputError(
             f"{path}: not a results table (no 'run' and 'status' columns); use another "
@@ -221,7 +236,7 @@ def run_job(
     if path.exists() and not _check_resumable(
         path, existing_sidecar(path), meta, rerun_other_code, job.decides
     ):
-        table = _read_table(path)
+        table = _read_table(path, job)
         if all(table.get(j, {}).get("status") == "ok" for j in range(runs)):
             _say_all_done(job, runs, path)  # the output is otherwise the same
             return _reported(job, path, table, runs)
@@ -245,7 +260,7 @@ def run_job(
                     print(f"{job.desc}: {path.name} was written by other code: its runs "
                           "are run again", file=sys.stderr)  # fmt: skip
                 else:
-                    table = _read_table(path)
+                    table = _read_table(path, job)
             if not meta_path.exists() or _read_json(meta_path) != meta:
                 wrote_meta = not meta_path.exists()
                 text = json.dumps(meta, indent=2)

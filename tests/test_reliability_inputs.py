@@ -449,6 +449,48 @@ def test_a_table_whose_column_types_were_changed_is_refused_on_resume(short, tmp
     assert len(pq.read_table(path)) == 1  # no run added
 
 
+@pytest.mark.parametrize("text", [["4.5"], ["n/a"]], ids=["numbers", "words"])
+def test_a_table_rewritten_by_pandas_with_text_in_a_number_column_is_refused(
+    short, tmp_path, capsys, text
+):
+    """pandas drops the record of the columns' types when it rewrites a table: a number
+    column turned to text there ended a resume in a traceback (the summary's float
+    conversion, or the save beside the new runs' numbers). The package writes text only
+    in the columns it names (status, error, names): any other is refused in one line,
+    before any run; a plain pandas rewrite still resumes (test_defects, i)."""
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    (path,) = out.glob("*.parquet")
+    df = pd.read_parquet(path)
+    df["miss_m"] = text * len(df)
+    df.to_parquet(path, index=False)
+    for runs in (1, 2):  # everything done, or a run to add
+        r = run(capsys, *args[:3], runs, *args[4:])
+        assert one_line_error(r), r.stderr
+        assert path.name in r.stderr and "'miss_m'" in r.stderr and "delete it" in r.stderr
+    assert len(pd.read_parquet(path)) == 1  # no run added
+
+
+def test_rows_that_cannot_be_saved_beside_a_rewritten_table_are_one_line(short, tmp_path, capsys):
+    """A rewritten table whose text column (``final_status``) now holds numbers passes
+    the check of the text columns; the new runs' words cannot be saved in that column:
+    one line naming the file after the line saying what runs (was a pyarrow
+    traceback), and the table left as it was."""
+    out = tmp_path / "out"
+    args = ["intercept", short, "--runs", 1, "--workers", 1, "--no-progress", "--out", out]
+    assert run(capsys, *args).returncode == 0
+    (path,) = out.glob("*.parquet")
+    df = pd.read_parquet(path).assign(final_status=1.5)
+    df.to_parquet(path, index=False)
+    r = run(capsys, *args[:3], 2, *args[4:])
+    said = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert "1 run of 2 already in" in said[0] and len(said) == 2  # then the error
+    assert path.name in said[1] and "cannot be saved" in said[1]
+    assert pd.read_parquet(path).equals(df)
+
+
 def test_a_resume_refusal_names_the_changed_field(tmp_path, capsys):
     """A field that changes what a run gives is named with both values. (The
     description and the [experiment] table do not change a run: a resume takes them,
