@@ -52,9 +52,10 @@ outer bound whatever its free parameter, the parameter choosing only the tightne
   \\varepsilon) - G` (``G = g/r^2``, :math:`\\varepsilon = e^2/r^2`; 0 when :math:`n (1 -
   \\varepsilon) \\ge G`), as :meth:`estim.common.sets.Ellipsoid.intersect_strip`, in closed form
   and batched. ``criterion="trace"``: their minimum of :math:`\\mathrm{tr} P^+`, among 0
-  and the positive roots of a cubic (as :func:`estim.common.sets.ellipsoid._trace_rho`), the
-  roots batched as companion-matrix eigenvalues (the trace mixes rad² and (rad/s)²: the
-  volume is the unit-free choice). Six strips a step, the ``i``-th on the result of the
+  and the positive roots of a cubic (as
+  :func:`estim.common.sets._ellipsoid_weights._trace_rho`), the roots batched as
+  companion-matrix eigenvalues (the trace mixes rad² and (rad/s)²: the volume is the
+  unit-free choice). Six strips a step, the ``i``-th on the result of the
   previous.
 
 Membership (:meth:`EllipsoidAttitudeBelief.set_inside`) is exact: in the eigenbasis of
@@ -93,7 +94,7 @@ from kalman_vs_infoset.estim.attitude.sets.common import (
     SetAttitudeEstimator,
 )
 from kalman_vs_infoset.estim.attitude.sets.options import ELLIPSOID
-from kalman_vs_infoset.estim.common.sets.ellipsoid import volume_weights
+from kalman_vs_infoset.estim.common.sets._ellipsoid_weights import volume_weights
 from numpy.typing import NDArray
 
 N = 6

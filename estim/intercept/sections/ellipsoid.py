@@ -40,7 +40,7 @@ from typing import Literal
 import numpy as np
 from kalman_vs_infoset.estim.common.polygons import ConvexPolygons
 from kalman_vs_infoset.estim.common.sets import Ellipsoid, EmptyIntersectionError
-from kalman_vs_infoset.estim.common.sets.ellipsoid import volume_weights
+from kalman_vs_infoset.estim.common.sets._ellipsoid_weights import volume_weights
 from kalman_vs_infoset.estim.intercept.sections.options import ELLIPSOID
 from kalman_vs_infoset.estim.intercept.slabs.sections import (
     BoolArray,
