@@ -71,9 +71,22 @@ def test_150deg_maneuver_settles_in_30_to_45_s_and_respects_wheel_limits():
     # the momentum limit is reached (regime III of Fig. 8) and total momentum stays zero
     assert np.max(np.abs(tr.x[:, 9])) == pytest.approx(L_MAX, rel=1e-9)
     np.testing.assert_allclose(J * tr.x[:, 6] + tr.x[:, 9], 0.0, atol=1e-12)
-    # the single-axis batch of the gain study reproduces the 3-axis settle time
+    # the single-axis batch of the gain study reproduces the 3-axis settle time, to the
+    # sample (it gave the last sample that failed the criterion, one period early)
     t_batch = gs.settle_times(np.radians(150.0), 1.375, 2.625, gs.MANEUVER_150)
-    assert float(t_batch) == pytest.approx(t_s, abs=0.02)
+    assert float(t_batch) == pytest.approx(t_s, abs=0.005)
+    i = int(np.argmin(np.abs(tr.time_s - float(t_batch))))
+    tol = (gs.MANEUVER_150.angle_tol_deg, gs.MANEUVER_150.rate_tol_degps)
+    assert np.all((angle[i:] < tol[0]) & (rate[i:] < tol[1]))  # settled from there on
+    assert angle[i - 1] >= tol[0] or rate[i - 1] >= tol[1]  # and not a sample earlier
+
+
+def test_a_turn_already_within_the_tolerance_settles_at_zero():
+    """The settle time is the first sample from which the criterion holds: the initial
+    state when it already does."""
+    small = np.radians(0.5 * gs.MANEUVER_150.angle_tol_deg)
+    t = gs.settle_times([0.0, small, np.radians(150.0)], 1.375, 2.625, gs.MANEUVER_150)
+    assert t[0] == 0.0 and t[1] == 0.0 and t[2] > 30.0
 
 
 @pytest.mark.parametrize("factor, saturates", [(0.9, False), (1.1, True)])

@@ -141,7 +141,9 @@ def settle_times(
     tol_a = np.radians(settings.angle_tol_deg)
     tol_r = np.radians(settings.rate_tol_degps)
     n = int(round(settings.horizon_s / dt))
-    last_bad = np.zeros(shape, dtype=np.int64)
+    # the last sample (0 the initial state, i + 1 after period i) that fails the criterion;
+    # settled at the next one (-1: the initial state already meets it, settled at 0 s)
+    last_bad = np.where((np.abs(phi) >= tol_a) | (np.abs(w) >= tol_r), 0, -1)
     u, tmp = np.empty(shape), np.empty(shape)
     bad, bad2 = np.empty(shape, dtype=bool), np.empty(shape, dtype=bool)
     for i in range(n):
@@ -169,7 +171,7 @@ def settle_times(
         np.greater_equal(tmp, tol_r, out=bad2)
         bad |= bad2
         np.copyto(last_bad, i + 1, where=bad)
-    t_settle = np.asarray(last_bad * dt, dtype=float)
+    t_settle = np.asarray((last_bad + 1) * dt, dtype=float)
     return np.where(t_settle > settings.horizon_s - settings.hold_s, np.inf, t_settle)
 
 
