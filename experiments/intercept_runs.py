@@ -10,6 +10,7 @@ A run that takes long shows its steps (:func:`experiments.progress.step_progress
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from functools import partial
@@ -178,6 +179,7 @@ def run_grid(
     in the order estimator-major. ``args`` holds the runner's options
     (:func:`experiments.options.add_runner`)."""
     check_plug_ins(sc, estimators)
+    warn_unread_tables(getattr(args, "overrides", None) or (), estimators, noises)
     rows, frames = [], []
     for est in estimators:
         for noise in noises:
@@ -195,6 +197,25 @@ def run_grid(
             rows.append(row)
             frames.append(df)
     return rows, frames
+
+
+def warn_unread_tables(
+    overrides: Sequence[str], estimators: Sequence[str], noises: Sequence[str]
+) -> None:
+    """One warning for each ``--set estimator.NAME.KEY`` whose table no run of the
+    command reads (:func:`estimators_read`: the run's estimator, and under game errors
+    the adversary's set): its results would equal the original's under another name."""
+    read = set().union(*(estimators_read(e, n) for e in estimators for n in noises))
+    for item in overrides:
+        key = item.partition("=")[0].strip()
+        parts = key.split(".")
+        if len(parts) == 3 and parts[0] == "estimator" and parts[1] not in read:
+            warnings.warn(
+                f"--set {key} has no effect: no run here reads [estimator.{parts[1]}] "
+                f"(these runs read {', '.join(sorted(read))})",
+                UserWarning,
+                stacklevel=2,
+            )
 
 
 def check_plug_ins(sc: InterceptScenario, estimators: Sequence[str]) -> None:

@@ -81,17 +81,21 @@ def worst_point(belief: ChannelSet, model: ChannelModel) -> np.ndarray:
     return belief.attained(MissForecast(model)).largest_abs()[1]
 
 
+#: the game's errors sit this relative margin inside their bounds: both points stay
+#: strictly inside the measurement's interval after rounding (docs/models.md §1.6)
+GAME_MARGIN = 1e-9
+
+
 def game_bearing(alpha_true: float, bound_true: float, belief: ChannelSet) -> float:
     """The adversary's bearing for one channel (rules (a)-(c) of the module docstring);
     ``belief`` is a set with ``alpha_range_rad()`` (the slab, point or node set)."""
     model = belief.model
-    if belief.is_empty:
-        return alpha_true + bound_true
+    b_t = bound_true * (1 - GAME_MARGIN)
+    if belief.is_empty:  # no worst point: the error at its bound (the margin inside)
+        return alpha_true + b_t
     worst = worst_point(belief, model)
     a_w, x_w = float(worst[0]), float(worst[2])
-    # a tiny inward margin keeps both points strictly inside after rounding
-    b_t = bound_true * (1 - 1e-9)
-    b_w = float(model.bearing_bound(x_w)) * (1 - 1e-9)
+    b_w = float(model.bearing_bound(x_w)) * (1 - GAME_MARGIN)
     lo, hi = max(alpha_true - b_t, a_w - b_w), min(alpha_true + b_t, a_w + b_w)
     if lo <= hi:
         # the overlap of [a - B, a + B] with the extent is concave in a and symmetric
@@ -105,7 +109,7 @@ def game_bearing(alpha_true: float, bound_true: float, belief: ChannelSet) -> fl
 def game_range(range_true_m: float, rel_bound: float, x_worst_m: float, x_lo: float, x_hi: float):
     """The adversary's range measurement: ``|d_m - d| <= b d`` and the interval
     ``[d_m/(1+b), d_m/(1-b)]`` covers the worst point's range, centred on the set."""
-    b = rel_bound * (1 - 1e-9)
+    b = rel_bound * (1 - GAME_MARGIN)
     lo = max(range_true_m * (1 - b), x_worst_m * (1 - b))
     hi = min(range_true_m * (1 + b), x_worst_m * (1 + b))
     if lo <= hi:

@@ -125,6 +125,22 @@ def test_game_bearing_always_contains_the_truth(y, vy, alpha_err, x):
         assert abs(a_m - worst[0]) <= float(MODEL.bearing_bound(worst[2]))
 
 
+def test_game_bearing_on_an_empty_set_sits_the_margin_inside_the_bound():
+    """docs/models.md §1.6: the adversary's errors sit a relative 1e-9 inside their bound,
+    also where the pursuer's set is empty and there is no worst point (that branch put
+    the error exactly at the bound)."""
+    from dataclasses import dataclass
+
+    @dataclass
+    class Empty:
+        model = MODEL
+        is_empty = True
+
+    bound = float(MODEL.bearing_bound(6e6))
+    err = game_bearing(1e-3, bound, Empty()) - 1e-3
+    assert 0 < bound - err and err == pytest.approx(bound * (1 - 1e-9), abs=1e-18)
+
+
 @given(d=st.floats(1e4, 1e7), xw=st.floats(1e4, 1e7))
 def test_game_range_always_contains_the_truth(d, xw):
     b = 0.05

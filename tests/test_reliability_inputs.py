@@ -697,6 +697,35 @@ def test_an_override_of_an_option_the_estimator_does_not_read_is_warned(capsys, 
     ]
 
 
+def test_an_override_of_a_table_no_run_reads_is_warned(capsys, tmp_path):
+    """``--set estimator.ekf.n_sigma=1`` on runs of the information set ran them under a
+    new name, silently (their results equal the original's): a table that no run of the
+    command reads is warned, once; the information set's options under game errors are
+    read by the adversary's set, whatever the pursuer, and are not warned."""
+    base = ["--runs", "1", "--workers", "1", "--no-progress"]
+
+    def warned(*args):
+        r = run(capsys, "intercept", "kp_fig3", *base, *args)
+        assert r.returncode == 0, r.stderr
+        return [line for line in r.stderr.splitlines() if "has no effect" in line]
+
+    assert warned(
+        "--estimators",
+        "infoset",
+        "--noise",
+        "random",
+        "--out",
+        tmp_path / "a",
+        "--set",
+        "estimator.ekf.n_sigma=1.0",
+    ) == [  # fmt: skip
+        "kvi: warning: --set estimator.ekf.n_sigma has no effect: no run here reads "
+        "[estimator.ekf] (these runs read infoset)"
+    ]
+    assert warned("--estimators", "ekf", "--noise", "game", "--out", tmp_path / "b",
+                  "--set", "estimator.infoset.n_nodes=8") == []  # fmt: skip
+
+
 def test_a_table_copied_beside_another_jobs_description_is_refused(tmp_path, capsys):
     """The table's own description decides a resume: a table of one scenario copied
     (without its ``_meta`` JSON) over the table of another was resumed under the other's
