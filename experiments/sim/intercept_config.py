@@ -100,10 +100,10 @@ class ModelTable(Table):
         0.005, "disturbance bound nu, m/s^2"
     )
     bearing_bound_start_rad: Annotated[float, float_bounds(1e-7, 0.1)] = field(
-        1.5e-4, "bearing bound at nominal range"
+        1.5e-4, "bearing bound at nominal range, rad"
     )
     bearing_bound_end_rad: Annotated[float, float_bounds(1e-7, 0.1)] = field(
-        2.3e-4, "bearing bound at zero range"
+        2.3e-4, "bearing bound at zero range, rad"
     )
     nominal_range_km: Annotated[float, float_bounds(10.0, 1e6)] = field(
         5801.3, "range of the start bound, km"
