@@ -39,11 +39,13 @@ DERIVED = {
     r"moved by up to ([\d.]+) % from its approach's median, and the slope through one pass "
     r"of each approach read ([\d.]+) to ([\d.]+) over the six passes",
     "make_run": r"what `make run` runs after its install, took ([\d.]+) s\s+of wall clock",
-    "make_run_now": r"took ([\d.]+), ([\d.]+) and ([\d.]+) s of wall clock in three runs in a "
-    r"row, ([\d.]+) to ([\d.]+)\s+CPU-s each \(`docs/results/make_run_wall\.json`\): under "
-    r"the target of 30 s there",
+    "make_run_now": r"took ([\d.]+) to ([\d.]+) s of wall clock\s+over (\d+) runs in two "
+    r"series half an hour\s+apart, at ([\d.]+) to ([\d.]+) CPU-s for the same work "
+    r"\(`docs/results/make_run_wall\.json`\):\s+under the target of 30 s in (\d+) of the "
+    r"(\d+),",
     "make_run_row": r"\| `make run`, wall clock, 2 cores, nothing else running "
-    r"\(`make_run_wall\.json`\) \| ([\d.]+) to ([\d.]+) s \| <= 30 s \|",
+    r"\(`make_run_wall\.json`\) \| ([\d.]+) to ([\d.]+) s, (\d+) of (\d+) runs within \| "
+    r"<= 30 s \(met on a quiet host only\) \|",
     "interleaved": r"\(`docs/results/bench_interleaved_1\.json` and `_2\.json`, load average "
     r"([\d.]+) and ([\d.]+), the second beside a test run\) read the whole approach at "
     r"([\d.]+) and ([\d.]+) UKF steps, the UKF's step there at (\d+) and (\d+) us",
@@ -200,13 +202,14 @@ def test_the_make_run_wall_clock_is_the_study_file():
 
 
 def test_make_run_today_is_its_timing_file():
-    """`make run` timed three times in a row (``docs/results/make_run_wall.json``: wall
-    clock and the children's CPU time of each): the page's numbers are the file's, and
-    the page says "under the target" only if every run was."""
+    """`make run` timed in two series (``docs/results/make_run_wall.json``: wall clock and
+    the children's CPU time of each run): the page's numbers, in its prose and in the
+    goals' table, are the file's, the count within 30 s included."""
     timed = results("docs/results/make_run_wall.json")
-    walls = [r["wall_s"] for r in timed["runs"]]
-    cpus = [r["cpu_s"] for r in timed["runs"]]
+    runs = [r for series in timed["series"] for r in series["runs"]]
+    walls, cpus = [r["wall_s"] for r in runs], [r["cpu_s"] for r in runs]
+    within = sum(w <= 30.0 for w in walls)
     assert timed["command"] == "rm -rf results/fig5 && make run" and timed["cpus"] == 2
-    agree_each(_read("make_run_now"), [*walls, min(cpus), max(cpus)])
-    agree_each(_read("make_run_row"), [min(walls), max(walls)])  # the goals' table
-    assert max(walls) <= 30.0
+    shown = [min(walls), max(walls), len(runs), min(cpus), max(cpus), within, len(runs)]
+    agree_each(_read("make_run_now"), shown)
+    agree_each(_read("make_run_row"), [min(walls), max(walls), within, len(runs)])
