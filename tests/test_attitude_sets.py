@@ -46,6 +46,26 @@ ESTIMATORS = {"zonotope": ZonotopeAttitudeEstimator, "ellipsoid": EllipsoidAttit
 MODEL = AttitudeModel(np.diag([1.0, 1.5, 2.0]), 1e-4, np.radians(0.01), np.radians(0.001))
 
 
+# -- the containment check ----------------------------------------------------------
+@pytest.mark.parametrize("name", ["box", "zonotope", "ellipsoid"])
+def test_the_containment_check_allows_rounding_only(name):
+    """The count of steps outside allows the check's own rounding and nothing more: a
+    state 1e-13 rad/s past the set's largest rate is outside (the check allowed 1e-12,
+    0.3 % of the narrowest rate set the loops have); the largest rate itself is inside."""
+    est = {"box": BoxAttitudeEstimator, **ESTIMATORS}[name](MODEL)
+    x = np.zeros((1, 7))
+    x[0, 3] = 1.0
+    belief = est.initial(AttitudePrior(_measure_at(x[0], MODEL, np.zeros(6))))
+    # the largest x rate the set holds: the box's upper face (the sets lie inside it)
+    top = float(np.max(belief.extremes(RateComponent(0)).max_value))
+    at = x.copy()
+    at[0, 4] = top
+    assert belief.inside(at)[0]
+    past = at.copy()
+    past[0, 4] = top + 1e-13
+    assert not belief.inside(past)[0]
+
+
 # -- maps and their remainders against scipy and DOP853 ---------------------------------
 def test_right_jacobian_against_scipy():
     rng = np.random.default_rng(0)

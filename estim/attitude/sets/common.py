@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 from kalman_vs_infoset.estim.attitude.box.estimator import (
+    INSIDE_TOL,
     BoxAttitudeBelief,
     BoxAttitudeEstimator,
     EmptyRunCounts,
@@ -151,7 +152,7 @@ class SetAttitudeBelief(EmptyRunCounts, AttitudeBelief):
         x = np.atleast_2d(np.asarray(state, dtype=float))
         return np.concatenate([qlog(qmul(qinv(self.q_ref), x[:, 0:4])), x[:, 4:7]], -1)
 
-    def inside(self, state: ArrayLike, tol: float = 1e-12) -> NDArray[np.bool_]:
+    def inside(self, state: ArrayLike, tol: float = INSIDE_TOL) -> NDArray[np.bool_]:
         """Per run: whether the state ``(q, w, ...)`` lies in ``Z ∩ B`` (exact tests)."""
         state = run_states(state, self.runs)
         x = self.error_of(state)
