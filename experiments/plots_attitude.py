@@ -133,7 +133,9 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
             tau = float(d["guaranteed_time_s"].iloc[0])
             for ax in bottom:
                 ax.axvline(tau, color=fs.REFERENCE, ls="--", lw=0.9, label="guaranteed time tau")
-    for ax, col in ((bottom[0], "angle_deg"), (bottom[2], "rate_norm_degps")):
+    panels = ((bottom[0], "angle_deg", "error angle, deg"),
+              (bottom[2], "rate_norm_degps", "rate norm, deg/s"))  # fmt: skip
+    for ax, col, what in panels:
         # the rows drawn (axis 1's)
         values = np.concatenate(
             [df.loc[df["axis"] == 1, col].to_numpy(dtype=float) for df in traces]
@@ -143,11 +145,9 @@ def time_histories(traces: Sequence[pd.DataFrame], title: str = ""):
         if np.any(np.isfinite(values) & (values > 0)):
             ax.set_yscale("log")
             # a zero (a turn from rest starts at rate 0) leaves the log axis unseen
-            zero = np.any(values <= 0.0)
-            what = "error angle, deg" if col == "angle_deg" else "rate norm, deg/s"
-            ax.set_ylabel(what + ("\n(log; zeros not drawn)" if zero else ""))
-        else:
-            ax.set_ylabel("error angle, deg" if col == "angle_deg" else "rate norm, deg/s")
+            if np.any(values <= 0.0):
+                what += "\n(log; zeros not drawn)"
+        ax.set_ylabel(what)
     # two lines: one ran into the panel above (the energy index Z of the CDFs, M^T M)
     bottom[1].set_ylabel("energy so far\n(sum M^T M dt), N^2 m^2 s")
     for ax in bottom:
