@@ -25,6 +25,7 @@ from kalman_vs_infoset.experiments.limits import RunLimits, reraise_timeout
 from kalman_vs_infoset.experiments.options import run_limits
 from kalman_vs_infoset.experiments.progress import step_progress
 from kalman_vs_infoset.experiments.runner import Job, check_seed, run_job, run_seed
+from kalman_vs_infoset.experiments.scenario import estimator_option
 from kalman_vs_infoset.experiments.sim.estimator_tables import tables_kept
 from kalman_vs_infoset.experiments.sim.intercept import (
     Engagement,
@@ -207,11 +208,10 @@ def warn_unread_tables(
     the adversary's set): its results would equal the original's under another name."""
     read = set().union(*(estimators_read(e, n) for e in estimators for n in noises))
     for item in overrides:
-        key = item.partition("=")[0].strip()
-        parts = key.split(".")
-        if len(parts) == 3 and parts[0] == "estimator" and parts[1] not in read:
+        found = estimator_option(item)
+        if found is not None and found[1] not in read:
             warnings.warn(
-                f"--set {key} has no effect: no run here reads [estimator.{parts[1]}] "
+                f"--set {found[0]} has no effect: no run here reads [estimator.{found[1]}] "
                 f"(these runs read {', '.join(sorted(read))})",
                 UserWarning,
                 stacklevel=2,

@@ -295,20 +295,30 @@ def load_scenario(
     return sc
 
 
+def estimator_option(item: str) -> tuple[str, str, str] | None:
+    """``(key, estimator, option)`` of an override ``estimator.NAME.OPTION=VALUE``;
+    ``None`` for an override of any other field."""
+    key = item.partition("=")[0].strip()
+    parts = key.split(".")
+    if len(parts) != 3 or parts[0] != "estimator":
+        return None
+    return key, parts[1], parts[2]
+
+
 def _warn_unused(sc: InterceptScenario, overrides: Sequence[str], via: str) -> None:
     """One warning for each override of an estimator option that the estimator these
     options build does not read (``estimator.infoset.n_sections`` with the node set): its
     results would equal the original's under another name."""
     for item in overrides:
-        key = item.partition("=")[0].strip()
-        parts = key.split(".")
-        if len(parts) != 3 or parts[0] != "estimator" or parts[1] not in sc.estimator.options:
+        found = estimator_option(item)
+        if found is None or found[1] not in sc.estimator.options:
             continue
+        key, name, option = found
         # (a plug-in may register any pydantic model: without the method, none)
-        opts = sc.estimator.options_for(parts[1])
+        opts = sc.estimator.options_for(name)
         unused: dict[str, str] = getattr(opts, "unused_fields", dict)()
-        if parts[2] in unused:
-            warnings.warn(f"{via} {key} has no effect: {unused[parts[2]]}", UserWarning,
+        if option in unused:
+            warnings.warn(f"{via} {key} has no effect: {unused[option]}", UserWarning,
                           stacklevel=2)  # fmt: skip
 
 
