@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from kalman_vs_infoset import _API
+from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed
 from kalman_vs_infoset.api_attitude import run_attitude as run_attitude
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.registry import Registration
@@ -64,29 +65,6 @@ def scenarios() -> list[str]:
     return data.scenario_names()
 
 
-def _sets(tables: Any) -> list[str]:
-    """Keyword tables of overrides as ``--set`` items (``TABLE.KEY=<TOML value>``); a
-    value a scenario file cannot hold (``None``, a path, an object) is a ``TypeError``
-    naming its key (``None`` was refused as the command line's ``'null'``)."""
-    items = _scenario.dotted_fields(tables)
-    for key, value in items.items():
-        if not _toml_like(value):
-            raise TypeError(
-                f"{key}={value!r}: a scenario value is a number, a bool, a str or a list of them"
-            )
-    return [f"{key}={_scenario.toml_value(v)}" for key, v in items.items()]
-
-
-def _toml_like(value: Any) -> bool:
-    """Whether ``value`` is what a scenario file holds: numbers, booleans, strings and
-    lists of them (numpy scalars and arrays as their lists, a tuple as a list)."""
-    if hasattr(value, "tolist"):
-        value = value.tolist()
-    if isinstance(value, list | tuple):
-        return all(_toml_like(v) for v in value)
-    return isinstance(value, bool | int | float | str)
-
-
 def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenario:
     """An intercept scenario, bundled (by name) or from a TOML file, with overrides.
 
@@ -120,7 +98,9 @@ def load_scenario(name_or_path: str | Path, **overrides: Any) -> InterceptScenar
     """
     if not isinstance(name_or_path, str | Path):  # None raised os.fspath's TypeError
         raise TypeError(f"name_or_path must be a scenario's name or path, got {name_or_path!r}")
-    return _scenario.load_scenario(name_or_path, _sets(overrides), via="keyword overrides")
+    return _scenario.load_scenario(
+        name_or_path, overrides_as_sets(overrides), via="keyword overrides"
+    )
 
 
 def _resolve(scenario: InterceptScenario | str | Path) -> InterceptScenario:
@@ -140,28 +120,6 @@ def _choice(sc: InterceptScenario, estimator: str | None, noise: str | None):
     estimator = estimator or sc.experiment.estimator
     _intercept.registration(estimator)  # the engagement's own checks, before any run
     return estimator, _intercept.check_noise(noise or sc.experiment.noise)
-
-
-def _index(value: Any, name: str, least: int, most: int = runner.MAX_RUNS) -> int:
-    """An integer argument (:func:`runner.is_integer`) in ``[least, most]``: by default at
-    most the command line's run count (a count of ``2**40`` ran for hours without a word,
-    or failed in a bare ``MemoryError``)."""
-    if not runner.is_integer(value):
-        raise TypeError(f"{name} must be an integer, got {value!r}")
-    if value < least:
-        raise ValueError(f"{name} must be at least {least}, got {value}")
-    if value > most:
-        raise ValueError(f"{name} must be at most {most}, got {value}")
-    return int(value)
-
-
-def _seed(value: Any, scenario_seed: int) -> int:
-    """The root seed: the scenario's when ``None``, else an integer in ``[0, MAX_SEED]``
-    (the results tables hold it as int64); named as the argument, not the CLI flag."""
-    if value is None:
-        return scenario_seed
-    seed = _index(value, "seed", 0, runner.MAX_SEED)
-    return seed
 
 
 def run_engagement(
@@ -206,8 +164,8 @@ def run_engagement(
     """
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
-    run = _index(run, "run", 0, runner.MAX_RUNS - 1)  # the last index a command runs
-    seed = _seed(seed, sc.experiment.seed)
+    run = integer_in(run, "run", 0, runner.MAX_RUNS - 1)  # the last index a command runs
+    seed = root_seed(seed, sc.experiment.seed)
     rng = np.random.default_rng(runner.run_seed(seed, run))
     return _intercept.run_engagement(sc, estimator, noise, rng)
 
@@ -264,9 +222,9 @@ def run_experiment(
     """
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
-    runs = sc.experiment.runs if runs is None else _index(runs, "runs", 1)
-    workers = None if workers is None else _index(workers, "workers", 1)  # 0 meant all CPUs
-    seed = _seed(seed, sc.experiment.seed)
+    runs = sc.experiment.runs if runs is None else integer_in(runs, "runs", 1)
+    workers = None if workers is None else integer_in(workers, "workers", 1)  # 0 meant all CPUs
+    seed = root_seed(seed, sc.experiment.seed)
     if executor is not None and not isinstance(executor, Executor):
         raise TypeError(f"executor must be a concurrent.futures.Executor, got {executor!r}")
     if out is not None and not isinstance(out, str | Path):
@@ -339,15 +297,15 @@ def trace(
     """
     sc = _resolve(scenario)
     estimator, noise = _choice(sc, estimator, noise)
-    seed = _seed(seed, sc.experiment.seed)
+    seed = root_seed(seed, sc.experiment.seed)
     if isinstance(runs, str) or not isinstance(runs, Sequence | np.ndarray):
         raise TypeError(f"runs must be a sequence of run indices (e.g. [0, 3]), got {runs!r}")
-    runs = [_index(j, "a run index", 0, runner.MAX_RUNS - 1) for j in runs]
+    runs = [integer_in(j, "a run index", 0, runner.MAX_RUNS - 1) for j in runs]
     if not runs:  # (two frames without columns came back)
         raise ValueError("runs must name at least one run to trace")
     if len(set(runs)) < len(runs):  # each step came back twice
         raise ValueError(f"runs must be distinct, got {runs}")
-    sets_every = _index(sets_every, "sets_every", 1)
+    sets_every = integer_in(sets_every, "sets_every", 1)
     steps, sets, _ = _traces.intercept_trace(sc, estimator, noise, seed, runs, sets_every)
     return steps, sets
 

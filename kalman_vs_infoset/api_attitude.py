@@ -82,16 +82,16 @@ def run_attitude(
     """
     import pandas as pd
 
-    from kalman_vs_infoset.api import _index, _seed, _sets
+    from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed
     from kalman_vs_infoset.estim import registry
     from kalman_vs_infoset.experiments.attitude_request import request
     from kalman_vs_infoset.experiments.runner import batched_task
     from kalman_vs_infoset.experiments.sim.estimator_loop import NOISES
 
-    runs = _index(runs, "runs", 1)
+    runs = integer_in(runs, "runs", 1)
     if tables is not None and not isinstance(tables, Mapping):  # "'list' object is not a mapping"
         raise TypeError(f"tables must map table names to their fields, got {tables!r}")
-    seed = _seed(seed, 0)
+    seed = root_seed(seed, 0)
     if estimator is not None and not isinstance(estimator, str):  # e.g. a list
         raise TypeError(f"estimator must be one name (a str), got {estimator!r}")
     if estimator is not None:
@@ -103,7 +103,7 @@ def run_attitude(
         raise ValueError(f"noise must be one of {', '.join(NOISES)}, got {noise!r}")
     args = argparse.Namespace(
         scenario=str(scenario),
-        overrides=_sets({**(tables or {}), **overrides}),
+        overrides=overrides_as_sets({**(tables or {}), **overrides}),
         controller=controller,
         noise=[noise],
         estimators=None if estimator is None else [estimator],

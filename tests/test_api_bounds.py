@@ -13,6 +13,7 @@ from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.options import MAX_RUNS
 
 from kalman_vs_infoset import api
+from kalman_vs_infoset._api_args import integer_in
 
 
 def test_run_counts_and_indices_are_bounded_as_on_the_command_line():
@@ -28,7 +29,7 @@ def test_run_counts_and_indices_are_bounded_as_on_the_command_line():
     with pytest.raises(ValueError, match=f"a run index must be at most {MAX_RUNS - 1}"):
         api.trace("kp_fig3", "ekf", "random", runs=[0, MAX_RUNS])
     # the bounds themselves are accepted (checked without running: the last index)
-    assert api._index(MAX_RUNS - 1, "run", 0, MAX_RUNS - 1) == MAX_RUNS - 1
+    assert integer_in(MAX_RUNS - 1, "run", 0, MAX_RUNS - 1) == MAX_RUNS - 1
 
 
 @pytest.mark.parametrize("call", ["run_engagement", "run_experiment", "trace"])
