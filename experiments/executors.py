@@ -36,6 +36,7 @@ from kalman_vs_infoset.experiments.errors import (
 )
 from kalman_vs_infoset.experiments.limits import RunLimits, limited
 from kalman_vs_infoset.experiments.provenance import code_identity
+from kalman_vs_infoset.experiments.usage import usable_cpus
 from kalman_vs_infoset.experiments.warm import exit_with_parent, warm_kernels
 
 #: how often a pool worker checks that its parent is alive (s)
@@ -73,7 +74,7 @@ def make_executor(workers: int | None = None, scheduler: str | None = None) -> I
         finally:
             client.close()
         return
-    n = workers or os.cpu_count() or 1
+    n = workers or usable_cpus()
     warm_kernels()  # forked workers inherit the loaded kernels
     # The parent's objects go to the collector's permanent generation before the fork:
     # a worker's collections would otherwise write to every one of them and copy the
@@ -244,7 +245,7 @@ def results(job, todo: list[int], executor, workers, scheduler, limits: RunLimit
     are counted and raise :class:`WorkerLost` once the others are through."""
     chunks = _chunks(todo, job.chunk)
     task = partial(limited, job.task, limits) if limits else job.task
-    n = min(workers or os.cpu_count() or 1, len(chunks))
+    n = min(workers or usable_cpus(), len(chunks))
     lost = {"dead": 0, "memory": 0}
     oom_before = oom_kills()
     # a memory limit is set in a worker process, never in this one: a library that fails

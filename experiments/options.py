@@ -301,7 +301,10 @@ def run_limits(args: argparse.Namespace):
 def add_runner(p: argparse.ArgumentParser) -> None:
     """Where the runs go: ``--workers``, ``--scheduler``, ``--no-progress``, the limit and
     ``--rerun-other-code``."""
-    p.add_argument("--workers", type=positive_int, help="local worker processes (default: CPUs)")
+    p.add_argument(
+        "--workers", type=positive_int,
+        help="local worker processes (default: the CPUs this process may run on)",
+    )  # fmt: skip
     p.add_argument("--scheduler", type=non_empty, help="Dask scheduler address (tcp://host:8786)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     add_limit(p)

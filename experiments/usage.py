@@ -12,13 +12,26 @@ process's children, and are not counted (the command reports ``None`` then).
 
 from __future__ import annotations
 
+import os
 import resource
 import sys
 
-__all__ = ["cpu_s", "peak_rss_mb"]
+__all__ = ["cpu_s", "peak_rss_mb", "usable_cpus"]
 
 # ru_maxrss is in kilobytes on Linux, in bytes on macOS
 _RSS_UNIT_MB = 1.0 / (1024.0 * 1024.0) if sys.platform == "darwin" else 1.0 / 1024.0
+
+
+def usable_cpus() -> int:
+    """The CPUs this process may run on: its affinity mask where the system has one
+    (Linux: a batch job's or a container's ``taskset``/cpuset allotment), else every
+    CPU of the machine. ``os.cpu_count()`` counts the machine's: on a 4-CPU job of a
+    64-CPU node the default worker count would put 64 processes on 4 CPUs, each with
+    its own memory."""
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
 
 
 def cpu_s() -> float:

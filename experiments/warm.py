@@ -79,12 +79,9 @@ def _first_compile() -> bool:
     """Whether the kernels will compile here (the cache does not hold them) with a
     second CPU free to share the work."""
     from kalman_vs_infoset.experiments.progress import compiled_kernels_cached
+    from kalman_vs_infoset.experiments.usage import usable_cpus
 
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        cpus = os.cpu_count() or 1
-    return cpus > 1 and compiled_kernels_cached() is False
+    return usable_cpus() > 1 and compiled_kernels_cached() is False
 
 
 def _start_helper(modules: list[str]) -> subprocess.Popen | None:

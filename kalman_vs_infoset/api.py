@@ -199,7 +199,8 @@ def run_experiment(
         A results folder: the runs are written (and resumed) there exactly as by
         ``kvi intercept --out``. ``None`` (default): computed in memory, nothing written.
     workers : int, optional
-        Local worker processes (default 1: in this process; ``None``: the CPUs).
+        Local worker processes (default 1: in this process; ``None``: the CPUs this
+        process may run on, its affinity mask on Linux).
     scheduler : str, optional
         A Dask scheduler's address (``pip install 'kalman-vs-infoset[cluster]'``).
     executor : concurrent.futures.Executor, optional
