@@ -109,7 +109,9 @@ def cdf_figure(
     # curves and three marks put a legend inside the fuel panel, over the game curves)
     n_marks = max((len(v) for v in (references or {}).values()), default=0)
     crowded = n_curves + n_marks > CROWDED_CURVES
-    rows = -(-(n_curves + 2 * len(references or {})) // 4)  # legend rows below, 4 columns
+    # the figure legend's rows below the panels (4 columns): every curve and every mark
+    entries = n_curves + sum(len(v) for v in (references or {}).values())
+    rows = -(-entries // 4)
     fig, axes = fs.figure(1, 2, size=(11, 4.4 + (0.17 * rows if crowded else 0.0)))
     variants = sorted(df["variant"].unique()) if "variant" in df else []
     for ax, (col, xlabel) in zip(axes[0], PANELS, strict=True):

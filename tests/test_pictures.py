@@ -364,6 +364,32 @@ def test_crowded_cdf_puts_one_legend_below_the_panels():
     assert not few.legends and few.axes[0].get_legend() is not None
 
 
+def test_a_legend_below_the_panels_leaves_them_their_height():
+    """Fig. 5's figure: four curves and three marks a panel put the legend below both
+    panels; the figure grows by its rows, counted from every curve and mark (the count
+    took two marks a panel, and the panels lost 6 % of their height)."""
+    from kalman_vs_infoset.experiments import plots
+
+    rng = np.random.default_rng(0)
+    rows = [{"variant": v, "noise": n, "miss_m": m, "fuel_mps": 100 + 20 * m, "status": "ok"}
+            for v in ("bearing only", "bearing + range") for n in ("random", "game")
+            for m in rng.uniform(0.1, 10, 20)]  # fmt: skip
+    paper = ("paper Fig. 3, random errors", "paper Fig. 3, game errors")
+    marks = {
+        "miss_m": [(4.3, paper[0]), (9.5, paper[1]), (1.15, "bearing-limited miss scale")],
+        "fuel_mps": [(244.7, paper[0]), (521.7, paper[1]), (44.8, "perfect information")],
+    }
+
+    def panel_height_in(references) -> float:
+        fig = plots.cdf_figure(pd.DataFrame(rows), ["variant", "noise"], "t", references)
+        fig.canvas.draw()
+        return fig.axes[0].get_window_extent().height / fig.dpi
+
+    crowded = plots.cdf_figure(pd.DataFrame(rows), ["variant", "noise"], "t", marks)
+    assert len(crowded.legends) == 1  # below the panels
+    assert panel_height_in(marks) >= 0.97 * panel_height_in(None)
+
+
 def _fig8_peaks_on_the_formulas_side(fig8) -> None:
     # seed 001 eq. (24): the plant's turns reach each limit on the side the formula says
     for angle, (torque, momentum) in fig8["peaks"].items():
