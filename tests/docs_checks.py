@@ -24,6 +24,7 @@ BENCH_NOW = "docs/results/bench_after_trial_splits.json"
 BENCH_PP = "docs/results/bench_per_piece.json"
 BENCH_TAIL = "docs/results/bench_tail.json"
 VS_SLOW = "docs/results/vs_35e3739_slow_host.json"
+VS_THIRD = "docs/results/vs_35e3739_third_host.json"
 STUDY = "docs/results/study/fig5-"
 SPEED = "docs/results/speed/kp_fig5-"
 SLOW10 = "docs/results/speed/kp_fig3-closing_"
@@ -502,6 +503,11 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
     (PERF, r"`docs/results/vs_35e3739_slow_host.json`\): ([\d.]+) times the runs per "
      r"CPU-second pooled, ([\d.]+) to ([\d.]+) pair by pair", VS_SLOW,
      ("runs_per_cpu_s_ratio_pooled", "runs_per_cpu_s_ratio_min", "runs_per_cpu_s_ratio_max")),
+    (PERF, r"`docs/results/vs_35e3739_third_host.json`\): ([\d.]+) times the runs per\s+"
+     r"CPU-second pooled, ([\d.]+) to ([\d.]+) pair by pair, the old commit's command "
+     r"costing ([\d.]+)\s+CPU-s in the first pair and ([\d.]+) in the third", VS_THIRD,
+     ("runs_per_cpu_s_ratio_pooled", "runs_per_cpu_s_ratio_min", "runs_per_cpu_s_ratio_max",
+      "cpu_s_35e3739/0", "cpu_s_35e3739/2")),
     (README, r"approach a set step costs ([\d.]+) of a UKF step, and the last tenth takes "
      r"([\d.]+) of the set's\s+CPU time", BENCH_TAIL,
      ("whole_approach_head_ratio", "whole_approach_tail_share/infoset")),
