@@ -55,11 +55,9 @@ def _version() -> str:
         return "0+unknown"
 
 
-#: front-door names that live in the registry: taken from there, not through
-#: :mod:`kalman_vs_infoset.api`, because a plug-in's entry point imports them while the
-#: registry loads plug-ins, which importing ``api`` itself starts (a plug-in doing
-#: ``from kalman_vs_infoset import register_estimator``, as docs/usage.md shows, failed
-#: with a circular ImportError and was left out of the Python API)
+#: front-door names that live in the registry: taken from there, without importing
+#: :mod:`kalman_vs_infoset.api` (a plug-in's entry point imports them while the registry
+#: loads plug-ins; importing ``api`` loads none, so its other names serve plug-ins too)
 _REGISTRY = {"register_estimator": "register", "Registration": "Registration"}
 
 

@@ -224,19 +224,30 @@ def test_a_plug_in_registering_through_the_package_name_reaches_the_python_api(t
     first through the Python API (``import kalman_vs_infoset as kvi; kvi.estimators()``)
     the plug-ins load while the API module itself is imported, and taking the name
     through it failed (a circular ImportError): the plug-in was left out with a warning.
-    A fresh process, warnings as errors."""
+    A fresh process, warnings as errors. Any front-door name, at the plug-in's top level
+    (``get_estimator`` failed so, after the first fix took the registry's two names from
+    the registry): importing the API loads no plug-in (its scenario class built its
+    default tables, which read the registry, as it was defined)."""
     import subprocess
 
     _entry_points(tmp_path, {"toyep_front": (
+        "from kalman_vs_infoset import Registration, get_estimator, load_scenario\n"
+        "from kalman_vs_infoset import register_estimator\n"
+        "from kalman_vs_infoset.estim.options import NoOptions\n\n\n"
         "def register():\n"
-        "    from kalman_vs_infoset import Registration, register_estimator\n"
-        "    from kalman_vs_infoset.estim.options import NoOptions\n"
-        "    assert Registration is not None\n"
+        "    assert Registration is not None and callable(get_estimator)\n"
+        "    assert callable(load_scenario)\n"
         "    register_estimator('toyep_front', 'intercept', NoOptions, doc='front door')\n"
     )})  # fmt: skip
-    code = "import kalman_vs_infoset as kvi; print(','.join(kvi.estimators()))"
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
-    r = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-c", code],
-                       capture_output=True, text=True, env=env, timeout=300)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    assert "toyep_front" in r.stdout.strip().split(",")
+    for first in ("import kalman_vs_infoset as kvi", "import kalman_vs_infoset.api as kvi"):
+        code = f"{first}; print(','.join(kvi.estimators()))"
+        r = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-c", code],
+                           capture_output=True, text=True, env=env, timeout=300)  # fmt: skip
+        assert r.returncode == 0, r.stderr
+        assert "toyep_front" in r.stdout.strip().split(","), first
+    code = "import kalman_vs_infoset.api; from kalman_vs_infoset.estim import registry as r; "
+    code += "print(r._loaded)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       timeout=300)  # fmt: skip
+    assert r.stdout.strip() == "False", r.stderr

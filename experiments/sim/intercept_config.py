@@ -323,7 +323,12 @@ class InterceptScenario(Table):
     name: str = field(..., "scenario name; names the result files")
     description: str = field("", "one line")
     model: ModelTable = field(ModelTable(), "auxiliary model, step")
-    estimator: EstimatorTable = field(EstimatorTable(), "a-priori knowledge and options")
+    # the two tables that read the estimator registry are built when a scenario is, not
+    # as this class is defined: that would load the plug-ins while the front door's
+    # module is half imported, and a plug-in importing a front-door name failed there
+    estimator: EstimatorTable = Field(
+        default_factory=EstimatorTable, description="a-priori knowledge and options"
+    )
     truth: TruthTable = field(
         ...,
         "truth boxes (default: the estimator's; the closing velocity from the closing "
@@ -331,7 +336,9 @@ class InterceptScenario(Table):
     )
     range_finder: RangeFinderTable = field(RangeFinderTable(), "range measurements")
     guidance: GuidanceTable = field(GuidanceTable(), "guided channels, impulse limits")
-    experiment: ExperimentTable = field(ExperimentTable(), "runs, seed, defaults")
+    experiment: ExperimentTable = Field(
+        default_factory=ExperimentTable, description="runs, seed, defaults"
+    )
     adversary: AdversaryTable = field(AdversaryTable(), "search of the white-box noises")
     reference: ReferenceTable = field(ReferenceTable(), "the paper's numbers")
     attitude: PointingConfig | None = field(None, "an attitude loop holding the axis")
