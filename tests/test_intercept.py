@@ -85,6 +85,29 @@ def test_law_issues_no_impulse_on_an_unbounded_forecast():
     assert law.impulse_mps(Unbounded(np.array([0.0, 0.0, 1e6])), 0.0) == 0.0
 
 
+def test_a_belief_that_bounds_the_forecast_at_no_range_fails_its_run_not_unbounded():
+    """Finite bounds of the forecast at states whose ranges are NaN (a plug-in's broken
+    ``argmin``), or an answer that is not an ``Extremes``, gave no impulse and a run
+    reported ``ok`` with every step "unbounded"; the estimator's fault is now an error
+    (its run fails, with it), and a set too wide to bound stays unbounded (above)."""
+    from kalman_vs_infoset.estim.base import Extremes, PointBelief
+
+    class NoRange(PointBelief):
+        def extremes(self, fn):
+            return Extremes(-3.0, np.full(3, np.nan), 5.0, np.full(3, np.nan))
+
+    class NotExtremes(PointBelief):
+        def extremes(self, fn):
+            return (-3.0, 5.0)
+
+    law = ForecastCentringLaw(MODEL)
+    state = np.array([0.0, 0.0, 1e6])
+    with pytest.raises(ValueError, match="NoRange.extremes bounds the miss forecast"):
+        law.impulse_mps(NoRange(state), 0.0)
+    with pytest.raises(TypeError, match="NotExtremes.extremes returned a tuple"):
+        law.impulse_mps(NotExtremes(state), 0.0)
+
+
 @given(
     k=st.floats(-50, 50),
     used=st.floats(0, 2100),

@@ -187,3 +187,37 @@ def test_an_unknown_problem_is_named_not_an_empty_list():
     with pytest.raises(ValueError, match=r"get_estimator takes \(name, problem\)"):
         get_estimator("intercept", "nosuch")
     assert get_estimator("ukf", "attitude").name == "ukf"
+
+
+def test_a_plug_in_bounding_the_forecast_at_no_range_fails_its_runs(tmp_path):
+    """A plug-in belief whose extremes have finite values at NaN states ran every step
+    without an impulse and reported its runs ``ok`` (each step counted "unbounded"):
+    its runs now fail, with the reason, as when it returns NaN values."""
+    import dataclasses
+
+    from kalman_vs_infoset.estim.base import Extremes
+    from toy_estimators import ToyBelief
+
+    from kalman_vs_infoset import api
+
+    @dataclasses.dataclass(frozen=True, eq=False)
+    class NoRange(ToyBelief):
+        def extremes(self, fn) -> Extremes:
+            e = super().extremes(fn)
+            return Extremes(e.min_value, np.full(3, np.nan), e.max_value, np.full(3, np.nan))
+
+    @dataclasses.dataclass(frozen=True)
+    class NoRangeEstimator(ToyEstimator):
+        def _box(self, pts, **changes):
+            return NoRange(pts.min(axis=0), pts.max(axis=0), **changes)
+
+    registry.register("toy_norange", "intercept", ToyOptions,
+                      lambda o, s: NoRangeEstimator(s.model, o.widen))  # fmt: skip
+    try:
+        scenario = tmp_path / "short.toml"
+        scenario.write_text(SHORT)
+        df = api.run_experiment(scenario, "toy_norange", "random", runs=2)
+    finally:
+        registry.unregister("intercept", "toy_norange")
+    assert list(df["status"]) == ["failed", "failed"]
+    assert df["error"].str.contains("bounds the miss forecast").all()

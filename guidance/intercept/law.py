@@ -72,7 +72,21 @@ class ForecastCentringLaw:
         if belief.is_empty:
             return 0.0, True
         ext = self.forecast(belief)
+        if not isinstance(ext, Extremes):  # a plug-in's own answer, never checked
+            raise TypeError(
+                f"{type(belief).__name__}.extremes returned a {type(ext).__name__}, "
+                "not an estim.base.Extremes"
+            )
         x_sum = float(ext.argmin[2] + ext.argmax[2])
+        bounded = np.isfinite(ext.min_value) and np.isfinite(ext.max_value)
+        if bounded and not x_sum > 0.0:
+            # finite bounds at states without a range: the estimator's fault, not a set
+            # too wide to bound (which would count as unbounded and issue nothing)
+            raise ValueError(
+                f"{type(belief).__name__}.extremes bounds the miss forecast "
+                f"({ext.min_value:g}, {ext.max_value:g}) at states whose ranges x "
+                f"({ext.argmin[2]:g}, {ext.argmax[2]:g}) do not add to a positive number"
+            )
         k = -(ext.min_value + ext.max_value) * self.model.e / x_sum
         return (float(k), True) if np.isfinite(k) else (0.0, False)
 
