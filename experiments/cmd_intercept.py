@@ -60,6 +60,11 @@ def _summary(r: dict[str, Any]) -> list[str]:
             f"  pointing premise (the true residual within the knowledge bound the sets took, "
             f"as their guarantee needs): {held}; the loop's own bound exceeded it at {over}"
         ]
+    # said only when it happened: a set too wide to bound the miss forecast issues nothing
+    n_unbounded = r.get("unbounded_steps") or 0
+    unbounded = [
+        f"  no impulse for want of a bounded forecast: {n_unbounded} channel steps"
+    ] if n_unbounded else []  # fmt: skip
     return [
         f"{r['scenario']}: {r['estimator']} / {r['noise']} noise, "
         f"{runs_text(r['runs'])}, seed {r['seed']}",
@@ -69,6 +74,7 @@ def _summary(r: dict[str, Any]) -> list[str]:
         f"  truth outside belief: {r['truth_outside']} steps; empty set: "
         f"{runs_text(r['empty_set'])}; diverged: {runs_text(r['diverged'])}; "
         f"failures: {r['failures']}",
+        *unbounded,
         *premise,
     ]
 

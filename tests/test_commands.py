@@ -343,3 +343,23 @@ def test_every_option_with_a_default_says_it_in_its_help(command):
         and "default" not in a.help
     ]
     assert silent == []
+
+
+def test_the_summary_says_when_a_set_issued_no_impulse_for_an_unbounded_forecast(tmp_path, capsys):
+    """A sound set too wide to bound the miss forecast issues no impulse (counted in
+    ``unbounded_steps``); the printed summary said nothing of it. It says so when it
+    happened, and the line is absent otherwise."""
+    from harness_texts import SHORT
+    from kalman_vs_infoset.experiments import cmd_intercept
+    from kalman_vs_infoset.experiments.cli import main
+
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(SHORT)
+    argv = ["intercept", str(scenario), "--runs", "1", "--workers", "1", "--json",
+            "--no-progress", "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["unbounded_steps"] == 0
+    assert "bounded forecast" not in cmd_intercept.render(result)
+    said = cmd_intercept.render({**result, "unbounded_steps": 7})
+    assert "  no impulse for want of a bounded forecast: 7 channel steps" in said.splitlines()
