@@ -221,3 +221,35 @@ def test_a_plug_in_bounding_the_forecast_at_no_range_fails_its_runs(tmp_path):
         registry.unregister("intercept", "toy_norange")
     assert list(df["status"]) == ["failed", "failed"]
     assert df["error"].str.contains("bounds the miss forecast").all()
+
+
+def test_a_plug_in_s_own_check_of_a_field_is_said_without_a_wrong_type(tmp_path):
+    """A plug-in option whose validator refuses a value of the right type read "must be
+    a string; mode 'weird' is not supported" of a string: the field's type is said as
+    what it is, then the plug-in's reason."""
+    from kalman_vs_infoset.experiments.errors import InputError
+    from pydantic import BaseModel, ConfigDict, field_validator
+
+    from kalman_vs_infoset import api
+
+    class Picky(BaseModel):
+        model_config = ConfigDict(extra="forbid")
+        mode: str = "plain"
+
+        @field_validator("mode")
+        @classmethod
+        def _known(cls, v: str) -> str:
+            if v != "plain":
+                raise ValueError(f"mode {v!r} is not supported")
+            return v
+
+    registry.register("toy_picky_mode", "intercept", Picky,
+                      lambda o, s: ToyEstimator(s.model))  # fmt: skip
+    try:
+        with pytest.raises(InputError) as caught:
+            api.load_scenario("kp_fig3", estimator={"toy_picky_mode": {"mode": "weird"}})
+    finally:
+        registry.unregister("intercept", "toy_picky_mode")
+    said = str(caught.value)
+    assert "field 'estimator.toy_picky_mode.mode' (a string): mode 'weird' is not supported" in said
+    assert "must be a string" not in said

@@ -210,8 +210,8 @@ def first_error(
         what = msg.removeprefix("Input should be ")
         # a table of tables (an estimator's options) in the words of every other table
         what = "a table" if what == "a valid dictionary" else what
-    elif kind == "value_error":
-        what = f"{what}; {msg}"
+    elif kind == "value_error":  # the field's own check refused a value of its type
+        return f"field '{dotted}' ({what}): {msg}{shown}"
     return f"field '{dotted}' must be {what}{shown}"
 
 

@@ -78,14 +78,13 @@ class ForecastCentringLaw:
                 "not an estim.base.Extremes"
             )
         x_sum = float(ext.argmin[2] + ext.argmax[2])
-        bounded = np.isfinite(ext.min_value) and np.isfinite(ext.max_value)
-        if bounded and not x_sum > 0.0:
+        if np.isfinite(ext.min_value) and np.isfinite(ext.max_value) and np.isnan(x_sum):
             # finite bounds at states without a range: the estimator's fault, not a set
             # too wide to bound (which would count as unbounded and issue nothing)
             raise ValueError(
                 f"{type(belief).__name__}.extremes bounds the miss forecast "
-                f"({ext.min_value:g}, {ext.max_value:g}) at states whose ranges x "
-                f"({ext.argmin[2]:g}, {ext.argmax[2]:g}) do not add to a positive number"
+                f"({ext.min_value:g}, {ext.max_value:g}) at states without a range "
+                f"(x = {ext.argmin[2]:g}, {ext.argmax[2]:g})"
             )
         k = -(ext.min_value + ext.max_value) * self.model.e / x_sum
         return (float(k), True) if np.isfinite(k) else (0.0, False)
