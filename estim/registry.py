@@ -185,7 +185,10 @@ def declare(
 def _add(reg: Registration, replace: bool) -> Registration:
     key = (reg.problem, reg.name)
     if key in _REGISTRY and not replace:
-        raise ValueError(f"{reg.problem} estimator {reg.name!r} is already registered")
+        raise ValueError(
+            f"{reg.problem} estimator {reg.name!r} is already registered (replace=True "
+            "takes its place)"
+        )
     _REGISTRY[key] = reg
     return reg
 

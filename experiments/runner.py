@@ -433,7 +433,8 @@ def _other_code(
         return False
     if rerun_other_code:
         return True
-    again = f"{fix}, or run them again with --rerun-other-code"
+    # the command line's flag, and the keyword of the Python front door's run_experiment
+    again = f"{fix}, or run them again with --rerun-other-code (Python: rerun_other_code=True)"
     if same_sources and plugin_then != plugin_now:  # the plug-in's code changed
         raise InputError(
             f"{path}: results written by another version of the estimator "
@@ -451,8 +452,7 @@ def _other_code(
     was = f"sources {before[:12]}" if before else "code that recorded no identity"
     raise InputError(
         f"{path}: results written by other code ({was}, now "
-        f"{meta['code']['sources_sha256'][:12]}); {fix}, or run them again with "
-        "--rerun-other-code"
+        f"{meta['code']['sources_sha256'][:12]}); {again}"
     )
 
 

@@ -182,6 +182,7 @@ def run_experiment(
     scheduler: str | None = None,
     executor: Executor | None = None,
     progress: bool = False,
+    rerun_other_code: bool = False,
 ) -> pd.DataFrame:
     """A Monte Carlo of the intercept: one row per run (``docs/results.md``).
 
@@ -207,6 +208,10 @@ def run_experiment(
         An executor of one's own for the runs' chunks.
     progress : bool, default False
         A progress bar (``tqdm.auto``: terminal or notebook).
+    rerun_other_code : bool, default False
+        With ``out``: run again the runs of a table there that other code wrote,
+        replacing it (``kvi intercept --rerun-other-code``); by default such a table is
+        refused (``InputError``), while the runs of this code are always resumed.
 
     Returns
     -------
@@ -237,8 +242,9 @@ def run_experiment(
         raise ValueError(f"scheduler must be a Dask scheduler's address, got {scheduler!r}")
     if out is not None:
         return intercept_runs.run_experiment(
-            sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor
-        )
+            sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor,
+            rerun_other_code=bool(rerun_other_code),
+        )  # fmt: skip
     job = intercept_runs.intercept_job(sc, estimator, noise, seed)
     chunks = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)

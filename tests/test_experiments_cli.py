@@ -736,3 +736,24 @@ def test_the_examples_of_kvi_help_parse():
         assert args.command == argv[0]
     text = cli.build_parser().format_help()
     assert all(name in text for name in cli.COMMANDS) and "examples:" in text
+
+
+def test_the_python_api_reruns_other_code_s_table_when_asked(short, tmp_path):
+    """``run_experiment(..., out=...)`` refused a table other code wrote, naming the
+    command line's ``--rerun-other-code``, which it did not take: it takes
+    ``rerun_other_code=True``, and the refusal names both."""
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    from kalman_vs_infoset import api
+
+    sc = load_scenario(short)
+    out = tmp_path / "out"
+    fresh = api.run_experiment(short, "infoset", "random", runs=2, out=out)
+    path = intercept_runs.results_path(out, sc, "infoset", "random", 11)
+    meta_path = out / "_meta" / f"{path.stem}.json"
+    meta = json.loads(meta_path.read_text())
+    meta_path.write_text(json.dumps({**meta, "code": {**meta["code"], "sources_sha256": "0" * 64}}))
+    with pytest.raises(InputError, match=r"--rerun-other-code \(Python: rerun_other_code=True\)"):
+        api.run_experiment(short, "infoset", "random", runs=2, out=out)
+    again = api.run_experiment(short, "infoset", "random", runs=2, out=out, rerun_other_code=True)
+    pd.testing.assert_frame_equal(_table(again), _table(fresh))
