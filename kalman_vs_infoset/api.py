@@ -219,6 +219,13 @@ def run_experiment(
         One row per run, sorted by ``run``; a failed run has ``status == "failed"`` and
         its ``error``.
 
+    Raises
+    ------
+    kalman_vs_infoset.experiments.errors.InputError
+        A plug-in estimator that cannot be built on the scenario's channels (built once
+        before any run, as the commands do), or a results table in ``out`` that cannot
+        be resumed.
+
     Examples
     --------
     >>> from kalman_vs_infoset.api import run_experiment
@@ -240,6 +247,9 @@ def run_experiment(
     if scheduler is not None and not (isinstance(scheduler, str) and scheduler.strip()):
         # an empty address ran the runs locally without a word
         raise ValueError(f"scheduler must be a Dask scheduler's address, got {scheduler!r}")
+    # a plug-in that cannot be built: one InputError here, as the commands say it in one
+    # line, not a failed row per run
+    intercept_runs.check_plug_ins(sc, [estimator])
     if out is not None:
         return intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor,

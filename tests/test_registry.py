@@ -253,3 +253,22 @@ def test_a_plug_in_s_own_check_of_a_field_is_said_without_a_wrong_type(tmp_path)
     said = str(caught.value)
     assert "field 'estimator.toy_picky_mode.mode' (a string): mode 'weird' is not supported" in said
     assert "must be a string" not in said
+
+
+def test_the_python_api_refuses_a_plug_in_that_cannot_be_built_before_any_run():
+    """A plug-in whose factory raises gave one failed row per run from
+    ``run_experiment``; it is built once first, as the commands do, and refused in one
+    ``InputError`` naming it."""
+    from kalman_vs_infoset.experiments.errors import InputError
+
+    from kalman_vs_infoset import api
+
+    def broken(options, setting):
+        raise RuntimeError("no licence for the solver")
+
+    registry.register("toy_unbuildable", "intercept", ToyOptions, broken)
+    try:
+        with pytest.raises(InputError, match="'toy_unbuildable' cannot be built.*licence"):
+            api.run_experiment("kp_fig3", "toy_unbuildable", "random", runs=3)
+    finally:
+        registry.unregister("intercept", "toy_unbuildable")
