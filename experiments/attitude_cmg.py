@@ -20,6 +20,7 @@ from kalman_vs_infoset.experiments.attitude_traces import trace_cmg
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.sim.attitude_cmg import (
     CONTROLLERS,
+    PERFORMANCE,
     SEED_ENERGY_N2M2S,
     estimator_loop,
     lower_bound_energy_N2m2s,
@@ -117,4 +118,5 @@ LOOP = AttitudeLoop(
     summarise=summarise,
     trace=trace_cmg,
     estimator=estimator_loop,
+    performance=PERFORMANCE,
 )

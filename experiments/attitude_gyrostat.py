@@ -157,4 +157,5 @@ LOOP = AttitudeLoop(
     summarise=summarise,
     trace=trace_gyrostat,
     estimator=build_estimator,
+    performance=PERFORMANCE,
 )

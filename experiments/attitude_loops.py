@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from kalman_vs_infoset.experiments.errors import InputError, built_or_refused
@@ -52,6 +52,10 @@ class AttitudeLoop:
     estimator
         The runs' estimator from the set-up, the noise and the estimator's name, as a
         run builds it (:func:`check_plug_ins` builds plug-ins with it up front).
+    performance : tuple of str
+        The row's measures of the turn's end (NaN for a run whose loop diverged).
+    controller_columns : mapping of str to tuple of str
+        Columns only some controllers' rows have (the LQR's Lyapunov check).
     """
 
     name: str
@@ -62,7 +66,20 @@ class AttitudeLoop:
     summarise: Summarise
     trace: Trace
     estimator: BuildEstimator
+    performance: tuple[str, ...]
+    controller_columns: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
+    def columns(self, controller: str) -> tuple[str, ...]:
+        """The result columns of every run of ``controller`` (docs/results.md): a table
+        of failed runs gets them as NaN, so selecting one does not raise KeyError."""
+        extra = self.controller_columns.get(controller, ())
+        return (*self.performance, *extra, *COUNTS)
+
+
+#: the columns of every attitude run's row besides its loop's measures: the set's
+#: guarantee and emptiness counts, and whether (when) the loop diverged
+COUNTS = ("truth_outside", "empty_steps", "unbounded_steps", "mean_knowledge_bound_deg",
+          "diverged", "diverged_time_s")  # fmt: skip
 
 #: controller -> the module declaring its :class:`AttitudeLoop` as ``LOOP``
 LOOPS: dict[str, str] = {

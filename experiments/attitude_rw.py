@@ -20,6 +20,7 @@ from kalman_vs_infoset.experiments.attitude_traces import trace_rw
 from kalman_vs_infoset.experiments.errors import InputError
 from kalman_vs_infoset.experiments.scenario import validate
 from kalman_vs_infoset.experiments.sim.attitude_rw import (
+    PERFORMANCE,
     estimator_loop,
     make_controller,
     simulate_runs,
@@ -154,4 +155,6 @@ LOOP = AttitudeLoop(
     summarise=summarise,
     trace=trace_rw,
     estimator=build_estimator,
+    performance=PERFORMANCE,
+    controller_columns={"lqr": ("lyapunov_max_increase",)},
 )

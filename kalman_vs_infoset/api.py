@@ -217,7 +217,8 @@ def run_experiment(
     -------
     pandas.DataFrame
         One row per run, sorted by ``run``; a failed run has ``status == "failed"`` and
-        its ``error``.
+        its ``error``, and NaN in the result columns (which are there even when every
+        run failed).
 
     Raises
     ------
@@ -251,10 +252,10 @@ def run_experiment(
     # line, not a failed row per run
     intercept_runs.check_plug_ins(sc, [estimator])
     if out is not None:
-        return intercept_runs.run_experiment(
+        return _with_result_columns(intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor,
             rerun_other_code=bool(rerun_other_code),
-        )  # fmt: skip
+        ))  # fmt: skip
     job = intercept_runs.intercept_job(sc, estimator, noise, seed)
     chunks = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
@@ -267,7 +268,14 @@ def run_experiment(
         bar.close()
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
     runner.report_failures(job, df)
-    return df
+    return _with_result_columns(df)
+
+
+def _with_result_columns(df: pd.DataFrame) -> pd.DataFrame:
+    """``df`` with every result column (NaN where no run gave one): a table whose runs
+    all failed holds only ``status`` and ``error``, and ``df["miss_m"]`` raised KeyError."""
+    missing = [c for c in EngagementResult.columns() if c not in df.columns]
+    return df.reindex(columns=[*df.columns, *missing]) if missing else df
 
 
 def trace(

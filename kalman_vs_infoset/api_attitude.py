@@ -63,7 +63,8 @@ def run_attitude(
         One row per estimator and run: the job's ``scenario``, ``controller``,
         ``estimator``, ``noise`` and ``seed``, ``run``, the loop's columns
         (``docs/results.md``: settle time, energy, final errors, ``truth_outside``, ...)
-        and ``status`` (``ok``, or ``failed`` with its ``error``).
+        and ``status`` (``ok``, or ``failed`` with its ``error`` and NaN in the loop's
+        columns, which are there even when every run failed).
 
     Raises
     ------
@@ -128,4 +129,7 @@ def run_attitude(
         for start in range(0, runs, loop.chunk):  # the command's batches (memory)
             chunk = list(range(start, min(start + loop.chunk, runs)))
             rows += [{**job, "run": j, **row} for j, row in batched_task(simulate, seed, chunk)]
-    return pd.DataFrame(rows)
+    df = pd.DataFrame(rows)
+    # every result column, NaN where no run gave one (all failed: only status, error)
+    missing = [c for c in loop.columns(req.controller) if c not in df.columns]
+    return df.reindex(columns=[*df.columns, *missing]) if missing else df

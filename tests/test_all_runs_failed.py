@@ -36,3 +36,21 @@ def test_every_run_failed_is_reported_not_a_traceback(
     assert "Traceback" not in r.stderr, r.stderr
     assert r.returncode == 1, r.stderr
     assert "runs failed" in r.stderr.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize("to_folder", [False, True], ids=["in_memory", "out"])
+def test_the_api_s_table_of_failed_runs_has_the_result_columns(short, tmp_path, monkeypatch,
+                                                               to_folder):  # fmt: skip
+    """``run_experiment`` returns the result columns even when no run gave any (NaN),
+    so ``df["miss_m"]`` selects them instead of raising KeyError."""
+    from kalman_vs_infoset.experiments.sim.intercept import EngagementResult
+
+    from kalman_vs_infoset.api import run_experiment
+
+    monkeypatch.setattr(intercept_runs, "run_engagement", _always_fails)
+    out = tmp_path / "out" if to_folder else None
+    df = run_experiment(short, "ekf", "random", runs=2, out=out)
+    assert (df["status"] == "failed").all()
+    assert set(EngagementResult.columns()) <= set(df.columns)
+    assert df["miss_m"].isna().all() and df["fuel_mps"].isna().all()
+    assert "miss_m" in EngagementResult.columns() and "x0_km" in EngagementResult.columns()

@@ -13,6 +13,8 @@ import warnings
 
 import numpy as np
 import pytest
+from kalman_vs_infoset.experiments import attitude_cmg as attitude_cmg_loop
+from kalman_vs_infoset.experiments import attitude_gyrostat, attitude_rw
 from kalman_vs_infoset.experiments.cli import main
 from kalman_vs_infoset.guidance.attitude.plant import (
     MAX_TURN_PER_STEP_RAD,
@@ -24,6 +26,10 @@ from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
 from scipy.spatial.transform import Rotation
 
 from kalman_vs_infoset import api
+
+#: the columns a run's row gets from its job and the runner, beside the loop's own
+JOB_COLUMNS = {"scenario", "controller", "estimator", "noise", "seed", "run", "status",
+               "error", "wall_s"}  # fmt: skip
 
 TINY_BODY = {"inertia_kgm2": [1e-6, 1e-6, 1e-6]}
 #: the stable loop's check needs only a few seconds of its turn
@@ -103,6 +109,7 @@ def test_a_stable_loop_reports_no_divergence():
                           simulation=SHORT)  # fmt: skip
     assert df["diverged"].tolist() == [0, 0]
     assert np.isinf(df["diverged_time_s"]).all() and df["final_angle_deg"].notna().all()
+    assert set(df.columns) - JOB_COLUMNS == set(attitude_rw.LOOP.columns("lqr"))
 
 
 def test_a_gyrostat_batch_splits_into_diverged_and_finished_runs():
@@ -114,6 +121,7 @@ def test_a_gyrostat_batch_splits_into_diverged_and_finished_runs():
     gone = df["diverged"] == 1
     assert 0 < gone.sum() < len(df)
     assert df.loc[gone, "final_angle_deg"].isna().all()
+    assert set(df.columns) - JOB_COLUMNS == set(attitude_gyrostat.LOOP.columns("game"))
     assert df.loc[~gone, "final_angle_deg"].notna().all()
     assert np.isinf(df.loc[~gone, "diverged_time_s"]).all()
     # a run of the batch simulated alone is the same run (its own generator)
@@ -161,6 +169,8 @@ def test_a_gyrodine_turn_that_diverges_ends_there(monkeypatch):
     assert row["diverged"] == 1 and row["diverged_time_s"] == pytest.approx(6 * setup.dt_s)
     assert np.isnan(row["energy_N2m2s"]) and np.isnan(row["settle_time_s"])
     assert np.isfinite(row["mean_knowledge_bound_deg"])
+    # a diverged run's row has the columns every run's row has
+    assert set(row) == set(attitude_cmg_loop.LOOP.columns("energy"))
 
 
 def test_a_cdf_label_names_the_diverged_runs():

@@ -27,7 +27,7 @@ threshold legitimately drops the sections that bracket it).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -142,6 +142,10 @@ def draw_truth(sc: InterceptScenario, rng: np.random.Generator) -> tuple[np.ndar
     return pos, vel
 
 
+#: the row's columns of the initial relative state (:attr:`EngagementResult.truth0`)
+TRUTH0_COLUMNS = ("x0_km", "y0_km", "z0_km", "vx0_kmps", "vy0_kmps", "vz0_kmps")
+
+
 @dataclass(frozen=True)
 class EngagementResult:
     miss_m: float
@@ -168,10 +172,15 @@ class EngagementResult:
 
     def as_row(self) -> dict[str, Any]:
         row = {k: v for k, v in self.__dict__.items() if k not in ("truth0", "extras")}
-        keys = ("x0_km", "y0_km", "z0_km", "vx0_kmps", "vy0_kmps", "vz0_kmps")
-        row.update(zip(keys, self.truth0, strict=True))
+        row.update(zip(TRUTH0_COLUMNS, self.truth0, strict=True))
         row.update(self.extras)
         return row
+
+    @classmethod
+    def columns(cls) -> tuple[str, ...]:
+        """The columns of every :meth:`as_row` (an estimator's ``extras`` add theirs)."""
+        names = [f.name for f in fields(cls) if f.name not in ("truth0", "extras")]
+        return (*names, *TRUTH0_COLUMNS)
 
 
 class Engagement:
