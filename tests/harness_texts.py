@@ -81,6 +81,11 @@ k_w = 2.625
 # Ctrl-C test 1.4 s longer)
 SLOW_RW = TINY_RW.replace("duration_s = 5.0", "duration_s = 10.0")
 
+#: the columns an attitude run's row gets from its job and the runner, beside the
+#: loop's own (``AttitudeLoop.columns``)
+JOB_COLUMNS = frozenset({"scenario", "controller", "estimator", "noise", "seed", "run",
+                         "status", "error", "wall_s"})  # fmt: skip
+
 
 def as_from_a_terminal() -> None:
     """In the child before it runs: Ctrl-C at its default, as a shell in a terminal

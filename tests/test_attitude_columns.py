@@ -8,12 +8,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from harness_texts import JOB_COLUMNS
 from kalman_vs_infoset.experiments import attitude_rw
 
 from kalman_vs_infoset import api
 
-JOB_COLUMNS = {"scenario", "controller", "estimator", "noise", "seed", "run", "status",
-               "error", "wall_s"}  # fmt: skip
 SHORT = {"duration_s": 2.0}
 
 

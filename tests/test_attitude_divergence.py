@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 import pytest
+from harness_texts import JOB_COLUMNS
 from kalman_vs_infoset.experiments import attitude_cmg as attitude_cmg_loop
 from kalman_vs_infoset.experiments import attitude_gyrostat, attitude_rw
 from kalman_vs_infoset.experiments.cli import main
@@ -26,10 +27,6 @@ from kalman_vs_infoset.guidance.attitude.wheels import rk4_step
 from scipy.spatial.transform import Rotation
 
 from kalman_vs_infoset import api
-
-#: the columns a run's row gets from its job and the runner, beside the loop's own
-JOB_COLUMNS = {"scenario", "controller", "estimator", "noise", "seed", "run", "status",
-               "error", "wall_s"}  # fmt: skip
 
 TINY_BODY = {"inertia_kgm2": [1e-6, 1e-6, 1e-6]}
 #: the stable loop's check needs only a few seconds of its turn
