@@ -54,3 +54,15 @@ def test_the_api_s_table_of_failed_runs_has_the_result_columns(short, tmp_path, 
     assert set(EngagementResult.columns()) <= set(df.columns)
     assert df["miss_m"].isna().all() and df["fuel_mps"].isna().all()
     assert "miss_m" in EngagementResult.columns() and "x0_km" in EngagementResult.columns()
+
+
+def test_the_declared_intercept_columns_are_a_finished_run_s_row(short):
+    """``EngagementResult.columns()`` names exactly what a finished run's row holds
+    (beside the estimator's own ``extras``): the columns a failed table is given."""
+    import numpy as np
+    from kalman_vs_infoset.experiments.scenario import load_scenario
+    from kalman_vs_infoset.experiments.sim.intercept import EngagementResult, run_engagement
+
+    res = run_engagement(load_scenario(short), "infoset", "random", np.random.default_rng(0))
+    row = res.as_row()
+    assert set(row) - {k for k, _ in res.extras} == set(EngagementResult.columns())
