@@ -266,10 +266,14 @@ def _load_plugin(entry: metadata.EntryPoint) -> None:
         where = f" of {dist.name} {dist.version}" if dist is not None else ""
         error = f"{type(exc).__name__}: {exc}".splitlines()[0]
         PLUGIN_ERRORS.append((f"{entry.name} = {entry.value}{where}", error))
-        warnings.warn(
+        # attributed to the plug-in, not to a line of ours: Python's default display
+        # then has no source line to print under it (one line, as the commands say it)
+        warnings.warn_explicit(
             f"estimator plug-in {entry.name!r} ({entry.value}{where}) is left out: {error}",
             RuntimeWarning,
-            stacklevel=2,
+            filename=f"estimator plug-in {entry.name}",
+            lineno=0,
+            module=__name__,
         )
 
 

@@ -183,6 +183,25 @@ def test_the_command_line_says_a_plug_in_is_left_out_in_one_line_and_runs(tmp_pa
     assert "Traceback" not in r.stderr
 
 
+def test_the_python_api_shows_a_broken_plug_in_s_warning_in_one_line(tmp_path):
+    """Python's default display printed the warning and, under it, the line of the
+    registry that raised it; the warning is now the plug-in's own, in one line."""
+    import os
+    import subprocess
+    import sys
+
+    _entry_points(tmp_path, {"toyep_broken": PLUGINS["toyep_broken"]})
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(HERE)])}
+    code = "from kalman_vs_infoset import api; print(len(api.registry.names('intercept')))"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       timeout=120)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.strip().splitlines() == [
+        "estimator plug-in toyep_broken:0: RuntimeWarning: estimator plug-in 'toyep_broken' "
+        "(toyep_broken:register of toyep 0.1) is left out: RuntimeError: missing dependency foo"
+    ]
+
+
 def test_replace_works_before_the_first_lookup(fresh):
     reg = registry.register("ekf", "intercept", ToyOptions, doc="mine", replace=True)
     assert registry.get("intercept", "ekf") is reg
