@@ -54,6 +54,7 @@ def seed_fuel_share(fuel: np.ndarray, seed_fuel: float | None) -> float:
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
+    from kalman_vs_infoset.experiments import figstyle as fs
     from kalman_vs_infoset.experiments import plots
     from kalman_vs_infoset.experiments.intercept_runs import run_grid
     from kalman_vs_infoset.experiments.report import write_tables, write_text
@@ -85,9 +86,10 @@ def run(args) -> dict[str, Any]:
     table = pd.concat(frames, ignore_index=True)
     stem = out / f"{sc.name}-adversaries"
     files = write_tables(table, stem)
+    paper = fs.paper_fig3("game")
     marks = {
-        "miss_m": [(ref.miss_game_m, "seed, game")] if ref.miss_game_m else [],
-        "fuel_mps": [(ref.fuel_game_mps, "seed, game")] if ref.fuel_game_mps else [],
+        "miss_m": [(ref.miss_game_m, paper)] if ref.miss_game_m else [],
+        "fuel_mps": [(ref.fuel_game_mps, paper)] if ref.fuel_game_mps else [],
     }
     fig = plots.cdf_figure(
         table, ["estimator", "noise"], f"{sc.name}: adversary strength, {runs} paired runs", marks

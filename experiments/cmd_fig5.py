@@ -111,18 +111,17 @@ def run(args) -> dict[str, Any]:
     files = write_tables(table, out / f"{stem}_runs")
     ref = sc.reference
     floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
-    # the paper's single engagements of Fig. 3 ("seed" read as a random seed), and the
-    # miss scale the last bearings leave (a scale, not a floor: runs end below it)
-    paper = "paper Fig. 3 (one engagement), {}".format
+    # the paper's single engagements of Fig. 3, and the miss scale the last bearings
+    # leave (a scale, not a floor: runs end below it)
     given: dict[str, list[tuple[float | None, str]]] = {
         "miss_m": [
-            (ref.miss_random_m, paper(fs.NOISE_WORDS["random"])),
-            (ref.miss_game_m, paper(fs.NOISE_WORDS["game"])),
+            (ref.miss_random_m, fs.paper_fig3("random")),
+            (ref.miss_game_m, fs.paper_fig3("game")),
             (miss_floor_m(sc), "bearing-limited miss scale"),
         ],
         "fuel_mps": [
-            (ref.fuel_random_mps, paper(fs.NOISE_WORDS["random"])),
-            (ref.fuel_game_mps, paper(fs.NOISE_WORDS["game"])),
+            (ref.fuel_random_mps, fs.paper_fig3("random")),
+            (ref.fuel_game_mps, fs.paper_fig3("game")),
             (floor, "perfect information (mean)"),
         ],
     }

@@ -99,6 +99,12 @@ NOISE_WORDS = {
 }
 
 
+def paper_fig3(noise: str) -> str:
+    """The legend of a mark at the intercept paper's Fig. 3 number under ``noise`` (one
+    engagement; "seed" in a legend read as a random seed)."""
+    return f"paper Fig. 3 (one engagement), {NOISE_WORDS.get(noise, noise)}"
+
+
 def words(estimator: str, noise: str | None = None) -> str:
     """An estimator (and a noise kind) in words for a legend, e.g. ``"UKF, random errors"``.
 

@@ -172,10 +172,21 @@ def test_adversary_table_bounds_the_search(tiny):
         load_scenario(tiny, ["adversary.lookahead_steps=5", "adversary.lookahead_candidates=5"])
 
 
-def test_adversaries_command_on_a_tiny_case(tiny, tmp_path, capsys):
+def test_adversaries_command_on_a_tiny_case(tiny, tmp_path, capsys, monkeypatch):
+    from kalman_vs_infoset.experiments import plots
+
+    marks, real = [], plots.cdf_figure
+
+    def spy(table, by, title, given, *a, **k):
+        marks.extend(lab for pairs in given.values() for _, lab in pairs)
+        return real(table, by, title, given, *a, **k)
+
+    monkeypatch.setattr(plots, "cdf_figure", spy)
     args = ["adversaries", tiny, "--runs", "1", "--estimators", "ekf", "--lookahead", "1"]
     args += ["--out", tmp_path, "--no-progress", "--workers", "1", "--json"]
     code = main([str(a) for a in args])
+    # the paper's number is marked as the paper's ("seed, game" read as a random seed)
+    assert marks and set(marks) == {"paper Fig. 3 (one engagement), game errors"}
     out = capsys.readouterr()
     assert code == 0, out.err
     res = json.loads(out.out.strip().splitlines()[-1])
