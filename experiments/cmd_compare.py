@@ -44,6 +44,7 @@ def summary_stem(args: argparse.Namespace, name: str) -> str:
 def run(args) -> dict[str, Any]:
     # here, not at import: declaring the arguments needs none of the runs' libraries
     import pandas as pd
+    from kalman_vs_infoset.experiments import figstyle as fs
     from kalman_vs_infoset.experiments import paired, plots, traces
     from kalman_vs_infoset.experiments.intercept_runs import miss_floor_m, run_grid, write_traces
     from kalman_vs_infoset.experiments.report import summary_markdown, write_tables, write_text
@@ -58,8 +59,8 @@ def run(args) -> dict[str, Any]:
     files = write_tables(table, stem)
     floor = ok_mean(table, "fuel_perfect_info_mps")  # None when every run failed
     marks = {
-        "miss_m": [(miss_floor_m(sc), "bearing-limited miss scale")],
-        "fuel_mps": [(floor, "perfect info (mean)")] if floor is not None else [],
+        "miss_m": [(miss_floor_m(sc), fs.MISS_SCALE_MARK)],
+        "fuel_mps": [(floor, fs.PERFECT_INFO_MARK)] if floor is not None else [],
     }
     fig = plots.cdf_figure(
         table, ["estimator", "noise"], f"{sc.name}: estimators x noise, {runs} paired runs", marks

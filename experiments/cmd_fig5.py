@@ -117,12 +117,12 @@ def run(args) -> dict[str, Any]:
         "miss_m": [
             (ref.miss_random_m, fs.paper_fig3("random")),
             (ref.miss_game_m, fs.paper_fig3("game")),
-            (miss_floor_m(sc), "bearing-limited miss scale"),
+            (miss_floor_m(sc), fs.MISS_SCALE_MARK),
         ],
         "fuel_mps": [
             (ref.fuel_random_mps, fs.paper_fig3("random")),
             (ref.fuel_game_mps, fs.paper_fig3("game")),
-            (floor, "perfect information (mean)"),
+            (floor, fs.PERFECT_INFO_MARK),
         ],
     }
     marks: dict[str, list[tuple[float, str]]] = {

@@ -99,6 +99,12 @@ NOISE_WORDS = {
 }
 
 
+#: the intercept CDFs' marks: the miss scale the last bearings leave (a scale, not a
+#: floor: runs end below it) and the mean fuel of perfect information (a lower bound)
+MISS_SCALE_MARK = "bearing-limited miss scale"
+PERFECT_INFO_MARK = "perfect information (mean)"
+
+
 def paper_fig3(noise: str) -> str:
     """The legend of a mark at the intercept paper's Fig. 3 number under ``noise`` (one
     engagement; "seed" in a legend read as a random seed)."""

@@ -142,6 +142,8 @@ def test_tightness_sweep_and_compare_labels_carry_units_and_words(tmp_path, monk
             "1", "--workers", "1", "--no-progress", "--out", str(tmp_path / "c")]  # fmt: skip
     assert main(argv) == 0
     assert [label for _, label in marks["miss_m"]] == ["bearing-limited miss scale"]
+    # "perfect info", where fig5 says it in words
+    assert [label for _, label in marks["fuel_mps"]] == ["perfect information (mean)"]
 
 
 def test_the_gain_study_figures_have_titles_and_say_paper_not_seed(tmp_path, monkeypatch):
