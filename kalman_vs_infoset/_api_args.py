@@ -1,13 +1,25 @@
 """The Python front door's argument checks, shared by :mod:`kalman_vs_infoset.api` and
 :mod:`kalman_vs_infoset.api_attitude` (each names the argument, as a Python caller
-wrote it, not the command line's flag)."""
+wrote it, not the command line's flag), and the shape of the tables both return."""
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
 
 from kalman_vs_infoset.experiments import runner
 from kalman_vs_infoset.experiments import scenario as _scenario
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+def with_columns(df: pd.DataFrame, columns: Iterable[str]) -> pd.DataFrame:
+    """``df`` with every column of ``columns`` (NaN where no run gave one): a table whose
+    runs all failed holds only ``status`` and ``error``, and selecting a result column
+    raised KeyError."""
+    missing = [c for c in columns if c not in df.columns]
+    return df.reindex(columns=[*df.columns, *missing]) if missing else df
 
 
 def overrides_as_sets(tables: Any) -> list[str]:

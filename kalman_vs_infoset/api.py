@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from kalman_vs_infoset import _API
-from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed
+from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed, with_columns
 from kalman_vs_infoset.api_attitude import run_attitude as run_attitude
 from kalman_vs_infoset.estim import registry
 from kalman_vs_infoset.estim.registry import Registration
@@ -252,10 +252,11 @@ def run_experiment(
     # line, not a failed row per run
     intercept_runs.check_plug_ins(sc, [estimator])
     if out is not None:
-        return _with_result_columns(intercept_runs.run_experiment(
+        df = intercept_runs.run_experiment(
             sc, estimator, noise, runs, seed, Path(out), workers, scheduler, progress, executor,
             rerun_other_code=bool(rerun_other_code),
-        ))  # fmt: skip
+        )  # fmt: skip
+        return with_columns(df, EngagementResult.columns())
     job = intercept_runs.intercept_job(sc, estimator, noise, seed)
     chunks = runner.results(job, list(range(runs)), executor, workers, scheduler)
     bar = progress_bar(runs, 0, job.desc, progress)
@@ -268,14 +269,7 @@ def run_experiment(
         bar.close()
     df = pd.DataFrame(rows).sort_values("run").reset_index(drop=True)
     runner.report_failures(job, df)
-    return _with_result_columns(df)
-
-
-def _with_result_columns(df: pd.DataFrame) -> pd.DataFrame:
-    """``df`` with every result column (NaN where no run gave one): a table whose runs
-    all failed holds only ``status`` and ``error``, and ``df["miss_m"]`` raised KeyError."""
-    missing = [c for c in EngagementResult.columns() if c not in df.columns]
-    return df.reindex(columns=[*df.columns, *missing]) if missing else df
+    return with_columns(df, EngagementResult.columns())
 
 
 def trace(

@@ -83,7 +83,7 @@ def run_attitude(
     """
     import pandas as pd
 
-    from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed
+    from kalman_vs_infoset._api_args import integer_in, overrides_as_sets, root_seed, with_columns
     from kalman_vs_infoset.estim import registry
     from kalman_vs_infoset.experiments.attitude_request import request
     from kalman_vs_infoset.experiments.runner import batched_task
@@ -129,7 +129,4 @@ def run_attitude(
         for start in range(0, runs, loop.chunk):  # the command's batches (memory)
             chunk = list(range(start, min(start + loop.chunk, runs)))
             rows += [{**job, "run": j, **row} for j, row in batched_task(simulate, seed, chunk)]
-    df = pd.DataFrame(rows)
-    # every result column, NaN where no run gave one (all failed: only status, error)
-    missing = [c for c in loop.columns(req.controller) if c not in df.columns]
-    return df.reindex(columns=[*df.columns, *missing]) if missing else df
+    return with_columns(pd.DataFrame(rows), loop.columns(req.controller))
