@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import docs_bench_table
 import numpy as np
 import test_docs_study
 import test_docs_tightness
@@ -49,6 +50,11 @@ DERIVED = {
     "interleaved": r"\(`docs/results/bench_interleaved_1\.json` and `_2\.json`, load average "
     r"([\d.]+) and ([\d.]+), the second beside a test run\) read the whole approach at "
     r"([\d.]+) and ([\d.]+) UKF steps, the UKF's step there at (\d+) and (\d+) us",
+    "glance": r"every one of them misses the engine's goals: the Fig\. 3 game engagement read "
+    r"(\d+) to (\d+) UKF steps \(goal 60\), the random one (\d+) to (\d+) \(goal 40\), the "
+    r"whole approach ([\d.]+) to ([\d.]+) UKF steps \(goal 0\.5\) and the cost exponent "
+    r"([\d.]+) to ([\d.]+) \(goal 1\.2\)\. The costliest `--help` met its goal of 0\.5 "
+    r"CPU-s in (\d+) of the (\d+) readings",
     "median_ratio": r"the whole approach read ([\d.]+) and ([\d.]+) UKF steps, because the "
     r"UKF's step there moved \((\d+) and (\d+) us\) and the set's did not \((\d+) and (\d+) "
     r"us\); the engagements read (\d+) / (\d+) and (\d+) / (\d+) UKF steps",
@@ -152,6 +158,19 @@ def test_the_closing_speed_bands_relative_widths():
     assert agrees(width, 100.0 * (e_hi / e_lo - 1.0)) and one == width
     assert agrees(one, band_widths_pct("kp_fig5", 1)[0])
     assert agrees(four, max(band_widths_pct("kp_fig5", 4)))
+
+
+def test_the_table_of_every_bench_reading_is_built_from_the_files():
+    """The page prints the table that ``docs_bench_table.table()`` builds from every
+    ``docs/results/bench*.json`` (a reading kept and not listed, or a cell changed,
+    fails), and the ranges under it are the readings' least and largest."""
+    text = (ROOT / PERF).read_text(encoding="utf-8")
+    assert docs_bench_table.table() in text
+    r = docs_bench_table.ranges()
+    readings = [row for _, row in docs_bench_table.readings()]
+    met = sum(row["help_cpu_s_max"] <= 0.5 for row in readings)
+    shown = [*r["game"], *r["random"], *r["whole"], *r["exponent"], met, len(readings)]
+    agree_each(_read("glance"), shown)
 
 
 def test_the_median_exponent_is_its_two_bench_runs():
