@@ -122,11 +122,12 @@ def cdf_figure(
             curve(ax, name, grp, col, **group_style(keys, df, variants))
         # the paper's marks (its random and game runs, say) one line style each
         paper_ls = iter((":", "-.", (0, (5, 2, 1, 2, 1, 2)), (0, (1, 4))))
+        unit = xlabel.rsplit(", ", 1)[1]  # the axis's unit: the legend holds both panels'
         for value, label in (references or {}).get(col, ()):
             paper = label.startswith(("seed", "paper"))
             ax.axvline(value, color=fs.PAPER if paper else fs.REFERENCE, lw=1.0,
                        ls=next(paper_ls, ":") if paper else "--",
-                       label=f"{label}: {value:.4g}")  # fmt: skip
+                       label=f"{label}: {value:.4g} {unit}")  # fmt: skip
         if not len(ok):  # every run failed: the rows say why, the panel says so
             ax.text(0.5, 0.5, "no successful run", ha="center", va="center",
                     transform=ax.transAxes)  # fmt: skip

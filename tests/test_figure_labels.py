@@ -198,3 +198,19 @@ def test_a_figure_legend_wider_than_its_figure_takes_fewer_columns():
     box = leg.get_window_extent(fig.canvas.get_renderer())
     assert box.width <= fig.bbox.width and leg._ncols < 4
     fs.plt.close(fig)
+
+
+def test_a_cdf_mark_says_its_unit():
+    """A CDF's reference marks read "bearing-limited miss scale: 1.15" and "perfect
+    information (mean): 79.98": below the panels, one legend holds the miss panel's and
+    the fuel panel's marks, and the numbers had no unit. Each now says its axis's."""
+    rows = [{"estimator": "infoset", "noise": n, "miss_m": 1.0 + j, "fuel_mps": 100.0 + j,
+             "status": "ok"} for j in range(3) for n in ("random", "game", "bias")]  # fmt: skip
+    marks = {"miss_m": [(1.15, fs.MISS_SCALE_MARK), (9.5, "paper Fig. 3, game errors")],
+             "fuel_mps": [(79.98, fs.PERFECT_INFO_MARK)]}  # fmt: skip
+    fig = plots.cdf_figure(pd.DataFrame(rows), ["estimator", "noise"], "t", marks)
+    texts = _legend_texts(fig)
+    assert f"{fs.MISS_SCALE_MARK}: 1.15 m" in texts, texts
+    assert "paper Fig. 3, game errors: 9.5 m" in texts
+    assert f"{fs.PERFECT_INFO_MARK}: 79.98 m/s" in texts
+    fs.plt.close(fig)
