@@ -254,6 +254,9 @@ CHECKS: list[tuple[str, str, str, tuple[str, ...]]] = [
      r"a median of ([\d.]+) and a 95th percentile of ([\d.]+); (\d+) passed 1\.1, and one "
      r"read\s+(\d+):", FZT, tuple(f"default_options/{k}" for k in (
          "compared", "p50", "p95", "n_over_1_1", "p100"))),
+    (README, r"with four times the bands \(`--set estimator\.infoset\.max_bands=256`\) the same\s+"
+     r"case reads (\d+)\.", "docs/results/tightness/corner/case400957-tightness-infoset-bias-"
+     "seed400957-guided-max_bands_256.json", ("max_ratio",)),
     (README, r"trade tightness for time, the 95th\s+percentile was ([\d.]+)\.", FZT,
      ("options_drawn/p95",)),
     # README: the runs per CPU-second against release 35e3739

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import io
 import json
 import os
@@ -106,12 +107,24 @@ QUANTILES = (50, 75, 90, 95, 100)
 OVER = (1.03, 1.1, 2)
 
 
+def draws_sha256(seeds) -> str:
+    """SHA-256 over the command lines of cases ``seeds`` (:func:`case_argv`): a search's
+    summary keeps it, so a change of the draws (which changes every number of a
+    published search) fails the docs' test instead of leaving the numbers stale."""
+    h = hashlib.sha256()
+    for seed in seeds:
+        h.update(json.dumps(case_argv(seed)).encode() + b"\n")
+    return h.hexdigest()
+
+
 def summary(rows: list[dict], first_seed: int) -> dict:
     """The search's numbers from its case rows (``seed``, ``outcome``, ``ratio``,
-    ``options``): counts, and quantiles of the cases' largest ratios at the default
-    options and with options drawn (``null`` where no case was compared)."""
+    ``options``): counts, the digest of its cases' draws (:func:`draws_sha256`), and
+    quantiles of the cases' largest ratios at the default options and with options
+    drawn (``null`` where no case was compared)."""
     counts = {k: sum(r["outcome"] == k for r in rows) for k in ("ok", "refused", "fault")}
     out: dict = {"first_seed": first_seed, "cases": len(rows), **counts}
+    out["draws_sha256"] = draws_sha256(r["seed"] for r in rows)
     for key, options in (("default_options", False), ("options_drawn", True)):
         kept = [r for r in rows if r["ratio"] is not None and r["options"] is options]
         if not kept:

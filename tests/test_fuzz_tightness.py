@@ -112,3 +112,20 @@ def test_a_search_of_a_number_of_cases_has_no_time_limit(monkeypatch):
     rows, _ = fuzz_tightness._search(argparse.Namespace(
         seconds=None, cases=None, seed=5, out="", log=None))  # fmt: skip
     assert rows == []  # the first reading is past the default 300 s
+
+
+def test_the_published_search_draws_todays_cases():
+    """The README's search (``--seed 400000 --cases 1200``, its summary in
+    ``docs/results/fuzz_tightness/``) was made with today's draws: its digest of the
+    cases' command lines is today's. A change of the scenario draws (range-finder times
+    put on the decision steps, after the search was first published) left the README's
+    numbers from cases the command no longer runs."""
+    from docs_checks import FZT
+    from docs_numbers import results
+
+    published = results(FZT)
+    seeds = range(published["first_seed"], published["first_seed"] + published["cases"])
+    assert published["draws_sha256"] == fuzz_tightness.draws_sha256(seeds)
+    # and the digest sees a changed draw: one case's command line moved
+    moved = [*seeds[:-1], seeds[-1] + 1]
+    assert fuzz_tightness.draws_sha256(moved) != published["draws_sha256"]
