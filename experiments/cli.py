@@ -25,6 +25,7 @@ import importlib
 import json
 import math
 import os
+import shlex
 import sys
 import warnings
 from collections.abc import Sequence
@@ -220,6 +221,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 141
 
 
+def _with_origin(summary: Any, argv: list[str]) -> Any:
+    """A ``--json`` summary with what made it: the command line (``command``, as typed
+    but for the program's name) and the package's code (``code``: version, SHA-256 of
+    the sources, git commit when known). A summary kept as a results file then says
+    how to make it again, and which code made it."""
+    if not isinstance(summary, dict):
+        return summary
+    from kalman_vs_infoset.experiments.provenance import code_identity
+
+    origin = {"command": shlex.join(["kvi", *argv]), "code": dict(code_identity())}
+    return {**summary, **{k: v for k, v in origin.items() if k not in summary}}
+
+
 def _discard_stdout() -> None:
     """Point stdout at /dev/null: what is still buffered cannot be written either, and
     the interpreter's last flush would print a second error."""
@@ -260,7 +274,7 @@ def _main(argv: Sequence[str] | None) -> int:
         progress.configure_logging()
         notice = _compile_notice(parser.prog, module)
         try:
-            return _run(parser, module, args)
+            return _run(parser, module, args, argv)
         finally:
             if notice is not None:
                 notice.report()
@@ -272,7 +286,7 @@ def _line(exc: BaseException) -> str:
     return " ".join(part.strip() for part in str(exc).splitlines() if part.strip())
 
 
-def _run(parser, module, args) -> int:
+def _run(parser, module, args, argv: list[str]) -> int:
     where = f"{parser.prog} {args.command}"
     try:
         try:
@@ -310,7 +324,7 @@ def _run(parser, module, args) -> int:
         return 2
     try:
         if args.json:
-            print(json.dumps(_jsonable(result), allow_nan=False))  # strict JSON
+            print(json.dumps(_with_origin(_jsonable(result), argv), allow_nan=False))  # strict
         else:
             render = getattr(module, "render", None)
             print(render(result) if render else _render_default(result))

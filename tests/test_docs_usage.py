@@ -21,6 +21,7 @@ DERIVED = {
     "connect": r"answers\s+Dask's handshake within (\d+) s",
     "suffix": r"past (\d+)\s+characters the overrides that do not fit",
     "paired": r"with their mean\s+and (\d+) % confidence interval",
+    "reproduce": r"same \(to (\d+e-\d+) relative; times, memory and paths left out\)",
     "save": r"is saved every (\d+) s while runs finish .{1,120}? loses the runs of its "
     r"last (\d+) s",
 }
@@ -46,6 +47,14 @@ INPUTS = (
 def test_every_number_of_the_usage_page_is_checked():
     """A number in docs/usage.md's prose is a constant of the code or an input."""
     assert unlisted_numbers(DOC, list(DERIVED.values()), INPUTS) == []
+
+
+def test_the_reproducers_tolerance_is_the_tools():
+    """The tolerance ``tests/reproduce_results.py`` compares numbers to."""
+    import reproduce_results
+
+    (rel,) = printed(DOC, DERIVED["reproduce"])
+    assert float(rel) == reproduce_results.REL_TOL
 
 
 def test_the_usage_pages_limits_are_the_codes():

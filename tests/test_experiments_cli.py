@@ -757,3 +757,34 @@ def test_the_python_api_reruns_other_code_s_table_when_asked(short, tmp_path):
         api.run_experiment(short, "infoset", "random", runs=2, out=out)
     again = api.run_experiment(short, "infoset", "random", runs=2, out=out, rerun_other_code=True)
     pd.testing.assert_frame_equal(_table(again), _table(fresh))
+
+
+def test_a_json_summary_names_its_command_and_code_and_remakes_itself(tmp_path, capsys):
+    """A ``--json`` summary kept as a results file says what made it: the command line
+    and the package's code (version, sources' SHA-256, commit). Results files said so
+    only in the prose around them (and one search's draws changed under its published
+    numbers). ``tests/reproduce_results.py`` runs the named command again and finds the
+    same numbers; an edited number is found moved."""
+    import shlex
+
+    import reproduce_results
+    from kalman_vs_infoset.experiments.cli import main
+    from kalman_vs_infoset.experiments.provenance import code_identity
+
+    argv = ["tightness", "kp_fig3", "--noise", "bias", "--seed", "3", "--times", "10",
+            "--json", "--out", str(tmp_path / "first")]  # fmt: skip
+    assert main(argv) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    summary = json.loads(line)
+    assert summary["command"] == shlex.join(["kvi", *argv])
+    assert summary["code"] == dict(code_identity())
+    kept = tmp_path / "kept.json"
+    kept.write_text(line + "\n")
+    assert reproduce_results.check(kept) == ("same", [])
+    summary["ratio"][0] *= 1.001
+    kept.write_text(json.dumps(summary) + "\n")
+    verdict, moved = reproduce_results.check(kept)
+    assert verdict == "moved" and moved[0].startswith("/ratio/0:")
+    del summary["command"]
+    kept.write_text(json.dumps(summary) + "\n")
+    assert reproduce_results.check(kept) == ("no command", [])
