@@ -205,7 +205,7 @@ def test_set_overrides_reach_the_typed_attitude_tables(capsys, tmp_path):
     assert by_set["scenario"] == "smallsat_rw" + "".join(  # in the order of the keys
         f"+{key}={new}" for key, (_, new) in sorted(sets.items())
     )
-    for key in ("scenario", "wall_s", "files", "cpu_s", "worker_peak_rss_mb"):
+    for key in ("scenario", "wall_s", "files", "cpu_s", "worker_peak_rss_mb", "command"):
         del by_set[key], by_file[key]
     assert by_set == by_file
 

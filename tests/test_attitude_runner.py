@@ -66,11 +66,12 @@ def _table(out) -> pd.DataFrame:
 
 
 def _summary(result: dict) -> dict:
-    # what the host's load and the process layout change (the CPU time is the runs')
+    # what the host's load and the process layout change (the CPU time is the runs'),
+    # and the command line that made it (its --out and --workers differ)
     return {
         k: v
         for k, v in result.items()
-        if k not in ("wall_s", "files", "cpu_s", "worker_peak_rss_mb")
+        if k not in ("wall_s", "files", "cpu_s", "worker_peak_rss_mb", "command")
     }
 
 
