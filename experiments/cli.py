@@ -94,6 +94,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "kalman_vs_infoset.experiments.cmd_paper_figures",
         "redraw every paper figure we model",
     ),
+    "reproduce": (
+        "kalman_vs_infoset.experiments.cmd_reproduce",
+        "run a kept --json summary's command again and compare",
+    ),
 }
 
 
@@ -336,6 +340,9 @@ def _run(parser, module, args, argv: list[str]) -> int:
               file=sys.stderr)  # fmt: skip
         _discard_stdout()
         return 2
+    exit_status = getattr(module, "exit_status", None)  # a command's own verdict
+    if exit_status is not None and (status := exit_status(result)):
+        return status
     runner = sys.modules.get(_RUNNER)
     failed = runner.failed_runs() if runner is not None else 0
     if failed:

@@ -40,6 +40,7 @@ COMMAND_LINES = {
     "plot": ["x-trace.parquet", "--no-animation"],
     "paper-figures": ["--only", "kp", "--runs", "2"],
     "attitude-tightness": ["smallsat_rw", "--times", "0.1"],
+    "reproduce": ["a.json", "b.json"],
 }  # fmt: skip
 
 #: in one fresh interpreter: for each command, ``kvi CMD --help`` through ``cli.main``

@@ -49,12 +49,12 @@ def test_every_number_of_the_usage_page_is_checked():
     assert unlisted_numbers(DOC, list(DERIVED.values()), INPUTS) == []
 
 
-def test_the_reproducers_tolerance_is_the_tools():
-    """The tolerance ``tests/reproduce_results.py`` compares numbers to."""
-    import reproduce_results
+def test_the_reproducers_tolerance_is_the_commands():
+    """The tolerance ``kvi reproduce`` compares numbers to."""
+    from kalman_vs_infoset.experiments import cmd_reproduce
 
     (rel,) = printed(DOC, DERIVED["reproduce"])
-    assert float(rel) == reproduce_results.REL_TOL
+    assert float(rel) == cmd_reproduce.REL_TOL
 
 
 def test_the_usage_pages_limits_are_the_codes():

@@ -763,11 +763,11 @@ def test_a_json_summary_names_its_command_and_code_and_remakes_itself(tmp_path, 
     """A ``--json`` summary kept as a results file says what made it: the command line
     and the package's code (version, sources' SHA-256, commit). Results files said so
     only in the prose around them (and one search's draws changed under its published
-    numbers). ``tests/reproduce_results.py`` runs the named command again and finds the
-    same numbers; an edited number is found moved."""
+    numbers). ``kvi reproduce`` runs the named command again and finds the same numbers
+    (exit 0); an edited number is found moved (exit 1, the value named); a summary
+    without a command is listed as such; a file that is no summary is bad input."""
     import shlex
 
-    import reproduce_results
     from kalman_vs_infoset.experiments.cli import main
     from kalman_vs_infoset.experiments.provenance import code_identity
 
@@ -780,11 +780,19 @@ def test_a_json_summary_names_its_command_and_code_and_remakes_itself(tmp_path, 
     assert summary["code"] == dict(code_identity())
     kept = tmp_path / "kept.json"
     kept.write_text(line + "\n")
-    assert reproduce_results.check(kept) == ("same", [])
+    assert main(["reproduce", str(kept), "--json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["checked"]
+    assert (row["verdict"], row["details"], row["same_code"]) == ("same", [], True)
     summary["ratio"][0] *= 1.001
     kept.write_text(json.dumps(summary) + "\n")
-    verdict, moved = reproduce_results.check(kept)
-    assert verdict == "moved" and moved[0].startswith("/ratio/0:")
+    assert main(["reproduce", str(kept)]) == 1
+    out = capsys.readouterr().out
+    assert out.startswith("moved") and "/ratio/0: " in out
     del summary["command"]
     kept.write_text(json.dumps(summary) + "\n")
-    assert reproduce_results.check(kept) == ("no command", [])
+    assert main(["reproduce", str(kept)]) == 0
+    assert capsys.readouterr().out.startswith("no command")
+    kept.write_text("not json\n")
+    assert main(["reproduce", str(kept)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"kvi reproduce: error: {kept}: not a --json summary (JSONDecodeError)"]

@@ -1,0 +1,158 @@
+"""``kvi reproduce``: make kept ``--json`` summaries again and compare them with their
+files, number by number.
+
+Every command's ``--json`` summary names the command line that made it (``command``)
+and the package's code (``code``: :func:`.provenance.code_identity`). :func:`check`
+runs that command again in a separate process, with its ``--out`` in a scratch folder,
+and lists what moved. What a run cannot repeat is left out (:data:`UNREPEATABLE`:
+times, memory, paths, the machine and the identities); numbers may differ by
+:data:`REL_TOL` relative (linear algebra rounds differently on other CPUs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import subprocess
+import sys
+import tempfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from kalman_vs_infoset.experiments.errors import InputError
+
+#: keys whose values a run cannot repeat, wherever they are in the summary
+UNREPEATABLE = frozenset(
+    "wall_s cpu_s lp_s worker_peak_rss_mb out files machine code command date".split()
+)
+#: relative difference within which two numbers are the same
+REL_TOL = 1e-9
+#: the command line's own entry point, in this interpreter
+_ENTRY = "import sys; from kalman_vs_infoset.experiments.cli import main; sys.exit(main())"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What :func:`check` found for one file: ``verdict`` is ``same``, ``moved``,
+    ``failed`` (the command did not end in status 0) or ``no command`` (a summary kept
+    before summaries named theirs); ``details`` the moved values or the error;
+    ``same_code`` whether the file's code is today's (``None``: the file does not say)."""
+
+    file: str
+    verdict: str
+    details: tuple[str, ...] = field(default_factory=tuple)
+    same_code: bool | None = None
+
+
+def differences(old: Any, new: Any, path: str = "") -> list[str]:
+    """Where two summaries differ, as ``path: old -> new`` lines (empty: the same)."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for key in sorted(set(old) | set(new)):
+            if key in UNREPEATABLE:
+                continue
+            if key not in old or key not in new:
+                out.append(f"{path}/{key}: {'missing now' if key in old else 'new'}")
+                continue
+            out += differences(old[key], new[key], f"{path}/{key}")
+        return out
+    if isinstance(old, list) and isinstance(new, list):
+        if len(old) != len(new):
+            return [f"{path}: {len(old)} items -> {len(new)}"]
+        return [d for i, (a, b) in enumerate(zip(old, new, strict=True))
+                for d in differences(a, b, f"{path}/{i}")]  # fmt: skip
+    numbers = (int, float)
+    if isinstance(old, numbers) and isinstance(new, numbers) and not isinstance(old, bool):
+        if old == new or math.isclose(old, new, rel_tol=REL_TOL):
+            return []
+        if all(isinstance(v, float) and math.isnan(v) for v in (old, new)):
+            return []
+    elif old == new:
+        return []
+    return [f"{path}: {old!r} -> {new!r}"]
+
+
+def read_summary(path: Path) -> dict[str, Any]:
+    """The summary a results file keeps (its last line: a command's ``--json`` output);
+    a file that is not one is bad input."""
+    try:
+        lines = Path(path).read_text(encoding="utf-8").strip().splitlines()
+        summary = json.loads(lines[-1]) if lines else None
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise InputError(f"{path}: not a --json summary ({type(exc).__name__})") from None
+    if not isinstance(summary, dict):
+        raise InputError(f"{path}: not a --json summary (its last line is no JSON object)")
+    return summary
+
+
+def rerun(command: str, scratch: Path) -> dict[str, Any]:
+    """The summary of ``command`` (``kvi ...``) run again from ``scratch``, its
+    ``--out`` (if any) there; ``RuntimeError`` with the command's last line on stderr
+    if it did not end in status 0."""
+    argv = shlex.split(command)[1:]
+    if "--out" in argv[:-1]:
+        argv[argv.index("--out") + 1] = str(scratch / "out")
+    done = subprocess.run([sys.executable, "-c", _ENTRY, *argv], cwd=scratch,
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    if done.returncode != 0:
+        said = done.stderr.strip().splitlines()[-1:] or [""]
+        raise RuntimeError(f"status {done.returncode}: {said[0]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def check(path: Path, scratch: Path) -> Verdict:
+    """Run the command of the summary kept in ``path`` again (from ``scratch``) and
+    compare (:class:`Verdict`)."""
+    from kalman_vs_infoset.experiments.provenance import code_identity
+
+    summary = read_summary(path)
+    command = summary.get("command")
+    if not isinstance(command, str) or not command.startswith("kvi "):
+        return Verdict(str(path), "no command")
+    then = (summary.get("code") or {}).get("sources_sha256")
+    same_code = None if then is None else then == code_identity()["sources_sha256"]
+    try:
+        new = rerun(command, scratch)
+    except (RuntimeError, ValueError, IndexError) as exc:
+        return Verdict(str(path), "failed", (str(exc),), same_code)
+    moved = differences(summary, new)
+    return Verdict(str(path), "moved" if moved else "same", tuple(moved), same_code)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "files", nargs="+", type=Path, metavar="FILE",
+        help="results files: a command's --json summary (its last line), which names "
+        "the command that made it",
+    )  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    for path in args.files:  # every file readable before the first command runs
+        read_summary(path)
+    checked = []
+    for path in args.files:
+        with tempfile.TemporaryDirectory(prefix="kvi-reproduce-") as scratch:
+            checked.append(asdict(check(path, Path(scratch))))
+    return {"checked": checked}
+
+
+def exit_status(result: dict[str, Any]) -> int:
+    """1 when a file's numbers moved or its command failed, else 0."""
+    return int(any(c["verdict"] in ("moved", "failed") for c in result["checked"]))
+
+
+def render(result: dict[str, Any]) -> str:
+    code = {True: "", False: " (written by other code)", None: ""}
+    lines = []
+    for c in result["checked"]:
+        lines.append(f"{c['verdict']:<10}  {c['file']}{code[c['same_code']]}")
+        lines += [f"    {d}" for d in c["details"][:10]]
+        if len(c["details"]) > 10:
+            lines.append(f"    ... {len(c['details']) - 10} more")
+    return "\n".join(lines)
