@@ -3,8 +3,9 @@ files, number by number.
 
 Every command's ``--json`` summary names the command line that made it (``command``)
 and the package's code (``code``: :func:`.provenance.code_identity`). :func:`check`
-runs that command again in a separate process, with its ``--out`` in a scratch folder,
-and lists what moved. What a run cannot repeat is left out (:data:`UNREPEATABLE`:
+runs that command again in a separate process, from the current folder (a scenario
+file may be named relative to it) with its output in a scratch folder, and lists what
+moved. What a run cannot repeat is left out (:data:`UNREPEATABLE`:
 times, memory, paths, the machine and the identities); numbers may differ by
 :data:`REL_TOL` relative (linear algebra rounds differently on other CPUs).
 """
@@ -12,6 +13,8 @@ times, memory, paths, the machine and the identities); numbers may differ by
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import math
 import shlex
@@ -90,15 +93,34 @@ def read_summary(path: Path) -> dict[str, Any]:
     return summary
 
 
+def _scratch_argv(argv: list[str], scratch: Path) -> list[str]:
+    """``argv`` with its output folder in ``scratch``: ``--out`` replaced, or added
+    where the command takes one (without it, a command writes into the folder it runs
+    from)."""
+    out = str(scratch / "out")
+    for i, arg in enumerate(argv):
+        if arg == "--out" and i + 1 < len(argv):
+            return [*argv[: i + 1], out, *argv[i + 2 :]]
+        if arg.startswith("--out="):
+            return [*argv[:i], f"--out={out}", *argv[i + 1 :]]
+    from kalman_vs_infoset.experiments import cli
+
+    try:  # (quietly: a command line its own parser refuses is the rerun's to say)
+        with contextlib.redirect_stderr(io.StringIO()):
+            args, _ = cli.build_parser(cli._command_named(argv)).parse_known_args(argv)
+    except SystemExit:
+        return argv
+    return [*argv, "--out", out] if hasattr(args, "out") else argv
+
+
 def rerun(command: str, scratch: Path) -> dict[str, Any]:
-    """The summary of ``command`` (``kvi ...``) run again from ``scratch``, its
-    ``--out`` (if any) there; ``RuntimeError`` with the command's last line on stderr
-    if it did not end in status 0."""
-    argv = shlex.split(command)[1:]
-    if "--out" in argv[:-1]:
-        argv[argv.index("--out") + 1] = str(scratch / "out")
-    done = subprocess.run([sys.executable, "-c", _ENTRY, *argv], cwd=scratch,
-                          capture_output=True, text=True, check=False)  # fmt: skip
+    """The summary of ``command`` (``kvi ...``) run again from the current folder (a
+    scenario file may be named relative to it), its output in ``scratch``;
+    ``RuntimeError`` with the command's last line on stderr if it did not end in
+    status 0."""
+    argv = _scratch_argv(shlex.split(command)[1:], scratch)
+    done = subprocess.run([sys.executable, "-c", _ENTRY, *argv], capture_output=True,
+                          text=True, check=False)  # fmt: skip
     if done.returncode != 0:
         said = done.stderr.strip().splitlines()[-1:] or [""]
         raise RuntimeError(f"status {done.returncode}: {said[0]}")
@@ -106,8 +128,8 @@ def rerun(command: str, scratch: Path) -> dict[str, Any]:
 
 
 def check(path: Path, scratch: Path) -> Verdict:
-    """Run the command of the summary kept in ``path`` again (from ``scratch``) and
-    compare (:class:`Verdict`)."""
+    """Run the command of the summary kept in ``path`` again (its output in
+    ``scratch``) and compare (:class:`Verdict`)."""
     from kalman_vs_infoset.experiments.provenance import code_identity
 
     summary = read_summary(path)

@@ -759,7 +759,9 @@ def test_the_python_api_reruns_other_code_s_table_when_asked(short, tmp_path):
     pd.testing.assert_frame_equal(_table(again), _table(fresh))
 
 
-def test_a_json_summary_names_its_command_and_code_and_remakes_itself(tmp_path, capsys):
+def test_a_json_summary_names_its_command_and_code_and_remakes_itself(
+    tmp_path, capsys, monkeypatch
+):
     """A ``--json`` summary kept as a results file says what made it: the command line
     and the package's code (version, sources' SHA-256, commit). Results files said so
     only in the prose around them (and one search's draws changed under its published
@@ -796,3 +798,21 @@ def test_a_json_summary_names_its_command_and_code_and_remakes_itself(tmp_path, 
     assert main(["reproduce", str(kept)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"kvi reproduce: error: {kept}: not a --json summary (JSONDecodeError)"]
+    # a scenario file named relative to the folder and no --out (the first run wrote
+    # into results/ here): the rerun reads the file from the current folder and writes
+    # into a scratch folder, not over the first run's files
+    from kalman_vs_infoset import data as bundled
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").write_text(bundled.scenario_file("kp_fig3").read_text())
+    argv = ["tightness", "mine.toml", "--noise", "bias", "--seed", "3", "--times", "10",
+            "--json"]  # fmt: skip
+    assert main(argv) == 0
+    kept.write_text(capsys.readouterr().out.strip().splitlines()[-1] + "\n")
+    written = [(p, p.stat().st_mtime_ns) for p in sorted((tmp_path / "results").rglob("*"))]
+    assert written
+    assert main(["reproduce", str(kept)]) == 0
+    assert capsys.readouterr().out.startswith("same")
+    assert [(p, p.stat().st_mtime_ns) for p in sorted((tmp_path / "results").rglob("*"))] == (
+        written
+    )
