@@ -31,6 +31,8 @@ from kalman_vs_infoset.experiments.errors import InputError
 UNREPEATABLE = frozenset(
     "wall_s cpu_s lp_s worker_peak_rss_mb out files machine code command date".split()
 )
+#: commands whose summaries are measurements of time and memory: nothing to repeat
+TIMINGS = frozenset({"bench"})
 #: relative difference within which two numbers are the same
 REL_TOL = 1e-9
 #: the command line's own entry point, in this interpreter
@@ -40,8 +42,9 @@ _ENTRY = "import sys; from kalman_vs_infoset.experiments.cli import main; sys.ex
 @dataclass(frozen=True)
 class Verdict:
     """What :func:`check` found for one file: ``verdict`` is ``same``, ``moved``,
-    ``failed`` (the command did not end in status 0) or ``no command`` (a summary kept
-    before summaries named theirs); ``details`` the moved values (and the fields
+    ``failed`` (the command did not end in status 0), ``no command`` (a summary kept
+    before summaries named theirs) or ``timings`` (a benchmark's, not run again: its
+    numbers are the host's timings); ``details`` the moved values (and the fields
     today's code adds, which alone leave a file ``same``) or the error;
     ``same_code`` whether the file's code is today's (``None``: the file does not say)."""
 
@@ -137,6 +140,9 @@ def check(path: Path, scratch: Path) -> Verdict:
     command = summary.get("command")
     if not isinstance(command, str) or not command.startswith("kvi "):
         return Verdict(str(path), "no command")
+    words = shlex.split(command)[1:]
+    if words[:1] and words[0] in TIMINGS:  # (not run: its numbers are the host's timings)
+        return Verdict(str(path), "timings")
     then = (summary.get("code") or {}).get("sources_sha256")
     same_code = None if then is None else then == code_identity()["sources_sha256"]
     try:
