@@ -117,12 +117,11 @@ def _scratch_argv(argv: list[str], scratch: Path) -> list[str]:
     return [*argv, "--out", out] if hasattr(args, "out") else argv
 
 
-def rerun(command: str, scratch: Path) -> dict[str, Any]:
-    """The summary of ``command`` (``kvi ...``) run again from the current folder (a
-    scenario file may be named relative to it), its output in ``scratch``;
-    ``RuntimeError`` with the command's last line on stderr if it did not end in
-    status 0."""
-    argv = _scratch_argv(shlex.split(command)[1:], scratch)
+def rerun(argv: list[str], scratch: Path) -> dict[str, Any]:
+    """The summary of ``kvi ARGV`` run again from the current folder (a scenario file
+    may be named relative to it), its output in ``scratch``; ``RuntimeError`` with the
+    command's last line on stderr if it did not end in status 0."""
+    argv = _scratch_argv(argv, scratch)
     done = subprocess.run([sys.executable, "-c", _ENTRY, *argv], capture_output=True,
                           text=True, check=False)  # fmt: skip
     if done.returncode != 0:
@@ -131,22 +130,24 @@ def rerun(command: str, scratch: Path) -> dict[str, Any]:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def check(path: Path, scratch: Path) -> Verdict:
-    """Run the command of the summary kept in ``path`` again (its output in
-    ``scratch``) and compare (:class:`Verdict`)."""
+def check(path: Path, summary: dict[str, Any], scratch: Path) -> Verdict:
+    """Run the command of ``summary`` (kept in ``path``: :func:`read_summary`) again, its
+    output in ``scratch``, and compare (:class:`Verdict`)."""
     from kalman_vs_infoset.experiments.provenance import code_identity
 
-    summary = read_summary(path)
     command = summary.get("command")
     if not isinstance(command, str) or not command.startswith("kvi "):
         return Verdict(str(path), "no command")
-    words = shlex.split(command)[1:]
-    if words[:1] and words[0] in TIMINGS:  # (not run: its numbers are the host's timings)
+    try:
+        argv = shlex.split(command)[1:]
+    except ValueError as exc:  # (an edited command with an unclosed quote)
+        return Verdict(str(path), "failed", (f"command {command!r}: {exc}",))
+    if argv[:1] and argv[0] in TIMINGS:  # (not run: its numbers are the host's timings)
         return Verdict(str(path), "timings")
     then = (summary.get("code") or {}).get("sources_sha256")
     same_code = None if then is None else then == code_identity()["sources_sha256"]
     try:
-        new = rerun(command, scratch)
+        new = rerun(argv, scratch)
     except (RuntimeError, ValueError, IndexError) as exc:
         return Verdict(str(path), "failed", (str(exc),), same_code)
     found = differences(summary, new)
@@ -164,12 +165,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
-    for path in args.files:  # every file readable before the first command runs
-        read_summary(path)
+    # every file read before the first command runs: a bad one stops nothing half-done
+    summaries = [read_summary(path) for path in args.files]
     checked = []
-    for path in args.files:
+    for path, summary in zip(args.files, summaries, strict=True):
         with tempfile.TemporaryDirectory(prefix="kvi-reproduce-") as scratch:
-            checked.append(asdict(check(path, Path(scratch))))
+            checked.append(asdict(check(path, summary, Path(scratch))))
     return {"checked": checked}
 
 

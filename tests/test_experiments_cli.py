@@ -800,6 +800,10 @@ def test_a_json_summary_names_its_command_and_code_and_remakes_itself(
     kept.write_text(json.dumps(summary) + "\n")
     assert main(["reproduce", str(kept)]) == 0
     assert capsys.readouterr().out.startswith("no command")
+    # an edited command with an unclosed quote: a failed check, said in its row (raised)
+    kept.write_text(json.dumps({"ratio": [1.0], "command": "kvi tightness 'kp_fig3"}))
+    assert main(["reproduce", str(kept)]) == 1
+    assert capsys.readouterr().out.startswith("failed")
     # a benchmark's summary is timings: said so, not run for a minute to read "moved"
     kept.write_text(json.dumps({"step_us": {"ukf": 500.0}, "command": "kvi bench --json"}))
     assert main(["reproduce", str(kept)]) == 0
